@@ -1,0 +1,255 @@
+//! The acceleration stage: [`Scene`] -> [`FlatScene`], the flattened arrays both paths render.
+//!
+//! Bounded primitives (triangles, spheres, quads, area-light quads) go into one obvhs BVH2, and
+//! are then reordered by the BVH's `primitive_indices`, so a leaf's `first_index` indexes the
+//! primitive array directly on both paths. Infinite planes cannot be bounded and follow the BVH's
+//! primitives, tested by brute force. Node boxes are widened by a few ULPs once here, which
+//! makes obvhs's CPU slab test and the WGSL one conservative against rounding alike.
+
+pub mod intersect;
+pub mod traverse;
+
+use std::time::{Duration, Instant};
+
+use glam::{Vec3, Vec3A};
+use obvhs::BvhBuildParams;
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::Bvh2;
+
+use crate::layout::*;
+use crate::math::sampling::strata_columns;
+use crate::scene::{Light, Scene, SamplerName, Shape};
+
+/// Everything the kernels (and the CPU reference) read, ready to upload.
+pub struct FlatScene {
+    /// obvhs BVH over `prims[..frame.plane_start]`; leaves index `prims` directly.
+    pub bvh: Bvh2,
+    pub nodes: Vec<GpuBvhNode>,
+    pub prims: Vec<GpuPrimitive>,
+    pub normals: Vec<GpuNormals>,
+    pub materials: Vec<GpuMaterial>,
+    pub lights: Vec<GpuLight>,
+    pub camera: GpuCamera,
+    pub frame: GpuFrame,
+    /// Longest root-to-leaf path (nodes); bounds the traversal stack.
+    pub bvh_depth: usize,
+    pub triangle_count: usize,
+    pub build_time: Duration,
+}
+
+/// Relative widening of node boxes: 16 ULPs of the box's largest coordinate.
+const BOX_WIDENING: f32 = 16.0 * f32::EPSILON;
+
+pub fn flatten(scene: &Scene) -> FlatScene {
+    let mut materials: Vec<GpuMaterial> = scene
+        .materials
+        .iter()
+        .map(|m| GpuMaterial {
+            diffuse: m.diffuse.to_array(),
+            model: m.model,
+            specular: m.specular.to_array(),
+            shininess: m.shininess,
+            mirror: m.mirror.to_array(),
+            ..Default::default()
+        })
+        .collect();
+    let mut bounded: Vec<(GpuPrimitive, Option<GpuNormals>)> = Vec::new();
+    let mut planes = Vec::new();
+    let mut triangle_count = 0;
+    for shape in &scene.shapes {
+        match shape {
+            Shape::Sphere { center, radius, material } => bounded.push((
+                prim(PRIM_SPHERE, *material, *center, Vec3::new(*radius, 0.0, 0.0), Vec3::ZERO),
+                None,
+            )),
+            Shape::Quad { corner, edge_u, edge_v, material } => {
+                bounded.push((prim(PRIM_QUAD, *material, *corner, *edge_u, *edge_v), None))
+            }
+            Shape::Plane { point, normal, material } => {
+                planes.push(prim(PRIM_PLANE, *material, *point, *normal, Vec3::ZERO))
+            }
+            Shape::Mesh { mesh, material } => {
+                triangle_count += mesh.triangles.len();
+                for t in &mesh.triangles {
+                    let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+                    let normals = mesh.normals.as_ref().map(|n| {
+                        let [na, nb, nc] = t.map(|i| n[i as usize]);
+                        GpuNormals {
+                            n: [na.x, na.y, na.z, nb.x, nb.y, nb.z, nc.x, nc.y, nc.z],
+                        }
+                    });
+                    bounded.push((prim(PRIM_TRIANGLE, *material, a, b, c), normals));
+                }
+            }
+        }
+    }
+    // Area lights are surfaces too: a one-sided emitting quad with a material of its own.
+    let mut lights = Vec::new();
+    for light in &scene.lights {
+        lights.push(match *light {
+            Light::Point { position, intensity } => GpuLight {
+                p0: position.to_array(),
+                kind: LIGHT_POINT,
+                color: intensity.to_array(),
+                prim: NONE,
+                ..Default::default()
+            },
+            Light::Directional { direction, irradiance } => GpuLight {
+                p0: (-direction).to_array(),
+                kind: LIGHT_DIRECTIONAL,
+                color: irradiance.to_array(),
+                prim: NONE,
+                ..Default::default()
+            },
+            Light::Area { corner, edge_u, edge_v, radiance, samples } => {
+                materials.push(GpuMaterial {
+                    model: MODEL_EMITTER,
+                    emission: radiance.to_array(),
+                    ..Default::default()
+                });
+                let material = materials.len() as u32 - 1;
+                bounded.push((prim(PRIM_QUAD, material, corner, edge_u, edge_v), None));
+                GpuLight {
+                    p0: corner.to_array(),
+                    kind: LIGHT_AREA,
+                    p1: edge_u.to_array(),
+                    samples,
+                    p2: edge_v.to_array(),
+                    // Pre-reorder index for now; remapped after the BVH build below.
+                    prim: bounded.len() as u32 - 1,
+                    color: radiance.to_array(),
+                    strata_columns: strata_columns(samples),
+                }
+            }
+        });
+    }
+
+    let start = Instant::now();
+    let aabbs: Vec<Aabb> = bounded.iter().map(|(p, _)| primitive_bounds(p)).collect();
+    let mut core_time = Duration::ZERO;
+    let mut bvh = if aabbs.is_empty() {
+        Bvh2::default()
+    } else {
+        obvhs::bvh2::builder::build_bvh2(&aabbs, BvhBuildParams::medium_build(), &mut core_time)
+    };
+    for node in &mut bvh.nodes {
+        widen(&mut node.aabb);
+    }
+    let build_time = start.elapsed();
+
+    // Reorder primitives so leaves index them directly; remap the area lights' quads.
+    let order = &bvh.primitive_indices;
+    let mut new_position = vec![0u32; bounded.len()];
+    for (new, &old) in order.iter().enumerate() {
+        new_position[old as usize] = new as u32;
+    }
+    let mut prims = Vec::with_capacity(bounded.len() + planes.len());
+    let mut normals = Vec::new();
+    for &old in order {
+        let (mut p, n) = bounded[old as usize];
+        if let Some(n) = n {
+            p.normals = normals.len() as u32;
+            normals.push(n);
+        }
+        prims.push(p);
+    }
+    for light in &mut lights {
+        if light.prim != NONE {
+            light.prim = new_position[light.prim as usize];
+        }
+    }
+    let plane_start = prims.len() as u32;
+    prims.extend(&planes);
+
+    let nodes: Vec<GpuBvhNode> = bvh
+        .nodes
+        .iter()
+        .map(|n| GpuBvhNode {
+            min: n.aabb.min.to_array(),
+            prim_count: n.prim_count,
+            max: n.aabb.max.to_array(),
+            first_index: n.first_index,
+        })
+        .collect();
+    let bvh_depth = tree_depth(&nodes);
+    // obvhs sizes its CPU traversal stack from this field.
+    bvh.max_depth = bvh.max_depth.max(bvh_depth + 1);
+    let render = &scene.render;
+    let frame = GpuFrame {
+        width: render.width,
+        height: render.height,
+        spp: render.spp,
+        max_depth: render.max_depth,
+        seed: render.seed,
+        pixel_sampler: match render.pixel_sampler {
+            SamplerName::Random => SAMPLER_RANDOM,
+            SamplerName::Stratified => SAMPLER_STRATIFIED,
+        },
+        light_count: lights.len() as u32,
+        node_count: nodes.len() as u32,
+        plane_start,
+        plane_count: planes.len() as u32,
+        traversal_cap: 2 * nodes.len() as u32 + 64,
+        pixel_strata_columns: strata_columns(render.spp),
+        background: render.background.to_array(),
+        ambient: render.ambient.to_array(),
+        ..Default::default()
+    };
+    FlatScene {
+        bvh,
+        nodes,
+        prims,
+        normals,
+        materials,
+        lights,
+        camera: scene.camera.to_gpu(),
+        frame,
+        bvh_depth,
+        triangle_count,
+        build_time,
+    }
+}
+
+fn prim(kind: u32, material: u32, p0: Vec3, p1: Vec3, p2: Vec3) -> GpuPrimitive {
+    GpuPrimitive {
+        p0: p0.to_array(),
+        kind,
+        p1: p1.to_array(),
+        material,
+        p2: p2.to_array(),
+        normals: NONE,
+    }
+}
+
+fn primitive_bounds(p: &GpuPrimitive) -> Aabb {
+    let [a, b, c] = [p.p0, p.p1, p.p2].map(Vec3A::from);
+    match p.kind {
+        PRIM_SPHERE => Aabb::new(a - Vec3A::splat(b.x), a + Vec3A::splat(b.x)),
+        PRIM_QUAD => Aabb::from_points(&[a, a + b, a + c, a + b + c]),
+        _ => Aabb::from_points(&[a, b, c]),
+    }
+}
+
+fn widen(aabb: &mut Aabb) {
+    let scale = aabb.min.abs().max(aabb.max.abs()).max_element();
+    let margin = Vec3A::splat(scale * BOX_WIDENING + f32::MIN_POSITIVE);
+    aabb.min -= margin;
+    aabb.max += margin;
+}
+
+fn tree_depth(nodes: &[GpuBvhNode]) -> usize {
+    if nodes.is_empty() {
+        return 0;
+    }
+    let mut deepest = 0;
+    let mut stack = vec![(0usize, 1usize)];
+    while let Some((index, depth)) = stack.pop() {
+        deepest = deepest.max(depth);
+        let node = nodes[index];
+        if node.prim_count == 0 {
+            stack.push((node.first_index as usize, depth + 1));
+            stack.push((node.first_index as usize + 1, depth + 1));
+        }
+    }
+    deepest
+}

@@ -1,0 +1,74 @@
+//! The one error type of the library. `main.rs` alone turns it into a message and an exit code.
+
+use std::path::PathBuf;
+
+/// Where in a scene file a problem was found: file, 1-based line and column, and the field path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Location {
+    pub file: PathBuf,
+    /// 1-based line, or 0 when the value came from a `--set` override.
+    pub line: usize,
+    pub column: usize,
+    /// Dotted field path, e.g. `shapes[2].radius`; empty for syntax errors.
+    pub field: String,
+}
+
+impl std::fmt::Display for Location {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.line == 0 {
+            write!(f, "{} (set on the command line)", self.file.display())?;
+        } else {
+            write!(f, "{}:{}:{}", self.file.display(), self.line, self.column)?;
+        }
+        if !self.field.is_empty() {
+            write!(f, ": field `{}`", self.field)?;
+        }
+        Ok(())
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The scene file (or a file it names) is malformed or physically meaningless.
+    #[error("{location}: {message}")]
+    Scene { location: Location, message: String },
+
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// A command-line override `--set key=value` is malformed.
+    #[error("--set {key}: {message}")]
+    Override { key: String, message: String },
+
+    /// No GPU adapter could be found (or the one found cannot run chambre's kernels).
+    #[error("no GPU adapter: {0}")]
+    NoAdapter(String),
+
+    /// The GPU reported an error (validation, out of memory, device lost, timeout).
+    #[error("GPU error: {0}")]
+    Gpu(String),
+
+    /// Writing the output image failed.
+    #[error("{path}: cannot write image: {message}")]
+    Output { path: PathBuf, message: String },
+
+    /// The render was stopped (Ctrl-C) before all samples were taken.
+    #[error("render interrupted after {done} of {total} samples per pixel")]
+    Interrupted { done: u32, total: u32 },
+}
+
+impl Error {
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

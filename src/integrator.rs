@@ -1,0 +1,231 @@
+//! The Whitted integrator: one camera sample -> radiance. Twin: `wgsl/integrator.wgsl`.
+//!
+//! Per hit: emission of a front-facing area light (which then ends the path: it reflects
+//! nothing), ambient term diffuse * L_a, direct light from every light through shadow rays,
+//! then a perfect-mirror bounce while the mirror reflectance is non-zero and depth < max_depth.
+//! The bounce is a loop, not recursion, exactly as on the GPU. Radiometry follows pbrt:
+//! Lambert = diffuse / pi; normalised Phong = ks (n + 2) / (2 pi) cos^n(alpha) with alpha between
+//! the mirror direction of the light and the viewer; normalised Blinn-Phong = ks (n + 8) / (8 pi)
+//! cos^n(theta_h).
+
+use std::f32::consts::PI;
+
+use glam::{Vec2, Vec3};
+
+use crate::accel::FlatScene;
+use crate::accel::intersect::{Hit, RayQuery, offset_ray_origin};
+use crate::accel::traverse::{closest_hit, occluded};
+use crate::camera::{film_position_mm, generate_ray};
+use crate::layout::*;
+use crate::math::rng::Rng;
+use crate::math::sampling::stratified_2d;
+
+/// Counters a sample adds to (rays traced, paths cut off at `max_depth`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SampleStats {
+    pub rays: u64,
+    pub truncated: u64,
+}
+
+/// A surface point as shading needs it; normals face the side the ray came from.
+struct Surface {
+    position: Vec3,
+    geometric_normal: Vec3,
+    shading_normal: Vec3,
+    front_facing: bool,
+}
+
+fn surface_at(scene: &FlatScene, prim: &GpuPrimitive, ray: &RayQuery, hit: Hit) -> Surface {
+    let (p0, p1, p2) = (Vec3::from(prim.p0), Vec3::from(prim.p1), Vec3::from(prim.p2));
+    // Recompute the position from the primitive itself: its error then scales with the
+    // primitive's coordinates, not with the distance travelled (origin offsets rely on it).
+    let (position, normal, shading) = match prim.kind {
+        PRIM_TRIANGLE => {
+            let b0 = 1.0 - hit.b1 - hit.b2;
+            let position = b0 * p0 + hit.b1 * p1 + hit.b2 * p2;
+            let normal = (p1 - p0).cross(p2 - p0).normalize();
+            let shading = if prim.normals == NONE {
+                normal
+            } else {
+                let n = scene.normals[prim.normals as usize].n;
+                let interpolated = b0 * Vec3::new(n[0], n[1], n[2])
+                    + hit.b1 * Vec3::new(n[3], n[4], n[5])
+                    + hit.b2 * Vec3::new(n[6], n[7], n[8]);
+                let length = interpolated.length();
+                if length > 0.0 { interpolated / length } else { normal }
+            };
+            (position, normal, shading)
+        }
+        PRIM_SPHERE => {
+            let outward = (ray.origin + hit.t * ray.direction - p0).normalize();
+            (p0 + p1.x * outward, outward, outward)
+        }
+        PRIM_QUAD => {
+            let normal = p1.cross(p2).normalize();
+            (p0 + hit.b1 * p1 + hit.b2 * p2, normal, normal)
+        }
+        _ => {
+            let raw = ray.origin + hit.t * ray.direction;
+            (raw - (raw - p0).dot(p1) * p1, p1, p1)
+        }
+    };
+    // Two-sided shading: turn both normals towards the incoming ray.
+    let front_facing = normal.dot(ray.direction) < 0.0;
+    let geometric_normal = if front_facing { normal } else { -normal };
+    let mut shading_normal = if front_facing { shading } else { -shading };
+    if shading_normal.dot(geometric_normal) < 0.0 {
+        shading_normal = -shading_normal;
+    }
+    Surface {
+        position,
+        geometric_normal,
+        shading_normal,
+        front_facing,
+    }
+}
+
+/// BRDF value for light arriving along `wi` and leaving along `wo` (both unit, away from p).
+pub fn eval_brdf(material: &GpuMaterial, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
+    let mut f = Vec3::from(material.diffuse) / PI;
+    let specular = Vec3::from(material.specular);
+    let exponent = material.shininess;
+    if material.model == MODEL_PHONG {
+        let reflected = 2.0 * n.dot(wi) * n - wi;
+        let cos_alpha = reflected.dot(wo);
+        if cos_alpha > 0.0 {
+            f += specular * ((exponent + 2.0) / (2.0 * PI)) * cos_alpha.powf(exponent);
+        }
+    } else if material.model == MODEL_BLINN_PHONG {
+        let half = (wi + wo).normalize();
+        let cos_h = n.dot(half);
+        if cos_h > 0.0 {
+            f += specular * ((exponent + 8.0) / (8.0 * PI)) * cos_h.powf(exponent);
+        }
+    }
+    f
+}
+
+/// Light reflected towards `wo` from every light, with shadow rays.
+fn direct_light(
+    scene: &FlatScene,
+    surface: &Surface,
+    material: &GpuMaterial,
+    prim_id: u32,
+    wo: Vec3,
+    rng: &mut Rng,
+    stats: &mut SampleStats,
+) -> Vec3 {
+    let n = surface.shading_normal;
+    let ng = surface.geometric_normal;
+    let origin = offset_ray_origin(surface.position, ng);
+    let mut total = Vec3::ZERO;
+    for light in &scene.lights[..scene.frame.light_count as usize] {
+        let color = Vec3::from(light.color);
+        if light.kind == LIGHT_AREA {
+            // Stratified points on the parallelogram; each sample draws its numbers first so
+            // both paths consume the same dimensions whatever the visibility.
+            let corner = Vec3::from(light.p0);
+            let (edge_u, edge_v) = (Vec3::from(light.p1), Vec3::from(light.p2));
+            let cross = edge_u.cross(edge_v);
+            let area = cross.length();
+            let light_normal = cross / area;
+            let mut sum = Vec3::ZERO;
+            for k in 0..light.samples {
+                let u = stratified_2d(k, light.samples, light.strata_columns, rng.next_2d());
+                let to_light = corner + u[0] * edge_u + u[1] * edge_v - surface.position;
+                let distance = to_light.length();
+                let wi = to_light / distance;
+                let cos_surface = n.dot(wi);
+                let cos_light = -light_normal.dot(wi);
+                if cos_surface > 0.0 && cos_light > 0.0 && ng.dot(wi) > 0.0 {
+                    stats.rays += 1;
+                    if !occluded(scene, &RayQuery::new(origin, wi), prim_id, light.prim, distance) {
+                        sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance);
+                    }
+                }
+            }
+            total += color * sum * (area / light.samples as f32);
+        } else {
+            let (wi, distance, falloff) = if light.kind == LIGHT_POINT {
+                let to_light = Vec3::from(light.p0) - surface.position;
+                let distance = to_light.length();
+                (to_light / distance, distance, 1.0 / (distance * distance))
+            } else {
+                (Vec3::from(light.p0), T_FAR, 1.0)
+            };
+            let cos_surface = n.dot(wi);
+            if cos_surface > 0.0 && ng.dot(wi) > 0.0 {
+                stats.rays += 1;
+                if !occluded(scene, &RayQuery::new(origin, wi), prim_id, NONE, distance) {
+                    total += eval_brdf(material, n, wo, wi) * color * (cos_surface * falloff);
+                }
+            }
+        }
+    }
+    total
+}
+
+/// Radiance along one path that starts with `origin`, `direction`.
+pub fn trace_path(scene: &FlatScene, origin: Vec3, direction: Vec3, rng: &mut Rng, stats: &mut SampleStats) -> Vec3 {
+    let frame = &scene.frame;
+    let mut radiance = Vec3::ZERO;
+    let mut throughput = Vec3::ONE;
+    let mut ray = RayQuery::new(origin, direction);
+    let mut skip = NONE;
+    for depth in 0..=frame.max_depth {
+        stats.rays += 1;
+        let Some((prim_id, hit)) = closest_hit(scene, &ray, skip, T_FAR) else {
+            radiance += throughput * Vec3::from(frame.background);
+            break;
+        };
+        let prim = &scene.prims[prim_id as usize];
+        let material = &scene.materials[prim.material as usize];
+        let surface = surface_at(scene, prim, &ray, hit);
+        // An area light shows its radiance from the front, is black from behind, reflects nothing.
+        if material.model == MODEL_EMITTER {
+            if surface.front_facing {
+                radiance += throughput * Vec3::from(material.emission);
+            }
+            break;
+        }
+        let wo = -ray.direction;
+        radiance += throughput * Vec3::from(material.diffuse) * Vec3::from(frame.ambient);
+        radiance += throughput * direct_light(scene, &surface, material, prim_id, wo, rng, stats);
+        // Perfect mirror bounce.
+        let mirror = Vec3::from(material.mirror);
+        if mirror.max_element() <= 0.0 {
+            break;
+        }
+        if depth == frame.max_depth {
+            stats.truncated += 1;
+            break;
+        }
+        let n = surface.shading_normal;
+        let reflected = ray.direction - 2.0 * ray.direction.dot(n) * n;
+        if reflected.dot(surface.geometric_normal) <= 0.0 {
+            break;
+        }
+        throughput *= mirror;
+        ray = RayQuery::new(offset_ray_origin(surface.position, surface.geometric_normal), reflected.normalize());
+        skip = if prim.kind == PRIM_SPHERE { NONE } else { prim_id };
+    }
+    radiance
+}
+
+/// Radiance of sample `sample` of pixel (x, y): pixel jitter (dimensions 0-1), lens point (2-3),
+/// then the path.
+pub fn trace_sample(scene: &FlatScene, x: u32, y: u32, sample: u32, stats: &mut SampleStats) -> Vec3 {
+    let frame = &scene.frame;
+    let mut rng = Rng::new(frame.seed, y * frame.width + x, sample);
+    let u = rng.next_2d();
+    let jitter = if frame.pixel_sampler == SAMPLER_STRATIFIED {
+        stratified_2d(sample, frame.spp, frame.pixel_strata_columns, u)
+    } else {
+        u
+    };
+    let raster = Vec2::new(x as f32 + jitter[0], y as f32 + jitter[1]);
+    let film = film_position_mm(&scene.camera, frame.width, frame.height, raster);
+    let lens_u = rng.next_2d();
+    let ray = generate_ray(&scene.camera, film, lens_u);
+    trace_path(scene, ray.origin, ray.direction, &mut rng, stats)
+}

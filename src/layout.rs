@@ -1,0 +1,220 @@
+//! Every struct and constant shared by the Rust reference path and the WGSL kernels.
+//!
+//! The CPU reference renders from the very same flattened arrays the GPU reads (pbrt's and
+//! Mitsuba's "one scene, two traversals"), so a parity test compares two implementations of the
+//! same scene, not two scenes. Each struct has a WGSL twin of the same name and field names in
+//! `wgsl/types.wgsl`; `tests/wgsl_layout.rs` checks sizes and offsets with naga, and the constants
+//! below are emitted into every composed kernel by [`wgsl_prelude`], never written twice.
+
+use bytemuck::{Pod, Zeroable};
+
+/// Kernel workgroup edge: a workgroup covers `WORKGROUP_SIZE x WORKGROUP_SIZE` pixels.
+pub const WORKGROUP_SIZE: u32 = 8;
+/// Depth of the per-invocation BVH traversal stack. Deeper BVHs are refused before upload.
+pub const BVH_STACK_SIZE: u32 = 64;
+/// Finite stand-in for an unbounded ray: WGSL may assume infinities never occur.
+pub const T_FAR: f32 = 1.0e30;
+/// Marks "no primitive" / "no normals" in index fields.
+pub const NONE: u32 = u32::MAX;
+
+/// Primitive kinds (`GpuPrimitive::kind`).
+pub const PRIM_TRIANGLE: u32 = 0;
+pub const PRIM_SPHERE: u32 = 1;
+pub const PRIM_QUAD: u32 = 2;
+pub const PRIM_PLANE: u32 = 3;
+
+/// Material models (`GpuMaterial::model`); every model also carries a perfect-mirror term.
+pub const MODEL_LAMBERT: u32 = 0;
+pub const MODEL_PHONG: u32 = 1;
+pub const MODEL_BLINN_PHONG: u32 = 2;
+/// The one-sided emitting surface of an area light.
+pub const MODEL_EMITTER: u32 = 3;
+
+/// Light kinds (`GpuLight::kind`).
+pub const LIGHT_POINT: u32 = 0;
+pub const LIGHT_DIRECTIONAL: u32 = 1;
+pub const LIGHT_AREA: u32 = 2;
+
+/// Sampler kinds (`GpuFrame::pixel_sampler`).
+pub const SAMPLER_RANDOM: u32 = 0;
+pub const SAMPLER_STRATIFIED: u32 = 1;
+
+/// Bits of the status word: a kernel loop hit its cap.
+pub const STATUS_TRAVERSAL_CAP: u32 = 1;
+pub const STATUS_STACK_OVERFLOW: u32 = 2;
+/// Slots of the status buffer (array<atomic<u32>, STATUS_WORDS>).
+pub const STATUS_FLAGS: u32 = 0;
+pub const STATUS_RAYS: u32 = 1;
+pub const STATUS_TRUNCATED: u32 = 2;
+pub const STATUS_WORDS: u32 = 4;
+
+/// A BVH node: obvhs's `Bvh2Node` without its spare fields. Inner node: `prim_count == 0` and
+/// children at `first_index` and `first_index + 1`. Leaf: primitives
+/// `first_index .. first_index + prim_count` of the primitive array, already in BVH order.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuBvhNode {
+    pub min: [f32; 3],
+    pub prim_count: u32,
+    pub max: [f32; 3],
+    pub first_index: u32,
+}
+
+/// One primitive. Triangle: `p0, p1, p2` are its vertices, `normals` indexes `GpuNormals` or is
+/// `NONE`. Sphere: `p0` centre, `p1.x` radius. Quad: `p0` corner, `p1` edge_u, `p2` edge_v.
+/// Plane: `p0` a point, `p1` the unit normal. Planes are unbounded and live after the BVH's
+/// primitives (`GpuFrame::plane_start`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPrimitive {
+    pub p0: [f32; 3],
+    pub kind: u32,
+    pub p1: [f32; 3],
+    pub material: u32,
+    pub p2: [f32; 3],
+    pub normals: u32,
+}
+
+/// Vertex normals of a smooth triangle, n0, n1, n2 packed as 9 floats.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuNormals {
+    pub n: [f32; 9],
+}
+
+/// Material parameters; radiometry as in pbrt: Lambert BRDF = diffuse / pi.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub diffuse: [f32; 3],
+    pub model: u32,
+    pub specular: [f32; 3],
+    pub shininess: f32,
+    pub mirror: [f32; 3],
+    pub _pad0: u32,
+    pub emission: [f32; 3],
+    pub _pad1: u32,
+}
+
+/// A light. Point: `p0` position, `color` intensity (W/sr). Directional: `p0` unit vector
+/// towards the light, `color` irradiance. Area: `p0` corner, `p1` edge_u, `p2` edge_v, `color`
+/// radiance, `samples` shadow rays, `prim` its emitting quad (skipped by its own shadow rays).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    pub p0: [f32; 3],
+    pub kind: u32,
+    pub p1: [f32; 3],
+    pub samples: u32,
+    pub p2: [f32; 3],
+    pub prim: u32,
+    pub color: [f32; 3],
+    /// Columns of the area light's sample strata (`math::sampling::strata_columns(samples)`).
+    pub strata_columns: u32,
+}
+
+/// The camera as ray generation needs it (see `docs/camera.md`). Lengths on the film and lens are
+/// in millimetres in the *lens frame* (lens plane z = 0, optical axis +z, x right, y up);
+/// `lens_to_world_*` are the lens frame's axes in world space and `lens_center` its origin.
+/// A film point for image coordinates (x, y) in mm is `film_center + x * film_u + y * film_v`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCamera {
+    pub lens_to_world_x: [f32; 3],
+    pub focal_length_mm: f32,
+    pub lens_to_world_y: [f32; 3],
+    pub lens_radius_mm: f32,
+    pub lens_to_world_z: [f32; 3],
+    /// Scene units per millimetre (lens points are in mm, ray origins in scene units).
+    pub units_per_mm: f32,
+    pub lens_center: [f32; 3],
+    /// 1 / focal length (1/mm): the ray-transfer refraction term.
+    pub inv_focal_length_mm: f32,
+    pub film_center: [f32; 3],
+    pub film_width_mm: f32,
+    pub film_u: [f32; 3],
+    pub film_height_mm: f32,
+    pub film_v: [f32; 3],
+    pub _pad0: u32,
+}
+
+/// Settings constant over one render.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuFrame {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    pub seed: u32,
+    pub pixel_sampler: u32,
+    pub light_count: u32,
+    pub node_count: u32,
+    pub plane_start: u32,
+    pub plane_count: u32,
+    /// Node-pair visits allowed per traversal before the kernel gives up and flags it.
+    pub traversal_cap: u32,
+    /// Columns of the pixel-sample strata (`math::sampling::strata_columns(spp)`).
+    pub pixel_strata_columns: u32,
+    pub background: [f32; 3],
+    pub _pad1: u32,
+    pub ambient: [f32; 3],
+    pub _pad2: u32,
+}
+
+/// What one dispatch renders: a tile of pixels and a range of sample indices.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPass {
+    pub tile_x: u32,
+    pub tile_y: u32,
+    pub tile_width: u32,
+    pub tile_height: u32,
+    pub sample_start: u32,
+    pub sample_count: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+}
+
+const _: () = assert!(size_of::<GpuBvhNode>() == 32);
+const _: () = assert!(size_of::<GpuPrimitive>() == 48);
+const _: () = assert!(size_of::<GpuNormals>() == 36);
+const _: () = assert!(size_of::<GpuMaterial>() == 64);
+const _: () = assert!(size_of::<GpuLight>() == 64);
+const _: () = assert!(size_of::<GpuCamera>() == 112);
+const _: () = assert!(size_of::<GpuFrame>() == 80);
+const _: () = assert!(size_of::<GpuPass>() == 32);
+
+/// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
+pub fn wgsl_prelude() -> String {
+    let u32s = [
+        ("WORKGROUP_SIZE", WORKGROUP_SIZE),
+        ("BVH_STACK_SIZE", BVH_STACK_SIZE),
+        ("NONE", NONE),
+        ("PRIM_TRIANGLE", PRIM_TRIANGLE),
+        ("PRIM_SPHERE", PRIM_SPHERE),
+        ("PRIM_QUAD", PRIM_QUAD),
+        ("PRIM_PLANE", PRIM_PLANE),
+        ("MODEL_LAMBERT", MODEL_LAMBERT),
+        ("MODEL_PHONG", MODEL_PHONG),
+        ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),
+        ("MODEL_EMITTER", MODEL_EMITTER),
+        ("LIGHT_POINT", LIGHT_POINT),
+        ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
+        ("LIGHT_AREA", LIGHT_AREA),
+        ("SAMPLER_RANDOM", SAMPLER_RANDOM),
+        ("SAMPLER_STRATIFIED", SAMPLER_STRATIFIED),
+        ("STATUS_TRAVERSAL_CAP", STATUS_TRAVERSAL_CAP),
+        ("STATUS_STACK_OVERFLOW", STATUS_STACK_OVERFLOW),
+        ("STATUS_FLAGS", STATUS_FLAGS),
+        ("STATUS_RAYS", STATUS_RAYS),
+        ("STATUS_TRUNCATED", STATUS_TRUNCATED),
+        ("STATUS_WORDS", STATUS_WORDS),
+    ];
+    let mut out = String::from("// Generated from src/layout.rs: do not edit.\n");
+    for (name, value) in u32s {
+        out += &format!("const {name}: u32 = {value}u;\n");
+    }
+    out += &format!("const T_FAR: f32 = {T_FAR:e};\n");
+    out
+}

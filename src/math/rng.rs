@@ -1,0 +1,45 @@
+//! Counter-based random numbers keyed by (seed, pixel, sample, dimension).
+//! Twin: `wgsl/rng.wgsl`. Integer operations only, so both paths draw bit-identical numbers.
+//!
+//! The hash is the PCG-based one recommended by Jarzynski and Olano, "Hash Functions for GPU
+//! Rendering", JCGT 9(3), 2020: <https://jcgt.org/published/0009/03/02/>
+
+/// PCG hash of one 32-bit word.
+pub fn pcg_hash(v: u32) -> u32 {
+    let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
+    (word >> 22) ^ word
+}
+
+/// The random stream of one camera sample: dimension `dim` of sample `sample` of pixel `pixel`.
+/// Dimensions are drawn in the same order by both paths, so a stream is reproducible from
+/// its key alone, in any order of pixels and samples.
+#[derive(Clone, Copy, Debug)]
+pub struct Rng {
+    key: u32,
+    dim: u32,
+}
+
+impl Rng {
+    pub fn new(seed: u32, pixel: u32, sample: u32) -> Self {
+        let key = pcg_hash(pcg_hash(pcg_hash(seed) ^ pixel) ^ sample);
+        Rng { key, dim: 0 }
+    }
+
+    pub fn next_u32(&mut self) -> u32 {
+        let h = pcg_hash(self.key ^ pcg_hash(self.dim));
+        self.dim += 1;
+        h
+    }
+
+    /// Uniform in [0, 1): the top 24 bits, exactly representable, so exact on both paths.
+    pub fn next_f32(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+    }
+
+    pub fn next_2d(&mut self) -> [f32; 2] {
+        let x = self.next_f32();
+        let y = self.next_f32();
+        [x, y]
+    }
+}

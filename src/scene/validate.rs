@@ -1,0 +1,434 @@
+//! Format structs -> [`Scene`]: every range and reference check, each error naming its field.
+//!
+//! Numbers are checked in f64 before they are narrowed to the f32 the kernels use: finite,
+//! inside f32, and coordinates within +-1e9 scene units (past that, f32 products in the
+//! intersection routines could overflow; see `docs/scene-format.md`).
+
+use glam::{DVec3, Vec3};
+
+use super::format::{LightType, MaterialModel, Scale, SceneFile, ShapeType, Vec3 as F3};
+use super::load::ParsedScene;
+use super::mesh::{load_mesh, transform_mesh};
+use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
+use crate::error::{Error, Result};
+use crate::layout;
+
+/// Largest coordinate or length accepted, in scene units.
+pub const MAX_COORDINATE: f64 = 1.0e9;
+/// Largest image side: wgpu's default texture limit, and a bound on memory.
+pub const MAX_IMAGE_SIDE: i64 = 16384;
+pub const MAX_SPP: i64 = 1 << 20;
+pub const MAX_DEPTH: i64 = 1024;
+pub const MAX_LIGHT_SAMPLES: i64 = 4096;
+
+struct Checker<'a> {
+    parsed: &'a ParsedScene,
+}
+
+impl Checker<'_> {
+    fn err(&self, field: &str, message: impl Into<String>) -> Error {
+        self.parsed.error(field, message)
+    }
+
+    fn finite(&self, field: &str, v: f64) -> Result<f64> {
+        if !v.is_finite() {
+            return Err(self.err(field, format!("must be a finite number, not {v}")));
+        }
+        if v.abs() > f32::MAX as f64 {
+            return Err(self.err(field, format!("{v} does not fit in a 32-bit float")));
+        }
+        Ok(v)
+    }
+
+    fn positive(&self, field: &str, v: f64) -> Result<f64> {
+        let v = self.finite(field, v)?;
+        if v <= 0.0 {
+            return Err(self.err(field, format!("must be positive, got {v}")));
+        }
+        Ok(v)
+    }
+
+    fn vector(&self, field: &str, v: F3) -> Result<DVec3> {
+        for (i, c) in v.iter().enumerate() {
+            self.finite(&format!("{field}[{i}]"), *c)?;
+        }
+        Ok(DVec3::from_array(v))
+    }
+
+    fn point(&self, field: &str, v: F3) -> Result<DVec3> {
+        let p = self.vector(field, v)?;
+        if p.abs().max_element() > MAX_COORDINATE {
+            return Err(self.err(
+                field,
+                format!("{p} lies beyond +-{MAX_COORDINATE:e} scene units (f32 precision limit)"),
+            ));
+        }
+        Ok(p)
+    }
+
+    /// A non-zero direction or edge vector, returned as given.
+    fn nonzero(&self, field: &str, v: F3) -> Result<DVec3> {
+        let d = self.point(field, v)?;
+        if d.length() == 0.0 {
+            return Err(self.err(field, "is a zero-length vector"));
+        }
+        Ok(d)
+    }
+
+    fn color(&self, field: &str, v: F3) -> Result<Vec3> {
+        let c = self.vector(field, v)?;
+        if c.min_element() < 0.0 {
+            return Err(self.err(field, format!("must not be negative, got {c}")));
+        }
+        Ok(c.as_vec3())
+    }
+
+    fn reflectance(&self, field: &str, v: F3) -> Result<Vec3> {
+        let c = self.color(field, v)?;
+        if c.max_element() > 1.0 {
+            return Err(self.err(field, format!("a reflectance lies in [0, 1], got {c}")));
+        }
+        Ok(c)
+    }
+
+    fn integer(&self, field: &str, v: i64, min: i64, max: i64) -> Result<u32> {
+        if v < min || v > max {
+            return Err(self.err(field, format!("must lie in {min}..={max}, got {v}")));
+        }
+        Ok(v as u32)
+    }
+
+    fn require<T: Copy>(&self, field: &str, v: Option<T>, kind: &str) -> Result<T> {
+        v.ok_or_else(|| self.err(field, format!("is required for a {kind}")))
+    }
+
+    /// Fields that belong to other shape or light types are errors, not silently ignored.
+    fn forbid(&self, prefix: &str, kind: &str, present: &[(&str, bool)]) -> Result<()> {
+        match present.iter().find(|(_, p)| *p) {
+            Some((name, _)) => Err(self.err(
+                &format!("{prefix}.{name}"),
+                format!("does not apply to a {kind}"),
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+pub fn validate(parsed: ParsedScene) -> Result<Scene> {
+    let check = Checker { parsed: &parsed };
+    let file: &SceneFile = &parsed.file;
+    let meters_per_unit = match file.scene.meters_per_unit {
+        Some(m) => check.positive("scene.meters_per_unit", m)?,
+        None => 1.0,
+    };
+    let render = validate_render(&check, file)?;
+    let camera = validate_camera(&check, file, &render, meters_per_unit)?;
+    let materials = validate_materials(&check, file)?;
+    let shapes = validate_shapes(&check, file, &materials)?;
+    let lights = validate_lights(&check, file)?;
+    Ok(Scene {
+        source: parsed.path.clone(),
+        render,
+        camera,
+        materials,
+        shapes,
+        lights,
+    })
+}
+
+fn validate_render(check: &Checker, file: &SceneFile) -> Result<RenderSettings> {
+    let r = &file.render;
+    Ok(RenderSettings {
+        width: check.integer("render.width", r.width, 1, MAX_IMAGE_SIDE)?,
+        height: check.integer("render.height", r.height, 1, MAX_IMAGE_SIDE)?,
+        spp: check.integer("render.spp", r.spp, 1, MAX_SPP)?,
+        max_depth: check.integer("render.max_depth", r.max_depth, 0, MAX_DEPTH)?,
+        seed: check.integer("render.seed", r.seed, 0, u32::MAX as i64)?,
+        pixel_sampler: r.pixel_sampler,
+        background: check.color("render.background", r.background)?,
+        ambient: check.color("render.ambient", r.ambient)?,
+    })
+}
+
+fn validate_camera(
+    check: &Checker,
+    file: &SceneFile,
+    render: &RenderSettings,
+    meters_per_unit: f64,
+) -> Result<CameraSpec> {
+    let c = &file.camera;
+    let position = check.point("camera.position", c.position)?;
+    let look_at = check.point("camera.look_at", c.look_at)?;
+    let up = check.nonzero("camera.up", c.up)?;
+    let forward = look_at - position;
+    if forward.length() <= 1e-12 * position.length().max(1.0) {
+        return Err(check.err("camera.look_at", "equals camera.position: no viewing direction"));
+    }
+    if forward.normalize().cross(up.normalize()).length() < 1e-9 {
+        return Err(check.err("camera.up", "is parallel to the viewing direction"));
+    }
+    let film = [
+        check.positive("camera.film[0]", c.film[0])?,
+        check.positive("camera.film[1]", c.film[1])?,
+    ];
+    let film_aspect = film[0] / film[1];
+    let image_aspect = render.width as f64 / render.height as f64;
+    if (film_aspect / image_aspect - 1.0).abs() > 1e-3 {
+        return Err(check.err(
+            "camera.film",
+            format!(
+                "film aspect {film_aspect:.4} ({} x {} mm) does not match the image aspect \
+                 {image_aspect:.4} ({} x {} pixels)",
+                film[0], film[1], render.width, render.height
+            ),
+        ));
+    }
+    let focal_length_mm = match (c.focal_length, c.vertical_fov) {
+        (Some(_), Some(_)) => {
+            return Err(check.err(
+                "camera.vertical_fov",
+                "give either focal_length or vertical_fov, not both",
+            ));
+        }
+        (Some(f), None) => check.positive("camera.focal_length", f)?,
+        (None, Some(fov)) => {
+            let fov = check.finite("camera.vertical_fov", fov)?;
+            if fov <= 0.0 || fov >= 180.0 {
+                return Err(check.err("camera.vertical_fov", format!("must lie in (0, 180) degrees, got {fov}")));
+            }
+            0.5 * film[1] / (0.5 * fov.to_radians()).tan()
+        }
+        (None, None) => 50.0,
+    };
+    let f_number = match c.f_number {
+        Some(n) => {
+            let n = check.finite("camera.f_number", n)?;
+            if n < 0.0 {
+                return Err(check.err("camera.f_number", format!("must be 0 (pinhole) or positive, got {n}")));
+            }
+            n
+        }
+        None => 0.0,
+    };
+    let units_per_mm = 0.001 / meters_per_unit;
+    let focus_distance = match c.focus_distance {
+        Some(d) if d == f64::INFINITY => None,
+        Some(d) => {
+            let d = check.positive("camera.focus_distance", d)?;
+            if f_number > 0.0 && d / units_per_mm <= focal_length_mm {
+                return Err(check.err(
+                    "camera.focus_distance",
+                    format!(
+                        "{d} scene units ({} mm) is not beyond the focal length {focal_length_mm} mm: \
+                         no real image forms",
+                        d / units_per_mm
+                    ),
+                ));
+            }
+            Some(d)
+        }
+        None => None,
+    };
+    Ok(CameraSpec {
+        position,
+        look_at,
+        up,
+        focal_length_mm,
+        film_mm: film,
+        f_number,
+        focus_distance,
+        units_per_mm,
+    })
+}
+
+fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>> {
+    let mut materials: Vec<Material> = Vec::new();
+    for (i, m) in file.materials.iter().enumerate() {
+        let at = |f: &str| format!("materials[{i}].{f}");
+        if materials.iter().any(|o| o.name == m.name) {
+            return Err(check.err(&at("name"), format!("duplicate material name `{}`", m.name)));
+        }
+        let is_mirror = m.model == MaterialModel::Mirror;
+        let default_diffuse = if is_mirror { [0.0; 3] } else { [0.8; 3] };
+        let default_mirror = if is_mirror { [1.0; 3] } else { [0.0; 3] };
+        let specular = check.reflectance(&at("specular"), m.specular.unwrap_or([0.0; 3]))?;
+        let uses_lobe = matches!(m.model, MaterialModel::Phong | MaterialModel::BlinnPhong);
+        if !uses_lobe && (m.specular.is_some() || m.shininess.is_some()) {
+            let field = if m.specular.is_some() { "specular" } else { "shininess" };
+            return Err(check.err(&at(field), "only phong and blinn_phong materials have a specular lobe"));
+        }
+        let shininess = check.finite(&at("shininess"), m.shininess.unwrap_or(32.0))?;
+        if !(0.0..=1.0e4).contains(&shininess) {
+            return Err(check.err(&at("shininess"), format!("must lie in [0, 10000], got {shininess}")));
+        }
+        materials.push(Material {
+            name: m.name.clone(),
+            model: match m.model {
+                MaterialModel::Lambert | MaterialModel::Mirror => layout::MODEL_LAMBERT,
+                MaterialModel::Phong => layout::MODEL_PHONG,
+                MaterialModel::BlinnPhong => layout::MODEL_BLINN_PHONG,
+            },
+            diffuse: check.reflectance(&at("diffuse"), m.diffuse.unwrap_or(default_diffuse))?,
+            specular,
+            shininess: shininess as f32,
+            mirror: check.reflectance(&at("mirror"), m.mirror.unwrap_or(default_mirror))?,
+        });
+    }
+    Ok(materials)
+}
+
+fn validate_shapes(check: &Checker, file: &SceneFile, materials: &[Material]) -> Result<Vec<Shape>> {
+    let scene_dir = check.parsed.path.parent().unwrap_or(std::path::Path::new("."));
+    let mut shapes = Vec::new();
+    for (i, s) in file.shapes.iter().enumerate() {
+        let prefix = format!("shapes[{i}]");
+        let at = |f: &str| format!("{prefix}.{f}");
+        let material = materials
+            .iter()
+            .position(|m| m.name == s.material)
+            .ok_or_else(|| check.err(&at("material"), format!("unknown material `{}`", s.material)))?
+            as u32;
+        let sphere_fields = [("center", s.center.is_some()), ("radius", s.radius.is_some())];
+        let quad_fields = [
+            ("corner", s.corner.is_some()),
+            ("edge_u", s.edge_u.is_some()),
+            ("edge_v", s.edge_v.is_some()),
+        ];
+        let plane_fields = [("point", s.point.is_some()), ("normal", s.normal.is_some())];
+        let mesh_fields = [
+            ("file", s.file.is_some()),
+            ("translate", s.translate.is_some()),
+            ("rotate", s.rotate.is_some()),
+            ("scale", s.scale.is_some()),
+            ("smooth", s.smooth.is_some()),
+        ];
+        let shape = match s.kind {
+            ShapeType::Sphere => {
+                check.forbid(&prefix, "sphere", &[&quad_fields[..], &plane_fields, &mesh_fields].concat())?;
+                let center = check.point(&at("center"), check.require(&at("center"), s.center, "sphere")?)?;
+                let radius = check.positive(&at("radius"), check.require(&at("radius"), s.radius, "sphere")?)?;
+                if radius > MAX_COORDINATE {
+                    return Err(check.err(&at("radius"), format!("exceeds {MAX_COORDINATE:e}")));
+                }
+                Shape::Sphere { center: center.as_vec3(), radius: radius as f32, material }
+            }
+            ShapeType::Quad => {
+                check.forbid(&prefix, "quad", &[&sphere_fields[..], &plane_fields, &mesh_fields].concat())?;
+                let (corner, edge_u, edge_v) = parallelogram(check, &prefix, s.corner, s.edge_u, s.edge_v, "quad")?;
+                Shape::Quad { corner, edge_u, edge_v, material }
+            }
+            ShapeType::Plane => {
+                check.forbid(&prefix, "plane", &[&sphere_fields[..], &quad_fields, &mesh_fields].concat())?;
+                let point = check.point(&at("point"), check.require(&at("point"), s.point, "plane")?)?;
+                let normal = check.nonzero(&at("normal"), check.require(&at("normal"), s.normal, "plane")?)?;
+                Shape::Plane { point: point.as_vec3(), normal: normal.normalize().as_vec3(), material }
+            }
+            ShapeType::Mesh => {
+                check.forbid(&prefix, "mesh", &[&sphere_fields[..], &quad_fields, &plane_fields].concat())?;
+                let name = check.require(&at("file"), s.file.as_ref(), "mesh")?;
+                let path = scene_dir.join(name);
+                let mut mesh = load_mesh(&path)
+                    .map_err(|e| check.err(&at("file"), format!("{}: {e}", path.display())))?;
+                let scale = match s.scale.unwrap_or(Scale::Uniform(1.0)) {
+                    Scale::Uniform(k) => DVec3::splat(check.finite(&at("scale"), k)?),
+                    Scale::PerAxis(v) => check.vector(&at("scale"), v)?,
+                };
+                if scale.min_element() == 0.0 || scale.abs().min_element() == 0.0 {
+                    return Err(check.err(&at("scale"), "a zero scale flattens the mesh"));
+                }
+                let rotate = check.vector(&at("rotate"), s.rotate.unwrap_or([0.0; 3]))?;
+                let translate = check.point(&at("translate"), s.translate.unwrap_or([0.0; 3]))?;
+                if !s.smooth.unwrap_or(true) {
+                    mesh.normals = None;
+                }
+                transform_mesh(&mut mesh, scale.as_vec3(), rotate.as_vec3(), translate.as_vec3());
+                if let Some(p) = mesh.positions.iter().find(|p| p.abs().max_element() as f64 > MAX_COORDINATE) {
+                    return Err(check.err(
+                        &at("file"),
+                        format!("vertex {p} lies beyond +-{MAX_COORDINATE:e} scene units after transformation"),
+                    ));
+                }
+                Shape::Mesh { mesh, material }
+            }
+        };
+        shapes.push(shape);
+    }
+    Ok(shapes)
+}
+
+/// Corner and two non-parallel, non-zero edges of a quad or an area light.
+fn parallelogram(
+    check: &Checker,
+    prefix: &str,
+    corner: Option<F3>,
+    edge_u: Option<F3>,
+    edge_v: Option<F3>,
+    kind: &str,
+) -> Result<(Vec3, Vec3, Vec3)> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let corner = check.point(&at("corner"), check.require(&at("corner"), corner, kind)?)?;
+    let u = check.nonzero(&at("edge_u"), check.require(&at("edge_u"), edge_u, kind)?)?;
+    let v = check.nonzero(&at("edge_v"), check.require(&at("edge_v"), edge_v, kind)?)?;
+    if u.normalize().cross(v.normalize()).length() < 1e-9 {
+        return Err(check.err(&at("edge_v"), "is parallel to edge_u: the parallelogram has no area"));
+    }
+    Ok((corner.as_vec3(), u.as_vec3(), v.as_vec3()))
+}
+
+fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
+    let mut lights = Vec::new();
+    for (i, l) in file.lights.iter().enumerate() {
+        let prefix = format!("lights[{i}]");
+        let at = |f: &str| format!("{prefix}.{f}");
+        let point_fields = [("position", l.position.is_some()), ("intensity", l.intensity.is_some())];
+        let directional_fields = [("direction", l.direction.is_some()), ("irradiance", l.irradiance.is_some())];
+        let area_fields = [
+            ("corner", l.corner.is_some()),
+            ("edge_u", l.edge_u.is_some()),
+            ("edge_v", l.edge_v.is_some()),
+            ("radiance", l.radiance.is_some()),
+            ("samples", l.samples.is_some()),
+        ];
+        let light = match l.kind {
+            LightType::Point => {
+                check.forbid(&prefix, "point light", &[&directional_fields[..], &area_fields].concat())?;
+                Light::Point {
+                    position: check
+                        .point(&at("position"), check.require(&at("position"), l.position, "point light")?)?
+                        .as_vec3(),
+                    intensity: check
+                        .color(&at("intensity"), check.require(&at("intensity"), l.intensity, "point light")?)?,
+                }
+            }
+            LightType::Directional => {
+                check.forbid(&prefix, "directional light", &[&point_fields[..], &area_fields].concat())?;
+                let direction = check.nonzero(
+                    &at("direction"),
+                    check.require(&at("direction"), l.direction, "directional light")?,
+                )?;
+                Light::Directional {
+                    direction: direction.normalize().as_vec3(),
+                    irradiance: check.color(
+                        &at("irradiance"),
+                        check.require(&at("irradiance"), l.irradiance, "directional light")?,
+                    )?,
+                }
+            }
+            LightType::Area => {
+                check.forbid(&prefix, "area light", &[&point_fields[..], &directional_fields].concat())?;
+                let (corner, edge_u, edge_v) =
+                    parallelogram(check, &prefix, l.corner, l.edge_u, l.edge_v, "area light")?;
+                Light::Area {
+                    corner,
+                    edge_u,
+                    edge_v,
+                    radiance: check
+                        .color(&at("radiance"), check.require(&at("radiance"), l.radiance, "area light")?)?,
+                    samples: check.integer(&at("samples"), l.samples.unwrap_or(1), 1, MAX_LIGHT_SAMPLES)?,
+                }
+            }
+        };
+        lights.push(light);
+    }
+    Ok(lights)
+}

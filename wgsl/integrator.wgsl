@@ -1,0 +1,204 @@
+// The Whitted integrator: one camera sample -> radiance.
+// Mirrors: src/integrator.rs (see there for the radiometry and the Phong normalisations).
+// Reads the module-scope bindings `prims`, `normals`, `materials`, `lights`, `frame`, `camera`.
+
+const PI: f32 = 3.14159265358979323846;
+
+struct Surface {
+    position: vec3<f32>,
+    geometric_normal: vec3<f32>,
+    shading_normal: vec3<f32>,
+    front_facing: bool,
+}
+
+struct PathCounters {
+    rays: u32,
+    truncated: u32,
+}
+
+fn surface_at(prim: GpuPrimitive, ray: RayQuery, hit: Hit) -> Surface {
+    // Recompute the position from the primitive itself (see the Rust twin).
+    var position: vec3<f32>;
+    var normal: vec3<f32>;
+    var shading: vec3<f32>;
+    switch prim.kind {
+        case PRIM_TRIANGLE: {
+            let b0 = 1.0 - hit.b1 - hit.b2;
+            position = b0 * prim.p0 + hit.b1 * prim.p1 + hit.b2 * prim.p2;
+            normal = normalize(cross(prim.p1 - prim.p0, prim.p2 - prim.p0));
+            shading = normal;
+            if (prim.normals != NONE) {
+                let n = normals[prim.normals].n;
+                let interpolated = b0 * vec3<f32>(n[0], n[1], n[2])
+                    + hit.b1 * vec3<f32>(n[3], n[4], n[5])
+                    + hit.b2 * vec3<f32>(n[6], n[7], n[8]);
+                let len = length(interpolated);
+                if (len > 0.0) {
+                    shading = interpolated / len;
+                }
+            }
+        }
+        case PRIM_SPHERE: {
+            let outward = normalize(ray.origin + hit.t * ray.direction - prim.p0);
+            position = prim.p0 + prim.p1.x * outward;
+            normal = outward;
+            shading = outward;
+        }
+        case PRIM_QUAD: {
+            normal = normalize(cross(prim.p1, prim.p2));
+            position = prim.p0 + hit.b1 * prim.p1 + hit.b2 * prim.p2;
+            shading = normal;
+        }
+        default: {
+            let raw = ray.origin + hit.t * ray.direction;
+            position = raw - dot(raw - prim.p0, prim.p1) * prim.p1;
+            normal = prim.p1;
+            shading = prim.p1;
+        }
+    }
+    // Two-sided shading: turn both normals towards the incoming ray.
+    let front_facing = dot(normal, ray.direction) < 0.0;
+    var geometric_normal = -normal;
+    var shading_normal = -shading;
+    if (front_facing) {
+        geometric_normal = normal;
+        shading_normal = shading;
+    }
+    if (dot(shading_normal, geometric_normal) < 0.0) {
+        shading_normal = -shading_normal;
+    }
+    return Surface(position, geometric_normal, shading_normal, front_facing);
+}
+
+fn eval_brdf(material: GpuMaterial, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    var f = material.diffuse / PI;
+    let exponent = material.shininess;
+    if (material.model == MODEL_PHONG) {
+        let reflected = 2.0 * dot(n, wi) * n - wi;
+        let cos_alpha = dot(reflected, wo);
+        if (cos_alpha > 0.0) {
+            f += material.specular * ((exponent + 2.0) / (2.0 * PI)) * pow(cos_alpha, exponent);
+        }
+    } else if (material.model == MODEL_BLINN_PHONG) {
+        let half = normalize(wi + wo);
+        let cos_h = dot(n, half);
+        if (cos_h > 0.0) {
+            f += material.specular * ((exponent + 8.0) / (8.0 * PI)) * pow(cos_h, exponent);
+        }
+    }
+    return f;
+}
+
+fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<f32>,
+                rng: ptr<function, Rng>, counters: ptr<function, PathCounters>) -> vec3<f32> {
+    let n = surface.shading_normal;
+    let ng = surface.geometric_normal;
+    let origin = offset_ray_origin(surface.position, ng);
+    var total = vec3<f32>(0.0);
+    for (var l = 0u; l < frame.light_count; l += 1u) {
+        let light = lights[l];
+        if (light.kind == LIGHT_AREA) {
+            // Stratified points on the parallelogram; numbers are drawn before any test.
+            let c = cross(light.p1, light.p2);
+            let area = length(c);
+            let light_normal = c / area;
+            var sum = vec3<f32>(0.0);
+            for (var k = 0u; k < light.samples; k += 1u) {
+                let u = stratified_2d(k, light.samples, light.strata_columns, rng_next_2d(rng));
+                let to_light = light.p0 + u.x * light.p1 + u.y * light.p2 - surface.position;
+                let distance = length(to_light);
+                let wi = to_light / distance;
+                let cos_surface = dot(n, wi);
+                let cos_light = -dot(light_normal, wi);
+                if (cos_surface > 0.0 && cos_light > 0.0 && dot(ng, wi) > 0.0) {
+                    (*counters).rays += 1u;
+                    if (!occluded(ray_query_new(origin, wi), prim_id, light.prim, distance)) {
+                        sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance);
+                    }
+                }
+            }
+            total += light.color * sum * (area / f32(light.samples));
+        } else {
+            var wi = light.p0;
+            var distance = T_FAR;
+            var falloff = 1.0;
+            if (light.kind == LIGHT_POINT) {
+                let to_light = light.p0 - surface.position;
+                distance = length(to_light);
+                wi = to_light / distance;
+                falloff = 1.0 / (distance * distance);
+            }
+            let cos_surface = dot(n, wi);
+            if (cos_surface > 0.0 && dot(ng, wi) > 0.0) {
+                (*counters).rays += 1u;
+                if (!occluded(ray_query_new(origin, wi), prim_id, NONE, distance)) {
+                    total += eval_brdf(material, n, wo, wi) * light.color * (cos_surface * falloff);
+                }
+            }
+        }
+    }
+    return total;
+}
+
+fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, Rng>,
+              counters: ptr<function, PathCounters>) -> vec3<f32> {
+    var radiance = vec3<f32>(0.0);
+    var throughput = vec3<f32>(1.0);
+    var ray = ray_query_new(origin, direction);
+    var skip = NONE;
+    for (var depth = 0u; depth <= frame.max_depth; depth += 1u) {
+        (*counters).rays += 1u;
+        let found = closest_hit(ray, skip, T_FAR);
+        if (found.prim == NONE) {
+            radiance += throughput * frame.background;
+            break;
+        }
+        let prim = prims[found.prim];
+        let material = materials[prim.material];
+        let surface = surface_at(prim, ray, found.hit);
+        // An area light shows its radiance from the front, is black from behind, reflects nothing.
+        if (material.model == MODEL_EMITTER) {
+            if (surface.front_facing) {
+                radiance += throughput * material.emission;
+            }
+            break;
+        }
+        let wo = -ray.direction;
+        radiance += throughput * material.diffuse * frame.ambient;
+        radiance += throughput * direct_light(surface, material, found.prim, wo, rng, counters);
+        // Perfect mirror bounce.
+        if (max(max(material.mirror.x, material.mirror.y), material.mirror.z) <= 0.0) {
+            break;
+        }
+        if (depth == frame.max_depth) {
+            (*counters).truncated += 1u;
+            break;
+        }
+        let n = surface.shading_normal;
+        let reflected = ray.direction - 2.0 * dot(ray.direction, n) * n;
+        if (dot(reflected, surface.geometric_normal) <= 0.0) {
+            break;
+        }
+        throughput *= material.mirror;
+        ray = ray_query_new(offset_ray_origin(surface.position, surface.geometric_normal), normalize(reflected));
+        skip = found.prim;
+        if (prim.kind == PRIM_SPHERE) {
+            skip = NONE;
+        }
+    }
+    return radiance;
+}
+
+fn trace_sample(x: u32, y: u32, sample: u32, counters: ptr<function, PathCounters>) -> vec3<f32> {
+    var rng = rng_new(frame.seed, y * frame.width + x, sample);
+    let u = rng_next_2d(&rng);
+    var jitter = u;
+    if (frame.pixel_sampler == SAMPLER_STRATIFIED) {
+        jitter = stratified_2d(sample, frame.spp, frame.pixel_strata_columns, u);
+    }
+    let raster = vec2<f32>(f32(x) + jitter.x, f32(y) + jitter.y);
+    let film = film_position_mm(camera, frame.width, frame.height, raster);
+    let lens_u = rng_next_2d(&rng);
+    let ray = generate_ray(camera, film, lens_u);
+    return trace_path(ray.origin, ray.direction, &rng, counters);
+}

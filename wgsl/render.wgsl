@@ -1,0 +1,33 @@
+// The render kernel: one invocation per pixel of a tile, a range of samples per dispatch,
+// accumulated into the pixel's running sum. Bindings are declared here only, so the
+// libraries above stay binding-free.
+// Mirrors: src/cpu.rs (the CPU tile loop).
+
+@group(0) @binding(0) var<uniform> camera: GpuCamera;
+@group(0) @binding(1) var<uniform> frame: GpuFrame;
+@group(0) @binding(2) var<uniform> pass_info: GpuPass;
+@group(0) @binding(3) var<storage, read> nodes: array<GpuBvhNode>;
+@group(0) @binding(4) var<storage, read> prims: array<GpuPrimitive>;
+@group(0) @binding(5) var<storage, read> normals: array<GpuNormals>;
+@group(0) @binding(6) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(7) var<storage, read> lights: array<GpuLight>;
+@group(0) @binding(8) var<storage, read_write> accumulation: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> status: array<atomic<u32>, STATUS_WORDS>;
+
+@compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
+fn render(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= pass_info.tile_width || id.y >= pass_info.tile_height) {
+        return;
+    }
+    let x = pass_info.tile_x + id.x;
+    let y = pass_info.tile_y + id.y;
+    var counters = PathCounters(0u, 0u);
+    var sum = vec3<f32>(0.0);
+    for (var s = 0u; s < pass_info.sample_count; s += 1u) {
+        sum += trace_sample(x, y, pass_info.sample_start + s, &counters);
+    }
+    let pixel = y * frame.width + x;
+    accumulation[pixel] += vec4<f32>(sum, f32(pass_info.sample_count));
+    atomicAdd(&status[STATUS_RAYS], counters.rays);
+    atomicAdd(&status[STATUS_TRUNCATED], counters.truncated);
+}

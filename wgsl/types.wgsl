@@ -1,0 +1,90 @@
+// Struct twins of src/layout.rs: same names, same field names (checked by tests/wgsl_layout.rs).
+
+struct GpuBvhNode {
+    min: vec3<f32>,
+    prim_count: u32,
+    max: vec3<f32>,
+    first_index: u32,
+}
+
+struct GpuPrimitive {
+    p0: vec3<f32>,
+    kind: u32,
+    p1: vec3<f32>,
+    material: u32,
+    p2: vec3<f32>,
+    normals: u32,
+}
+
+struct GpuNormals {
+    n: array<f32, 9>,
+}
+
+struct GpuMaterial {
+    diffuse: vec3<f32>,
+    model: u32,
+    specular: vec3<f32>,
+    shininess: f32,
+    mirror: vec3<f32>,
+    _pad0: u32,
+    emission: vec3<f32>,
+    _pad1: u32,
+}
+
+struct GpuLight {
+    p0: vec3<f32>,
+    kind: u32,
+    p1: vec3<f32>,
+    samples: u32,
+    p2: vec3<f32>,
+    prim: u32,
+    color: vec3<f32>,
+    strata_columns: u32,
+}
+
+struct GpuCamera {
+    lens_to_world_x: vec3<f32>,
+    focal_length_mm: f32,
+    lens_to_world_y: vec3<f32>,
+    lens_radius_mm: f32,
+    lens_to_world_z: vec3<f32>,
+    units_per_mm: f32,
+    lens_center: vec3<f32>,
+    inv_focal_length_mm: f32,
+    film_center: vec3<f32>,
+    film_width_mm: f32,
+    film_u: vec3<f32>,
+    film_height_mm: f32,
+    film_v: vec3<f32>,
+    _pad0: u32,
+}
+
+struct GpuFrame {
+    width: u32,
+    height: u32,
+    spp: u32,
+    max_depth: u32,
+    seed: u32,
+    pixel_sampler: u32,
+    light_count: u32,
+    node_count: u32,
+    plane_start: u32,
+    plane_count: u32,
+    traversal_cap: u32,
+    pixel_strata_columns: u32,
+    background: vec3<f32>,
+    _pad1: u32,
+    ambient: vec3<f32>,
+    _pad2: u32,
+}
+
+struct GpuPass {
+    tile_x: u32,
+    tile_y: u32,
+    tile_width: u32,
+    tile_height: u32,
+    sample_start: u32,
+    sample_count: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
