@@ -1,5 +1,6 @@
 // Ray/primitive intersection: watertight triangles, robust spheres, quads, planes, slabs,
-// and the integer-ULP origin offset. Mirrors: src/accel/intersect.rs (references there).
+// and the integer-ULP origin offset.
+// Mirrors: src/accel/intersect.rs (references there).
 
 const MIN_DIRECTION: f32 = 1.0e-20;
 // 1 + 2*gamma(3) widened 2x for WGSL's 2.5-ULP division (see the Rust twin).

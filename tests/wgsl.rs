@@ -1,0 +1,98 @@
+//! Every WGSL module validates with naga, and every struct shared with Rust has the same size
+//! and field offsets on both sides.
+
+use std::mem::{offset_of, size_of};
+
+use chambre::gpu::shader::{MODULES, render_kernel_source};
+use chambre::layout::*;
+use naga::valid::{Capabilities, ValidationFlags, Validator};
+
+fn parse_and_validate(source: &str) -> naga::Module {
+    let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+    Validator::new(ValidationFlags::all(), Capabilities::empty())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+    module
+}
+
+#[test]
+fn composed_render_kernel_validates() {
+    parse_and_validate(&render_kernel_source());
+}
+
+#[test]
+fn every_library_module_parses_with_its_dependencies() {
+    // Each prefix of the composition order is a valid module on its own (libraries only
+    // depend on what comes before them), except the last two, which read the kernel bindings.
+    let mut source = wgsl_prelude();
+    for (name, text) in &MODULES[..5] {
+        source += text;
+        naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
+    }
+}
+
+#[test]
+fn every_wgsl_module_names_an_existing_rust_twin() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    for (name, text) in MODULES {
+        if name == "types.wgsl" {
+            assert!(text.contains("src/layout.rs"));
+            continue;
+        }
+        let line = text.lines().find(|l| l.starts_with("// Mirrors: ")).unwrap_or_else(|| panic!("{name} names no twin"));
+        let twin = line.trim_start_matches("// Mirrors: ").split_whitespace().next().unwrap().trim_end_matches([',', '.']);
+        assert!(std::path::Path::new(root).join(twin).exists(), "{name}: twin {twin} does not exist");
+    }
+}
+
+fn check_struct(module: &naga::Module, name: &str, size: usize, fields: &[(&str, usize)]) {
+    let (_, ty) = module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)).unwrap_or_else(|| panic!("{name} missing in WGSL"));
+    let naga::TypeInner::Struct { members, span } = &ty.inner else { panic!("{name} is not a struct") };
+    assert_eq!(*span as usize, size, "{name}: WGSL size {span} != Rust size {size}");
+    assert_eq!(members.len(), fields.len(), "{name}: field count differs");
+    for (member, (field, offset)) in members.iter().zip(fields) {
+        assert_eq!(member.name.as_deref(), Some(*field), "{name}: field order/name differs");
+        assert_eq!(member.offset as usize, *offset, "{name}.{field}: WGSL offset {} != Rust {offset}", member.offset);
+    }
+}
+
+macro_rules! layout {
+    ($module:expr, $ty:ident { $($field:ident),* }) => {
+        check_struct(&$module, stringify!($ty), size_of::<$ty>(), &[$((stringify!($field), offset_of!($ty, $field))),*]);
+    };
+}
+
+#[test]
+fn shared_structs_have_identical_layouts() {
+    let module = parse_and_validate(&render_kernel_source());
+    layout!(module, GpuBvhNode { min, prim_count, max, first_index });
+    layout!(module, GpuPrimitive { p0, kind, p1, material, p2, normals });
+    layout!(module, GpuNormals { n });
+    layout!(module, GpuMaterial { diffuse, model, specular, shininess, mirror, _pad0, emission, _pad1 });
+    layout!(module, GpuLight { p0, kind, p1, samples, p2, prim, color, strata_columns });
+    layout!(module, GpuCamera {
+        lens_to_world_x, focal_length_mm, lens_to_world_y, lens_radius_mm, lens_to_world_z, units_per_mm,
+        lens_center, inv_focal_length_mm, film_center, film_width_mm, film_u, film_height_mm, film_v, _pad0
+    });
+    layout!(module, GpuFrame {
+        width, height, spp, max_depth, seed, pixel_sampler, light_count, node_count, plane_start,
+        plane_count, traversal_cap, pixel_strata_columns, background, _pad1, ambient, _pad2
+    });
+    layout!(module, GpuPass { tile_x, tile_y, tile_width, tile_height, sample_start, sample_count, _pad0, _pad1 });
+}
+
+#[test]
+fn generated_constants_match_rust() {
+    let module = parse_and_validate(&render_kernel_source());
+    let constant = |name: &str| -> u32 {
+        let (_, c) = module.constants.iter().find(|(_, c)| c.name.as_deref() == Some(name)).unwrap();
+        match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::U32(v)) => v,
+            ref e => panic!("{name}: {e:?}"),
+        }
+    };
+    assert_eq!(constant("BVH_STACK_SIZE"), BVH_STACK_SIZE);
+    assert_eq!(constant("MODEL_EMITTER"), MODEL_EMITTER);
+    assert_eq!(constant("LIGHT_AREA"), LIGHT_AREA);
+    assert_eq!(constant("NONE"), NONE);
+}
