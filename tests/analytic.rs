@@ -1,0 +1,205 @@
+//! Renders checked against values known in closed form.
+
+mod common;
+
+use std::f32::consts::PI;
+
+use chambre::accel::flatten;
+use chambre::camera::{film_position_mm, generate_ray};
+use chambre::integrator::{SampleStats, trace_path};
+use chambre::math::rng::Rng;
+use chambre::scene::Scene;
+use glam::{Vec2, Vec3};
+
+fn scene(text: &str) -> Scene {
+    Scene::from_str(std::path::Path::new("inline.toml"), text, &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+const LAMBERT_SPHERE: &str = r#"
+[render]
+width = 64
+height = 64
+spp = 16
+[camera]
+position = [0.0, 0.0, 10.0]
+look_at = [0.0, 0.0, 0.0]
+focal_length = 100.0
+film = [24.0, 24.0]
+[[materials]]
+name = "m"
+model = "lambert"
+diffuse = [0.5, 0.25, 0.125]
+[[shapes]]
+type = "sphere"
+center = [0.0, 0.0, 0.0]
+radius = 1.0
+material = "m"
+[[lights]]
+type = "point"
+position = [3.0, 4.0, 5.0]
+intensity = [10.0, 10.0, 10.0]
+"#;
+
+fn lambert_expected(p: Vec3) -> Vec3 {
+    let light = Vec3::new(3.0, 4.0, 5.0);
+    let to_light = light - p;
+    let cos = p.normalize().dot(to_light.normalize()).max(0.0);
+    Vec3::new(0.5, 0.25, 0.125) / PI * 10.0 * cos / to_light.length_squared()
+}
+
+#[test]
+fn lambert_sphere_under_point_light_matches_closed_form_on_cpu() {
+    let flat = flatten(&scene(LAMBERT_SPHERE));
+    let origin = Vec3::new(0.0, 0.0, 10.0);
+    for target in [Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.3, 0.4, 0.866_025_4), Vec3::new(-0.5, 0.2, 0.842_615)] {
+        let p = target.normalize();
+        let radiance = trace_path(&flat, origin, (p - origin).normalize(), &mut Rng::new(0, 0, 0), &mut SampleStats::default());
+        let expected = lambert_expected(p);
+        assert!((radiance - expected).abs().max_element() <= 1e-5 * expected.max_element(), "{radiance} vs {expected}");
+    }
+}
+
+#[test]
+fn lambert_sphere_pixels_match_closed_form_on_both_paths() {
+    let flat = flatten(&scene(LAMBERT_SPHERE));
+    let cpu = common::render_cpu(&flat);
+    let gpu = common::render_gpu(&flat);
+    // The centre ray of chosen pixels, intersected analytically with the unit sphere.
+    for (x, y) in [(32, 32), (36, 28), (28, 38), (40, 33)] {
+        let film = film_position_mm(&flat.camera, 64, 64, Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+        let ray = generate_ray(&flat.camera, film, [0.5, 0.5]);
+        let b = ray.origin.dot(ray.direction);
+        let t = -b - (b * b - ray.origin.length_squared() + 1.0).sqrt();
+        let expected = lambert_expected(ray.origin + t * ray.direction);
+        // A pixel is the mean over its footprint; the field is smooth, so 1% covers curvature.
+        for (name, image) in [("cpu", Some(&cpu)), ("gpu", gpu.as_ref())] {
+            let Some(image) = image else { continue };
+            let got = image.get(x, y);
+            assert!((got - expected).abs().max_element() <= 0.01 * expected.max_element(), "{name} ({x},{y}): {got} vs {expected}");
+        }
+    }
+}
+
+#[test]
+fn pinhole_projects_known_points_to_known_pixels() {
+    // f = 18 mm on a 36 x 24 mm film: 90 degrees horizontally. Camera at the origin looking -z.
+    let text = r#"
+[render]
+width = 360
+height = 240
+[camera]
+position = [0.0, 0.0, 0.0]
+look_at = [0.0, 0.0, -1.0]
+focal_length = 18.0
+film = [36.0, 24.0]
+"#;
+    let flat = flatten(&scene(text));
+    let cases = [
+        (Vec3::new(0.0, 0.0, -1.0), Vec2::new(180.0, 120.0)),
+        (Vec3::new(0.5, 0.0, -1.0), Vec2::new(270.0, 120.0)),
+        (Vec3::new(-1.0, 0.0, -1.0), Vec2::new(0.0, 120.0)),
+        (Vec3::new(0.0, 0.5, -1.0), Vec2::new(180.0, 30.0)),
+        (Vec3::new(2.0, -1.0, -4.0), Vec2::new(270.0, 165.0)),
+    ];
+    for (world, raster) in cases {
+        let film = film_position_mm(&flat.camera, 360, 240, raster);
+        let ray = generate_ray(&flat.camera, film, [0.5, 0.5]);
+        let to_point = world - ray.origin;
+        let miss = (to_point - to_point.dot(ray.direction) * ray.direction).length();
+        assert!(miss <= 1e-5 * to_point.length(), "{world} should be seen at pixel {raster}, ray misses by {miss}");
+    }
+}
+
+const SHADOW: &str = r#"
+[render]
+width = 64
+height = 64
+spp = 4
+ambient = [0.2, 0.2, 0.2]
+[camera]
+position = [0.0, 2.0, 4.0]
+look_at = [0.0, 0.0, 0.0]
+focal_length = 50.0
+film = [24.0, 24.0]
+[[materials]]
+name = "m"
+model = "lambert"
+diffuse = [0.8, 0.6, 0.4]
+[[shapes]]
+type = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 1.0, 0.0]
+material = "m"
+[[shapes]]
+type = "sphere"
+center = [0.0, 1.0, 0.0]
+radius = 0.5
+material = "m"
+[[lights]]
+type = "point"
+position = [0.0, 3.0, 0.0]
+intensity = [20.0, 20.0, 20.0]
+"#;
+
+#[test]
+fn point_in_shadow_gets_only_the_ambient_term() {
+    let flat = flatten(&scene(SHADOW));
+    let ambient_only = Vec3::new(0.8, 0.6, 0.4) * 0.2;
+    let radiance = trace_path(&flat, Vec3::new(3.0, 1.0, 0.0), Vec3::new(-3.0, -1.0, 0.0).normalize(), &mut Rng::new(0, 0, 0), &mut SampleStats::default());
+    assert!((radiance - ambient_only).abs().max_element() < 1e-6, "{radiance}");
+    // A point outside the shadow gets more.
+    let lit = trace_path(&flat, Vec3::new(3.0, 1.0, 0.0), Vec3::new(-1.0, -1.0, 0.0).normalize(), &mut Rng::new(0, 0, 0), &mut SampleStats::default());
+    assert!(lit.x > ambient_only.x * 2.0, "{lit}");
+    // The image's centre pixel sees the ground under the sphere (umbra radius 0.75).
+    let cpu = common::render_cpu(&flat);
+    assert!((cpu.get(32, 32) - ambient_only).abs().max_element() < 1e-6);
+    if let Some(gpu) = common::render_gpu(&flat) {
+        assert!((gpu.get(32, 32) - ambient_only).abs().max_element() < 1e-6, "{}", gpu.get(32, 32));
+    }
+}
+
+#[test]
+fn mirror_shows_the_object_behind_the_camera() {
+    // A mirror 5 units ahead; a red sphere 3 units behind the camera, seen at about 4.4 degrees
+    // around the image centre; the image corners see the mirror's reflection of the background.
+    let text = r#"
+[render]
+width = 64
+height = 64
+spp = 4
+max_depth = 3
+background = [0.0, 0.0, 1.0]
+ambient = [1.0, 1.0, 1.0]
+[camera]
+position = [0.0, 0.0, 0.0]
+look_at = [0.0, 0.0, -1.0]
+focal_length = 12.0
+film = [24.0, 24.0]
+[[materials]]
+name = "mirror"
+model = "mirror"
+mirror = [0.5, 0.5, 0.5]
+[[materials]]
+name = "red"
+model = "lambert"
+diffuse = [1.0, 0.0, 0.0]
+[[shapes]]
+type = "quad"
+corner = [-50.0, -50.0, -5.0]
+edge_u = [100.0, 0.0, 0.0]
+edge_v = [0.0, 100.0, 0.0]
+material = "mirror"
+[[shapes]]
+type = "sphere"
+center = [0.0, 0.0, 3.0]
+radius = 1.0
+material = "red"
+"#;
+    let flat = flatten(&scene(text));
+    let cpu = common::render_cpu(&flat);
+    let gpu = common::render_gpu(&flat);
+    for image in [Some(&cpu), gpu.as_ref()].into_iter().flatten() {
+        assert!((image.get(32, 32) - Vec3::new(0.5, 0.0, 0.0)).abs().max_element() < 1e-6, "centre {}", image.get(32, 32));
+        assert!((image.get(0, 0) - Vec3::new(0.0, 0.0, 0.5)).abs().max_element() < 1e-6, "corner {}", image.get(0, 0));
+    }
+}
