@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# The test command: installs lavapipe (Mesa's software Vulkan) when no Vulkan driver is present,
+# names the adapter in the log, then runs every test with GPU tests required to find an adapter.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if ! ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; then
+    echo "== installing lavapipe (mesa-vulkan-drivers)"
+    SUDO=""
+    [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq mesa-vulkan-drivers >/dev/null
+fi
+
+export CHAMBRE_REQUIRE_GPU=1
+# The loader's complaint about a missing XDG_RUNTIME_DIR on headless machines is noise.
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
+
+cargo build --release --bins
+echo "== GPU adapters"
+./target/release/chambre info
+cargo test --release
