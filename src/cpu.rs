@@ -17,7 +17,10 @@ pub struct CpuRenderer<'a> {
 impl<'a> CpuRenderer<'a> {
     pub fn new(scene: &'a FlatScene) -> Self {
         let pixels = scene.frame.width as usize * scene.frame.height as usize;
-        CpuRenderer { scene, accumulation: vec![[0.0; 4]; pixels] }
+        CpuRenderer {
+            scene,
+            accumulation: vec![[0.0; 4]; pixels],
+        }
     }
 }
 
@@ -25,7 +28,8 @@ impl Backend for CpuRenderer<'_> {
     fn render_tile(&mut self, pass: GpuPass) -> Result<TileStatus> {
         let scene = self.scene;
         let width = scene.frame.width;
-        let rows: Vec<(u32, Vec<[f32; 4]>, SampleStats)> = (pass.tile_y..pass.tile_y + pass.tile_height)
+        let rows: Vec<(u32, Vec<[f32; 4]>, SampleStats)> = (pass.tile_y
+            ..pass.tile_y + pass.tile_height)
             .into_par_iter()
             .map(|y| {
                 let mut stats = SampleStats::default();
@@ -44,7 +48,10 @@ impl Backend for CpuRenderer<'_> {
         let mut status = TileStatus::default();
         for (y, row, stats) in rows {
             let start = (y * width + pass.tile_x) as usize;
-            for (acc, add) in self.accumulation[start..start + row.len()].iter_mut().zip(row) {
+            for (acc, add) in self.accumulation[start..start + row.len()]
+                .iter_mut()
+                .zip(row)
+            {
                 for c in 0..4 {
                     acc[c] += add[c];
                 }

@@ -36,7 +36,11 @@ struct Surface {
 }
 
 fn surface_at(scene: &FlatScene, prim: &GpuPrimitive, ray: &RayQuery, hit: Hit) -> Surface {
-    let (p0, p1, p2) = (Vec3::from(prim.p0), Vec3::from(prim.p1), Vec3::from(prim.p2));
+    let (p0, p1, p2) = (
+        Vec3::from(prim.p0),
+        Vec3::from(prim.p1),
+        Vec3::from(prim.p2),
+    );
     // Recompute the position from the primitive itself: its error then scales with the
     // primitive's coordinates, not with the distance travelled (origin offsets rely on it).
     let (position, normal, shading) = match prim.kind {
@@ -52,7 +56,11 @@ fn surface_at(scene: &FlatScene, prim: &GpuPrimitive, ray: &RayQuery, hit: Hit) 
                     + hit.b1 * Vec3::new(n[3], n[4], n[5])
                     + hit.b2 * Vec3::new(n[6], n[7], n[8]);
                 let length = interpolated.length();
-                if length > 0.0 { interpolated / length } else { normal }
+                if length > 0.0 {
+                    interpolated / length
+                } else {
+                    normal
+                }
             };
             (position, normal, shading)
         }
@@ -139,8 +147,15 @@ fn direct_light(
                 let cos_light = -light_normal.dot(wi);
                 if cos_surface > 0.0 && cos_light > 0.0 && ng.dot(wi) > 0.0 {
                     stats.rays += 1;
-                    if !occluded(scene, &RayQuery::new(origin, wi), prim_id, light.prim, distance) {
-                        sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance);
+                    if !occluded(
+                        scene,
+                        &RayQuery::new(origin, wi),
+                        prim_id,
+                        light.prim,
+                        distance,
+                    ) {
+                        sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light
+                            / (distance * distance);
                     }
                 }
             }
@@ -166,7 +181,13 @@ fn direct_light(
 }
 
 /// Radiance along one path that starts with `origin`, `direction`.
-pub fn trace_path(scene: &FlatScene, origin: Vec3, direction: Vec3, rng: &mut Rng, stats: &mut SampleStats) -> Vec3 {
+pub fn trace_path(
+    scene: &FlatScene,
+    origin: Vec3,
+    direction: Vec3,
+    rng: &mut Rng,
+    stats: &mut SampleStats,
+) -> Vec3 {
     let frame = &scene.frame;
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
@@ -206,15 +227,28 @@ pub fn trace_path(scene: &FlatScene, origin: Vec3, direction: Vec3, rng: &mut Rn
             break;
         }
         throughput *= mirror;
-        ray = RayQuery::new(offset_ray_origin(surface.position, surface.geometric_normal), reflected.normalize());
-        skip = if prim.kind == PRIM_SPHERE { NONE } else { prim_id };
+        ray = RayQuery::new(
+            offset_ray_origin(surface.position, surface.geometric_normal),
+            reflected.normalize(),
+        );
+        skip = if prim.kind == PRIM_SPHERE {
+            NONE
+        } else {
+            prim_id
+        };
     }
     radiance
 }
 
 /// Radiance of sample `sample` of pixel (x, y): pixel jitter (dimensions 0-1), lens point (2-3),
 /// then the path.
-pub fn trace_sample(scene: &FlatScene, x: u32, y: u32, sample: u32, stats: &mut SampleStats) -> Vec3 {
+pub fn trace_sample(
+    scene: &FlatScene,
+    x: u32,
+    y: u32,
+    sample: u32,
+    stats: &mut SampleStats,
+) -> Vec3 {
     let frame = &scene.frame;
     let mut rng = Rng::new(frame.seed, y * frame.width + x, sample);
     let u = rng.next_2d();

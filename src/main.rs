@@ -19,7 +19,11 @@ use chambre::scene::Scene;
 use chambre::{Error, Result};
 
 #[derive(Parser)]
-#[command(name = "chambre", version, about = "A GPU ray tracer built around the optics of the view camera")]
+#[command(
+    name = "chambre",
+    version,
+    about = "A GPU ray tracer built around the optics of the view camera"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -68,9 +72,23 @@ enum BackendChoice {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render { scene, output, spp, width, height, seed, backend, set } => {
+        Command::Render {
+            scene,
+            output,
+            spp,
+            width,
+            height,
+            seed,
+            backend,
+            set,
+        } => {
             let mut overrides = Vec::new();
-            let fields = [("render.spp", spp), ("render.width", width), ("render.height", height), ("render.seed", seed)];
+            let fields = [
+                ("render.spp", spp),
+                ("render.width", width),
+                ("render.height", height),
+                ("render.seed", seed),
+            ];
             for (key, value) in fields {
                 if let Some(v) = value {
                     overrides.push(format!("{key}={v}"));
@@ -117,9 +135,18 @@ fn run_check(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<Exi
         camera.image_distance_mm(),
         fov[0],
         fov[1],
-        if camera.is_pinhole() { "pinhole".to_string() } else { format!("f/{}", camera.f_number) }
+        if camera.is_pinhole() {
+            "pinhole".to_string()
+        } else {
+            format!("f/{}", camera.f_number)
+        }
     );
-    println!("BVH: {} nodes, depth {}, built in {:.1} ms", flat.nodes.len(), flat.bvh_depth, flat.build_time.as_secs_f64() * 1e3);
+    println!(
+        "BVH: {} nodes, depth {}, built in {:.1} ms",
+        flat.nodes.len(),
+        flat.bvh_depth,
+        flat.build_time.as_secs_f64() * 1e3
+    );
     Ok(ExitCode::SUCCESS)
 }
 
@@ -138,8 +165,10 @@ fn run_info() -> anyhow::Result<ExitCode> {
 fn progress_reporter() -> Box<dyn Progress> {
     if std::io::stderr().is_terminal() {
         let bar = indicatif::ProgressBar::new(0).with_style(
-            indicatif::ProgressStyle::with_template("{bar:40} {percent:>3}% {elapsed_precise} ETA {eta}")
-                .expect("valid template"),
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {percent:>3}% {elapsed_precise} ETA {eta}",
+            )
+            .expect("valid template"),
         );
         Box::new(move |done: u64, total: u64| {
             bar.set_length(total);
@@ -170,7 +199,8 @@ fn run_render(
     let flat = flatten(&scene);
     let cancel = Arc::new(AtomicBool::new(false));
     let flag = cancel.clone();
-    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed)).context("installing the Ctrl-C handler")?;
+    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
+        .context("installing the Ctrl-C handler")?;
     let mut progress = progress_reporter();
     let gpu = match choice {
         BackendChoice::Cpu => None,
@@ -187,12 +217,18 @@ fn run_render(
         Some(context) => {
             let mut renderer = GpuRenderer::new(context, &flat)?;
             let name = format!("GPU: {}", renderer.adapter_description());
-            (render(&flat, &mut renderer, progress.as_mut(), &cancel)?, name)
+            (
+                render(&flat, &mut renderer, progress.as_mut(), &cancel)?,
+                name,
+            )
         }
         None => {
             let mut renderer = CpuRenderer::new(&flat);
             let name = format!("CPU: {} threads", rayon::current_num_threads());
-            (render(&flat, &mut renderer, progress.as_mut(), &cancel)?, name)
+            (
+                render(&flat, &mut renderer, progress.as_mut(), &cancel)?,
+                name,
+            )
         }
     };
     finish(output, output_path, &backend_name)
@@ -201,7 +237,10 @@ fn run_render(
 fn finish(output: RenderOutput, path: &std::path::Path, backend: &str) -> anyhow::Result<ExitCode> {
     let bad = output.image.non_finite_count();
     if bad > 0 {
-        bail!("{bad} pixels are not finite numbers: refusing to write {}", path.display());
+        bail!(
+            "{bad} pixels are not finite numbers: refusing to write {}",
+            path.display()
+        );
     }
     if output.samples_per_pixel > 0 {
         write_image(&output.image, path)?;
@@ -217,7 +256,10 @@ fn finish(output: RenderOutput, path: &std::path::Path, backend: &str) -> anyhow
         output.rays
     );
     if output.truncated_paths > 0 {
-        eprintln!("note: {} mirror paths were cut off at max_depth", output.truncated_paths);
+        eprintln!(
+            "note: {} mirror paths were cut off at max_depth",
+            output.truncated_paths
+        );
     }
     if let Some(reason) = describe_status_flags(output.status_flags) {
         bail!("the render kernel reported a problem: {reason}");
@@ -228,6 +270,9 @@ fn finish(output: RenderOutput, path: &std::path::Path, backend: &str) -> anyhow
             eprintln!("error: {e}; wrote the partial image");
             Ok(ExitCode::from(130))
         }
-        Some(e) => bail!("{e}; wrote the partial image ({} spp)", output.samples_per_pixel),
+        Some(e) => bail!(
+            "{e}; wrote the partial image ({} spp)",
+            output.samples_per_pixel
+        ),
     }
 }

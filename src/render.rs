@@ -11,7 +11,10 @@ use glam::Vec3;
 
 use crate::accel::FlatScene;
 use crate::error::{Error, Result};
-use crate::layout::{GpuPass, STATUS_FLAGS, STATUS_RAYS, STATUS_STACK_OVERFLOW, STATUS_TRAVERSAL_CAP, STATUS_TRUNCATED};
+use crate::layout::{
+    GpuPass, STATUS_FLAGS, STATUS_RAYS, STATUS_STACK_OVERFLOW, STATUS_TRAVERSAL_CAP,
+    STATUS_TRUNCATED,
+};
 
 /// Tile edge in pixels: one dispatch covers at most TILE x TILE pixels.
 pub const TILE: u32 = 128;
@@ -55,9 +58,19 @@ impl Image {
     pub fn from_accumulation(width: u32, height: u32, accumulation: &[[f32; 4]]) -> Image {
         let pixels = accumulation
             .iter()
-            .map(|a| if a[3] > 0.0 { Vec3::new(a[0], a[1], a[2]) / a[3] } else { Vec3::ZERO })
+            .map(|a| {
+                if a[3] > 0.0 {
+                    Vec3::new(a[0], a[1], a[2]) / a[3]
+                } else {
+                    Vec3::ZERO
+                }
+            })
             .collect();
-        Image { width, height, pixels }
+        Image {
+            width,
+            height,
+            pixels,
+        }
     }
 
     pub fn get(&self, x: u32, y: u32) -> Vec3 {
@@ -131,7 +144,11 @@ pub fn render(
     let total = (tiles.len() * passes.len()) as u64;
     let mut done = 0;
     let mut output = RenderOutput {
-        image: Image { width: frame.width, height: frame.height, pixels: Vec::new() },
+        image: Image {
+            width: frame.width,
+            height: frame.height,
+            pixels: Vec::new(),
+        },
         samples_per_pixel: 0,
         elapsed: Duration::ZERO,
         rays: 0,
@@ -142,10 +159,21 @@ pub fn render(
     'passes: for &(sample_start, sample_count) in &passes {
         for &(tile_x, tile_y, tile_width, tile_height) in &tiles {
             if cancel.load(Ordering::Relaxed) {
-                output.stopped = Some(Error::Interrupted { done: output.samples_per_pixel, total: frame.spp });
+                output.stopped = Some(Error::Interrupted {
+                    done: output.samples_per_pixel,
+                    total: frame.spp,
+                });
                 break 'passes;
             }
-            let pass = GpuPass { tile_x, tile_y, tile_width, tile_height, sample_start, sample_count, ..Default::default() };
+            let pass = GpuPass {
+                tile_x,
+                tile_y,
+                tile_width,
+                tile_height,
+                sample_start,
+                sample_count,
+                ..Default::default()
+            };
             match backend.render_tile(pass) {
                 Ok(status) => {
                     output.rays += status.rays;

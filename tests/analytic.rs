@@ -12,7 +12,8 @@ use chambre::scene::Scene;
 use glam::{Vec2, Vec3};
 
 fn scene(text: &str) -> Scene {
-    Scene::from_str(std::path::Path::new("inline.toml"), text, &[]).unwrap_or_else(|e| panic!("{e}"))
+    Scene::from_str(std::path::Path::new("inline.toml"), text, &[])
+        .unwrap_or_else(|e| panic!("{e}"))
 }
 
 const LAMBERT_SPHERE: &str = r#"
@@ -51,11 +52,24 @@ fn lambert_expected(p: Vec3) -> Vec3 {
 fn lambert_sphere_under_point_light_matches_closed_form_on_cpu() {
     let flat = flatten(&scene(LAMBERT_SPHERE));
     let origin = Vec3::new(0.0, 0.0, 10.0);
-    for target in [Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.3, 0.4, 0.866_025_4), Vec3::new(-0.5, 0.2, 0.842_615)] {
+    for target in [
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.3, 0.4, 0.866_025_4),
+        Vec3::new(-0.5, 0.2, 0.842_615),
+    ] {
         let p = target.normalize();
-        let radiance = trace_path(&flat, origin, (p - origin).normalize(), &mut Rng::new(0, 0, 0), &mut SampleStats::default());
+        let radiance = trace_path(
+            &flat,
+            origin,
+            (p - origin).normalize(),
+            &mut Rng::new(0, 0, 0),
+            &mut SampleStats::default(),
+        );
         let expected = lambert_expected(p);
-        assert!((radiance - expected).abs().max_element() <= 1e-5 * expected.max_element(), "{radiance} vs {expected}");
+        assert!(
+            (radiance - expected).abs().max_element() <= 1e-5 * expected.max_element(),
+            "{radiance} vs {expected}"
+        );
     }
 }
 
@@ -66,7 +80,12 @@ fn lambert_sphere_pixels_match_closed_form_on_both_paths() {
     let gpu = common::render_gpu(&flat);
     // The centre ray of chosen pixels, intersected analytically with the unit sphere.
     for (x, y) in [(32, 32), (36, 28), (28, 38), (40, 33)] {
-        let film = film_position_mm(&flat.camera, 64, 64, Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+        let film = film_position_mm(
+            &flat.camera,
+            64,
+            64,
+            Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
+        );
         let ray = generate_ray(&flat.camera, film, [0.5, 0.5]);
         let b = ray.origin.dot(ray.direction);
         let t = -b - (b * b - ray.origin.length_squared() + 1.0).sqrt();
@@ -75,7 +94,10 @@ fn lambert_sphere_pixels_match_closed_form_on_both_paths() {
         for (name, image) in [("cpu", Some(&cpu)), ("gpu", gpu.as_ref())] {
             let Some(image) = image else { continue };
             let got = image.get(x, y);
-            assert!((got - expected).abs().max_element() <= 0.01 * expected.max_element(), "{name} ({x},{y}): {got} vs {expected}");
+            assert!(
+                (got - expected).abs().max_element() <= 0.01 * expected.max_element(),
+                "{name} ({x},{y}): {got} vs {expected}"
+            );
         }
     }
 }
@@ -106,7 +128,10 @@ film = [36.0, 24.0]
         let ray = generate_ray(&flat.camera, film, [0.5, 0.5]);
         let to_point = world - ray.origin;
         let miss = (to_point - to_point.dot(ray.direction) * ray.direction).length();
-        assert!(miss <= 1e-5 * to_point.length(), "{world} should be seen at pixel {raster}, ray misses by {miss}");
+        assert!(
+            miss <= 1e-5 * to_point.length(),
+            "{world} should be seen at pixel {raster}, ray misses by {miss}"
+        );
     }
 }
 
@@ -145,16 +170,35 @@ intensity = [20.0, 20.0, 20.0]
 fn point_in_shadow_gets_only_the_ambient_term() {
     let flat = flatten(&scene(SHADOW));
     let ambient_only = Vec3::new(0.8, 0.6, 0.4) * 0.2;
-    let radiance = trace_path(&flat, Vec3::new(3.0, 1.0, 0.0), Vec3::new(-3.0, -1.0, 0.0).normalize(), &mut Rng::new(0, 0, 0), &mut SampleStats::default());
-    assert!((radiance - ambient_only).abs().max_element() < 1e-6, "{radiance}");
+    let radiance = trace_path(
+        &flat,
+        Vec3::new(3.0, 1.0, 0.0),
+        Vec3::new(-3.0, -1.0, 0.0).normalize(),
+        &mut Rng::new(0, 0, 0),
+        &mut SampleStats::default(),
+    );
+    assert!(
+        (radiance - ambient_only).abs().max_element() < 1e-6,
+        "{radiance}"
+    );
     // A point outside the shadow gets more.
-    let lit = trace_path(&flat, Vec3::new(3.0, 1.0, 0.0), Vec3::new(-1.0, -1.0, 0.0).normalize(), &mut Rng::new(0, 0, 0), &mut SampleStats::default());
+    let lit = trace_path(
+        &flat,
+        Vec3::new(3.0, 1.0, 0.0),
+        Vec3::new(-1.0, -1.0, 0.0).normalize(),
+        &mut Rng::new(0, 0, 0),
+        &mut SampleStats::default(),
+    );
     assert!(lit.x > ambient_only.x * 2.0, "{lit}");
     // The image's centre pixel sees the ground under the sphere (umbra radius 0.75).
     let cpu = common::render_cpu(&flat);
     assert!((cpu.get(32, 32) - ambient_only).abs().max_element() < 1e-6);
     if let Some(gpu) = common::render_gpu(&flat) {
-        assert!((gpu.get(32, 32) - ambient_only).abs().max_element() < 1e-6, "{}", gpu.get(32, 32));
+        assert!(
+            (gpu.get(32, 32) - ambient_only).abs().max_element() < 1e-6,
+            "{}",
+            gpu.get(32, 32)
+        );
     }
 }
 
@@ -199,7 +243,21 @@ material = "red"
     let cpu = common::render_cpu(&flat);
     let gpu = common::render_gpu(&flat);
     for image in [Some(&cpu), gpu.as_ref()].into_iter().flatten() {
-        assert!((image.get(32, 32) - Vec3::new(0.5, 0.0, 0.0)).abs().max_element() < 1e-6, "centre {}", image.get(32, 32));
-        assert!((image.get(0, 0) - Vec3::new(0.0, 0.0, 0.5)).abs().max_element() < 1e-6, "corner {}", image.get(0, 0));
+        assert!(
+            (image.get(32, 32) - Vec3::new(0.5, 0.0, 0.0))
+                .abs()
+                .max_element()
+                < 1e-6,
+            "centre {}",
+            image.get(32, 32)
+        );
+        assert!(
+            (image.get(0, 0) - Vec3::new(0.0, 0.0, 0.5))
+                .abs()
+                .max_element()
+                < 1e-6,
+            "corner {}",
+            image.get(0, 0)
+        );
     }
 }

@@ -8,7 +8,8 @@ use chambre::layout::*;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
 
 fn parse_and_validate(source: &str) -> naga::Module {
-    let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
     Validator::new(ValidationFlags::all(), Capabilities::empty())
         .validate(&module)
         .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
@@ -27,7 +28,8 @@ fn every_library_module_parses_with_its_dependencies() {
     let mut source = wgsl_prelude();
     for (name, text) in &MODULES[..5] {
         source += text;
-        naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
+        naga::front::wgsl::parse_str(&source)
+            .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&source)));
     }
 }
 
@@ -39,20 +41,48 @@ fn every_wgsl_module_names_an_existing_rust_twin() {
             assert!(text.contains("src/layout.rs"));
             continue;
         }
-        let line = text.lines().find(|l| l.starts_with("// Mirrors: ")).unwrap_or_else(|| panic!("{name} names no twin"));
-        let twin = line.trim_start_matches("// Mirrors: ").split_whitespace().next().unwrap().trim_end_matches([',', '.']);
-        assert!(std::path::Path::new(root).join(twin).exists(), "{name}: twin {twin} does not exist");
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("// Mirrors: "))
+            .unwrap_or_else(|| panic!("{name} names no twin"));
+        let twin = line
+            .trim_start_matches("// Mirrors: ")
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .trim_end_matches([',', '.']);
+        assert!(
+            std::path::Path::new(root).join(twin).exists(),
+            "{name}: twin {twin} does not exist"
+        );
     }
 }
 
 fn check_struct(module: &naga::Module, name: &str, size: usize, fields: &[(&str, usize)]) {
-    let (_, ty) = module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)).unwrap_or_else(|| panic!("{name} missing in WGSL"));
-    let naga::TypeInner::Struct { members, span } = &ty.inner else { panic!("{name} is not a struct") };
-    assert_eq!(*span as usize, size, "{name}: WGSL size {span} != Rust size {size}");
+    let (_, ty) = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("{name} missing in WGSL"));
+    let naga::TypeInner::Struct { members, span } = &ty.inner else {
+        panic!("{name} is not a struct")
+    };
+    assert_eq!(
+        *span as usize, size,
+        "{name}: WGSL size {span} != Rust size {size}"
+    );
     assert_eq!(members.len(), fields.len(), "{name}: field count differs");
     for (member, (field, offset)) in members.iter().zip(fields) {
-        assert_eq!(member.name.as_deref(), Some(*field), "{name}: field order/name differs");
-        assert_eq!(member.offset as usize, *offset, "{name}.{field}: WGSL offset {} != Rust {offset}", member.offset);
+        assert_eq!(
+            member.name.as_deref(),
+            Some(*field),
+            "{name}: field order/name differs"
+        );
+        assert_eq!(
+            member.offset as usize, *offset,
+            "{name}.{field}: WGSL offset {} != Rust {offset}",
+            member.offset
+        );
     }
 }
 
@@ -65,27 +95,117 @@ macro_rules! layout {
 #[test]
 fn shared_structs_have_identical_layouts() {
     let module = parse_and_validate(&render_kernel_source());
-    layout!(module, GpuBvhNode { min, prim_count, max, first_index });
-    layout!(module, GpuPrimitive { p0, kind, p1, material, p2, normals });
+    layout!(
+        module,
+        GpuBvhNode {
+            min,
+            prim_count,
+            max,
+            first_index
+        }
+    );
+    layout!(
+        module,
+        GpuPrimitive {
+            p0,
+            kind,
+            p1,
+            material,
+            p2,
+            normals
+        }
+    );
     layout!(module, GpuNormals { n });
-    layout!(module, GpuMaterial { diffuse, model, specular, shininess, mirror, _pad0, emission, _pad1 });
-    layout!(module, GpuLight { p0, kind, p1, samples, p2, prim, color, strata_columns });
-    layout!(module, GpuCamera {
-        lens_to_world_x, focal_length_mm, lens_to_world_y, lens_radius_mm, lens_to_world_z, units_per_mm,
-        lens_center, inv_focal_length_mm, film_center, film_width_mm, film_u, film_height_mm, film_v, _pad0
-    });
-    layout!(module, GpuFrame {
-        width, height, spp, max_depth, seed, pixel_sampler, light_count, node_count, plane_start,
-        plane_count, traversal_cap, pixel_strata_columns, background, _pad1, ambient, _pad2
-    });
-    layout!(module, GpuPass { tile_x, tile_y, tile_width, tile_height, sample_start, sample_count, _pad0, _pad1 });
+    layout!(
+        module,
+        GpuMaterial {
+            diffuse,
+            model,
+            specular,
+            shininess,
+            mirror,
+            _pad0,
+            emission,
+            _pad1
+        }
+    );
+    layout!(
+        module,
+        GpuLight {
+            p0,
+            kind,
+            p1,
+            samples,
+            p2,
+            prim,
+            color,
+            strata_columns
+        }
+    );
+    layout!(
+        module,
+        GpuCamera {
+            lens_to_world_x,
+            focal_length_mm,
+            lens_to_world_y,
+            lens_radius_mm,
+            lens_to_world_z,
+            units_per_mm,
+            lens_center,
+            inv_focal_length_mm,
+            film_center,
+            film_width_mm,
+            film_u,
+            film_height_mm,
+            film_v,
+            _pad0
+        }
+    );
+    layout!(
+        module,
+        GpuFrame {
+            width,
+            height,
+            spp,
+            max_depth,
+            seed,
+            pixel_sampler,
+            light_count,
+            node_count,
+            plane_start,
+            plane_count,
+            traversal_cap,
+            pixel_strata_columns,
+            background,
+            _pad1,
+            ambient,
+            _pad2
+        }
+    );
+    layout!(
+        module,
+        GpuPass {
+            tile_x,
+            tile_y,
+            tile_width,
+            tile_height,
+            sample_start,
+            sample_count,
+            _pad0,
+            _pad1
+        }
+    );
 }
 
 #[test]
 fn generated_constants_match_rust() {
     let module = parse_and_validate(&render_kernel_source());
     let constant = |name: &str| -> u32 {
-        let (_, c) = module.constants.iter().find(|(_, c)| c.name.as_deref() == Some(name)).unwrap();
+        let (_, c) = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))
+            .unwrap();
         match module.global_expressions[c.init] {
             naga::Expression::Literal(naga::Literal::U32(v)) => v,
             ref e => panic!("{name}: {e:?}"),

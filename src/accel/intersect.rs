@@ -36,7 +36,7 @@ pub struct RayQuery {
 }
 
 fn safe_reciprocal(d: f32) -> f32 {
-    if d >= 0.0 && d < MIN_DIRECTION {
+    if (0.0..MIN_DIRECTION).contains(&d) {
         1.0 / MIN_DIRECTION
     } else if d < 0.0 && d > -MIN_DIRECTION {
         -1.0 / MIN_DIRECTION
@@ -174,7 +174,11 @@ pub fn intersect_sphere(ray: &RayQuery, center: Vec3, radius: f32, t_max: f32) -
     if t <= 0.0 || t >= t_max {
         return MISS;
     }
-    Hit { t, b1: 0.0, b2: 0.0 }
+    Hit {
+        t,
+        b1: 0.0,
+        b2: 0.0,
+    }
 }
 
 pub fn intersect_quad(ray: &RayQuery, corner: Vec3, edge_u: Vec3, edge_v: Vec3, t_max: f32) -> Hit {
@@ -206,7 +210,11 @@ pub fn intersect_plane(ray: &RayQuery, point: Vec3, normal: Vec3, t_max: f32) ->
     if t <= 0.0 || t >= t_max {
         return MISS;
     }
-    Hit { t, b1: 0.0, b2: 0.0 }
+    Hit {
+        t,
+        b1: 0.0,
+        b2: 0.0,
+    }
 }
 
 /// Intersect any primitive; `t == T_FAR` means a miss.
@@ -246,8 +254,15 @@ pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
     const INT_SCALE: f32 = 256.0;
     let offset = |p: f32, n: f32| -> f32 {
         let of_i = (INT_SCALE * n) as i32;
-        let moved = f32::from_bits((p.to_bits() as i32).wrapping_add(if p < 0.0 { -of_i } else { of_i }) as u32);
-        if p.abs() < ORIGIN { p + FLOAT_SCALE * n } else { moved }
+        let moved =
+            f32::from_bits(
+                (p.to_bits() as i32).wrapping_add(if p < 0.0 { -of_i } else { of_i }) as u32,
+            );
+        if p.abs() < ORIGIN {
+            p + FLOAT_SCALE * n
+        } else {
+            moved
+        }
     };
     Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
 }

@@ -18,7 +18,7 @@ use obvhs::bvh2::Bvh2;
 
 use crate::layout::*;
 use crate::math::sampling::strata_columns;
-use crate::scene::{Light, Scene, SamplerName, Shape};
+use crate::scene::{Light, SamplerName, Scene, Shape};
 
 /// Everything the kernels (and the CPU reference) read, ready to upload.
 pub struct FlatScene {
@@ -58,16 +58,31 @@ pub fn flatten(scene: &Scene) -> FlatScene {
     let mut triangle_count = 0;
     for shape in &scene.shapes {
         match shape {
-            Shape::Sphere { center, radius, material } => bounded.push((
-                prim(PRIM_SPHERE, *material, *center, Vec3::new(*radius, 0.0, 0.0), Vec3::ZERO),
+            Shape::Sphere {
+                center,
+                radius,
+                material,
+            } => bounded.push((
+                prim(
+                    PRIM_SPHERE,
+                    *material,
+                    *center,
+                    Vec3::new(*radius, 0.0, 0.0),
+                    Vec3::ZERO,
+                ),
                 None,
             )),
-            Shape::Quad { corner, edge_u, edge_v, material } => {
-                bounded.push((prim(PRIM_QUAD, *material, *corner, *edge_u, *edge_v), None))
-            }
-            Shape::Plane { point, normal, material } => {
-                planes.push(prim(PRIM_PLANE, *material, *point, *normal, Vec3::ZERO))
-            }
+            Shape::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                material,
+            } => bounded.push((prim(PRIM_QUAD, *material, *corner, *edge_u, *edge_v), None)),
+            Shape::Plane {
+                point,
+                normal,
+                material,
+            } => planes.push(prim(PRIM_PLANE, *material, *point, *normal, Vec3::ZERO)),
             Shape::Mesh { mesh, material } => {
                 triangle_count += mesh.triangles.len();
                 for t in &mesh.triangles {
@@ -87,21 +102,33 @@ pub fn flatten(scene: &Scene) -> FlatScene {
     let mut lights = Vec::new();
     for light in &scene.lights {
         lights.push(match *light {
-            Light::Point { position, intensity } => GpuLight {
+            Light::Point {
+                position,
+                intensity,
+            } => GpuLight {
                 p0: position.to_array(),
                 kind: LIGHT_POINT,
                 color: intensity.to_array(),
                 prim: NONE,
                 ..Default::default()
             },
-            Light::Directional { direction, irradiance } => GpuLight {
+            Light::Directional {
+                direction,
+                irradiance,
+            } => GpuLight {
                 p0: (-direction).to_array(),
                 kind: LIGHT_DIRECTIONAL,
                 color: irradiance.to_array(),
                 prim: NONE,
                 ..Default::default()
             },
-            Light::Area { corner, edge_u, edge_v, radiance, samples } => {
+            Light::Area {
+                corner,
+                edge_u,
+                edge_v,
+                radiance,
+                samples,
+            } => {
                 materials.push(GpuMaterial {
                     model: MODEL_EMITTER,
                     emission: radiance.to_array(),

@@ -9,23 +9,29 @@ use crate::layout::{NONE, T_FAR};
 /// Closest intersection along `ray` before `t_max`, ignoring primitive `skip` (the planar
 /// primitive a secondary ray leaves, which it can never hit again). Returns (primitive, hit).
 pub fn closest_hit(scene: &FlatScene, ray: &RayQuery, skip: u32, t_max: f32) -> Option<(u32, Hit)> {
-    let mut best = Hit { t: t_max, b1: 0.0, b2: 0.0 };
+    let mut best = Hit {
+        t: t_max,
+        b1: 0.0,
+        b2: 0.0,
+    };
     let mut best_prim = NONE;
     if !scene.bvh.nodes.is_empty() {
         let mut record = obvhs::ray::RayHit::none();
-        scene.bvh.ray_traverse(ray.to_obvhs(t_max), &mut record, |r, id| {
-            if id as u32 == skip {
-                return f32::INFINITY;
-            }
-            let hit = intersect_primitive(ray, &scene.prims[id], r.tmax);
-            if hit.t < r.tmax {
-                best = hit;
-                best_prim = id as u32;
-                hit.t
-            } else {
-                f32::INFINITY
-            }
-        });
+        scene
+            .bvh
+            .ray_traverse(ray.to_obvhs(t_max), &mut record, |r, id| {
+                if id as u32 == skip {
+                    return f32::INFINITY;
+                }
+                let hit = intersect_primitive(ray, &scene.prims[id], r.tmax);
+                if hit.t < r.tmax {
+                    best = hit;
+                    best_prim = id as u32;
+                    hit.t
+                } else {
+                    f32::INFINITY
+                }
+            });
     }
     let planes = scene.frame.plane_start..scene.frame.plane_start + scene.frame.plane_count;
     for id in planes {

@@ -60,11 +60,12 @@ pub struct GpuContext {
 
 impl GpuContext {
     pub fn new() -> Result<GpuContext> {
-        let adapter = pollster::block_on(instance().request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            ..Default::default()
-        }))
-        .map_err(|e| Error::NoAdapter(e.to_string()))?;
+        let adapter =
+            pollster::block_on(instance().request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                ..Default::default()
+            }))
+            .map_err(|e| Error::NoAdapter(e.to_string()))?;
         let adapter_limits = adapter.limits();
         let required_limits = wgpu::Limits {
             max_storage_buffer_binding_size: adapter_limits.max_storage_buffer_binding_size,
@@ -192,11 +193,13 @@ impl GpuRenderer {
             } else {
                 bytes
             };
-            Ok(device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage: wgpu::BufferUsages::STORAGE,
-            }))
+            Ok(
+                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage: wgpu::BufferUsages::STORAGE,
+                }),
+            )
         };
         let camera = uniform("camera", bytemuck::bytes_of(&scene.camera));
         let frame = uniform("frame", bytemuck::bytes_of(&scene.frame));
@@ -223,7 +226,9 @@ impl GpuRenderer {
         let status = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("status"),
             size: STATUS_WORDS as u64 * 4,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -283,7 +288,9 @@ impl GpuRenderer {
 impl Backend for GpuRenderer {
     fn render_tile(&mut self, pass: GpuPass) -> Result<TileStatus> {
         let context = &self.context;
-        context.queue.write_buffer(&self.pass_buffer, 0, bytemuck::bytes_of(&pass));
+        context
+            .queue
+            .write_buffer(&self.pass_buffer, 0, bytemuck::bytes_of(&pass));
         let mut encoder = context.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.status, 0, None);
         {

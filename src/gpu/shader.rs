@@ -11,7 +11,10 @@ pub const MODULES: [(&str, &str); 8] = [
     ("camera.wgsl", include_str!("../../wgsl/camera.wgsl")),
     ("intersect.wgsl", include_str!("../../wgsl/intersect.wgsl")),
     ("traverse.wgsl", include_str!("../../wgsl/traverse.wgsl")),
-    ("integrator.wgsl", include_str!("../../wgsl/integrator.wgsl")),
+    (
+        "integrator.wgsl",
+        include_str!("../../wgsl/integrator.wgsl"),
+    ),
     ("render.wgsl", include_str!("../../wgsl/render.wgsl")),
 ];
 

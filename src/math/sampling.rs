@@ -11,7 +11,7 @@ use std::f32::consts::FRAC_PI_4;
 /// largest divisor of `n` not above sqrt(n), so every `n` (even a prime) gets equal-area strata.
 pub fn strata_columns(n: u32) -> u32 {
     let mut nx = (n as f64).sqrt().floor().max(1.0) as u32;
-    while n % nx != 0 {
+    while !n.is_multiple_of(nx) {
         nx -= 1;
     }
     nx
@@ -28,14 +28,17 @@ pub fn stratified_2d(index: u32, n: u32, columns: u32, u: [f32; 2]) -> [f32; 2] 
 /// sin(x) for |x| <= pi/4 (Taylor to x^9; error below 2e-9).
 pub fn sin_quarter(x: f32) -> f32 {
     let x2 = x * x;
-    x * (1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362_880.0)))))
+    x * (1.0
+        + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362_880.0)))))
 }
 
 /// cos(x) for |x| <= pi/4 (Taylor to x^10; error below 2e-10).
 pub fn cos_quarter(x: f32) -> f32 {
     let x2 = x * x;
     1.0 + x2
-        * (-0.5 + x2 * (1.0 / 24.0 + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40_320.0 + x2 * (-1.0 / 3_628_800.0)))))
+        * (-0.5
+            + x2 * (1.0 / 24.0
+                + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40_320.0 + x2 * (-1.0 / 3_628_800.0)))))
 }
 
 /// Shirley and Chiu's concentric map of the unit square to the unit disk (area-preserving up to

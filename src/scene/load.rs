@@ -25,7 +25,11 @@ pub struct ParsedScene {
 impl ParsedScene {
     /// An error about `field` (a path like `shapes[2].radius`).
     pub fn error(&self, field: &str, message: impl Into<String>) -> Error {
-        let (line, column) = if self.overridden.iter().any(|o| field.starts_with(o.as_str())) {
+        let (line, column) = if self
+            .overridden
+            .iter()
+            .any(|o| field.starts_with(o.as_str()))
+        {
             (0, 0)
         } else {
             self.spans.line_col(field)
@@ -171,7 +175,11 @@ fn set_path(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<()
     set_in_value(slot, rest, value)
 }
 
-fn set_in_value(target: &mut toml::Value, segments: &[Segment], value: toml::Value) -> Result<(), String> {
+fn set_in_value(
+    target: &mut toml::Value,
+    segments: &[Segment],
+    value: toml::Value,
+) -> Result<(), String> {
     let Some((first, rest)) = segments.split_first() else {
         return Err("empty key".into());
     };
@@ -212,7 +220,10 @@ impl SpanIndex {
         if let Ok(root) = DeTable::parse(text) {
             collect_spans(root.get_ref(), "", &mut fields);
         }
-        SpanIndex { line_starts, fields }
+        SpanIndex {
+            line_starts,
+            fields,
+        }
     }
 
     pub fn offset_to_line_col(&self, offset: usize) -> (usize, usize) {
@@ -257,7 +268,11 @@ impl SpanIndex {
     }
 }
 
-fn collect_spans(table: &DeTable<'_>, prefix: &str, out: &mut Vec<(String, std::ops::Range<usize>)>) {
+fn collect_spans(
+    table: &DeTable<'_>,
+    prefix: &str,
+    out: &mut Vec<(String, std::ops::Range<usize>)>,
+) {
     for (key, value) in table.iter() {
         let path = if prefix.is_empty() {
             key.get_ref().to_string()
@@ -271,7 +286,11 @@ fn collect_spans(table: &DeTable<'_>, prefix: &str, out: &mut Vec<(String, std::
     }
 }
 
-fn collect_value_spans(value: &DeValue<'_>, path: &str, out: &mut Vec<(String, std::ops::Range<usize>)>) {
+fn collect_value_spans(
+    value: &DeValue<'_>,
+    path: &str,
+    out: &mut Vec<(String, std::ops::Range<usize>)>,
+) {
     match value {
         DeValue::Table(t) => collect_spans(t, path, out),
         DeValue::Array(items) => {

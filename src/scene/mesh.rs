@@ -53,18 +53,30 @@ fn read_obj(reader: &mut dyn BufRead) -> Result<TriangleMesh, String> {
     })
     .map_err(|e| format!("malformed OBJ: {e}"))?;
     let mut mesh = TriangleMesh::default();
-    let all_have_normals = models.iter().all(|m| m.mesh.normals.len() == m.mesh.positions.len());
+    let all_have_normals = models
+        .iter()
+        .all(|m| m.mesh.normals.len() == m.mesh.positions.len());
     let mut normals = Vec::new();
     for model in &models {
         let base = mesh.positions.len() as u32;
         let m = &model.mesh;
-        mesh.positions
-            .extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
+        mesh.positions.extend(
+            m.positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2])),
+        );
         if all_have_normals {
-            normals.extend(m.normals.chunks_exact(3).map(|n| Vec3::new(n[0], n[1], n[2])));
+            normals.extend(
+                m.normals
+                    .chunks_exact(3)
+                    .map(|n| Vec3::new(n[0], n[1], n[2])),
+            );
         }
-        mesh.triangles
-            .extend(m.indices.chunks_exact(3).map(|t| [base + t[0], base + t[1], base + t[2]]));
+        mesh.triangles.extend(
+            m.indices
+                .chunks_exact(3)
+                .map(|t| [base + t[0], base + t[1], base + t[2]]),
+        );
     }
     if all_have_normals && !normals.is_empty() {
         mesh.normals = Some(normals);
@@ -81,7 +93,10 @@ fn read_ply(reader: &mut dyn BufRead) -> Result<TriangleMesh, String> {
     let ply = parser
         .read_ply(&mut bytes.as_slice())
         .map_err(|e| format!("malformed PLY: {e}"))?;
-    let vertices = ply.payload.get("vertex").ok_or("PLY has no `vertex` element")?;
+    let vertices = ply
+        .payload
+        .get("vertex")
+        .ok_or("PLY has no `vertex` element")?;
     let scalar = |e: &ply_rs_bw::ply::DefaultElement, key: &str| -> Option<f32> {
         match e.get(key)? {
             Property::Float(v) => Some(*v),
@@ -110,9 +125,16 @@ fn read_ply(reader: &mut dyn BufRead) -> Result<TriangleMesh, String> {
     if normals.len() == mesh.positions.len() && !normals.is_empty() {
         mesh.normals = Some(normals);
     }
-    let faces = ply.payload.get("face").map(Vec::as_slice).unwrap_or_default();
+    let faces = ply
+        .payload
+        .get("face")
+        .map(Vec::as_slice)
+        .unwrap_or_default();
     for (f, face) in faces.iter().enumerate() {
-        let indices: Vec<i64> = match face.get("vertex_indices").or_else(|| face.get("vertex_index")) {
+        let indices: Vec<i64> = match face
+            .get("vertex_indices")
+            .or_else(|| face.get("vertex_index"))
+        {
             Some(Property::ListInt(l)) => l.iter().map(|&i| i as i64).collect(),
             Some(Property::ListUInt(l)) => l.iter().map(|&i| i as i64).collect(),
             Some(Property::ListShort(l)) => l.iter().map(|&i| i as i64).collect(),
@@ -123,7 +145,9 @@ fn read_ply(reader: &mut dyn BufRead) -> Result<TriangleMesh, String> {
         };
         let count = mesh.positions.len() as i64;
         if let Some(bad) = indices.iter().find(|&&i| i < 0 || i >= count) {
-            return Err(format!("PLY face {f} has vertex index {bad}, out of range (0..{count})"));
+            return Err(format!(
+                "PLY face {f} has vertex index {bad}, out of range (0..{count})"
+            ));
         }
         // Fan-triangulate polygons, as tobj does for OBJ.
         for k in 1..indices.len().saturating_sub(1) {
@@ -140,7 +164,11 @@ fn check_mesh(mut mesh: TriangleMesh) -> Result<TriangleMesh, String> {
         return Err(format!("vertex {i} has a non-finite coordinate"));
     }
     let count = mesh.positions.len() as u32;
-    if let Some(t) = mesh.triangles.iter().position(|t| t.iter().any(|&i| i >= count)) {
+    if let Some(t) = mesh
+        .triangles
+        .iter()
+        .position(|t| t.iter().any(|&i| i >= count))
+    {
         return Err(format!(
             "triangle {t} has a vertex index out of range ({} vertices)",
             count

@@ -57,10 +57,26 @@ pub struct Material {
 /// A shape; `material` indexes [`Scene::materials`].
 #[derive(Clone, Debug)]
 pub enum Shape {
-    Sphere { center: Vec3, radius: f32, material: u32 },
-    Quad { corner: Vec3, edge_u: Vec3, edge_v: Vec3, material: u32 },
-    Plane { point: Vec3, normal: Vec3, material: u32 },
-    Mesh { mesh: TriangleMesh, material: u32 },
+    Sphere {
+        center: Vec3,
+        radius: f32,
+        material: u32,
+    },
+    Quad {
+        corner: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        material: u32,
+    },
+    Plane {
+        point: Vec3,
+        normal: Vec3,
+        material: u32,
+    },
+    Mesh {
+        mesh: TriangleMesh,
+        material: u32,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -70,7 +86,13 @@ pub enum Light {
     /// `direction` is the unit direction the light travels; `irradiance` at normal incidence.
     Directional { direction: Vec3, irradiance: Vec3 },
     /// One-sided emitting parallelogram, normal = edge_u x edge_v.
-    Area { corner: Vec3, edge_u: Vec3, edge_v: Vec3, radiance: Vec3, samples: u32 },
+    Area {
+        corner: Vec3,
+        edge_u: Vec3,
+        edge_v: Vec3,
+        radiance: Vec3,
+        samples: u32,
+    },
 }
 
 impl Scene {

@@ -162,7 +162,10 @@ fn validate_camera(
     let up = check.nonzero("camera.up", c.up)?;
     let forward = look_at - position;
     if forward.length() <= 1e-12 * position.length().max(1.0) {
-        return Err(check.err("camera.look_at", "equals camera.position: no viewing direction"));
+        return Err(check.err(
+            "camera.look_at",
+            "equals camera.position: no viewing direction",
+        ));
     }
     if forward.normalize().cross(up.normalize()).length() < 1e-9 {
         return Err(check.err("camera.up", "is parallel to the viewing direction"));
@@ -194,7 +197,10 @@ fn validate_camera(
         (None, Some(fov)) => {
             let fov = check.finite("camera.vertical_fov", fov)?;
             if fov <= 0.0 || fov >= 180.0 {
-                return Err(check.err("camera.vertical_fov", format!("must lie in (0, 180) degrees, got {fov}")));
+                return Err(check.err(
+                    "camera.vertical_fov",
+                    format!("must lie in (0, 180) degrees, got {fov}"),
+                ));
             }
             0.5 * film[1] / (0.5 * fov.to_radians()).tan()
         }
@@ -204,7 +210,10 @@ fn validate_camera(
         Some(n) => {
             let n = check.finite("camera.f_number", n)?;
             if n < 0.0 {
-                return Err(check.err("camera.f_number", format!("must be 0 (pinhole) or positive, got {n}")));
+                return Err(check.err(
+                    "camera.f_number",
+                    format!("must be 0 (pinhole) or positive, got {n}"),
+                ));
             }
             n
         }
@@ -254,12 +263,22 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
         let specular = check.reflectance(&at("specular"), m.specular.unwrap_or([0.0; 3]))?;
         let uses_lobe = matches!(m.model, MaterialModel::Phong | MaterialModel::BlinnPhong);
         if !uses_lobe && (m.specular.is_some() || m.shininess.is_some()) {
-            let field = if m.specular.is_some() { "specular" } else { "shininess" };
-            return Err(check.err(&at(field), "only phong and blinn_phong materials have a specular lobe"));
+            let field = if m.specular.is_some() {
+                "specular"
+            } else {
+                "shininess"
+            };
+            return Err(check.err(
+                &at(field),
+                "only phong and blinn_phong materials have a specular lobe",
+            ));
         }
         let shininess = check.finite(&at("shininess"), m.shininess.unwrap_or(32.0))?;
         if !(0.0..=1.0e4).contains(&shininess) {
-            return Err(check.err(&at("shininess"), format!("must lie in [0, 10000], got {shininess}")));
+            return Err(check.err(
+                &at("shininess"),
+                format!("must lie in [0, 10000], got {shininess}"),
+            ));
         }
         materials.push(Material {
             name: m.name.clone(),
@@ -277,8 +296,16 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
     Ok(materials)
 }
 
-fn validate_shapes(check: &Checker, file: &SceneFile, materials: &[Material]) -> Result<Vec<Shape>> {
-    let scene_dir = check.parsed.path.parent().unwrap_or(std::path::Path::new("."));
+fn validate_shapes(
+    check: &Checker,
+    file: &SceneFile,
+    materials: &[Material],
+) -> Result<Vec<Shape>> {
+    let scene_dir = check
+        .parsed
+        .path
+        .parent()
+        .unwrap_or(std::path::Path::new("."));
     let mut shapes = Vec::new();
     for (i, s) in file.shapes.iter().enumerate() {
         let prefix = format!("shapes[{i}]");
@@ -286,9 +313,16 @@ fn validate_shapes(check: &Checker, file: &SceneFile, materials: &[Material]) ->
         let material = materials
             .iter()
             .position(|m| m.name == s.material)
-            .ok_or_else(|| check.err(&at("material"), format!("unknown material `{}`", s.material)))?
-            as u32;
-        let sphere_fields = [("center", s.center.is_some()), ("radius", s.radius.is_some())];
+            .ok_or_else(|| {
+                check.err(
+                    &at("material"),
+                    format!("unknown material `{}`", s.material),
+                )
+            })? as u32;
+        let sphere_fields = [
+            ("center", s.center.is_some()),
+            ("radius", s.radius.is_some()),
+        ];
         let quad_fields = [
             ("corner", s.corner.is_some()),
             ("edge_u", s.edge_u.is_some()),
@@ -304,27 +338,67 @@ fn validate_shapes(check: &Checker, file: &SceneFile, materials: &[Material]) ->
         ];
         let shape = match s.kind {
             ShapeType::Sphere => {
-                check.forbid(&prefix, "sphere", &[&quad_fields[..], &plane_fields, &mesh_fields].concat())?;
-                let center = check.point(&at("center"), check.require(&at("center"), s.center, "sphere")?)?;
-                let radius = check.positive(&at("radius"), check.require(&at("radius"), s.radius, "sphere")?)?;
+                check.forbid(
+                    &prefix,
+                    "sphere",
+                    &[&quad_fields[..], &plane_fields, &mesh_fields].concat(),
+                )?;
+                let center = check.point(
+                    &at("center"),
+                    check.require(&at("center"), s.center, "sphere")?,
+                )?;
+                let radius = check.positive(
+                    &at("radius"),
+                    check.require(&at("radius"), s.radius, "sphere")?,
+                )?;
                 if radius > MAX_COORDINATE {
                     return Err(check.err(&at("radius"), format!("exceeds {MAX_COORDINATE:e}")));
                 }
-                Shape::Sphere { center: center.as_vec3(), radius: radius as f32, material }
+                Shape::Sphere {
+                    center: center.as_vec3(),
+                    radius: radius as f32,
+                    material,
+                }
             }
             ShapeType::Quad => {
-                check.forbid(&prefix, "quad", &[&sphere_fields[..], &plane_fields, &mesh_fields].concat())?;
-                let (corner, edge_u, edge_v) = parallelogram(check, &prefix, s.corner, s.edge_u, s.edge_v, "quad")?;
-                Shape::Quad { corner, edge_u, edge_v, material }
+                check.forbid(
+                    &prefix,
+                    "quad",
+                    &[&sphere_fields[..], &plane_fields, &mesh_fields].concat(),
+                )?;
+                let (corner, edge_u, edge_v) =
+                    parallelogram(check, &prefix, s.corner, s.edge_u, s.edge_v, "quad")?;
+                Shape::Quad {
+                    corner,
+                    edge_u,
+                    edge_v,
+                    material,
+                }
             }
             ShapeType::Plane => {
-                check.forbid(&prefix, "plane", &[&sphere_fields[..], &quad_fields, &mesh_fields].concat())?;
-                let point = check.point(&at("point"), check.require(&at("point"), s.point, "plane")?)?;
-                let normal = check.nonzero(&at("normal"), check.require(&at("normal"), s.normal, "plane")?)?;
-                Shape::Plane { point: point.as_vec3(), normal: normal.normalize().as_vec3(), material }
+                check.forbid(
+                    &prefix,
+                    "plane",
+                    &[&sphere_fields[..], &quad_fields, &mesh_fields].concat(),
+                )?;
+                let point =
+                    check.point(&at("point"), check.require(&at("point"), s.point, "plane")?)?;
+                let normal = check.nonzero(
+                    &at("normal"),
+                    check.require(&at("normal"), s.normal, "plane")?,
+                )?;
+                Shape::Plane {
+                    point: point.as_vec3(),
+                    normal: normal.normalize().as_vec3(),
+                    material,
+                }
             }
             ShapeType::Mesh => {
-                check.forbid(&prefix, "mesh", &[&sphere_fields[..], &quad_fields, &plane_fields].concat())?;
+                check.forbid(
+                    &prefix,
+                    "mesh",
+                    &[&sphere_fields[..], &quad_fields, &plane_fields].concat(),
+                )?;
                 let name = check.require(&at("file"), s.file.as_ref(), "mesh")?;
                 let path = scene_dir.join(name);
                 let mut mesh = load_mesh(&path)
@@ -341,8 +415,17 @@ fn validate_shapes(check: &Checker, file: &SceneFile, materials: &[Material]) ->
                 if !s.smooth.unwrap_or(true) {
                     mesh.normals = None;
                 }
-                transform_mesh(&mut mesh, scale.as_vec3(), rotate.as_vec3(), translate.as_vec3());
-                if let Some(p) = mesh.positions.iter().find(|p| p.abs().max_element() as f64 > MAX_COORDINATE) {
+                transform_mesh(
+                    &mut mesh,
+                    scale.as_vec3(),
+                    rotate.as_vec3(),
+                    translate.as_vec3(),
+                );
+                if let Some(p) = mesh
+                    .positions
+                    .iter()
+                    .find(|p| p.abs().max_element() as f64 > MAX_COORDINATE)
+                {
                     return Err(check.err(
                         &at("file"),
                         format!("vertex {p} lies beyond +-{MAX_COORDINATE:e} scene units after transformation"),
@@ -370,7 +453,10 @@ fn parallelogram(
     let u = check.nonzero(&at("edge_u"), check.require(&at("edge_u"), edge_u, kind)?)?;
     let v = check.nonzero(&at("edge_v"), check.require(&at("edge_v"), edge_v, kind)?)?;
     if u.normalize().cross(v.normalize()).length() < 1e-9 {
-        return Err(check.err(&at("edge_v"), "is parallel to edge_u: the parallelogram has no area"));
+        return Err(check.err(
+            &at("edge_v"),
+            "is parallel to edge_u: the parallelogram has no area",
+        ));
     }
     Ok((corner.as_vec3(), u.as_vec3(), v.as_vec3()))
 }
@@ -380,8 +466,14 @@ fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
     for (i, l) in file.lights.iter().enumerate() {
         let prefix = format!("lights[{i}]");
         let at = |f: &str| format!("{prefix}.{f}");
-        let point_fields = [("position", l.position.is_some()), ("intensity", l.intensity.is_some())];
-        let directional_fields = [("direction", l.direction.is_some()), ("irradiance", l.irradiance.is_some())];
+        let point_fields = [
+            ("position", l.position.is_some()),
+            ("intensity", l.intensity.is_some()),
+        ];
+        let directional_fields = [
+            ("direction", l.direction.is_some()),
+            ("irradiance", l.irradiance.is_some()),
+        ];
         let area_fields = [
             ("corner", l.corner.is_some()),
             ("edge_u", l.edge_u.is_some()),
@@ -391,17 +483,30 @@ fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
         ];
         let light = match l.kind {
             LightType::Point => {
-                check.forbid(&prefix, "point light", &[&directional_fields[..], &area_fields].concat())?;
+                check.forbid(
+                    &prefix,
+                    "point light",
+                    &[&directional_fields[..], &area_fields].concat(),
+                )?;
                 Light::Point {
                     position: check
-                        .point(&at("position"), check.require(&at("position"), l.position, "point light")?)?
+                        .point(
+                            &at("position"),
+                            check.require(&at("position"), l.position, "point light")?,
+                        )?
                         .as_vec3(),
-                    intensity: check
-                        .color(&at("intensity"), check.require(&at("intensity"), l.intensity, "point light")?)?,
+                    intensity: check.color(
+                        &at("intensity"),
+                        check.require(&at("intensity"), l.intensity, "point light")?,
+                    )?,
                 }
             }
             LightType::Directional => {
-                check.forbid(&prefix, "directional light", &[&point_fields[..], &area_fields].concat())?;
+                check.forbid(
+                    &prefix,
+                    "directional light",
+                    &[&point_fields[..], &area_fields].concat(),
+                )?;
                 let direction = check.nonzero(
                     &at("direction"),
                     check.require(&at("direction"), l.direction, "directional light")?,
@@ -415,16 +520,27 @@ fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
                 }
             }
             LightType::Area => {
-                check.forbid(&prefix, "area light", &[&point_fields[..], &directional_fields].concat())?;
+                check.forbid(
+                    &prefix,
+                    "area light",
+                    &[&point_fields[..], &directional_fields].concat(),
+                )?;
                 let (corner, edge_u, edge_v) =
                     parallelogram(check, &prefix, l.corner, l.edge_u, l.edge_v, "area light")?;
                 Light::Area {
                     corner,
                     edge_u,
                     edge_v,
-                    radiance: check
-                        .color(&at("radiance"), check.require(&at("radiance"), l.radiance, "area light")?)?,
-                    samples: check.integer(&at("samples"), l.samples.unwrap_or(1), 1, MAX_LIGHT_SAMPLES)?,
+                    radiance: check.color(
+                        &at("radiance"),
+                        check.require(&at("radiance"), l.radiance, "area light")?,
+                    )?,
+                    samples: check.integer(
+                        &at("samples"),
+                        l.samples.unwrap_or(1),
+                        1,
+                        MAX_LIGHT_SAMPLES,
+                    )?,
                 }
             }
         };

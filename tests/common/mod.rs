@@ -23,7 +23,9 @@ pub fn gpu_context() -> Option<GpuContext> {
                 eprintln!("SKIPPED (CHAMBRE_SKIP_GPU=1): {e}");
                 return None;
             }
-            panic!("no GPU adapter ({e}); install lavapipe (tools/test.sh does) or set CHAMBRE_SKIP_GPU=1");
+            panic!(
+                "no GPU adapter ({e}); install lavapipe (tools/test.sh does) or set CHAMBRE_SKIP_GPU=1"
+            );
         }
     }
 }
@@ -36,7 +38,8 @@ pub fn load(path: &str, overrides: &[&str]) -> Scene {
 
 pub fn render_cpu(flat: &FlatScene) -> Image {
     let mut renderer = CpuRenderer::new(flat);
-    let output = render(flat, &mut renderer, &mut |_, _| {}, &AtomicBool::new(false)).expect("CPU render");
+    let output =
+        render(flat, &mut renderer, &mut |_, _| {}, &AtomicBool::new(false)).expect("CPU render");
     assert!(output.stopped.is_none());
     output.image
 }
@@ -44,7 +47,8 @@ pub fn render_cpu(flat: &FlatScene) -> Image {
 pub fn render_gpu(flat: &FlatScene) -> Option<Image> {
     let context = gpu_context()?;
     let mut renderer = GpuRenderer::new(context, flat).unwrap_or_else(|e| panic!("{e}"));
-    let output = render(flat, &mut renderer, &mut |_, _| {}, &AtomicBool::new(false)).expect("GPU render");
+    let output =
+        render(flat, &mut renderer, &mut |_, _| {}, &AtomicBool::new(false)).expect("GPU render");
     if let Some(e) = output.stopped {
         panic!("GPU render stopped: {e}");
     }
