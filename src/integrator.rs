@@ -19,6 +19,7 @@ use crate::camera::{film_position_mm, generate_ray};
 use crate::layout::*;
 use crate::math::rng::Rng;
 use crate::math::sampling::stratified_2d;
+use crate::sampler::{PatternSource, sample_2d, sample_aperture};
 
 /// Counters a sample adds to (rays traced, paths cut off at `max_depth`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -240,8 +241,8 @@ pub fn trace_path(
     radiance
 }
 
-/// Radiance of sample `sample` of pixel (x, y): pixel jitter (dimensions 0-1), lens point (2-3),
-/// then the path.
+/// Radiance of sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1),
+/// lens point (2-3, drawn only by a lens), then the path.
 pub fn trace_sample(
     scene: &FlatScene,
     x: u32,
@@ -250,16 +251,44 @@ pub fn trace_sample(
     stats: &mut SampleStats,
 ) -> Vec3 {
     let frame = &scene.frame;
+    let camera = &scene.camera;
     let mut rng = Rng::new(frame.seed, y * frame.width + x, sample);
-    let u = rng.next_2d();
-    let jitter = if frame.pixel_sampler == SAMPLER_STRATIFIED {
-        stratified_2d(sample, frame.spp, frame.pixel_strata_columns, u)
-    } else {
-        u
+    let pixel_source = PatternSource {
+        sampler: frame.pixel_sampler,
+        strata_columns: frame.pixel_strata_columns,
+        table_offset: frame.pixel_table_offset,
+        dim: PIXEL_DIMENSION,
     };
+    let jitter = sample_2d(
+        frame,
+        &scene.sample_table,
+        pixel_source,
+        x,
+        y,
+        sample,
+        &mut rng,
+    );
     let raster = Vec2::new(x as f32 + jitter[0], y as f32 + jitter[1]);
-    let film = film_position_mm(&scene.camera, frame.width, frame.height, raster);
-    let lens_u = rng.next_2d();
-    let ray = generate_ray(&scene.camera, film, lens_u);
+    let film = film_position_mm(camera, frame.width, frame.height, raster);
+    let mut lens = Vec2::ZERO;
+    if camera.lens_radius_mm > 0.0 {
+        let lens_source = PatternSource {
+            sampler: frame.lens_sampler,
+            strata_columns: frame.lens_strata_columns,
+            table_offset: frame.lens_table_offset,
+            dim: LENS_DIMENSION,
+        };
+        let u = sample_2d(
+            frame,
+            &scene.sample_table,
+            lens_source,
+            x,
+            y,
+            sample,
+            &mut rng,
+        );
+        lens = Vec2::from(sample_aperture(camera, &scene.sample_table, u));
+    }
+    let ray = generate_ray(camera, film, lens);
     trace_path(scene, ray.origin, ray.direction, &mut rng, stats)
 }

@@ -35,9 +35,21 @@ pub const LIGHT_POINT: u32 = 0;
 pub const LIGHT_DIRECTIONAL: u32 = 1;
 pub const LIGHT_AREA: u32 = 2;
 
-/// Sampler kinds (`GpuFrame::pixel_sampler`).
+/// Sample patterns (`GpuFrame::pixel_sampler`, `GpuFrame::lens_sampler`); see `src/sampler.rs`.
 pub const SAMPLER_RANDOM: u32 = 0;
 pub const SAMPLER_STRATIFIED: u32 = 1;
+pub const SAMPLER_POISSON: u32 = 2;
+pub const SAMPLER_INTERLEAVED: u32 = 3;
+pub const SAMPLER_SOBOL: u32 = 4;
+/// Cap on the cycle-walking loop of the stratified sampler's permutation (`sampler::permute`).
+pub const PERMUTE_WALK_CAP: u32 = 64;
+/// Random dimensions of the pixel position and of the lens point.
+pub const PIXEL_DIMENSION: u32 = 0;
+pub const LENS_DIMENSION: u32 = 2;
+/// Poisson-disk sets in the sample table; a pixel picks one by hash and shifts it.
+pub const POISSON_SETS: u32 = 16;
+/// Interleaved sampling repeats a tile of INTERLEAVED_TILE x INTERLEAVED_TILE basis patterns.
+pub const INTERLEAVED_TILE: u32 = 3;
 
 /// Bits of the status word: a kernel loop hit its cap.
 pub const STATUS_TRAVERSAL_CAP: u32 = 1;
@@ -135,7 +147,13 @@ pub struct GpuCamera {
     pub film_u: [f32; 3],
     pub film_height_mm: f32,
     pub film_v: [f32; 3],
+    /// 0: circular aperture; n >= 3: regular polygon whose unit-circle vertices are
+    /// `sample_table[aperture_table_offset ..= aperture_table_offset + n]` (first one repeated).
+    pub aperture_blades: u32,
+    pub aperture_table_offset: u32,
     pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 /// Settings constant over one render.
@@ -156,6 +174,11 @@ pub struct GpuFrame {
     pub traversal_cap: u32,
     /// Columns of the pixel-sample strata (`math::sampling::strata_columns(spp)`).
     pub pixel_strata_columns: u32,
+    pub lens_sampler: u32,
+    pub lens_strata_columns: u32,
+    /// Where the pixel / lens sampler's precomputed patterns start in the sample table.
+    pub pixel_table_offset: u32,
+    pub lens_table_offset: u32,
     pub background: [f32; 3],
     pub _pad1: u32,
     pub ambient: [f32; 3],
@@ -181,8 +204,8 @@ const _: () = assert!(size_of::<GpuPrimitive>() == 48);
 const _: () = assert!(size_of::<GpuNormals>() == 36);
 const _: () = assert!(size_of::<GpuMaterial>() == 64);
 const _: () = assert!(size_of::<GpuLight>() == 64);
-const _: () = assert!(size_of::<GpuCamera>() == 112);
-const _: () = assert!(size_of::<GpuFrame>() == 80);
+const _: () = assert!(size_of::<GpuCamera>() == 128);
+const _: () = assert!(size_of::<GpuFrame>() == 96);
 const _: () = assert!(size_of::<GpuPass>() == 32);
 
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
@@ -204,6 +227,14 @@ pub fn wgsl_prelude() -> String {
         ("LIGHT_AREA", LIGHT_AREA),
         ("SAMPLER_RANDOM", SAMPLER_RANDOM),
         ("SAMPLER_STRATIFIED", SAMPLER_STRATIFIED),
+        ("SAMPLER_POISSON", SAMPLER_POISSON),
+        ("SAMPLER_INTERLEAVED", SAMPLER_INTERLEAVED),
+        ("SAMPLER_SOBOL", SAMPLER_SOBOL),
+        ("POISSON_SETS", POISSON_SETS),
+        ("PERMUTE_WALK_CAP", PERMUTE_WALK_CAP),
+        ("PIXEL_DIMENSION", PIXEL_DIMENSION),
+        ("LENS_DIMENSION", LENS_DIMENSION),
+        ("INTERLEAVED_TILE", INTERLEAVED_TILE),
         ("STATUS_TRAVERSAL_CAP", STATUS_TRAVERSAL_CAP),
         ("STATUS_STACK_OVERFLOW", STATUS_STACK_OVERFLOW),
         ("STATUS_FLAGS", STATUS_FLAGS),

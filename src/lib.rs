@@ -13,7 +13,8 @@
 //! |----------------------|-----------------------------|------------------------|
 //! | random numbers       | `math/rng.rs`               | `wgsl/rng.wgsl`        |
 //! | sample warping       | `math/sampling.rs`          | `wgsl/sampling.wgsl`   |
-//! | primary rays         | `camera.rs`                 | `wgsl/camera.wgsl`     |
+//! | pixel & lens samples | `sampler.rs`                | `wgsl/sampler.wgsl`    |
+//! | primary rays         | `camera/mod.rs`             | `wgsl/camera.wgsl`     |
 //! | intersection         | `accel/intersect.rs`        | `wgsl/intersect.wgsl`  |
 //! | BVH traversal        | `accel/traverse.rs` (obvhs) | `wgsl/traverse.wgsl`   |
 //! | shading, shadows, mirrors | `integrator.rs`        | `wgsl/integrator.wgsl` |
@@ -29,6 +30,7 @@ pub mod layout;
 pub mod math;
 pub mod output;
 pub mod render;
+pub mod sampler;
 pub mod scene;
 
 pub use error::{Error, Result};

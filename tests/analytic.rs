@@ -86,7 +86,7 @@ fn lambert_sphere_pixels_match_closed_form_on_both_paths() {
             64,
             Vec2::new(x as f32 + 0.5, y as f32 + 0.5),
         );
-        let ray = generate_ray(&flat.camera, film, [0.5, 0.5]);
+        let ray = generate_ray(&flat.camera, film, glam::Vec2::ZERO);
         let b = ray.origin.dot(ray.direction);
         let t = -b - (b * b - ray.origin.length_squared() + 1.0).sqrt();
         let expected = lambert_expected(ray.origin + t * ray.direction);
@@ -125,7 +125,7 @@ film = [36.0, 24.0]
     ];
     for (world, raster) in cases {
         let film = film_position_mm(&flat.camera, 360, 240, raster);
-        let ray = generate_ray(&flat.camera, film, [0.5, 0.5]);
+        let ray = generate_ray(&flat.camera, film, glam::Vec2::ZERO);
         let to_point = world - ray.origin;
         let miss = (to_point - to_point.dot(ray.direction) * ray.direction).length();
         assert!(

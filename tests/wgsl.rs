@@ -158,7 +158,11 @@ fn shared_structs_have_identical_layouts() {
             film_u,
             film_height_mm,
             film_v,
-            _pad0
+            aperture_blades,
+            aperture_table_offset,
+            _pad0,
+            _pad1,
+            _pad2
         }
     );
     layout!(
@@ -176,6 +180,10 @@ fn shared_structs_have_identical_layouts() {
             plane_count,
             traversal_cap,
             pixel_strata_columns,
+            lens_sampler,
+            lens_strata_columns,
+            pixel_table_offset,
+            lens_table_offset,
             background,
             _pad1,
             ambient,
@@ -215,4 +223,6 @@ fn generated_constants_match_rust() {
     assert_eq!(constant("MODEL_EMITTER"), MODEL_EMITTER);
     assert_eq!(constant("LIGHT_AREA"), LIGHT_AREA);
     assert_eq!(constant("NONE"), NONE);
+    assert_eq!(constant("SAMPLER_SOBOL"), SAMPLER_SOBOL);
+    assert_eq!(constant("POISSON_SETS"), POISSON_SETS);
 }

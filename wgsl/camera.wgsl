@@ -1,5 +1,6 @@
-// Primary-ray generation: the physical camera (pinhole or thin lens).
-// Mirrors: src/camera.rs (see there and docs/camera.md for the ray-transfer form).
+// Primary-ray generation: the view camera (pinhole or thin lens, with movements).
+// Mirrors: src/camera/mod.rs (see there and docs/camera.md for the ray-transfer form; film
+// and lens movements are folded into GpuCamera on the CPU).
 
 struct Ray {
     origin: vec3<f32>,
@@ -17,16 +18,12 @@ fn lens_to_world(camera: GpuCamera, v: vec3<f32>) -> vec3<f32> {
     return v.x * camera.lens_to_world_x + v.y * camera.lens_to_world_y + v.z * camera.lens_to_world_z;
 }
 
-fn generate_ray(camera: GpuCamera, film_mm: vec2<f32>, lens_u: vec2<f32>) -> Ray {
+fn generate_ray(camera: GpuCamera, film_mm: vec2<f32>, lens_mm: vec2<f32>) -> Ray {
     let film_point = camera.film_center + film_mm.x * camera.film_u + film_mm.y * camera.film_v;
-    var lens = vec2<f32>(0.0, 0.0);
-    if (camera.lens_radius_mm > 0.0) {
-        lens = camera.lens_radius_mm * concentric_disk(lens_u);
-    }
     // Thin-lens ray transfer: outgoing slope = incoming slope - h / f.
-    let slope_in = (lens - film_point.xy) / -film_point.z;
-    let slope_out = slope_in - lens * camera.inv_focal_length_mm;
+    let slope_in = (lens_mm - film_point.xy) / -film_point.z;
+    let slope_out = slope_in - lens_mm * camera.inv_focal_length_mm;
     let direction_lens = normalize(vec3<f32>(slope_out, 1.0));
-    let origin_lens = vec3<f32>(lens, 0.0) * camera.units_per_mm;
+    let origin_lens = vec3<f32>(lens_mm, 0.0) * camera.units_per_mm;
     return Ray(camera.lens_center + lens_to_world(camera, origin_lens), lens_to_world(camera, direction_lens));
 }

@@ -191,14 +191,15 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, Rng>,
 
 fn trace_sample(x: u32, y: u32, sample: u32, counters: ptr<function, PathCounters>) -> vec3<f32> {
     var rng = rng_new(frame.seed, y * frame.width + x, sample);
-    let u = rng_next_2d(&rng);
-    var jitter = u;
-    if (frame.pixel_sampler == SAMPLER_STRATIFIED) {
-        jitter = stratified_2d(sample, frame.spp, frame.pixel_strata_columns, u);
-    }
+    let pixel_source = PatternSource(frame.pixel_sampler, frame.pixel_strata_columns, frame.pixel_table_offset, PIXEL_DIMENSION);
+    let jitter = sample_2d(pixel_source, x, y, sample, &rng);
     let raster = vec2<f32>(f32(x) + jitter.x, f32(y) + jitter.y);
     let film = film_position_mm(camera, frame.width, frame.height, raster);
-    let lens_u = rng_next_2d(&rng);
-    let ray = generate_ray(camera, film, lens_u);
+    var lens = vec2<f32>(0.0, 0.0);
+    if (camera.lens_radius_mm > 0.0) {
+        let lens_source = PatternSource(frame.lens_sampler, frame.lens_strata_columns, frame.lens_table_offset, LENS_DIMENSION);
+        lens = sample_aperture(sample_2d(lens_source, x, y, sample, &rng));
+    }
+    let ray = generate_ray(camera, film, lens);
     return trace_path(ray.origin, ray.direction, &rng, counters);
 }

@@ -13,6 +13,7 @@
 @group(0) @binding(7) var<storage, read> lights: array<GpuLight>;
 @group(0) @binding(8) var<storage, read_write> accumulation: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read_write> status: array<atomic<u32>, STATUS_WORDS>;
+@group(0) @binding(10) var<storage, read> sample_table: array<vec2<f32>>;
 
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn render(@builtin(global_invocation_id) id: vec3<u32>) {

@@ -56,7 +56,11 @@ struct GpuCamera {
     film_u: vec3<f32>,
     film_height_mm: f32,
     film_v: vec3<f32>,
+    aperture_blades: u32,
+    aperture_table_offset: u32,
     _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct GpuFrame {
@@ -72,6 +76,10 @@ struct GpuFrame {
     plane_count: u32,
     traversal_cap: u32,
     pixel_strata_columns: u32,
+    lens_sampler: u32,
+    lens_strata_columns: u32,
+    pixel_table_offset: u32,
+    lens_table_offset: u32,
     background: vec3<f32>,
     _pad1: u32,
     ambient: vec3<f32>,

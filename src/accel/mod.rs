@@ -18,7 +18,8 @@ use obvhs::bvh2::Bvh2;
 
 use crate::layout::*;
 use crate::math::sampling::strata_columns;
-use crate::scene::{Light, SamplerName, Scene, Shape};
+use crate::sampler::SampleTable;
+use crate::scene::{Light, Scene, Shape};
 
 /// Everything the kernels (and the CPU reference) read, ready to upload.
 pub struct FlatScene {
@@ -31,6 +32,8 @@ pub struct FlatScene {
     pub lights: Vec<GpuLight>,
     pub camera: GpuCamera,
     pub frame: GpuFrame,
+    /// Precomputed sample patterns and aperture vertices (`sampler::SampleTable`).
+    pub sample_table: Vec<[f32; 2]>,
     /// Longest root-to-leaf path (nodes); bounds the traversal stack.
     pub bvh_depth: usize,
     pub triangle_count: usize,
@@ -202,22 +205,33 @@ pub fn flatten(scene: &Scene) -> FlatScene {
     // obvhs sizes its CPU traversal stack from this field.
     bvh.max_depth = bvh.max_depth.max(bvh_depth + 1);
     let render = &scene.render;
+    let camera = &scene.camera;
+    let lens_sampler = (!camera.is_pinhole()).then_some(camera.lens_sampler);
+    let table = SampleTable::build(
+        render.spp,
+        render.seed,
+        render.pixel_sampler,
+        lens_sampler,
+        camera.aperture_blades,
+        camera.aperture_rotation_deg,
+    );
     let frame = GpuFrame {
         width: render.width,
         height: render.height,
         spp: render.spp,
         max_depth: render.max_depth,
         seed: render.seed,
-        pixel_sampler: match render.pixel_sampler {
-            SamplerName::Random => SAMPLER_RANDOM,
-            SamplerName::Stratified => SAMPLER_STRATIFIED,
-        },
+        pixel_sampler: render.pixel_sampler.code(),
         light_count: lights.len() as u32,
         node_count: nodes.len() as u32,
         plane_start,
         plane_count: planes.len() as u32,
         traversal_cap: 2 * nodes.len() as u32 + 64,
         pixel_strata_columns: strata_columns(render.spp),
+        lens_sampler: camera.lens_sampler.code(),
+        lens_strata_columns: strata_columns(render.spp),
+        pixel_table_offset: table.pixel_offset,
+        lens_table_offset: table.lens_offset,
         background: render.background.to_array(),
         ambient: render.ambient.to_array(),
         ..Default::default()
@@ -229,8 +243,9 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         normals,
         materials,
         lights,
-        camera: scene.camera.to_gpu(),
+        camera: camera.to_gpu(table.aperture_offset),
         frame,
+        sample_table: table.points,
         bvh_depth,
         triangle_count,
         build_time,

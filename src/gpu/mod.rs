@@ -209,6 +209,7 @@ impl GpuRenderer {
         let normals = storage("normals", bytemuck::cast_slice(&scene.normals))?;
         let materials = storage("materials", bytemuck::cast_slice(&scene.materials))?;
         let lights = storage("lights", bytemuck::cast_slice(&scene.lights))?;
+        let sample_table = storage("sample table", bytemuck::cast_slice(&scene.sample_table))?;
         let pixel_count = scene.frame.width as u64 * scene.frame.height as u64;
         let accumulation_size = pixel_count * 16;
         if accumulation_size > limit {
@@ -254,6 +255,7 @@ impl GpuRenderer {
             &lights,
             &accumulation,
             &status,
+            &sample_table,
         ]
         .iter()
         .enumerate()

@@ -4,13 +4,14 @@
 use crate::layout::wgsl_prelude;
 
 /// (file name, source) of every WGSL module, in composition order.
-pub const MODULES: [(&str, &str); 8] = [
+pub const MODULES: [(&str, &str); 9] = [
     ("types.wgsl", include_str!("../../wgsl/types.wgsl")),
     ("rng.wgsl", include_str!("../../wgsl/rng.wgsl")),
     ("sampling.wgsl", include_str!("../../wgsl/sampling.wgsl")),
     ("camera.wgsl", include_str!("../../wgsl/camera.wgsl")),
     ("intersect.wgsl", include_str!("../../wgsl/intersect.wgsl")),
     ("traverse.wgsl", include_str!("../../wgsl/traverse.wgsl")),
+    ("sampler.wgsl", include_str!("../../wgsl/sampler.wgsl")),
     (
         "integrator.wgsl",
         include_str!("../../wgsl/integrator.wgsl"),

@@ -37,6 +37,9 @@ pub enum SamplerName {
     Random,
     #[default]
     Stratified,
+    Poisson,
+    Interleaved,
+    Sobol,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -83,6 +86,28 @@ pub struct CameraSection {
     pub f_number: Option<f64>,
     /// scene units along the optical axis; absent or `inf`: infinity
     pub focus_distance: Option<f64>,
+    /// mm from the lens centre to the film along the rail (the bellows extension)
+    pub film_distance: Option<f64>,
+    /// three world points the plane of sharp focus must pass through
+    pub focus_points: Option<[Vec3; 3]>,
+    /// degrees: film rotation about the horizontal axis (corrects a camera pitched up by it)
+    pub film_tilt: Option<f64>,
+    /// degrees: film rotation about the vertical axis (corrects a camera yawed right by it)
+    pub film_swing: Option<f64>,
+    /// mm: [right, up] movement of the framing (rear standard shift, rise/fall)
+    pub film_shift: Option<[f64; 2]>,
+    /// degrees: positive turns the plane of sharp focus down towards the ground
+    pub lens_tilt: Option<f64>,
+    /// degrees: positive turns the plane of sharp focus towards the right
+    pub lens_swing: Option<f64>,
+    /// mm: [right, up] movement of the lens (front standard shift)
+    pub lens_shift: Option<[f64; 2]>,
+    /// 0: circular; n >= 3: regular n-gon inscribed in the f/N circle
+    pub aperture_blades: Option<i64>,
+    /// degrees, counter-clockwise in the image
+    pub aperture_rotation: Option<f64>,
+    #[serde(default)]
+    pub lens_sampler: SamplerName,
 }
 
 fn default_up() -> Vec3 {

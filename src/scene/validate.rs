@@ -6,12 +6,17 @@
 
 use glam::{DVec3, Vec3};
 
-use super::format::{LightType, MaterialModel, Scale, SceneFile, ShapeType, Vec3 as F3};
+use super::format::{
+    LightType, MaterialModel, SamplerName, Scale, SceneFile, ShapeType, Vec3 as F3,
+};
 use super::load::ParsedScene;
 use super::mesh::{load_mesh, transform_mesh};
 use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
+use crate::camera::optics::solve_focus_points;
+use crate::camera::{Focus, Movements};
 use crate::error::{Error, Result};
 use crate::layout;
+use crate::sampler::{MAX_BLADES, MAX_TABLE_SPP};
 
 /// Largest coordinate or length accepted, in scene units.
 pub const MAX_COORDINATE: f64 = 1.0e9;
@@ -20,6 +25,8 @@ pub const MAX_IMAGE_SIDE: i64 = 16384;
 pub const MAX_SPP: i64 = 1 << 20;
 pub const MAX_DEPTH: i64 = 1024;
 pub const MAX_LIGHT_SAMPLES: i64 = 4096;
+/// Film and lens rotations lie strictly inside +-90 degrees (at 90 a standard is edge-on).
+pub const MAX_MOVEMENT_DEG: f64 = 90.0;
 
 struct Checker<'a> {
     parsed: &'a ParsedScene,
@@ -136,8 +143,23 @@ pub fn validate(parsed: ParsedScene) -> Result<Scene> {
     })
 }
 
+/// Table-based samplers store `spp` points per pattern; beyond MAX_TABLE_SPP use another.
+fn check_sampler_spp(check: &Checker, field: &str, sampler: SamplerName, spp: i64) -> Result<()> {
+    if sampler.uses_table() && spp > MAX_TABLE_SPP as i64 {
+        return Err(check.err(
+            field,
+            format!(
+                "{sampler:?} patterns are precomputed for at most {MAX_TABLE_SPP} samples per \
+                 pixel, got spp = {spp}; use stratified or sobol"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 fn validate_render(check: &Checker, file: &SceneFile) -> Result<RenderSettings> {
     let r = &file.render;
+    check_sampler_spp(check, "render.pixel_sampler", r.pixel_sampler, r.spp)?;
     Ok(RenderSettings {
         width: check.integer("render.width", r.width, 1, MAX_IMAGE_SIDE)?,
         height: check.integer("render.height", r.height, 1, MAX_IMAGE_SIDE)?,
@@ -238,16 +260,164 @@ fn validate_camera(
         }
         None => None,
     };
-    Ok(CameraSpec {
+    let angle = |field: &str, v: Option<f64>| -> Result<f64> {
+        let a = check.finite(field, v.unwrap_or(0.0))?;
+        if a.abs() >= MAX_MOVEMENT_DEG {
+            return Err(check.err(
+                field,
+                format!(
+                    "{a} degrees turns the standard edge-on or past it: movements lie strictly \
+                     between -{MAX_MOVEMENT_DEG} and {MAX_MOVEMENT_DEG} degrees"
+                ),
+            ));
+        }
+        Ok(a)
+    };
+    let shift = |field: &str, v: Option<[f64; 2]>| -> Result<[f64; 2]> {
+        let [x, y] = v.unwrap_or([0.0, 0.0]);
+        Ok([
+            check.finite(&format!("{field}[0]"), x)?,
+            check.finite(&format!("{field}[1]"), y)?,
+        ])
+    };
+    let movements = Movements {
+        film_tilt: angle("camera.film_tilt", c.film_tilt)?,
+        film_swing: angle("camera.film_swing", c.film_swing)?,
+        film_shift: shift("camera.film_shift", c.film_shift)?,
+        lens_tilt: angle("camera.lens_tilt", c.lens_tilt)?,
+        lens_swing: angle("camera.lens_swing", c.lens_swing)?,
+        lens_shift: shift("camera.lens_shift", c.lens_shift)?,
+    };
+    let aperture_blades = match c.aperture_blades {
+        None | Some(0) => 0,
+        Some(n) if (1..3).contains(&n) => {
+            return Err(check.err(
+                "camera.aperture_blades",
+                format!("{n} blades make no aperture: use 0 (circle) or 3..={MAX_BLADES}"),
+            ));
+        }
+        Some(n) => check.integer("camera.aperture_blades", n, 3, MAX_BLADES as i64)?,
+    };
+    let mut camera = CameraSpec {
         position,
         look_at,
         up,
         focal_length_mm,
         film_mm: film,
         f_number,
-        focus_distance,
+        focus: Focus::Pinhole,
+        film_distance_mm: focal_length_mm,
+        movements,
+        aperture_blades,
+        aperture_rotation_deg: check.finite(
+            "camera.aperture_rotation",
+            c.aperture_rotation.unwrap_or(0.0),
+        )?,
+        lens_sampler: c.lens_sampler,
         units_per_mm,
-    })
+    };
+    if f_number > 0.0 {
+        check_sampler_spp(
+            check,
+            "camera.lens_sampler",
+            c.lens_sampler,
+            file.render.spp,
+        )?;
+    }
+    let focus_fields = [
+        ("focus_distance", c.focus_distance.is_some()),
+        ("film_distance", c.film_distance.is_some()),
+        ("focus_points", c.focus_points.is_some()),
+    ];
+    let given: Vec<&str> = focus_fields
+        .iter()
+        .filter(|(_, p)| *p)
+        .map(|(n, _)| *n)
+        .collect();
+    if given.len() > 1 {
+        return Err(check.err(
+            &format!("camera.{}", given[1]),
+            format!(
+                "give one of focus_distance, film_distance, focus_points, not {}",
+                given.join(" and ")
+            ),
+        ));
+    }
+    if let Some(d) = c.film_distance {
+        let d = check.positive("camera.film_distance", d)?;
+        if f_number > 0.0 && d < focal_length_mm {
+            return Err(check.err(
+                "camera.film_distance",
+                format!(
+                    "{d} mm puts the film closer to the lens than its focal length \
+                     {focal_length_mm} mm: no real object is in focus there"
+                ),
+            ));
+        }
+        camera.film_distance_mm = d;
+        camera.focus = Focus::FilmDistance;
+    } else if let Some(points) = c.focus_points {
+        let field = "camera.focus_points";
+        if f_number == 0.0 {
+            return Err(check.err(field, "needs a lens: set f_number (a pinhole has no focus)"));
+        }
+        for (name, present) in [
+            ("lens_tilt", c.lens_tilt.is_some()),
+            ("lens_swing", c.lens_swing.is_some()),
+        ] {
+            if present {
+                return Err(check.err(
+                    &format!("camera.{name}"),
+                    "is solved from focus_points: give one or the other",
+                ));
+            }
+        }
+        let mut world = [DVec3::ZERO; 3];
+        for (i, p) in points.iter().enumerate() {
+            world[i] = check.point(&format!("{field}[{i}]"), *p)?;
+        }
+        let solution = solve_focus_points(&camera, world).map_err(|e| check.err(field, e))?;
+        camera.movements.lens_tilt = solution.lens_tilt;
+        camera.movements.lens_swing = solution.lens_swing;
+        camera.film_distance_mm = solution.film_distance_mm;
+        camera.focus = Focus::Points(world);
+    } else if f_number > 0.0 {
+        camera.film_distance_mm = match focus_distance {
+            Some(d) => 1.0 / (1.0 / focal_length_mm - units_per_mm / d),
+            None => focal_length_mm,
+        };
+        camera.focus = Focus::Distance(focus_distance);
+    }
+    check_film_behind_lens(check, &camera)?;
+    Ok(camera)
+}
+
+/// Every film corner must lie behind the lens plane, by a margin: a film that reaches the lens
+/// plane would send rays sideways at infinite slope.
+fn check_film_behind_lens(check: &Checker, camera: &CameraSpec) -> Result<()> {
+    let margin = 0.01 * camera.focal_length_mm;
+    for corner in camera.film_corners_in_lens_frame() {
+        if corner.z > -margin {
+            let m = &camera.movements;
+            return Err(check.err(
+                "camera",
+                format!(
+                    "with film_tilt {} and film_swing {} (film {} x {} mm at {:.3} mm), \
+                     lens_tilt {:.3} and lens_swing {:.3} degrees, a film corner reaches \
+                     {:.3} mm from the lens plane: no image can form; reduce the movements",
+                    m.film_tilt,
+                    m.film_swing,
+                    camera.film_mm[0],
+                    camera.film_mm[1],
+                    camera.film_distance_mm,
+                    m.lens_tilt,
+                    m.lens_swing,
+                    -corner.z
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>> {

@@ -1,0 +1,282 @@
+//! Primary-ray generation: the view camera (pinhole or thin lens, with film and lens movements).
+//! Twin: `wgsl/camera.wgsl`. Model, conventions and equations: `docs/camera.md`.
+//!
+//! Geometry is built in f64 in the *camera frame* (x right, y up, z forward, origin at the lens
+//! centre before any lens shift, lengths in mm): the lens is rotated by L = R_y(lens_swing) *
+//! R_x(lens_tilt) about its centre and shifted by `lens_shift`; the film is rotated by
+//! T = R_y(-film_swing) * R_x(film_tilt) about the point where the rail axis meets it, at
+//! `film_distance` behind the lens, and shifted within its rotated plane by `film_shift`.
+//!
+//! The kernels then work in the *lens frame* (lens plane z = 0, optical axis +z) with the paraxial
+//! ray-transfer form of the ideal thin lens: a ray from film point A through lens point P has
+//! incoming slope (P - A.xy) / (-A.z) and leaves with slope `incoming - P / f`. Every ray of a
+//! film point then passes through that point's conjugate, the form needs no division by
+//! (s_i - f), and focus at infinity (parallel rays) or a film point nearer than f (a virtual
+//! conjugate) is not a special case. All movements fold into the uploaded [`GpuCamera`]; ray
+//! generation costs the same with or without them.
+
+pub mod optics;
+
+use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
+
+use crate::layout::GpuCamera;
+use crate::scene::SamplerName;
+
+/// Film and lens movements in the scene file's units: degrees and millimetres.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Movements {
+    pub film_tilt: f64,
+    pub film_swing: f64,
+    pub film_shift: [f64; 2],
+    pub lens_tilt: f64,
+    pub lens_swing: f64,
+    pub lens_shift: [f64; 2],
+}
+
+/// How the focus was set (kept for reports; the geometry only needs `film_distance_mm`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Focus {
+    /// A pinhole: the film at f, nothing to focus.
+    Pinhole,
+    /// `focus_distance` in scene units along the rail; `None`: infinity.
+    Distance(Option<f64>),
+    /// `film_distance` (bellows extension) given directly.
+    FilmDistance,
+    /// `focus_points`: lens tilt, swing and film distance solved from three world points.
+    Points([DVec3; 3]),
+}
+
+/// The validated camera of a scene, in the units of the scene file (f64 until uploaded).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraSpec {
+    pub position: DVec3,
+    pub look_at: DVec3,
+    pub up: DVec3,
+    pub focal_length_mm: f64,
+    pub film_mm: [f64; 2],
+    /// 0: pinhole.
+    pub f_number: f64,
+    pub focus: Focus,
+    /// Lens centre to the film's pivot (the rail axis), in mm: the bellows extension.
+    pub film_distance_mm: f64,
+    pub movements: Movements,
+    /// 0: circular aperture; n >= 3: regular polygon.
+    pub aperture_blades: u32,
+    pub aperture_rotation_deg: f64,
+    pub lens_sampler: SamplerName,
+    /// Scene units per millimetre (0.001 / meters_per_unit).
+    pub units_per_mm: f64,
+}
+
+/// An orthonormal camera basis: right = forward x up, image row 0 at the top.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraBasis {
+    pub right: DVec3,
+    pub up: DVec3,
+    pub forward: DVec3,
+}
+
+impl CameraBasis {
+    /// World direction of a camera-frame vector.
+    pub fn to_world(&self, v: DVec3) -> DVec3 {
+        v.x * self.right + v.y * self.up + v.z * self.forward
+    }
+
+    /// Camera-frame components of a world direction.
+    pub fn to_camera(&self, v: DVec3) -> DVec3 {
+        DVec3::new(v.dot(self.right), v.dot(self.up), v.dot(self.forward))
+    }
+}
+
+/// R_y(swing) * R_x(tilt) in camera-frame components (x right, y up, z forward): tilt first,
+/// so the tilt axis follows the swing. R_x(t) * z = (0, -sin t, cos t).
+pub fn standard_rotation(tilt_deg: f64, swing_deg: f64) -> DMat3 {
+    DMat3::from_rotation_y(swing_deg.to_radians()) * DMat3::from_rotation_x(tilt_deg.to_radians())
+}
+
+/// The camera's optical parts in the camera frame (mm, origin at the unshifted lens centre).
+#[derive(Clone, Copy, Debug)]
+pub struct Standards {
+    /// Lens centre (non-zero only with a lens shift).
+    pub lens_center: DVec3,
+    /// Lens rotation: columns are the lens frame's axes; column z is the optical axis.
+    pub lens: DMat3,
+    /// Where the film's rotation axis meets the rail: (0, 0, -film_distance).
+    pub film_pivot: DVec3,
+    /// Film rotation: its z column is the film normal (pointing at the lens).
+    pub film: DMat3,
+    /// Film point of image centre (the pivot moved by the film shift).
+    pub film_center: DVec3,
+    /// Film directions of image right and image up (mirror image: the film is inverted).
+    pub film_u: DVec3,
+    pub film_v: DVec3,
+}
+
+impl Standards {
+    /// Film point (camera frame, mm) of image-plane coordinates (mm, x right, y up, centred).
+    pub fn film_point(&self, image_mm: DVec2) -> DVec3 {
+        self.film_center + image_mm.x * self.film_u + image_mm.y * self.film_v
+    }
+
+    /// Camera-frame point -> lens frame.
+    pub fn to_lens_frame(&self, p: DVec3) -> DVec3 {
+        self.lens.transpose() * (p - self.lens_center)
+    }
+
+    /// Lens-frame direction -> camera frame.
+    pub fn lens_direction_to_camera(&self, v: DVec3) -> DVec3 {
+        self.lens * v
+    }
+}
+
+impl CameraSpec {
+    pub fn basis(&self) -> CameraBasis {
+        let forward = (self.look_at - self.position).normalize();
+        let right = forward.cross(self.up).normalize();
+        CameraBasis {
+            right,
+            up: right.cross(forward),
+            forward,
+        }
+    }
+
+    pub fn is_pinhole(&self) -> bool {
+        self.f_number == 0.0
+    }
+
+    /// Lens-to-film distance along the rail in mm (s_i without movements).
+    pub fn image_distance_mm(&self) -> f64 {
+        self.film_distance_mm
+    }
+
+    pub fn lens_radius_mm(&self) -> f64 {
+        if self.is_pinhole() {
+            0.0
+        } else {
+            self.focal_length_mm / (2.0 * self.f_number)
+        }
+    }
+
+    pub fn standards(&self) -> Standards {
+        let m = &self.movements;
+        let lens = standard_rotation(m.lens_tilt, m.lens_swing);
+        let film = standard_rotation(m.film_tilt, -m.film_swing);
+        let film_pivot = DVec3::new(0.0, 0.0, -self.film_distance_mm);
+        // The film is the mirror image of the projection plane through the lens centre: image
+        // right and up run along -x and -y of the film's own frame.
+        let film_u = -film.x_axis;
+        let film_v = -film.y_axis;
+        Standards {
+            lens_center: DVec3::new(m.lens_shift[0], m.lens_shift[1], 0.0),
+            lens,
+            film_pivot,
+            film,
+            film_center: film_pivot + m.film_shift[0] * film_u + m.film_shift[1] * film_v,
+            film_u,
+            film_v,
+        }
+    }
+
+    /// Camera-frame point in mm -> world point.
+    pub fn camera_to_world(&self, p_mm: DVec3) -> DVec3 {
+        self.position + self.basis().to_world(p_mm * self.units_per_mm)
+    }
+
+    /// World point -> camera-frame point in mm.
+    pub fn world_to_camera(&self, p: DVec3) -> DVec3 {
+        self.basis().to_camera(p - self.position) / self.units_per_mm
+    }
+
+    /// The film's four corners in the lens frame (mm).
+    pub fn film_corners_in_lens_frame(&self) -> [DVec3; 4] {
+        let s = self.standards();
+        let [w, h] = self.film_mm.map(|v| 0.5 * v);
+        [(-w, -h), (w, -h), (w, h), (-w, h)]
+            .map(|(x, y)| s.to_lens_frame(s.film_point(DVec2::new(x, y))))
+    }
+
+    /// Horizontal and vertical field of view in degrees: the angles the film's edge midpoints
+    /// subtend at the lens centre (for an unmoved camera, 2 atan(size / 2 s_i)).
+    pub fn field_of_view_deg(&self) -> [f64; 2] {
+        let s = self.standards();
+        let angle = |a: DVec2, b: DVec2| {
+            let (pa, pb) = (
+                s.film_point(a) - s.lens_center,
+                s.film_point(b) - s.lens_center,
+            );
+            pa.angle_between(pb).to_degrees()
+        };
+        let [w, h] = self.film_mm.map(|v| 0.5 * v);
+        [
+            angle(DVec2::new(-w, 0.0), DVec2::new(w, 0.0)),
+            angle(DVec2::new(0.0, -h), DVec2::new(0.0, h)),
+        ]
+    }
+
+    /// The camera as the kernels see it. `aperture_table_offset` locates the polygon's vertices
+    /// in the sample table.
+    pub fn to_gpu(&self, aperture_table_offset: u32) -> GpuCamera {
+        let basis = self.basis();
+        let s = self.standards();
+        let f32x3 = |v: DVec3| v.as_vec3().to_array();
+        let lens_axis_world = |column: DVec3| f32x3(basis.to_world(column));
+        let film_dir = |v: DVec3| f32x3(s.lens.transpose() * v);
+        GpuCamera {
+            lens_to_world_x: lens_axis_world(s.lens.x_axis),
+            focal_length_mm: self.focal_length_mm as f32,
+            lens_to_world_y: lens_axis_world(s.lens.y_axis),
+            lens_radius_mm: self.lens_radius_mm() as f32,
+            lens_to_world_z: lens_axis_world(s.lens.z_axis),
+            units_per_mm: self.units_per_mm as f32,
+            lens_center: f32x3(self.camera_to_world(s.lens_center)),
+            inv_focal_length_mm: (1.0 / self.focal_length_mm) as f32,
+            film_center: f32x3(s.to_lens_frame(s.film_center)),
+            film_width_mm: self.film_mm[0] as f32,
+            film_u: film_dir(s.film_u),
+            film_height_mm: self.film_mm[1] as f32,
+            film_v: film_dir(s.film_v),
+            aperture_blades: self.aperture_blades,
+            aperture_table_offset,
+            ..Default::default()
+        }
+    }
+}
+
+/// A ray in world space; `direction` is unit length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub direction: Vec3,
+}
+
+/// Image-plane position in mm (x right, y up, centred) of a point `raster` in raster space
+/// (x right, y down, in pixels).
+pub fn film_position_mm(camera: &GpuCamera, width: u32, height: u32, raster: Vec2) -> Vec2 {
+    Vec2::new(
+        (raster.x / width as f32 - 0.5) * camera.film_width_mm,
+        (0.5 - raster.y / height as f32) * camera.film_height_mm,
+    )
+}
+
+/// The ray from image-plane point `film_mm` through the lens point `lens_mm` (lens frame, mm;
+/// from `sampler::sample_aperture`, or the centre for a pinhole).
+pub fn generate_ray(camera: &GpuCamera, film_mm: Vec2, lens_mm: Vec2) -> Ray {
+    let film_point = Vec3::from(camera.film_center)
+        + film_mm.x * Vec3::from(camera.film_u)
+        + film_mm.y * Vec3::from(camera.film_v);
+    // Thin-lens ray transfer: outgoing slope = incoming slope - h / f.
+    let slope_in = (lens_mm - film_point.truncate()) / -film_point.z;
+    let slope_out = slope_in - lens_mm * camera.inv_focal_length_mm;
+    let direction_lens = slope_out.extend(1.0).normalize();
+    let origin_lens = lens_mm.extend(0.0) * camera.units_per_mm;
+    Ray {
+        origin: Vec3::from(camera.lens_center) + lens_to_world(camera, origin_lens),
+        direction: lens_to_world(camera, direction_lens),
+    }
+}
+
+fn lens_to_world(camera: &GpuCamera, v: Vec3) -> Vec3 {
+    v.x * Vec3::from(camera.lens_to_world_x)
+        + v.y * Vec3::from(camera.lens_to_world_y)
+        + v.z * Vec3::from(camera.lens_to_world_z)
+}

@@ -1,0 +1,411 @@
+//! Camera sample patterns: where sample `i` of a pixel falls inside the pixel and on the
+//! aperture. Twin: `wgsl/sampler.wgsl`. Choices and measurements: `docs/camera.md` and
+//! `BENCHMARKS.md`.
+//!
+//! Five patterns, each drawing 2-D points in [0, 1)^2 that the camera then maps to the pixel or to
+//! the aperture (concentric disk or polygon, both area-preserving so strata keep equal areas):
+//!
+//! - `random`: independent uniform points.
+//! - `stratified`: one jittered point per cell of a `columns x rows` grid; each pixel and each
+//!   dimension pair visits the cells in its own pseudo-random order (Kensler's hashed
+//!   permutation), so the pixel position of a sample does not predict its lens position.
+//! - `poisson`: `POISSON_SETS` Poisson-disk sets of `spp` points built once on the CPU
+//!   (Bridson's algorithm on the torus, trimmed to exactly `spp` points), uploaded in the sample
+//!   table; a pixel picks a set by hash and moves it by a Cranley-Patterson shift, which keeps
+//!   the minimum distance because the sets are toroidal.
+//! - `interleaved`: Keller and Heidrich's interleaved sampling: `INTERLEAVED_TILE^2` jittered
+//!   basis patterns repeated regularly across the image, with no per-pixel randomness.
+//! - `sobol`: the first two Sobol dimensions, shuffled and Owen-scrambled with Burley's
+//!   hash-based nested uniform scrambling ("Practical Hash-based Owen Scrambling", JCGT 2020).
+//!
+//! Every pattern consumes the same two random dimensions per 2-D sample, so switching the camera
+//! sampler leaves the light samples untouched and comparisons isolate the camera.
+
+use std::f64::consts::TAU;
+
+use crate::layout::*;
+use crate::math::rng::{Rng, pcg_hash};
+use crate::math::sampling::{concentric_disk, strata_columns, stratified_2d};
+use crate::scene::SamplerName;
+
+/// Samples per pixel the table-based samplers (poisson, interleaved) accept.
+pub const MAX_TABLE_SPP: u32 = 4096;
+/// Largest number of aperture blades.
+pub const MAX_BLADES: u32 = 64;
+
+impl SamplerName {
+    /// The `SAMPLER_*` code the kernels switch on.
+    pub fn code(self) -> u32 {
+        match self {
+            SamplerName::Random => SAMPLER_RANDOM,
+            SamplerName::Stratified => SAMPLER_STRATIFIED,
+            SamplerName::Poisson => SAMPLER_POISSON,
+            SamplerName::Interleaved => SAMPLER_INTERLEAVED,
+            SamplerName::Sobol => SAMPLER_SOBOL,
+        }
+    }
+
+    /// Whether the sampler reads precomputed patterns from the sample table.
+    pub fn uses_table(self) -> bool {
+        matches!(self, SamplerName::Poisson | SamplerName::Interleaved)
+    }
+}
+
+/// The sample table uploaded once per render: precomputed patterns and aperture vertices.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SampleTable {
+    pub points: Vec<[f32; 2]>,
+    pub pixel_offset: u32,
+    pub lens_offset: u32,
+    pub aperture_offset: u32,
+}
+
+impl SampleTable {
+    /// Patterns for `spp` samples of the pixel and lens samplers (`lens: None` for a pinhole,
+    /// which draws no lens points), and the unit-circle vertices of a polygonal aperture.
+    pub fn build(
+        spp: u32,
+        seed: u32,
+        pixel: SamplerName,
+        lens: Option<SamplerName>,
+        blades: u32,
+        rotation_deg: f64,
+    ) -> SampleTable {
+        let mut table = SampleTable::default();
+        table.pixel_offset = table.append_patterns(spp, seed, pixel, PIXEL_DIMENSION);
+        if let Some(lens) = lens {
+            table.lens_offset = table.append_patterns(spp, seed, lens, LENS_DIMENSION);
+        }
+        if blades >= 3 {
+            table.aperture_offset = table.points.len() as u32;
+            table.points.extend(aperture_vertices(blades, rotation_deg));
+        }
+        if table.points.is_empty() {
+            // A binding needs at least one element; nothing reads it.
+            table.points.push([0.0, 0.0]);
+        }
+        table
+    }
+
+    fn append_patterns(&mut self, spp: u32, seed: u32, sampler: SamplerName, dim: u32) -> u32 {
+        let offset = self.points.len() as u32;
+        let salt = pcg_hash(seed ^ pcg_hash(dim));
+        match sampler {
+            SamplerName::Poisson => {
+                for set in 0..POISSON_SETS {
+                    let key = pcg_hash(salt ^ set);
+                    self.points.extend(poisson_disk_set(spp, key).points);
+                }
+            }
+            SamplerName::Interleaved => {
+                for pattern in 0..INTERLEAVED_TILE * INTERLEAVED_TILE {
+                    self.points
+                        .extend(jittered_pattern(spp, pcg_hash(salt ^ pattern)));
+                }
+            }
+            _ => {}
+        }
+        offset
+    }
+}
+
+/// A Poisson-disk point set on the unit torus: no two points closer than `radius`.
+#[derive(Clone, Debug)]
+pub struct PoissonSet {
+    pub points: Vec<[f32; 2]>,
+    pub radius: f64,
+}
+
+/// Distance between two points of the unit torus.
+pub fn toroidal_distance(a: [f64; 2], b: [f64; 2]) -> f64 {
+    let d = |x: f64, y: f64| {
+        let d = (x - y).abs();
+        d.min(1.0 - d)
+    };
+    d(a[0], b[0]).hypot(d(a[1], b[1]))
+}
+
+/// Exactly `n` points with a large minimum toroidal distance, in random order.
+///
+/// Bridson's algorithm (30 candidates per active point) fills the torus for a radius below the
+/// densest packing's; the radius shrinks by 5% until at least `n` points fit, and the surplus is
+/// removed closest pair first (Yuksel's sample elimination, greedily), which keeps the radius.
+pub fn poisson_disk_set(n: u32, key: u32) -> PoissonSet {
+    let n = n.max(1) as usize;
+    // Hexagonal packing of n disks on the unit torus has spacing sqrt(2 / (sqrt(3) n)).
+    let hexagonal = (2.0 / (3f64.sqrt() * n as f64)).sqrt();
+    let mut radius = (0.85 * hexagonal).min(0.7);
+    let mut rng = Rng::new(key, 0x5eed, 0);
+    let mut points = loop {
+        let points = bridson_torus(radius, &mut rng);
+        if points.len() >= n {
+            break points;
+        }
+        radius *= 0.95;
+    };
+    eliminate_closest(&mut points, n);
+    // Shuffle (Fisher-Yates) so any prefix of the samples is spread over the domain.
+    for i in (1..points.len()).rev() {
+        let j = (rng.next_u32() as usize) % (i + 1);
+        points.swap(i, j);
+    }
+    PoissonSet {
+        points: points.iter().map(|p| [p[0] as f32, p[1] as f32]).collect(),
+        radius,
+    }
+}
+
+fn bridson_torus(radius: f64, rng: &mut Rng) -> Vec<[f64; 2]> {
+    let cells = ((std::f64::consts::SQRT_2 / radius).floor() as usize).max(1);
+    let mut grid: Vec<Option<usize>> = vec![None; cells * cells];
+    let cell_of = |p: [f64; 2]| {
+        let c = |x: f64| ((x * cells as f64) as usize).min(cells - 1);
+        (c(p[0]), c(p[1]))
+    };
+    let mut points = vec![rng.next_2d().map(f64::from)];
+    let (cx, cy) = cell_of(points[0]);
+    grid[cy * cells + cx] = Some(0);
+    let mut active = vec![0usize];
+    let reach = (radius * cells as f64).ceil() as isize;
+    while !active.is_empty() {
+        let slot = (rng.next_u32() as usize) % active.len();
+        let base = points[active[slot]];
+        let found = (0..30).find_map(|_| {
+            let [u, v] = rng.next_2d().map(f64::from);
+            let r = radius * (1.0 + 3.0 * u).sqrt();
+            let a = TAU * v;
+            let p = [
+                (base[0] + r * a.cos()).rem_euclid(1.0),
+                (base[1] + r * a.sin()).rem_euclid(1.0),
+            ];
+            let (px, py) = cell_of(p);
+            let clear = (-reach..=reach).all(|dy| {
+                (-reach..=reach).all(|dx| {
+                    let gx = (px as isize + dx).rem_euclid(cells as isize) as usize;
+                    let gy = (py as isize + dy).rem_euclid(cells as isize) as usize;
+                    grid[gy * cells + gx].is_none_or(|q| toroidal_distance(p, points[q]) >= radius)
+                })
+            });
+            clear.then_some((p, px, py))
+        });
+        match found {
+            Some((p, px, py)) => {
+                grid[py * cells + px] = Some(points.len());
+                active.push(points.len());
+                points.push(p);
+            }
+            None => {
+                active.swap_remove(slot);
+            }
+        }
+    }
+    points
+}
+
+/// Removes points until `n` remain, always one of the closest remaining pair.
+fn eliminate_closest(points: &mut Vec<[f64; 2]>, n: usize) {
+    let nearest = |points: &[[f64; 2]], i: usize| {
+        (0..points.len())
+            .filter(|&j| j != i)
+            .map(|j| toroidal_distance(points[i], points[j]))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut distance: Vec<f64> = (0..points.len()).map(|i| nearest(points, i)).collect();
+    while points.len() > n {
+        let worst = (0..points.len())
+            .min_by(|&a, &b| distance[a].total_cmp(&distance[b]))
+            .unwrap();
+        let removed = points.swap_remove(worst);
+        distance.swap_remove(worst);
+        for i in 0..points.len() {
+            if distance[i] <= toroidal_distance(points[i], removed) {
+                distance[i] = nearest(points, i);
+            }
+        }
+    }
+}
+
+/// One interleaved basis pattern: a jittered stratification of `n` points, shuffled.
+fn jittered_pattern(n: u32, key: u32) -> Vec<[f32; 2]> {
+    let columns = strata_columns(n);
+    let mut rng = Rng::new(key, 0x1ea7, 0);
+    let mut points: Vec<[f32; 2]> = (0..n)
+        .map(|i| stratified_2d(i, n, columns, rng.next_2d()))
+        .collect();
+    for i in (1..points.len()).rev() {
+        let j = (rng.next_u32() as usize) % (i + 1);
+        points.swap(i, j);
+    }
+    points
+}
+
+/// Unit-circle vertices of a regular `blades`-gon, the first repeated at the end. With
+/// `rotation_deg = 0` the edge between vertices 0 and 1 stands vertical on the right (+x);
+/// positive rotations turn the polygon counter-clockwise (+x towards +y).
+pub fn aperture_vertices(blades: u32, rotation_deg: f64) -> Vec<[f32; 2]> {
+    let n = blades as f64;
+    (0..=blades)
+        .map(|k| {
+            let angle = rotation_deg.to_radians() + TAU * (k as f64 - 0.5) / n;
+            [angle.cos() as f32, angle.sin() as f32]
+        })
+        .collect()
+}
+
+/// A hash of (seed, pixel, dimension) for per-pixel, per-dimension decisions (set choice,
+/// shifts, permutations); disjoint from the per-sample `Rng` keys.
+pub fn pixel_hash(seed: u32, pixel: u32, dim: u32) -> u32 {
+    pcg_hash(pcg_hash(pcg_hash(seed) ^ pixel) ^ (dim | 0x8000_0000))
+}
+
+fn unit_float(bits: u32) -> f32 {
+    (bits >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// Kensler's hashed permutation of [0, n) ("Correlated Multi-Jittered Sampling", 2013): index
+/// `i`'s place in the permutation keyed by `key`, by cycle-walking a bijection of the enclosing
+/// power of two.
+/// The walk is capped at `PERMUTE_WALK_CAP` steps (a kernel loop must be bounded);
+/// `tests/sampling.rs` checks it stays a permutation for every n it meets in practice.
+pub fn permute(i: u32, n: u32, key: u32) -> u32 {
+    let mut w = n.wrapping_sub(1);
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    let mut i = i;
+    for _ in 0..PERMUTE_WALK_CAP {
+        i ^= key;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= key >> 16;
+        i ^= (i & w) >> 4;
+        i ^= key >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= key >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | key >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < n {
+            break;
+        }
+    }
+    (i.wrapping_add(key)) % n
+}
+
+fn laine_karras_permutation(mut x: u32, seed: u32) -> u32 {
+    x = x.wrapping_add(seed);
+    x ^= x.wrapping_mul(0x6c50_b47c);
+    x ^= x.wrapping_mul(0xb82f_1e52);
+    x ^= x.wrapping_mul(0xc7af_e638);
+    x ^= x.wrapping_mul(0x8d22_f6e6);
+    x
+}
+
+/// Owen scrambling of a 32-bit fixed-point coordinate (or index), hash-based.
+pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
+    laine_karras_permutation(x.reverse_bits(), seed).reverse_bits()
+}
+
+/// Second Sobol dimension (primitive polynomial x + 1): direction numbers v_k = v_{k-1} ^ (v_{k-1} >> 1).
+fn sobol_dimension_1(mut index: u32) -> u32 {
+    let mut v = 1u32 << 31;
+    let mut result = 0;
+    for _ in 0..32 {
+        if index & 1 != 0 {
+            result ^= v;
+        }
+        index >>= 1;
+        v ^= v >> 1;
+    }
+    result
+}
+
+/// Point `index` of the shuffled, Owen-scrambled 2-D Sobol sequence keyed by `seed`.
+pub fn sobol_owen_2d(index: u32, seed: u32) -> [f32; 2] {
+    let shuffled = nested_uniform_scramble(index, seed);
+    let x = nested_uniform_scramble(shuffled.reverse_bits(), pcg_hash(seed ^ 0x0000_a511));
+    let y = nested_uniform_scramble(sobol_dimension_1(shuffled), pcg_hash(seed ^ 0x0000_b0b1));
+    [unit_float(x), unit_float(y)]
+}
+
+/// Where a pixel's sample comes from: the sampler, its strata and its patterns.
+#[derive(Clone, Copy, Debug)]
+pub struct PatternSource {
+    pub sampler: u32,
+    pub strata_columns: u32,
+    pub table_offset: u32,
+    pub dim: u32,
+}
+
+/// The 2-D point of sample `sample` of pixel (x, y) in [0, 1)^2. Always draws `rng.next_2d()`.
+pub fn sample_2d(
+    frame: &GpuFrame,
+    table: &[[f32; 2]],
+    source: PatternSource,
+    x: u32,
+    y: u32,
+    sample: u32,
+    rng: &mut Rng,
+) -> [f32; 2] {
+    let u = rng.next_2d();
+    let pixel = y * frame.width + x;
+    let key = pixel_hash(frame.seed, pixel, source.dim);
+    match source.sampler {
+        SAMPLER_STRATIFIED => {
+            let stratum = permute(sample, frame.spp, key);
+            stratified_2d(stratum, frame.spp, source.strata_columns, u)
+        }
+        SAMPLER_POISSON => {
+            let set = key % POISSON_SETS;
+            let p = table[(source.table_offset + set * frame.spp + sample) as usize];
+            let shift = [
+                unit_float(pcg_hash(key)),
+                unit_float(pcg_hash(key ^ 0x5151)),
+            ];
+            [wrap_unit(p[0] + shift[0]), wrap_unit(p[1] + shift[1])]
+        }
+        SAMPLER_INTERLEAVED => {
+            let pattern = (x % INTERLEAVED_TILE) + INTERLEAVED_TILE * (y % INTERLEAVED_TILE);
+            table[(source.table_offset + pattern * frame.spp + sample) as usize]
+        }
+        SAMPLER_SOBOL => sobol_owen_2d(sample, key),
+        _ => u,
+    }
+}
+
+/// x - floor(x) for x in [0, 2), staying below 1 (a sum of two values in [0, 1) may round to 1).
+fn wrap_unit(x: f32) -> f32 {
+    let w = if x >= 1.0 { x - 1.0 } else { x };
+    w.min(0.999_999_94)
+}
+
+/// A point of the aperture in mm (lens frame), uniform by area: the disk of radius
+/// `lens_radius_mm` by the concentric map, or the inscribed regular polygon by picking one of its
+/// `n` equal triangles with `u.x` and a uniform point of that triangle.
+pub fn sample_aperture(camera: &GpuCamera, table: &[[f32; 2]], u: [f32; 2]) -> [f32; 2] {
+    let r = camera.lens_radius_mm;
+    if camera.aperture_blades == 0 {
+        let [x, y] = concentric_disk(u);
+        return [r * x, r * y];
+    }
+    let n = camera.aperture_blades;
+    let scaled = u[0] * n as f32;
+    let k = (scaled as u32).min(n - 1);
+    let radial = (scaled - k as f32).sqrt();
+    let a = table[(camera.aperture_table_offset + k) as usize];
+    let b = table[(camera.aperture_table_offset + k + 1) as usize];
+    let s = r * radial;
+    [
+        s * (a[0] + u[1] * (b[0] - a[0])),
+        s * (a[1] + u[1] * (b[1] - a[1])),
+    ]
+}

@@ -1,0 +1,138 @@
+// Camera sample patterns: where sample i of a pixel falls in the pixel and on the aperture.
+// Mirrors: src/sampler.rs (see there for the five patterns; integer hashing is bit-identical).
+// Reads the `sample_table` binding declared in render.wgsl.
+
+
+struct PatternSource {
+    sampler: u32,
+    strata_columns: u32,
+    table_offset: u32,
+    dim: u32,
+}
+
+fn pixel_hash(seed: u32, pixel: u32, dim: u32) -> u32 {
+    return pcg_hash(pcg_hash(pcg_hash(seed) ^ pixel) ^ (dim | 0x80000000u));
+}
+
+fn unit_float(bits: u32) -> f32 {
+    return f32(bits >> 8u) * (1.0 / 16777216.0);
+}
+
+fn permute(index: u32, n: u32, key: u32) -> u32 {
+    var w = n - 1u;
+    w |= w >> 1u;
+    w |= w >> 2u;
+    w |= w >> 4u;
+    w |= w >> 8u;
+    w |= w >> 16u;
+    var i = index;
+    for (var walk = 0u; walk < PERMUTE_WALK_CAP; walk += 1u) {
+        i ^= key;
+        i *= 0xe170893du;
+        i ^= key >> 16u;
+        i ^= (i & w) >> 4u;
+        i ^= key >> 8u;
+        i *= 0x0929eb3fu;
+        i ^= key >> 23u;
+        i ^= (i & w) >> 1u;
+        i *= 1u | (key >> 27u);
+        i *= 0x6935fa69u;
+        i ^= (i & w) >> 11u;
+        i *= 0x74dcb303u;
+        i ^= (i & w) >> 2u;
+        i *= 0x9e501cc3u;
+        i ^= (i & w) >> 2u;
+        i *= 0xc860a3dfu;
+        i &= w;
+        i ^= i >> 5u;
+        if (i < n) {
+            break;
+        }
+    }
+    return (i + key) % n;
+}
+
+fn laine_karras_permutation(value: u32, seed: u32) -> u32 {
+    var x = value + seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+
+fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
+    return reverseBits(laine_karras_permutation(reverseBits(x), seed));
+}
+
+fn sobol_dimension_1(index: u32) -> u32 {
+    var bits = index;
+    var v = 1u << 31u;
+    var result = 0u;
+    for (var k = 0u; k < 32u; k += 1u) {
+        if ((bits & 1u) != 0u) {
+            result ^= v;
+        }
+        bits >>= 1u;
+        v ^= v >> 1u;
+    }
+    return result;
+}
+
+fn sobol_owen_2d(index: u32, seed: u32) -> vec2<f32> {
+    let shuffled = nested_uniform_scramble(index, seed);
+    let x = nested_uniform_scramble(reverseBits(shuffled), pcg_hash(seed ^ 0x0000a511u));
+    let y = nested_uniform_scramble(sobol_dimension_1(shuffled), pcg_hash(seed ^ 0x0000b0b1u));
+    return vec2<f32>(unit_float(x), unit_float(y));
+}
+
+fn wrap_unit(x: f32) -> f32 {
+    var w = x;
+    if (x >= 1.0) {
+        w = x - 1.0;
+    }
+    return min(w, 0.99999994);
+}
+
+fn sample_2d(source: PatternSource, x: u32, y: u32, sample: u32, rng: ptr<function, Rng>) -> vec2<f32> {
+    let u = rng_next_2d(rng);
+    let pixel = y * frame.width + x;
+    let key = pixel_hash(frame.seed, pixel, source.dim);
+    switch source.sampler {
+        case SAMPLER_STRATIFIED: {
+            let stratum = permute(sample, frame.spp, key);
+            return stratified_2d(stratum, frame.spp, source.strata_columns, u);
+        }
+        case SAMPLER_POISSON: {
+            let set_index = key % POISSON_SETS;
+            let p = sample_table[source.table_offset + set_index * frame.spp + sample];
+            let shift = vec2<f32>(unit_float(pcg_hash(key)), unit_float(pcg_hash(key ^ 0x5151u)));
+            return vec2<f32>(wrap_unit(p.x + shift.x), wrap_unit(p.y + shift.y));
+        }
+        case SAMPLER_INTERLEAVED: {
+            let pattern = (x % INTERLEAVED_TILE) + INTERLEAVED_TILE * (y % INTERLEAVED_TILE);
+            return sample_table[source.table_offset + pattern * frame.spp + sample];
+        }
+        case SAMPLER_SOBOL: {
+            return sobol_owen_2d(sample, key);
+        }
+        default: {
+            return u;
+        }
+    }
+}
+
+fn sample_aperture(u: vec2<f32>) -> vec2<f32> {
+    let r = camera.lens_radius_mm;
+    if (camera.aperture_blades == 0u) {
+        return r * concentric_disk(u);
+    }
+    let n = camera.aperture_blades;
+    let scaled = u.x * f32(n);
+    let k = min(u32(scaled), n - 1u);
+    let radial = sqrt(scaled - f32(k));
+    let a = sample_table[camera.aperture_table_offset + k];
+    let b = sample_table[camera.aperture_table_offset + k + 1u];
+    let s = r * radial;
+    return vec2<f32>(s * (a.x + u.y * (b.x - a.x)), s * (a.y + u.y * (b.y - a.y)));
+}
