@@ -11,6 +11,7 @@ use anyhow::{Context, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 
 use chambre::accel::flatten;
+use chambre::camera::report::camera_report;
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::{GpuContext, GpuRenderer, describe_adapters};
 use chambre::output::write_image;
@@ -47,7 +48,26 @@ enum Command {
         seed: Option<u32>,
         #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
         backend: BackendChoice,
+        /// Pixel sample pattern (overrides render.pixel_sampler).
+        #[arg(long, value_enum)]
+        pixel_sampler: Option<SamplerChoice>,
+        /// Lens sample pattern (overrides camera.lens_sampler).
+        #[arg(long, value_enum)]
+        lens_sampler: Option<SamplerChoice>,
         /// Override any scene field, e.g. --set camera.f_number=2.8 (also -D).
+        #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Print what the camera does: field of view, plane of sharp focus, hinge and Scheimpflug
+    /// lines, depth of field, and the equivalent raster projection matrix.
+    Camera {
+        scene: PathBuf,
+        /// Circle of confusion in mm for the depth of field (default: film diagonal / 1500).
+        #[arg(long)]
+        coc: Option<f64>,
+        /// Far clipping distance of the raster projection, in scene units.
+        #[arg(long, default_value_t = 1000.0)]
+        far: f64,
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
@@ -59,6 +79,27 @@ enum Command {
     },
     /// List the GPU adapters found and their relevant limits.
     Info,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum SamplerChoice {
+    Random,
+    Stratified,
+    Poisson,
+    Interleaved,
+    Sobol,
+}
+
+impl SamplerChoice {
+    fn name(self) -> &'static str {
+        match self {
+            SamplerChoice::Random => "random",
+            SamplerChoice::Stratified => "stratified",
+            SamplerChoice::Poisson => "poisson",
+            SamplerChoice::Interleaved => "interleaved",
+            SamplerChoice::Sobol => "sobol",
+        }
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -80,6 +121,8 @@ fn main() -> ExitCode {
             height,
             seed,
             backend,
+            pixel_sampler,
+            lens_sampler,
             set,
         } => {
             let mut overrides = Vec::new();
@@ -94,10 +137,25 @@ fn main() -> ExitCode {
                     overrides.push(format!("{key}={v}"));
                 }
             }
+            let samplers = [
+                ("render.pixel_sampler", pixel_sampler),
+                ("camera.lens_sampler", lens_sampler),
+            ];
+            for (key, value) in samplers {
+                if let Some(v) = value {
+                    overrides.push(format!("{key}={}", v.name()));
+                }
+            }
             overrides.extend(set);
             run_render(&scene, &output, backend, &overrides)
         }
         Command::Check { scene, set } => run_check(&scene, &set),
+        Command::Camera {
+            scene,
+            coc,
+            far,
+            set,
+        } => run_camera(&scene, coc, far, &set),
         Command::Info => run_info(),
     };
     match result {
@@ -147,6 +205,25 @@ fn run_check(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<Exi
         flat.bvh_depth,
         flat.build_time.as_secs_f64() * 1e3
     );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_camera(
+    path: &std::path::Path,
+    coc: Option<f64>,
+    far: f64,
+    overrides: &[String],
+) -> anyhow::Result<ExitCode> {
+    let scene = load(path, overrides)?;
+    let camera = &scene.camera;
+    let coc = coc.unwrap_or_else(|| camera.film_mm[0].hypot(camera.film_mm[1]) / 1500.0);
+    if !(coc.is_finite() && coc > 0.0) {
+        bail!("--coc must be a positive number of millimetres, got {coc}");
+    }
+    if !(far.is_finite() && far > 0.0) {
+        bail!("--far must be a positive distance, got {far}");
+    }
+    print!("{}", camera_report(camera, coc, far));
     Ok(ExitCode::SUCCESS)
 }
 

@@ -16,6 +16,7 @@
 //! generation costs the same with or without them.
 
 pub mod optics;
+pub mod report;
 
 use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
 

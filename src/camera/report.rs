@@ -1,0 +1,140 @@
+//! The text `chambre camera SCENE` prints: what the camera's settings mean in object space.
+
+use std::fmt::Write;
+
+use glam::{DMat4, DVec3};
+
+use super::optics::{Line, Plane};
+use super::{CameraSpec, Focus};
+
+fn v3(v: DVec3) -> String {
+    format!("[{:.6}, {:.6}, {:.6}]", v.x, v.y, v.z)
+}
+
+fn plane(p: Option<Plane>) -> String {
+    match p {
+        Some(p) => format!("point {}, normal {}", v3(p.point), v3(p.normal)),
+        None => "at infinity".into(),
+    }
+}
+
+fn line(l: Option<Line>) -> String {
+    match l {
+        Some(l) => format!("point {}, direction {}", v3(l.point), v3(l.direction)),
+        None => "at infinity (lens and film are parallel)".into(),
+    }
+}
+
+fn matrix(m: DMat4) -> String {
+    (0..4)
+        .map(|r| {
+            let row = m.row(r);
+            format!(
+                "  [{:>14.8}, {:>14.8}, {:>14.8}, {:>14.8}]\n",
+                row.x, row.y, row.z, row.w
+            )
+        })
+        .collect()
+}
+
+/// The multi-line report for circle of confusion `coc_mm` and a far clipping plane `far`
+/// (scene units) for the raster projection.
+pub fn camera_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
+    let mut out = String::new();
+    let m = &camera.movements;
+    let fov = camera.field_of_view_deg();
+    let w = &mut out;
+    let _ = writeln!(
+        w,
+        "lens: f = {} mm, {}, aperture {}",
+        camera.focal_length_mm,
+        if camera.is_pinhole() {
+            "pinhole".to_string()
+        } else {
+            format!("f/{} ({:.4} mm)", camera.f_number, 2.0 * camera.lens_radius_mm())
+        },
+        if camera.aperture_blades == 0 {
+            "circular".to_string()
+        } else {
+            format!(
+                "{} blades, rotated {} deg",
+                camera.aperture_blades, camera.aperture_rotation_deg
+            )
+        }
+    );
+    let _ = writeln!(
+        w,
+        "film: {} x {} mm at {:.6} mm behind the lens (along the rail)",
+        camera.film_mm[0], camera.film_mm[1], camera.film_distance_mm
+    );
+    let _ = writeln!(
+        w,
+        "movements: film tilt {:.6}, swing {:.6} deg, shift {:?} mm; lens tilt {:.6}, swing {:.6} deg, shift {:?} mm",
+        m.film_tilt, m.film_swing, m.film_shift, m.lens_tilt, m.lens_swing, m.lens_shift
+    );
+    if let Focus::Points(points) = camera.focus {
+        let _ = writeln!(
+            w,
+            "focus_points {}, {}, {}: solved lens tilt {:.6} deg, lens swing {:.6} deg, film distance {:.6} mm",
+            v3(points[0]),
+            v3(points[1]),
+            v3(points[2]),
+            m.lens_tilt,
+            m.lens_swing,
+            camera.film_distance_mm
+        );
+    }
+    let _ = writeln!(
+        w,
+        "field of view: {:.4} x {:.4} deg",
+        fov[0], fov[1]
+    );
+    if camera.is_pinhole() {
+        let _ = writeln!(w, "focus: a pinhole renders everything sharp");
+    } else {
+        let focus = camera.focus_plane();
+        let _ = writeln!(w, "plane of sharp focus: {}", plane(focus));
+        if let Some(distance) = focus.and_then(|p| camera.distance_along_chief_ray(&p)) {
+            let _ = writeln!(w, "  meets the image centre's chief ray at {distance:.6} units");
+        }
+        let _ = writeln!(
+            w,
+            "lens-to-film angle: {:.6} deg",
+            camera.lens_to_film_angle_deg()
+        );
+        let _ = writeln!(w, "hinge line: {}", line(camera.hinge_line()));
+        if let Some(hinge) = camera.hinge_line() {
+            let lens = camera.camera_to_world(camera.standards().lens_center);
+            let _ = writeln!(
+                w,
+                "  at {:.6} units from the lens centre (f / sin(angle))",
+                hinge.distance_to(lens)
+            );
+        }
+        let _ = writeln!(w, "Scheimpflug line: {}", line(camera.scheimpflug_line()));
+        if let Some((near, far_limit)) = camera.depth_of_field(coc_mm) {
+            let _ = writeln!(w, "depth of field for a {coc_mm} mm circle of confusion:");
+            let along = |p: &Option<Plane>| {
+                p.and_then(|p| camera.distance_along_chief_ray(&p))
+                    .map_or("beyond infinity".to_string(), |d| format!("{d:.6} units"))
+            };
+            let _ = writeln!(w, "  near limit: {} ({})", plane(near), along(&near));
+            let _ = writeln!(w, "  far limit:  {} ({})", plane(far_limit), along(&far_limit));
+        }
+    }
+    let raster = camera.raster_projection(far);
+    let f = raster.frustum;
+    let _ = writeln!(
+        w,
+        "raster equivalent of the film-tilted pinhole (OpenGL conventions, scene units):"
+    );
+    let _ = writeln!(
+        w,
+        "  frustum: left {:.8}, right {:.8}, bottom {:.8}, top {:.8}, near {:.8}, far {}",
+        f.left, f.right, f.bottom, f.top, f.near, f.far
+    );
+    let _ = write!(w, "  view matrix (world -> eye, rows):\n{}", matrix(raster.view));
+    let _ = write!(w, "  projection matrix (rows):\n{}", matrix(raster.projection));
+    let _ = write!(w, "  projection * view (rows):\n{}", matrix(raster.matrix()));
+    out
+}
