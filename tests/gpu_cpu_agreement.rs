@@ -89,3 +89,103 @@ fn random_pixel_sampler_agrees() {
         ],
     );
 }
+
+// The view camera: film tilt and shift, a solved lens tilt with a polygonal aperture, a reverse
+// tilt, hexagonal bokeh, and every pixel and lens sampler.
+
+#[test]
+fn film_tilt_and_rise_agree() {
+    check(
+        "scenes/architecture.toml",
+        &["render.width=96", "render.height=144", "render.spp=4"],
+    );
+}
+
+#[test]
+fn focus_points_lens_tilt_with_heptagonal_aperture_agrees() {
+    check(
+        "scenes/tabletop.toml",
+        &["render.width=144", "render.height=96", "render.spp=8"],
+    );
+}
+
+#[test]
+fn reverse_tilt_with_swing_and_lens_shift_agrees() {
+    check(
+        "scenes/miniature.toml",
+        &[
+            "render.width=144",
+            "render.height=96",
+            "render.spp=6",
+            "camera.lens_swing=5.0",
+            "camera.lens_shift=[2.0, -1.0]",
+            "camera.film_swing=-7.0",
+        ],
+    );
+}
+
+#[test]
+fn hexagonal_bokeh_agrees() {
+    check(
+        "scenes/bokeh.toml",
+        &["render.width=120", "render.height=80", "render.spp=9"],
+    );
+}
+
+#[test]
+fn every_lens_sampler_agrees() {
+    for sampler in ["random", "stratified", "poisson", "interleaved", "sobol"] {
+        check(
+            "scenes/thin_lens.toml",
+            &[
+                "render.width=96",
+                "render.height=64",
+                "render.spp=7",
+                &format!("camera.lens_sampler={sampler}"),
+                "camera.aperture_blades=5",
+            ],
+        );
+    }
+}
+
+#[test]
+fn every_pixel_sampler_agrees() {
+    for sampler in ["poisson", "interleaved", "sobol"] {
+        check(
+            "scenes/spheres.toml",
+            &[
+                "render.width=96",
+                "render.height=64",
+                "render.spp=5",
+                &format!("render.pixel_sampler={sampler}"),
+            ],
+        );
+    }
+}
+
+/// Pinhole limit: f/1e6 renders the pinhole image (same film distance) on both paths.
+#[test]
+fn f_number_1e6_renders_the_pinhole_image_on_both_paths() {
+    let base = [
+        "render.width=96",
+        "render.height=64",
+        "render.spp=4",
+        "camera.lens_tilt=12.0",
+        "camera.focus_distance=inf",
+    ];
+    let lens = [&base[..], &["camera.f_number=1e6"]].concat();
+    let pinhole = [&base[..], &["camera.f_number=0.0"]].concat();
+    let Some((lens_cpu, lens_gpu)) = common::render_both("scenes/thin_lens.toml", &lens) else {
+        return;
+    };
+    let (pinhole_cpu, pinhole_gpu) =
+        common::render_both("scenes/thin_lens.toml", &pinhole).unwrap();
+    for (name, a, b) in [
+        ("CPU", &lens_cpu, &pinhole_cpu),
+        ("GPU", &lens_gpu, &pinhole_gpu),
+    ] {
+        let (within, mean_abs) = common::agreement(a, b, 1e-3);
+        eprintln!("{name}: f/1e6 vs pinhole: {:.3}% within 1e-3, mean |diff| {mean_abs:.2e}", within * 100.0);
+        assert!(within >= 0.995 && mean_abs < 1e-4, "{name}: {within} {mean_abs}");
+    }
+}

@@ -66,3 +66,257 @@ fn concentric_disk_is_uniform_over_the_disk() {
     assert!(chi2 < 330.0, "chi-square {chi2}");
     assert_eq!(concentric_disk([0.5, 0.5]), [0.0, 0.0]);
 }
+
+mod patterns {
+    use chambre::layout::*;
+    use chambre::math::rng::Rng;
+    use chambre::sampler::{
+        PatternSource, SampleTable, permute, poisson_disk_set, sample_2d, sample_aperture,
+        toroidal_distance,
+    };
+    use chambre::scene::SamplerName;
+
+    const ALL: [SamplerName; 5] = [
+        SamplerName::Random,
+        SamplerName::Stratified,
+        SamplerName::Poisson,
+        SamplerName::Interleaved,
+        SamplerName::Sobol,
+    ];
+
+    fn frame(spp: u32, sampler: SamplerName, table: &SampleTable) -> GpuFrame {
+        GpuFrame {
+            width: 64,
+            height: 64,
+            spp,
+            seed: 9,
+            pixel_sampler: sampler.code(),
+            pixel_strata_columns: chambre::math::sampling::strata_columns(spp),
+            pixel_table_offset: table.pixel_offset,
+            ..Default::default()
+        }
+    }
+
+    /// Every sample of the first `pixels` pixels (row-major in a 64-pixel-wide image) of a
+    /// `sampler` pattern with `spp` samples.
+    fn pixel_samples(sampler: SamplerName, spp: u32, pixels: u32) -> Vec<[f32; 2]> {
+        let coordinates: Vec<(u32, u32)> = (0..pixels).map(|p| (p % 64, p / 64)).collect();
+        samples_of(sampler, spp, &coordinates)
+    }
+
+    fn samples_of(sampler: SamplerName, spp: u32, pixels: &[(u32, u32)]) -> Vec<[f32; 2]> {
+        let table = SampleTable::build(spp, 9, sampler, None, 0, 0.0);
+        let frame = frame(spp, sampler, &table);
+        let source = PatternSource {
+            sampler: frame.pixel_sampler,
+            strata_columns: frame.pixel_strata_columns,
+            table_offset: frame.pixel_table_offset,
+            dim: PIXEL_DIMENSION,
+        };
+        let mut out = Vec::new();
+        for &(x, y) in pixels {
+            for s in 0..spp {
+                let mut rng = Rng::new(9, y * 64 + x, s);
+                out.push(sample_2d(&frame, &table.points, source, x, y, s, &mut rng));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn hashed_permutation_is_a_permutation_for_every_size_it_meets() {
+        for n in 1..=4096u32 {
+            for key in [
+                0u32,
+                0x9e37_79b9,
+                0xdead_beef,
+                n.wrapping_mul(2_654_435_761),
+            ] {
+                let mut seen = vec![false; n as usize];
+                for i in 0..n {
+                    let j = permute(i, n, key) as usize;
+                    assert!(!seen[j], "n = {n}, key = {key:#x}: {j} twice");
+                    seen[j] = true;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn stratified_puts_one_sample_in_each_stratum_of_every_pixel() {
+        for spp in [1u32, 6, 16, 17, 64] {
+            let columns = chambre::math::sampling::strata_columns(spp);
+            let rows = spp / columns;
+            let samples = pixel_samples(SamplerName::Stratified, spp, 20);
+            for pixel in samples.chunks(spp as usize) {
+                let mut hits = vec![0; spp as usize];
+                for [x, y] in pixel {
+                    let cell = (y * rows as f32) as u32 * columns + (x * columns as f32) as u32;
+                    hits[cell as usize] += 1;
+                }
+                assert!(hits.iter().all(|&h| h == 1), "spp {spp}: {hits:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn poisson_sets_have_exactly_n_points_and_respect_their_radius() {
+        for n in [1u32, 2, 5, 16, 64, 256, 1024] {
+            for key in [1u32, 77] {
+                let set = poisson_disk_set(n, key);
+                assert_eq!(set.points.len(), n as usize);
+                let points: Vec<[f64; 2]> = set
+                    .points
+                    .iter()
+                    .map(|p| [p[0] as f64, p[1] as f64])
+                    .collect();
+                let mut closest = f64::INFINITY;
+                for i in 0..points.len() {
+                    assert!(points[i].iter().all(|c| (0.0..1.0).contains(c)));
+                    for j in 0..i {
+                        closest = closest.min(toroidal_distance(points[i], points[j]));
+                    }
+                }
+                // f32 storage may round a pair 1e-7 closer than the f64 radius.
+                assert!(
+                    closest >= set.radius - 1e-6,
+                    "n {n}: {closest} < {}",
+                    set.radius
+                );
+                // And the radius is a real Poisson-disk radius: at least 60% of the
+                // hexagonal-packing spacing (Bridson's maximal sets reach about 75-85%).
+                let hexagonal = (2.0 / (3f64.sqrt() * n as f64)).sqrt().min(0.7);
+                assert!(set.radius > 0.6 * hexagonal, "n {n}: {}", set.radius);
+            }
+        }
+    }
+
+    #[test]
+    fn shifted_poisson_pixels_keep_the_minimum_distance() {
+        let spp = 32;
+        let radius = |key| poisson_disk_set(spp, key).radius;
+        let smallest = (0..POISSON_SETS)
+            .map(|set| {
+                radius(chambre::math::rng::pcg_hash(
+                    chambre::math::rng::pcg_hash(9 ^ chambre::math::rng::pcg_hash(PIXEL_DIMENSION))
+                        ^ set,
+                ))
+            })
+            .fold(f64::INFINITY, f64::min);
+        let samples = pixel_samples(SamplerName::Poisson, spp, 30);
+        for pixel in samples.chunks(spp as usize) {
+            for i in 0..pixel.len() {
+                for j in 0..i {
+                    let a = pixel[i].map(f64::from);
+                    let b = pixel[j].map(f64::from);
+                    assert!(toroidal_distance(a, b) >= smallest - 1e-6);
+                }
+            }
+        }
+    }
+
+    /// Chi-square of sample counts over `bins` equal-probability bins against uniform.
+    fn chi_square(counts: &[f64]) -> f64 {
+        let total: f64 = counts.iter().sum();
+        let expected = total / counts.len() as f64;
+        counts
+            .iter()
+            .map(|c| (c - expected).powi(2) / expected)
+            .sum()
+    }
+
+    #[test]
+    fn every_sampler_is_uniform_over_the_disk_aperture() {
+        // 8 rings x 8 sectors of equal area; 63 degrees of freedom, 0.999 quantile about 104.
+        // Pixels: 64 for the per-pixel randomised samplers; for interleaved sampling the nine
+        // distinct basis patterns of one tile (its other pixels repeat them exactly).
+        let per_pixel: Vec<(u32, u32)> = (0..64).map(|p| (p % 8, p / 8)).collect();
+        let one_tile: Vec<(u32, u32)> = (0..9).map(|p| (p % 3, p / 3)).collect();
+        for sampler in ALL {
+            let pixels = if sampler == SamplerName::Interleaved {
+                &one_tile
+            } else {
+                &per_pixel
+            };
+            let mut counts = vec![0f64; 64];
+            let camera = GpuCamera {
+                lens_radius_mm: 1.0,
+                ..Default::default()
+            };
+            for [u, v] in samples_of(sampler, 256, pixels) {
+                let [x, y] = sample_aperture(&camera, &[[0.0, 0.0]], [u, v]);
+                let r2 = (x * x + y * y) as f64;
+                let ring = ((r2 * 8.0) as usize).min(7);
+                let angle = (y as f64).atan2(x as f64) + std::f64::consts::PI;
+                let sector = ((angle / std::f64::consts::TAU * 8.0) as usize).min(7);
+                counts[ring * 8 + sector] += 1.0;
+            }
+            let chi2 = chi_square(&counts);
+            assert!(chi2 < 104.0, "{sampler:?}: chi-square {chi2}");
+        }
+    }
+
+    #[test]
+    fn polygonal_apertures_are_uniform_by_area() {
+        // Cells of a 12 x 12 grid that lie wholly inside the polygon all get the same expected
+        // count; the rest of the polygon is one more bin.
+        for blades in [3u32, 5, 6, 9] {
+            let table = SampleTable::build(1, 1, SamplerName::Random, None, blades, 17.0);
+            let camera = GpuCamera {
+                lens_radius_mm: 1.0,
+                aperture_blades: blades,
+                aperture_table_offset: table.aperture_offset,
+                ..Default::default()
+            };
+            let vertices = &table.points[table.aperture_offset as usize..];
+            let inside = |x: f64, y: f64| {
+                (0..blades as usize).all(|k| {
+                    let (a, b) = (vertices[k], vertices[k + 1]);
+                    let cross = (b[0] - a[0]) as f64 * (y - a[1] as f64)
+                        - (b[1] - a[1]) as f64 * (x - a[0] as f64);
+                    cross >= 0.0
+                })
+            };
+            let cell = 2.0 / 12.0;
+            let full: Vec<(usize, usize)> = (0..12)
+                .flat_map(|i| (0..12).map(move |j| (i, j)))
+                .filter(|&(i, j)| {
+                    let (x0, y0) = (-1.0 + i as f64 * cell, -1.0 + j as f64 * cell);
+                    [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]
+                        .iter()
+                        .all(|(a, b)| inside(x0 + a * cell, y0 + b * cell))
+                })
+                .collect();
+            let area = 0.5 * blades as f64 * (std::f64::consts::TAU / blades as f64).sin();
+            let n = 400_000u32;
+            let mut counts = vec![0f64; full.len() + 1];
+            let mut rng = Rng::new(blades, 0, 0);
+            for _ in 0..n {
+                let [x, y] = sample_aperture(&camera, &table.points, rng.next_2d());
+                assert!(inside(x as f64 * 0.999_99, y as f64 * 0.999_99), "{x} {y}");
+                let (i, j) = (
+                    ((x as f64 + 1.0) / cell) as usize,
+                    ((y as f64 + 1.0) / cell) as usize,
+                );
+                let bin = full.iter().position(|&c| c == (i, j)).unwrap_or(full.len());
+                counts[bin] += 1.0;
+            }
+            let cell_p = cell * cell / area;
+            let rest_p = 1.0 - cell_p * full.len() as f64;
+            let chi2: f64 = counts
+                .iter()
+                .enumerate()
+                .map(|(b, c)| {
+                    let e = n as f64 * if b < full.len() { cell_p } else { rest_p };
+                    (c - e).powi(2) / e
+                })
+                .sum();
+            // Degrees of freedom = full cells; the 0.999 quantile is below dof + 4 sqrt(2 dof) + 10.
+            let dof = full.len() as f64;
+            assert!(
+                chi2 < dof + 4.0 * (2.0 * dof).sqrt() + 10.0,
+                "{blades} blades: {chi2} ({dof} dof)"
+            );
+        }
+    }
+}

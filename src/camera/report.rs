@@ -51,7 +51,11 @@ pub fn camera_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
         if camera.is_pinhole() {
             "pinhole".to_string()
         } else {
-            format!("f/{} ({:.4} mm)", camera.f_number, 2.0 * camera.lens_radius_mm())
+            format!(
+                "f/{} ({:.4} mm)",
+                camera.f_number,
+                2.0 * camera.lens_radius_mm()
+            )
         },
         if camera.aperture_blades == 0 {
             "circular".to_string()
@@ -84,18 +88,17 @@ pub fn camera_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
             camera.film_distance_mm
         );
     }
-    let _ = writeln!(
-        w,
-        "field of view: {:.4} x {:.4} deg",
-        fov[0], fov[1]
-    );
+    let _ = writeln!(w, "field of view: {:.4} x {:.4} deg", fov[0], fov[1]);
     if camera.is_pinhole() {
         let _ = writeln!(w, "focus: a pinhole renders everything sharp");
     } else {
         let focus = camera.focus_plane();
         let _ = writeln!(w, "plane of sharp focus: {}", plane(focus));
         if let Some(distance) = focus.and_then(|p| camera.distance_along_chief_ray(&p)) {
-            let _ = writeln!(w, "  meets the image centre's chief ray at {distance:.6} units");
+            let _ = writeln!(
+                w,
+                "  meets the image centre's chief ray at {distance:.6} units"
+            );
         }
         let _ = writeln!(
             w,
@@ -119,7 +122,12 @@ pub fn camera_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
                     .map_or("beyond infinity".to_string(), |d| format!("{d:.6} units"))
             };
             let _ = writeln!(w, "  near limit: {} ({})", plane(near), along(&near));
-            let _ = writeln!(w, "  far limit:  {} ({})", plane(far_limit), along(&far_limit));
+            let _ = writeln!(
+                w,
+                "  far limit:  {} ({})",
+                plane(far_limit),
+                along(&far_limit)
+            );
         }
     }
     let raster = camera.raster_projection(far);
@@ -133,8 +141,20 @@ pub fn camera_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
         "  frustum: left {:.8}, right {:.8}, bottom {:.8}, top {:.8}, near {:.8}, far {}",
         f.left, f.right, f.bottom, f.top, f.near, f.far
     );
-    let _ = write!(w, "  view matrix (world -> eye, rows):\n{}", matrix(raster.view));
-    let _ = write!(w, "  projection matrix (rows):\n{}", matrix(raster.projection));
-    let _ = write!(w, "  projection * view (rows):\n{}", matrix(raster.matrix()));
+    let _ = write!(
+        w,
+        "  view matrix (world -> eye, rows):\n{}",
+        matrix(raster.view)
+    );
+    let _ = write!(
+        w,
+        "  projection matrix (rows):\n{}",
+        matrix(raster.projection)
+    );
+    let _ = write!(
+        w,
+        "  projection * view (rows):\n{}",
+        matrix(raster.matrix())
+    );
     out
 }
