@@ -1,0 +1,155 @@
+//! Mesh files as tools and scanners write them: OBJ with quads, negative indices and several
+//! objects; PLY in ASCII and binary of both byte orders with extra properties; gzip-compressed.
+//! Every encoding of the same pyramid must load to the same triangles.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use chambre::scene::mesh::load_mesh;
+
+/// Square pyramid: base (0..4) as one quad, apex 4, four sides.
+const POSITIONS: [[f32; 3]; 5] = [
+    [0.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [1.0, 0.0, 1.0],
+    [0.0, 0.0, 1.0],
+    [0.5, 1.0, 0.5],
+];
+const QUAD: [u32; 4] = [0, 1, 2, 3];
+const SIDES: [[u32; 3]; 4] = [[0, 4, 1], [1, 4, 2], [2, 4, 3], [3, 4, 0]];
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("chambre-meshes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn obj_text() -> String {
+    let mut text = String::from("# two objects, a quad, negative indices\no base\n");
+    for p in POSITIONS {
+        text += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+    }
+    text += "f 1 2 3 4\no sides\n";
+    // Relative indices count back from the last vertex (-1 is the apex).
+    for side in SIDES {
+        let rel = side.map(|i| i as i64 - 5);
+        text += &format!("f {} {} {}\n", rel[0], rel[1], rel[2]);
+    }
+    text
+}
+
+fn ply_header(format: &str) -> String {
+    format!(
+        "ply\nformat {format} 1.0\ncomment written by a scanner\nelement vertex 5\n\
+         property float x\nproperty float y\nproperty float z\nproperty float confidence\n\
+         property uchar intensity\nelement face 5\nproperty list uchar int vertex_indices\n\
+         property uchar flags\nend_header\n"
+    )
+}
+
+fn ply_ascii() -> Vec<u8> {
+    let mut text = ply_header("ascii");
+    for p in POSITIONS {
+        text += &format!("{} {} {} 0.9 200\n", p[0], p[1], p[2]);
+    }
+    text += &format!("4 {} {} {} {} 7\n", QUAD[0], QUAD[1], QUAD[2], QUAD[3]);
+    for s in SIDES {
+        text += &format!("3 {} {} {} 7\n", s[0], s[1], s[2]);
+    }
+    text.into_bytes()
+}
+
+fn ply_binary(big_endian: bool) -> Vec<u8> {
+    let format = if big_endian {
+        "binary_big_endian"
+    } else {
+        "binary_little_endian"
+    };
+    let mut out = ply_header(format).into_bytes();
+    let f32b = |v: f32| {
+        if big_endian {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    let i32b = |v: i32| {
+        if big_endian {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    for p in POSITIONS {
+        for c in p {
+            out.extend(f32b(c));
+        }
+        out.extend(f32b(0.9));
+        out.push(200);
+    }
+    let mut face = |indices: &[u32]| {
+        out.push(indices.len() as u8);
+        for &i in indices {
+            out.extend(i32b(i as i32));
+        }
+        out.push(7);
+    };
+    face(&QUAD);
+    for s in SIDES {
+        face(&s);
+    }
+    out
+}
+
+fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut encoder = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    encoder.write_all(bytes).unwrap();
+    encoder.finish().unwrap()
+}
+
+/// Total area and triangle count: invariant to triangulation order and vertex numbering.
+fn signature(path: &PathBuf) -> (usize, f32) {
+    let mesh = load_mesh(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let area = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    (mesh.triangles.len(), area)
+}
+
+#[test]
+fn every_encoding_of_the_pyramid_loads_the_same_triangles() {
+    let files: Vec<(&str, Vec<u8>)> = vec![
+        ("pyramid.obj", obj_text().into_bytes()),
+        ("pyramid.obj.gz", gzip(obj_text().as_bytes())),
+        ("pyramid_ascii.ply", ply_ascii()),
+        ("pyramid_le.ply", ply_binary(false)),
+        ("pyramid_be.ply", ply_binary(true)),
+        ("pyramid_be.ply.gz", gzip(&ply_binary(true))),
+    ];
+    // Base 1 plus four sides of height sqrt(1.25) * base 1 / 2 each.
+    let expected_area = 1.0 + 4.0 * 0.5 * 1.25f32.sqrt();
+    for (name, bytes) in files {
+        let path = scratch(name);
+        std::fs::write(&path, bytes).unwrap();
+        let (triangles, area) = signature(&path);
+        assert_eq!(triangles, 6, "{name}");
+        assert!((area - expected_area).abs() < 1e-5, "{name}: area {area}");
+    }
+}
+
+#[test]
+fn a_corrupt_gzip_or_truncated_binary_ply_is_an_error_not_a_panic() {
+    let mut truncated = ply_binary(true);
+    truncated.truncate(truncated.len() - 10);
+    let path = scratch("truncated.ply");
+    std::fs::write(&path, truncated).unwrap();
+    assert!(load_mesh(&path).is_err());
+    let path = scratch("corrupt.obj.gz");
+    std::fs::write(&path, b"\x1f\x8b\x08\x00not really gzip").unwrap();
+    assert!(load_mesh(&path).is_err());
+}
