@@ -253,16 +253,10 @@ pub fn trace_sample(
     let frame = &scene.frame;
     let camera = &scene.camera;
     let mut rng = Rng::new(frame.seed, y * frame.width + x, sample);
-    let pixel_source = PatternSource {
-        sampler: frame.pixel_sampler,
-        strata_columns: frame.pixel_strata_columns,
-        table_offset: frame.pixel_table_offset,
-        dim: PIXEL_DIMENSION,
-    };
     let jitter = sample_2d(
         frame,
         &scene.sample_table,
-        pixel_source,
+        PatternSource::pixel(frame),
         x,
         y,
         sample,
@@ -272,16 +266,10 @@ pub fn trace_sample(
     let film = film_position_mm(camera, frame.width, frame.height, raster);
     let mut lens = Vec2::ZERO;
     if camera.lens_radius_mm > 0.0 {
-        let lens_source = PatternSource {
-            sampler: frame.lens_sampler,
-            strata_columns: frame.lens_strata_columns,
-            table_offset: frame.lens_table_offset,
-            dim: LENS_DIMENSION,
-        };
         let u = sample_2d(
             frame,
             &scene.sample_table,
-            lens_source,
+            PatternSource::lens(frame),
             x,
             y,
             sample,

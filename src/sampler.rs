@@ -319,7 +319,8 @@ pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
 fn sobol_dimension_1(mut index: u32) -> u32 {
     let mut v = 1u32 << 31;
     let mut result = 0;
-    for _ in 0..32 {
+    // At most 32 steps: the loop ends once the index's highest set bit is consumed.
+    while index != 0 {
         if index & 1 != 0 {
             result ^= v;
         }
@@ -344,6 +345,28 @@ pub struct PatternSource {
     pub strata_columns: u32,
     pub table_offset: u32,
     pub dim: u32,
+}
+
+impl PatternSource {
+    /// The pixel-position samples of `frame` (random dimensions 0-1).
+    pub fn pixel(frame: &GpuFrame) -> Self {
+        PatternSource {
+            sampler: frame.pixel_sampler,
+            strata_columns: frame.pixel_strata_columns,
+            table_offset: frame.pixel_table_offset,
+            dim: PIXEL_DIMENSION,
+        }
+    }
+
+    /// The lens samples of `frame` (random dimensions 2-3).
+    pub fn lens(frame: &GpuFrame) -> Self {
+        PatternSource {
+            sampler: frame.lens_sampler,
+            strata_columns: frame.lens_strata_columns,
+            table_offset: frame.lens_table_offset,
+            dim: LENS_DIMENSION,
+        }
+    }
 }
 
 /// The 2-D point of sample `sample` of pixel (x, y) in [0, 1)^2. Always draws `rng.next_2d()`.

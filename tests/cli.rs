@@ -24,7 +24,9 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn scene_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
 }
 
 #[test]
@@ -33,8 +35,24 @@ fn render_writes_the_linear_exr_the_library_computes_with_every_override() {
     let status = chambre()
         .args(["render", "scenes/spheres.toml", "-o"])
         .arg(&out)
-        .args(["--backend", "cpu", "--spp", "3", "--width", "48", "--height", "32"])
-        .args(["--seed", "7", "--pixel-sampler", "sobol", "-D", "render.ambient=[0.2, 0.2, 0.2]"])
+        .args([
+            "--backend",
+            "cpu",
+            "--spp",
+            "3",
+            "--width",
+            "48",
+            "--height",
+            "32",
+        ])
+        .args([
+            "--seed",
+            "7",
+            "--pixel-sampler",
+            "sobol",
+            "-D",
+            "render.ambient=[0.2, 0.2, 0.2]",
+        ])
         .status()
         .unwrap();
     assert!(status.success());
@@ -58,11 +76,19 @@ fn render_writes_the_linear_exr_the_library_computes_with_every_override() {
     let written = image::open(&out).unwrap().into_rgb32f();
     assert_eq!((written.width(), written.height()), (48, 32));
     for (p, q) in written.pixels().zip(&expected.pixels) {
-        assert_eq!(p.0, q.to_array(), "EXR must hold the linear radiance unchanged");
+        assert_eq!(
+            p.0,
+            q.to_array(),
+            "EXR must hold the linear radiance unchanged"
+        );
     }
     // A linear EXR keeps values a PNG would clamp (the lit spheres exceed 1 somewhere or not;
     // either way nothing is negative or non-finite).
-    assert!(written.pixels().all(|p| p.0.iter().all(|c| c.is_finite() && *c >= 0.0)));
+    assert!(
+        written
+            .pixels()
+            .all(|p| p.0.iter().all(|c| c.is_finite() && *c >= 0.0))
+    );
 }
 
 #[test]
@@ -92,21 +118,28 @@ fn bad_input_exits_non_zero_naming_file_line_and_field() {
         .unwrap()
         .replace("[camera]\n", "[camera]\nlens_tilt = \"steep\"\n");
     std::fs::write(&path, text).unwrap();
-    let output = chambre()
-        .args(["check"])
-        .arg(&path)
-        .output()
-        .unwrap();
+    let output = chambre().args(["check"]).arg(&path).output().unwrap();
     assert_eq!(output.status.code(), Some(1));
     let message = String::from_utf8(output.stderr).unwrap();
     assert!(message.contains("bad.toml:"), "{message}");
     assert!(message.contains("lens_tilt"), "{message}");
     assert!(!message.contains("panicked"), "{message}");
     let output = chambre()
-        .args(["render", "scenes/spheres.toml", "-o", "/tmp/x.png", "--lens-sampler", "halton"])
+        .args([
+            "render",
+            "scenes/spheres.toml",
+            "-o",
+            "/tmp/x.png",
+            "--lens-sampler",
+            "halton",
+        ])
         .output()
         .unwrap();
-    assert_eq!(output.status.code(), Some(2), "clap rejects unknown sampler names");
+    assert_eq!(
+        output.status.code(),
+        Some(2),
+        "clap rejects unknown sampler names"
+    );
 }
 
 #[test]
@@ -131,7 +164,10 @@ fn an_interrupted_render_keeps_the_samples_it_finished() {
         &cancel,
     )
     .unwrap();
-    assert!(matches!(output.stopped, Some(chambre::Error::Interrupted { .. })));
+    assert!(matches!(
+        output.stopped,
+        Some(chambre::Error::Interrupted { .. })
+    ));
     let passes = chambre::render::sample_passes(256, 128 * 128);
     assert!(passes.len() > 1);
     assert_eq!(output.samples_per_pixel, passes[0].1);
@@ -142,5 +178,8 @@ fn an_interrupted_render_keeps_the_samples_it_finished() {
         .iter()
         .filter(|p| p.max_element() > 0.0)
         .count();
-    assert!(lit > output.image.pixels.len() / 2, "the partial image holds the finished samples");
+    assert!(
+        lit > output.image.pixels.len() / 2,
+        "the partial image holds the finished samples"
+    );
 }

@@ -185,7 +185,13 @@ fn f_number_1e6_renders_the_pinhole_image_on_both_paths() {
         ("GPU", &lens_gpu, &pinhole_gpu),
     ] {
         let (within, mean_abs) = common::agreement(a, b, 1e-3);
-        eprintln!("{name}: f/1e6 vs pinhole: {:.3}% within 1e-3, mean |diff| {mean_abs:.2e}", within * 100.0);
-        assert!(within >= 0.995 && mean_abs < 1e-4, "{name}: {within} {mean_abs}");
+        eprintln!(
+            "{name}: f/1e6 vs pinhole: {:.3}% within 1e-3, mean |diff| {mean_abs:.2e}",
+            within * 100.0
+        );
+        assert!(
+            within >= 0.995 && mean_abs < 1e-4,
+            "{name}: {within} {mean_abs}"
+        );
     }
 }

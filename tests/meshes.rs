@@ -108,7 +108,7 @@ fn gzip(bytes: &[u8]) -> Vec<u8> {
 }
 
 /// Total area and triangle count: invariant to triangulation order and vertex numbering.
-fn signature(path: &PathBuf) -> (usize, f32) {
+fn signature(path: &std::path::Path) -> (usize, f32) {
     let mesh = load_mesh(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let area = mesh
         .triangles

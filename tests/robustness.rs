@@ -35,7 +35,12 @@ fn grid(n: usize, size: f32, centre: Vec3, rng: &mut Rng) -> (Vec<Vec3>, Vec<[us
     let mut triangles = Vec::new();
     for j in 0..n - 1 {
         for i in 0..n - 1 {
-            let (a, b, c, d) = (j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i);
+            let (a, b, c, d) = (
+                j * n + i,
+                j * n + i + 1,
+                (j + 1) * n + i + 1,
+                (j + 1) * n + i,
+            );
             triangles.push([a, b, c]);
             triangles.push([a, c, d]);
         }
@@ -45,7 +50,12 @@ fn grid(n: usize, size: f32, centre: Vec3, rng: &mut Rng) -> (Vec<Vec3>, Vec<[us
 
 #[test]
 fn rays_through_shared_vertices_and_edges_never_leak() {
-    for (offset, size) in [(0.0f32, 1.0f32), (1.0e4, 1.0), (1.0e6, 100.0), (0.0, 1.0e-4)] {
+    for (offset, size) in [
+        (0.0f32, 1.0f32),
+        (1.0e4, 1.0),
+        (1.0e6, 100.0),
+        (0.0, 1.0e-4),
+    ] {
         let mut rng = Rng::new(offset as u32 ^ 77, 0, 0);
         let n = 9;
         let centre = Vec3::new(offset, -offset * 0.5, offset * 0.25);
@@ -79,7 +89,10 @@ fn rays_through_shared_vertices_and_edges_never_leak() {
                 }
             }
         }
-        assert_eq!(leaks, 0, "offset {offset}, size {size}: {leaks} rays slipped through");
+        assert_eq!(
+            leaks, 0,
+            "offset {offset}, size {size}: {leaks} rays slipped through"
+        );
     }
 }
 
@@ -111,7 +124,14 @@ fn slab_test_survives_zero_direction_components_and_grazing_faces() {
 /// A sphere on a plane under a directional light, seen from above, everything scaled by
 /// `scale` and moved by `offset`; meters_per_unit follows the scale so the optics are unchanged.
 fn far_scene(scale: f64, offset: f64, lens: bool) -> String {
-    let p = |x: f64, y: f64, z: f64| format!("[{}, {}, {}]", x * scale + offset, y * scale + offset, z * scale - offset);
+    let p = |x: f64, y: f64, z: f64| {
+        format!(
+            "[{}, {}, {}]",
+            x * scale + offset,
+            y * scale + offset,
+            z * scale - offset
+        )
+    };
     let lens = if lens {
         format!("f_number = 2.8\nfocus_distance = {}\n", 6.0 * scale)
     } else {
@@ -140,8 +160,9 @@ fn far_scene(scale: f64, offset: f64, lens: bool) -> String {
 fn renders_far_from_the_origin_and_at_extreme_scales_match_the_origin() {
     for lens in [false, true] {
         let render = |scale: f64, offset: f64| {
-            let scene = Scene::from_str(Path::new("far.toml"), &far_scene(scale, offset, lens), &[])
-                .unwrap_or_else(|e| panic!("scale {scale}, offset {offset}: {e}"));
+            let scene =
+                Scene::from_str(Path::new("far.toml"), &far_scene(scale, offset, lens), &[])
+                    .unwrap_or_else(|e| panic!("scale {scale}, offset {offset}: {e}"));
             common::render_cpu(&flatten(&scene))
         };
         let reference = render(1.0, 0.0);
@@ -149,7 +170,11 @@ fn renders_far_from_the_origin_and_at_extreme_scales_match_the_origin() {
         let cos = 1.0 / Vec3::new(0.3, -1.0, 0.2).length();
         let floor = 0.8 / std::f32::consts::PI * 2.0 * cos + 0.8 * 0.1;
         let corner = reference.pixels[47 * 72 + 2];
-        assert!((corner.x - floor).abs() < 1e-4, "floor {} vs {floor}", corner.x);
+        assert!(
+            (corner.x - floor).abs() < 1e-4,
+            "floor {} vs {floor}",
+            corner.x
+        );
         for (scale, offset) in [(1.0e-3, 0.0), (1.0e3, 0.0), (1.0, 1.0e4), (1.0e2, 1.0e5)] {
             let image = render(scale, offset);
             assert_eq!(image.non_finite_count(), 0);
@@ -164,14 +189,18 @@ fn renders_far_from_the_origin_and_at_extreme_scales_match_the_origin() {
             // (Ray Tracing Gems' offset: 0.25 units at 1e4) and sees the floor or the sky.
             // Everywhere else the images agree; a leak or self-shadowing acne would flip whole
             // regions.
-            assert!(within > 0.97 && mean_abs < 1e-2, "lens {lens}, scale {scale}, offset {offset}");
+            assert!(
+                within > 0.97 && mean_abs < 1e-2,
+                "lens {lens}, scale {scale}, offset {offset}"
+            );
         }
     }
 }
 
 #[test]
 fn gpu_agrees_with_cpu_far_from_the_origin() {
-    let scene = Scene::from_str(Path::new("far.toml"), &far_scene(1.0e2, 1.0e5, true), &[]).unwrap();
+    let scene =
+        Scene::from_str(Path::new("far.toml"), &far_scene(1.0e2, 1.0e5, true), &[]).unwrap();
     let flat = flatten(&scene);
     let Some(gpu) = common::render_gpu(&flat) else {
         return;

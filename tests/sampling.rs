@@ -107,12 +107,7 @@ mod patterns {
     fn samples_of(sampler: SamplerName, spp: u32, pixels: &[(u32, u32)]) -> Vec<[f32; 2]> {
         let table = SampleTable::build(spp, 9, sampler, None, 0, 0.0);
         let frame = frame(spp, sampler, &table);
-        let source = PatternSource {
-            sampler: frame.pixel_sampler,
-            strata_columns: frame.pixel_strata_columns,
-            table_offset: frame.pixel_table_offset,
-            dim: PIXEL_DIMENSION,
-        };
+        let source = PatternSource::pixel(&frame);
         let mut out = Vec::new();
         for &(x, y) in pixels {
             for s in 0..spp {

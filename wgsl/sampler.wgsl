@@ -69,7 +69,7 @@ fn sobol_dimension_1(index: u32) -> u32 {
     var bits = index;
     var v = 1u << 31u;
     var result = 0u;
-    for (var k = 0u; k < 32u; k += 1u) {
+    for (var k = 0u; k < 32u && bits != 0u; k += 1u) {
         if ((bits & 1u) != 0u) {
             result ^= v;
         }
