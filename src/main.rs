@@ -11,6 +11,7 @@ use anyhow::{Context, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 
 use chambre::accel::flatten;
+use chambre::camera::Focus;
 use chambre::camera::report::camera_report;
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::{GpuContext, GpuRenderer, describe_adapters};
@@ -199,6 +200,13 @@ fn run_check(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<Exi
             format!("f/{}", camera.f_number)
         }
     );
+    if let Focus::Points(_) = camera.focus {
+        let m = &camera.movements;
+        println!(
+            "focus_points: solved lens tilt {:.4} deg, lens swing {:.4} deg, film distance {:.4} mm",
+            m.lens_tilt, m.lens_swing, camera.film_distance_mm
+        );
+    }
     println!(
         "BVH: {} nodes, depth {}, built in {:.1} ms",
         flat.nodes.len(),
