@@ -202,9 +202,17 @@ fn f_number_1e6_renders_the_pinhole_image_on_both_paths() {
 fn extreme_movements_agree_without_nan() {
     let small = ["render.width=72", "render.height=48", "render.spp=2"];
     for extra in [
-        &["camera.f_number=0.0", "camera.film_tilt=80.0", "camera.film_swing=-80.0"][..],
+        &[
+            "camera.f_number=0.0",
+            "camera.film_tilt=80.0",
+            "camera.film_swing=-80.0",
+        ][..],
         &["camera.lens_tilt=60.0", "camera.film=[12.0, 8.0]"][..],
-        &["camera.f_number=0.7", "camera.focal_length=10.0", "camera.film=[90.0, 60.0]"][..],
+        &[
+            "camera.f_number=0.7",
+            "camera.focal_length=10.0",
+            "camera.film=[90.0, 60.0]",
+        ][..],
     ] {
         check("scenes/thin_lens.toml", &[&small[..], extra].concat());
     }

@@ -669,3 +669,39 @@ fn tilted_lens_keeps_a_receding_checkerboard_sharp_from_front_to_back() {
         }
     }
 }
+
+#[test]
+fn untilted_depth_of_field_matches_the_hyperfocal_formulas() {
+    // Classic limits: H = f^2 / (N c) + f, near = s (H - f) / (H + s - 2f), far = s (H - f) / (H - s).
+    for (f, n, s_mm, c) in [
+        (50.0, 1.4, 4000.0, 0.03),
+        (90.0, 8.0, 2500.0, 0.1),
+        (35.0, 2.0, 900.0, 0.02),
+    ] {
+        let camera = camera(&format!(
+            "focal_length = {f}\nf_number = {n}\nfocus_distance = {}",
+            s_mm / 1000.0
+        ));
+        let h = f * f / (n * c) + f;
+        let near = s_mm * (h - f) / (h + s_mm - 2.0 * f);
+        let far = s_mm * (h - f) / (h - s_mm);
+        let (near_plane, far_plane) = camera.depth_of_field(c).unwrap();
+        let along = |p: Option<chambre::camera::optics::Plane>| {
+            camera.distance_along_chief_ray(&p.unwrap()).unwrap() * 1000.0
+        };
+        // With no movements the image centre's chief ray is the optical axis.
+        assert!(
+            (along(near_plane) / near - 1.0).abs() < 1e-9,
+            "{} vs {near}",
+            along(near_plane)
+        );
+        assert!(
+            (along(far_plane) / far - 1.0).abs() < 1e-9,
+            "{} vs {far}",
+            along(far_plane)
+        );
+    }
+    // Beyond the hyperfocal distance the far limit is at infinity.
+    let camera = camera("focal_length = 50.0\nf_number = 16.0\nfocus_distance = 10.0");
+    assert!(camera.depth_of_field(0.03).unwrap().1.is_none());
+}

@@ -117,17 +117,28 @@ pub fn camera_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
         let _ = writeln!(w, "Scheimpflug line: {}", line(camera.scheimpflug_line()));
         if let Some((near, far_limit)) = camera.depth_of_field(coc_mm) {
             let _ = writeln!(w, "depth of field for a {coc_mm} mm circle of confusion:");
-            let along = |p: &Option<Plane>| {
-                p.and_then(|p| camera.distance_along_chief_ray(&p))
-                    .map_or("beyond infinity".to_string(), |d| format!("{d:.6} units"))
+            let limit = |p: Option<Plane>, missing: &str| match p {
+                None => missing.to_string(),
+                Some(plane) => match camera.distance_along_chief_ray(&plane) {
+                    Some(d) => format!(
+                        "{} (at {d:.6} units along the image centre's chief ray)",
+                        self::plane(Some(plane))
+                    ),
+                    None => format!(
+                        "{} (not crossed by the image centre's chief ray)",
+                        self::plane(Some(plane))
+                    ),
+                },
             };
-            let _ = writeln!(w, "  near limit: {} ({})", plane(near), along(&near));
-            let _ = writeln!(
-                w,
-                "  far limit:  {} ({})",
-                plane(far_limit),
-                along(&far_limit)
-            );
+            if coc_mm >= 2.0 * camera.lens_radius_mm() {
+                let _ = writeln!(
+                    w,
+                    "  near limit: at the lens (the circle of confusion is not smaller than the aperture)"
+                );
+            } else {
+                let _ = writeln!(w, "  near limit: {}", limit(near, "at infinity"));
+            }
+            let _ = writeln!(w, "  far limit:  {}", limit(far_limit, "beyond infinity"));
         }
     }
     let raster = camera.raster_projection(far);
