@@ -58,6 +58,7 @@ impl Backend for CpuRenderer<'_> {
             }
             status.rays += stats.rays;
             status.truncated += stats.truncated;
+            status.flags |= stats.flags;
         }
         Ok(status)
     }

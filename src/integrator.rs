@@ -26,6 +26,8 @@ use crate::sampler::{PatternSource, sample_2d, sample_aperture};
 pub struct SampleStats {
     pub rays: u64,
     pub truncated: u64,
+    /// `STATUS_*` bits raised while sampling.
+    pub flags: u32,
 }
 
 /// A surface point as shading needs it; normals face the side the ray came from.
@@ -261,6 +263,7 @@ pub fn trace_sample(
         y,
         sample,
         &mut rng,
+        &mut stats.flags,
     );
     let raster = Vec2::new(x as f32 + jitter[0], y as f32 + jitter[1]);
     let film = film_position_mm(camera, frame.width, frame.height, raster);
@@ -274,6 +277,7 @@ pub fn trace_sample(
             y,
             sample,
             &mut rng,
+            &mut stats.flags,
         );
         lens = Vec2::from(sample_aperture(camera, &scene.sample_table, u));
     }

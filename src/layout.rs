@@ -54,6 +54,9 @@ pub const INTERLEAVED_TILE: u32 = 3;
 /// Bits of the status word: a kernel loop hit its cap.
 pub const STATUS_TRAVERSAL_CAP: u32 = 1;
 pub const STATUS_STACK_OVERFLOW: u32 = 2;
+/// The stratified sampler's permutation walk hit `PERMUTE_WALK_CAP` (its sample order then
+/// repeats a stratum).
+pub const STATUS_PERMUTE_CAP: u32 = 4;
 /// Slots of the status buffer (array<atomic<u32>, STATUS_WORDS>).
 pub const STATUS_FLAGS: u32 = 0;
 pub const STATUS_RAYS: u32 = 1;
@@ -237,6 +240,7 @@ pub fn wgsl_prelude() -> String {
         ("INTERLEAVED_TILE", INTERLEAVED_TILE),
         ("STATUS_TRAVERSAL_CAP", STATUS_TRAVERSAL_CAP),
         ("STATUS_STACK_OVERFLOW", STATUS_STACK_OVERFLOW),
+        ("STATUS_PERMUTE_CAP", STATUS_PERMUTE_CAP),
         ("STATUS_FLAGS", STATUS_FLAGS),
         ("STATUS_RAYS", STATUS_RAYS),
         ("STATUS_TRUNCATED", STATUS_TRUNCATED),

@@ -12,8 +12,8 @@ use glam::Vec3;
 use crate::accel::FlatScene;
 use crate::error::{Error, Result};
 use crate::layout::{
-    GpuPass, STATUS_FLAGS, STATUS_RAYS, STATUS_STACK_OVERFLOW, STATUS_TRAVERSAL_CAP,
-    STATUS_TRUNCATED,
+    GpuPass, STATUS_FLAGS, STATUS_PERMUTE_CAP, STATUS_RAYS, STATUS_STACK_OVERFLOW,
+    STATUS_TRAVERSAL_CAP, STATUS_TRUNCATED,
 };
 
 /// Tile edge in pixels: one dispatch covers at most TILE x TILE pixels.
@@ -209,6 +209,11 @@ pub fn describe_status_flags(flags: u32) -> Option<String> {
     }
     if flags & STATUS_STACK_OVERFLOW != 0 {
         reasons.push("a BVH traversal overflowed its stack");
+    }
+    if flags & STATUS_PERMUTE_CAP != 0 {
+        reasons.push(
+            "the stratified sampler's permutation hit its walk cap (use --pixel-sampler/--lens-sampler sobol)",
+        );
     }
     (!reasons.is_empty()).then(|| reasons.join("; "))
 }

@@ -265,9 +265,9 @@ fn unit_float(bits: u32) -> f32 {
 /// Kensler's hashed permutation of [0, n) ("Correlated Multi-Jittered Sampling", 2013): index
 /// `i`'s place in the permutation keyed by `key`, by cycle-walking a bijection of the enclosing
 /// power of two.
-/// The walk is capped at `PERMUTE_WALK_CAP` steps (a kernel loop must be bounded);
-/// `tests/sampling.rs` checks it stays a permutation for every n it meets in practice.
-pub fn permute(i: u32, n: u32, key: u32) -> u32 {
+/// The walk is capped at `PERMUTE_WALK_CAP` steps (a kernel loop must be bounded); `None` when
+/// the cap is hit. `tests/sampling.rs` checks the cap is never reached for n <= 4096.
+pub fn permute(i: u32, n: u32, key: u32) -> Option<u32> {
     let mut w = n.wrapping_sub(1);
     w |= w >> 1;
     w |= w >> 2;
@@ -295,10 +295,10 @@ pub fn permute(i: u32, n: u32, key: u32) -> u32 {
         i &= w;
         i ^= i >> 5;
         if i < n {
-            break;
+            return Some(i.wrapping_add(key) % n);
         }
     }
-    (i.wrapping_add(key)) % n
+    None
 }
 
 fn laine_karras_permutation(mut x: u32, seed: u32) -> u32 {
@@ -369,7 +369,9 @@ impl PatternSource {
     }
 }
 
-/// The 2-D point of sample `sample` of pixel (x, y) in [0, 1)^2. Always draws `rng.next_2d()`.
+/// The 2-D point of sample `sample` of pixel (x, y) in [0, 1)^2. Always draws `rng.next_2d()`;
+/// ORs `STATUS_PERMUTE_CAP` into `flags` if the stratified permutation gives up.
+#[allow(clippy::too_many_arguments)]
 pub fn sample_2d(
     frame: &GpuFrame,
     table: &[[f32; 2]],
@@ -378,13 +380,17 @@ pub fn sample_2d(
     y: u32,
     sample: u32,
     rng: &mut Rng,
+    flags: &mut u32,
 ) -> [f32; 2] {
     let u = rng.next_2d();
     let pixel = y * frame.width + x;
     let key = pixel_hash(frame.seed, pixel, source.dim);
     match source.sampler {
         SAMPLER_STRATIFIED => {
-            let stratum = permute(sample, frame.spp, key);
+            let stratum = permute(sample, frame.spp, key).unwrap_or_else(|| {
+                *flags |= STATUS_PERMUTE_CAP;
+                sample
+            });
             stratified_2d(stratum, frame.spp, source.strata_columns, u)
         }
         SAMPLER_POISSON => {

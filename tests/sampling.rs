@@ -112,7 +112,18 @@ mod patterns {
         for &(x, y) in pixels {
             for s in 0..spp {
                 let mut rng = Rng::new(9, y * 64 + x, s);
-                out.push(sample_2d(&frame, &table.points, source, x, y, s, &mut rng));
+                let mut flags = 0;
+                out.push(sample_2d(
+                    &frame,
+                    &table.points,
+                    source,
+                    x,
+                    y,
+                    s,
+                    &mut rng,
+                    &mut flags,
+                ));
+                assert_eq!(flags, 0);
             }
         }
         out
@@ -129,7 +140,7 @@ mod patterns {
             ] {
                 let mut seen = vec![false; n as usize];
                 for i in 0..n {
-                    let j = permute(i, n, key) as usize;
+                    let j = permute(i, n, key).expect("the walk stays under its cap") as usize;
                     assert!(!seen[j], "n = {n}, key = {key:#x}: {j} twice");
                     seen[j] = true;
                 }

@@ -46,10 +46,11 @@ fn permute(index: u32, n: u32, key: u32) -> u32 {
         i &= w;
         i ^= i >> 5u;
         if (i < n) {
-            break;
+            return (i + key) % n;
         }
     }
-    return (i + key) % n;
+    flag_status(STATUS_PERMUTE_CAP);
+    return index;
 }
 
 fn laine_karras_permutation(value: u32, seed: u32) -> u32 {
