@@ -191,7 +191,7 @@ fn run_check(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<Exi
     println!(
         "camera: f = {:.2} mm, film at {:.3} mm, field of view {:.2} x {:.2} deg, {}",
         camera.focal_length_mm,
-        camera.image_distance_mm(),
+        camera.film_distance_mm,
         fov[0],
         fov[1],
         if camera.is_pinhole() {

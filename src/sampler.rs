@@ -383,8 +383,10 @@ pub fn sample_2d(
     flags: &mut u32,
 ) -> [f32; 2] {
     let u = rng.next_2d();
-    let pixel = y * frame.width + x;
-    let key = pixel_hash(frame.seed, pixel, source.dim);
+    if source.sampler == SAMPLER_RANDOM {
+        return u;
+    }
+    let key = pixel_hash(frame.seed, y * frame.width + x, source.dim);
     match source.sampler {
         SAMPLER_STRATIFIED => {
             let stratum = permute(sample, frame.spp, key).unwrap_or_else(|| {

@@ -4,6 +4,8 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+mod common;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use chambre::accel::flatten;
@@ -68,11 +70,7 @@ fn render_writes_the_linear_exr_the_library_computes_with_every_override() {
     .map(String::from)
     .to_vec();
     let scene = Scene::load(&scene_path("spheres.toml"), &overrides).unwrap();
-    let flat = flatten(&scene);
-    let mut cpu = CpuRenderer::new(&flat);
-    let expected = render(&flat, &mut cpu, &mut |_, _| {}, &AtomicBool::new(false))
-        .unwrap()
-        .image;
+    let expected = common::render_cpu(&flatten(&scene));
     let written = image::open(&out).unwrap().into_rgb32f();
     assert_eq!((written.width(), written.height()), (48, 32));
     for (p, q) in written.pixels().zip(&expected.pixels) {

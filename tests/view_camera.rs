@@ -1,6 +1,8 @@
 //! The view camera's geometry: conventions, the Scheimpflug and hinge rules, convergence of the
 //! thin-lens rays, the raster-projection equivalence, focus_points, and the extremes.
 
+mod common;
+
 use std::path::Path;
 
 use chambre::accel::flatten;
@@ -493,7 +495,7 @@ fn extreme_movements_render_without_nan_or_are_refused_with_reasons() {
         let scene = Scene::from_str(Path::new("t.toml"), &scene_text(fields, 36, 24), &[])
             .unwrap_or_else(|e| panic!("{fields}: {e}"));
         let flat = flatten(&scene);
-        let image = common_render(&flat);
+        let image = common::render_cpu(&flat);
         assert_eq!(image.non_finite_count(), 0, "{fields}");
     }
     let edge_on = error("focal_length = 50.0\nfilm_tilt = 90.0");
@@ -518,19 +520,6 @@ fn extreme_movements_render_without_nan_or_are_refused_with_reasons() {
     let both =
         error("focal_length = 50.0\nf_number = 2.0\nfocus_distance = 3.0\nfilm_distance = 60.0");
     assert!(both.contains("film_distance"), "{both}");
-}
-
-fn common_render(flat: &chambre::accel::FlatScene) -> chambre::render::Image {
-    use chambre::cpu::CpuRenderer;
-    let mut renderer = CpuRenderer::new(flat);
-    let output = chambre::render::render(
-        flat,
-        &mut renderer,
-        &mut |_, _| {},
-        &std::sync::atomic::AtomicBool::new(false),
-    )
-    .unwrap();
-    output.image
 }
 
 /// Image position (mm, x right, y up) where the ray from world point `q` through lens point
@@ -639,8 +628,8 @@ fn tilted_lens_keeps_a_receding_checkerboard_sharp_from_front_to_back() {
             .replace("f_number = 1.2", "f_number = 0.0");
         let pinhole = Scene::from_str(path, &pinhole_text, &small).unwrap();
         (
-            common_render(&flatten(&scene)),
-            common_render(&flatten(&pinhole)),
+            common::render_cpu(&flatten(&scene)),
+            common::render_cpu(&flatten(&pinhole)),
         )
     };
     let bands = [

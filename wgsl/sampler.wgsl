@@ -97,8 +97,10 @@ fn wrap_unit(x: f32) -> f32 {
 
 fn sample_2d(source: PatternSource, x: u32, y: u32, sample: u32, rng: ptr<function, Rng>) -> vec2<f32> {
     let u = rng_next_2d(rng);
-    let pixel = y * frame.width + x;
-    let key = pixel_hash(frame.seed, pixel, source.dim);
+    if (source.sampler == SAMPLER_RANDOM) {
+        return u;
+    }
+    let key = pixel_hash(frame.seed, y * frame.width + x, source.dim);
     switch source.sampler {
         case SAMPLER_STRATIFIED: {
             let stratum = permute(sample, frame.spp, key);

@@ -123,11 +123,6 @@ impl Standards {
     pub fn to_lens_frame(&self, p: DVec3) -> DVec3 {
         self.lens.transpose() * (p - self.lens_center)
     }
-
-    /// Lens-frame direction -> camera frame.
-    pub fn lens_direction_to_camera(&self, v: DVec3) -> DVec3 {
-        self.lens * v
-    }
 }
 
 impl CameraSpec {
@@ -143,11 +138,6 @@ impl CameraSpec {
 
     pub fn is_pinhole(&self) -> bool {
         self.f_number == 0.0
-    }
-
-    /// Lens-to-film distance along the rail in mm (s_i without movements).
-    pub fn image_distance_mm(&self) -> f64 {
-        self.film_distance_mm
     }
 
     pub fn lens_radius_mm(&self) -> f64 {

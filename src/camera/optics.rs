@@ -166,24 +166,12 @@ impl CameraSpec {
             .flatten();
         let far_scale = d / (d + coc_mm);
         // The far limit lies beyond infinity once the scaled film's conjugate crosses behind the
-        // lens: on the rail axis, when the scaled film is nearer than f.
+        // lens: the image centre's chief ray no longer meets it in front.
         let far = self
             .conjugate_plane_lens_frame(far_scale)
-            .filter(|p| self.distance_along_view_axis(p).is_some());
-        Some((
-            near.map(|p| self.lens_plane_to_world(p)),
-            far.map(|p| self.lens_plane_to_world(p)),
-        ))
-    }
-
-    /// Distance (scene units) from the lens centre along the chief ray of the image centre to a
-    /// lens-frame plane, if the ray meets it in front of the lens.
-    fn distance_along_view_axis(&self, plane: &RawPlane) -> Option<f64> {
-        let s = self.standards();
-        let direction = s.to_lens_frame(s.lens_center) - s.to_lens_frame(s.film_center);
-        let direction = direction.normalize();
-        let t = plane.offset / plane.normal.dot(direction);
-        (t.is_finite() && t > 0.0).then_some(t * self.units_per_mm)
+            .map(|p| self.lens_plane_to_world(p))
+            .filter(|p| self.distance_along_chief_ray(p).is_some());
+        Some((near.map(|p| self.lens_plane_to_world(p)), far))
     }
 
     /// Distance from the lens centre along the image centre's chief ray to a world plane.
