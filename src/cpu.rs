@@ -1,17 +1,21 @@
 //! The CPU reference path: the same stages as the GPU kernel, in Rust, on all cores.
-//! Twin: `wgsl/render.wgsl` (the per-pixel sample loop and the accumulation).
+//! Twin: `wgsl/render.wgsl` (the per-pixel sample loop, the scratch sum of a pass split into
+//! light windows, and the accumulation).
 
+use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::accel::FlatScene;
 use crate::error::Result;
-use crate::integrator::{SampleStats, trace_sample};
+use crate::integrator::{LightWindow, SampleStats, trace_sample};
 use crate::layout::GpuPass;
 use crate::render::{Backend, TileStatus};
 
 pub struct CpuRenderer<'a> {
     scene: &'a FlatScene,
     accumulation: Vec<[f32; 4]>,
+    /// Sums of a pass whose light windows are not all done (allocated on first use).
+    scratch: Vec<Vec3>,
 }
 
 impl<'a> CpuRenderer<'a> {
@@ -20,6 +24,7 @@ impl<'a> CpuRenderer<'a> {
         CpuRenderer {
             scene,
             accumulation: vec![[0.0; 4]; pixels],
+            scratch: Vec::new(),
         }
     }
 }
@@ -28,32 +33,44 @@ impl Backend for CpuRenderer<'_> {
     fn render_tile(&mut self, pass: GpuPass) -> Result<TileStatus> {
         let scene = self.scene;
         let width = scene.frame.width;
-        let rows: Vec<(u32, Vec<[f32; 4]>, SampleStats)> = (pass.tile_y
+        let window = LightWindow::of_pass(&pass);
+        let rows: Vec<(u32, Vec<Vec3>, SampleStats)> = (pass.tile_y
             ..pass.tile_y + pass.tile_height)
             .into_par_iter()
             .map(|y| {
                 let mut stats = SampleStats::default();
                 let row = (pass.tile_x..pass.tile_x + pass.tile_width)
                     .map(|x| {
-                        let mut sum = glam::Vec3::ZERO;
+                        let mut sum = Vec3::ZERO;
                         for s in 0..pass.sample_count {
-                            sum += trace_sample(scene, x, y, pass.sample_start + s, &mut stats);
+                            let sample = pass.sample_start + s;
+                            sum += trace_sample(scene, x, y, sample, window, &mut stats);
                         }
-                        [sum.x, sum.y, sum.z, pass.sample_count as f32]
+                        sum
                     })
                     .collect();
                 (y, row, stats)
             })
             .collect();
+        if pass.commit == 0 && self.scratch.is_empty() {
+            self.scratch = vec![Vec3::ZERO; self.accumulation.len()];
+        }
         let mut status = TileStatus::default();
         for (y, row, stats) in rows {
             let start = (y * width + pass.tile_x) as usize;
-            for (acc, add) in self.accumulation[start..start + row.len()]
-                .iter_mut()
-                .zip(row)
-            {
-                for c in 0..4 {
-                    acc[c] += add[c];
+            for (i, mut sum) in row.into_iter().enumerate() {
+                let pixel = start + i;
+                if !window.is_first() {
+                    sum += self.scratch[pixel];
+                }
+                if pass.commit != 0 {
+                    let acc = &mut self.accumulation[pixel];
+                    let add = [sum.x, sum.y, sum.z, pass.sample_count as f32];
+                    for c in 0..4 {
+                        acc[c] += add[c];
+                    }
+                } else {
+                    self.scratch[pixel] = sum;
                 }
             }
             status.rays += stats.rays;

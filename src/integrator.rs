@@ -116,13 +116,62 @@ pub fn eval_brdf(material: &GpuMaterial, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
     f
 }
 
-/// Light reflected towards `wo` from every light, with shadow rays.
+/// The window of every area light's shadow-ray samples that one dispatch evaluates (see
+/// `GpuPass`): a light with more samples than one invocation can trace in a bounded number of
+/// loop iterations is split over several dispatches, each summing its window.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightWindow {
+    pub start: u32,
+    pub count: u32,
+}
+
+impl LightWindow {
+    /// Every light sample in one go.
+    pub const ALL: LightWindow = LightWindow {
+        start: 0,
+        count: u32::MAX,
+    };
+
+    pub fn of_pass(pass: &GpuPass) -> LightWindow {
+        LightWindow {
+            start: pass.light_sample_start,
+            count: pass.light_sample_count,
+        }
+    }
+
+    /// The first window also adds what does not depend on light samples.
+    pub fn is_first(self) -> bool {
+        self.start == 0
+    }
+
+    /// The samples of a light with `samples` samples that fall in the window.
+    fn clip(self, samples: u32) -> std::ops::Range<u32> {
+        let end = self.start.saturating_add(self.count.min(samples));
+        self.start.min(samples)..end.min(samples)
+    }
+}
+
+/// First random dimension of sample `k` of the area light whose samples start at `offset`
+/// among the `layout::LIGHT_DIMENSION` block of path vertex `depth` (wrapping, as in WGSL).
+fn light_dimension(frame: &GpuFrame, depth: u32, offset: u32, k: u32) -> u32 {
+    let index = depth
+        .wrapping_mul(frame.light_samples_per_vertex)
+        .wrapping_add(offset)
+        .wrapping_add(k);
+    LIGHT_DIMENSION.wrapping_add(index.wrapping_mul(2))
+}
+
+/// Light reflected towards `wo` from every light, with shadow rays: the area-light samples in
+/// `window`, and the point and directional lights in the first window.
+#[allow(clippy::too_many_arguments)]
 fn direct_light(
     scene: &FlatScene,
     surface: &Surface,
     material: &GpuMaterial,
     prim_id: u32,
     wo: Vec3,
+    depth: u32,
+    window: LightWindow,
     rng: &mut Rng,
     stats: &mut SampleStats,
 ) -> Vec3 {
@@ -130,6 +179,7 @@ fn direct_light(
     let ng = surface.geometric_normal;
     let origin = offset_ray_origin(surface.position, ng);
     let mut total = Vec3::ZERO;
+    let mut sample_offset = 0;
     for light in &scene.lights[..scene.frame.light_count as usize] {
         let color = Vec3::from(light.color);
         if light.kind == LIGHT_AREA {
@@ -140,8 +190,16 @@ fn direct_light(
             let cross = edge_u.cross(edge_v);
             let area = cross.length();
             let light_normal = cross / area;
+            let samples = window.clip(light.samples);
+            rng.seek(light_dimension(
+                &scene.frame,
+                depth,
+                sample_offset,
+                samples.start,
+            ));
+            sample_offset += light.samples;
             let mut sum = Vec3::ZERO;
-            for k in 0..light.samples {
+            for k in samples {
                 let u = stratified_2d(k, light.samples, light.strata_columns, rng.next_2d());
                 let to_light = corner + u[0] * edge_u + u[1] * edge_v - surface.position;
                 let distance = to_light.length();
@@ -163,7 +221,7 @@ fn direct_light(
                 }
             }
             total += color * sum * (area / light.samples as f32);
-        } else {
+        } else if window.is_first() {
             let (wi, distance, falloff) = if light.kind == LIGHT_POINT {
                 let to_light = Vec3::from(light.p0) - surface.position;
                 let distance = to_light.length();
@@ -183,14 +241,17 @@ fn direct_light(
     total
 }
 
-/// Radiance along one path that starts with `origin`, `direction`.
+/// Radiance along one path that starts with `origin`, `direction`, with the area-light samples
+/// in `window` (the path itself is deterministic: every window retraces the same rays).
 pub fn trace_path(
     scene: &FlatScene,
     origin: Vec3,
     direction: Vec3,
+    window: LightWindow,
     rng: &mut Rng,
     stats: &mut SampleStats,
 ) -> Vec3 {
+    let first = window.is_first();
     let frame = &scene.frame;
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
@@ -199,7 +260,9 @@ pub fn trace_path(
     for depth in 0..=frame.max_depth {
         stats.rays += 1;
         let Some((prim_id, hit)) = closest_hit(scene, &ray, skip, T_FAR) else {
-            radiance += throughput * Vec3::from(frame.background);
+            if first {
+                radiance += throughput * Vec3::from(frame.background);
+            }
             break;
         };
         let prim = &scene.prims[prim_id as usize];
@@ -207,21 +270,28 @@ pub fn trace_path(
         let surface = surface_at(scene, prim, &ray, hit);
         // An area light shows its radiance from the front, is black from behind, reflects nothing.
         if material.model == MODEL_EMITTER {
-            if surface.front_facing {
+            if surface.front_facing && first {
                 radiance += throughput * Vec3::from(material.emission);
             }
             break;
         }
         let wo = -ray.direction;
-        radiance += throughput * Vec3::from(material.diffuse) * Vec3::from(frame.ambient);
-        radiance += throughput * direct_light(scene, &surface, material, prim_id, wo, rng, stats);
+        if first {
+            radiance += throughput * Vec3::from(material.diffuse) * Vec3::from(frame.ambient);
+        }
+        radiance += throughput
+            * direct_light(
+                scene, &surface, material, prim_id, wo, depth, window, rng, stats,
+            );
         // Perfect mirror bounce.
         let mirror = Vec3::from(material.mirror);
         if mirror.max_element() <= 0.0 {
             break;
         }
         if depth == frame.max_depth {
-            stats.truncated += 1;
+            if first {
+                stats.truncated += 1;
+            }
             break;
         }
         let n = surface.shading_normal;
@@ -244,12 +314,13 @@ pub fn trace_path(
 }
 
 /// Radiance of sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1),
-/// lens point (2-3, drawn only by a lens), then the path.
+/// lens point (2-3, drawn only by a lens), then the path with the light samples in `window`.
 pub fn trace_sample(
     scene: &FlatScene,
     x: u32,
     y: u32,
     sample: u32,
+    window: LightWindow,
     stats: &mut SampleStats,
 ) -> Vec3 {
     let frame = &scene.frame;
@@ -282,5 +353,5 @@ pub fn trace_sample(
         lens = Vec2::from(sample_aperture(camera, &scene.sample_table, u));
     }
     let ray = generate_ray(camera, film, lens);
-    trace_path(scene, ray.origin, ray.direction, &mut rng, stats)
+    trace_path(scene, ray.origin, ray.direction, window, &mut rng, stats)
 }

@@ -46,6 +46,11 @@ pub const PERMUTE_WALK_CAP: u32 = 64;
 /// Random dimensions of the pixel position and of the lens point.
 pub const PIXEL_DIMENSION: u32 = 0;
 pub const LENS_DIMENSION: u32 = 2;
+/// First random dimension of the area-light samples. Light sample `k` of the area light whose
+/// samples start at `offset`, at path vertex `depth`, draws dimensions
+/// `LIGHT_DIMENSION + 2 * (depth * frame.light_samples_per_vertex + offset + k)` and the next
+/// one: any window of light samples can then be evaluated on its own (`GpuPass`).
+pub const LIGHT_DIMENSION: u32 = 4;
 /// Poisson-disk sets in the sample table; a pixel picks one by hash and shifts it.
 pub const POISSON_SETS: u32 = 16;
 /// Interleaved sampling repeats a tile of INTERLEAVED_TILE x INTERLEAVED_TILE basis patterns.
@@ -57,6 +62,13 @@ pub const STATUS_STACK_OVERFLOW: u32 = 2;
 /// The stratified sampler's permutation walk hit `PERMUTE_WALK_CAP` (its sample order then
 /// repeats a stratum).
 pub const STATUS_PERMUTE_CAP: u32 = 4;
+/// The driver stopped the kernel's loops early. lavapipe (Mesa's llvmpipe) ends every loop of
+/// an invocation, silently, once 65535 loop iterations have run in total (its
+/// LP_MAX_TGSI_LOOP_ITERATIONS); `render.wgsl` detects it with a loop of `LOOP_CHECK_ITERATIONS`
+/// run-time iterations at the end of the kernel, which then runs fewer.
+pub const STATUS_LOOP_LIMIT: u32 = 8;
+/// Trip count of the loop-limit check (`GpuPass::loop_check`); any value above 1 works.
+pub const LOOP_CHECK_ITERATIONS: u32 = 2;
 /// Slots of the status buffer (array<atomic<u32>, STATUS_WORDS>).
 pub const STATUS_FLAGS: u32 = 0;
 pub const STATUS_RAYS: u32 = 1;
@@ -183,12 +195,16 @@ pub struct GpuFrame {
     pub pixel_table_offset: u32,
     pub lens_table_offset: u32,
     pub background: [f32; 3],
-    pub _pad1: u32,
+    /// Shadow-ray samples of all area lights at one path vertex (the sum of their `samples`).
+    pub light_samples_per_vertex: u32,
     pub ambient: [f32; 3],
     pub _pad2: u32,
 }
 
-/// What one dispatch renders: a tile of pixels and a range of sample indices.
+/// What one dispatch renders: a tile of pixels, a range of sample indices, and a window of
+/// every area light's shadow-ray samples. A pass whose light samples need several windows
+/// (dispatches) sums them in a scratch buffer and commits the sum to the accumulation with the
+/// last window, so the accumulation is a valid mean after every dispatch (see `render.rs`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuPass {
@@ -198,8 +214,23 @@ pub struct GpuPass {
     pub tile_height: u32,
     pub sample_start: u32,
     pub sample_count: u32,
+    /// Light samples `light_sample_start .. light_sample_start + light_sample_count` of each
+    /// area light; the window starting at 0 also adds everything else (emission, ambient,
+    /// point and directional lights, background).
+    pub light_sample_start: u32,
+    pub light_sample_count: u32,
+    /// 1 when this window is the pass's last: the scratch sum is committed.
+    pub commit: u32,
+    /// Always `LOOP_CHECK_ITERATIONS`; a uniform so no compiler can fold the check away.
+    pub loop_check: u32,
     pub _pad0: u32,
     pub _pad1: u32,
+}
+
+impl GpuPass {
+    pub fn is_first_light_window(&self) -> bool {
+        self.light_sample_start == 0
+    }
 }
 
 const _: () = assert!(size_of::<GpuBvhNode>() == 32);
@@ -209,7 +240,7 @@ const _: () = assert!(size_of::<GpuMaterial>() == 64);
 const _: () = assert!(size_of::<GpuLight>() == 64);
 const _: () = assert!(size_of::<GpuCamera>() == 128);
 const _: () = assert!(size_of::<GpuFrame>() == 96);
-const _: () = assert!(size_of::<GpuPass>() == 32);
+const _: () = assert!(size_of::<GpuPass>() == 48);
 
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
 pub fn wgsl_prelude() -> String {
@@ -237,10 +268,12 @@ pub fn wgsl_prelude() -> String {
         ("PERMUTE_WALK_CAP", PERMUTE_WALK_CAP),
         ("PIXEL_DIMENSION", PIXEL_DIMENSION),
         ("LENS_DIMENSION", LENS_DIMENSION),
+        ("LIGHT_DIMENSION", LIGHT_DIMENSION),
         ("INTERLEAVED_TILE", INTERLEAVED_TILE),
         ("STATUS_TRAVERSAL_CAP", STATUS_TRAVERSAL_CAP),
         ("STATUS_STACK_OVERFLOW", STATUS_STACK_OVERFLOW),
         ("STATUS_PERMUTE_CAP", STATUS_PERMUTE_CAP),
+        ("STATUS_LOOP_LIMIT", STATUS_LOOP_LIMIT),
         ("STATUS_FLAGS", STATUS_FLAGS),
         ("STATUS_RAYS", STATUS_RAYS),
         ("STATUS_TRUNCATED", STATUS_TRUNCATED),

@@ -3,6 +3,10 @@
 //!
 //! Each pass adds the same number of samples to every pixel, so the accumulation is a valid
 //! image at every pass boundary: an interrupted or failing render keeps what it computed.
+//!
+//! Passes are sized by the rays they may trace, not by samples alone: one invocation traces at
+//! most [`RAYS_PER_INVOCATION`] rays per dispatch, so a sample whose area lights ask for more
+//! shadow rays is split into windows of light samples (`GpuPass`), each its own dispatch.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -12,14 +16,18 @@ use glam::Vec3;
 use crate::accel::FlatScene;
 use crate::error::{Error, Result};
 use crate::layout::{
-    GpuPass, STATUS_FLAGS, STATUS_PERMUTE_CAP, STATUS_RAYS, STATUS_STACK_OVERFLOW,
-    STATUS_TRAVERSAL_CAP, STATUS_TRUNCATED,
+    GpuPass, LIGHT_AREA, LOOP_CHECK_ITERATIONS, STATUS_FLAGS, STATUS_LOOP_LIMIT,
+    STATUS_PERMUTE_CAP, STATUS_RAYS, STATUS_STACK_OVERFLOW, STATUS_TRAVERSAL_CAP, STATUS_TRUNCATED,
 };
 
 /// Tile edge in pixels: one dispatch covers at most TILE x TILE pixels.
 pub const TILE: u32 = 128;
-/// Samples a pass aims to take in one tile (pixels x samples), to keep each dispatch short.
-const SAMPLES_PER_DISPATCH: u32 = 1 << 17;
+/// Rays one invocation may trace in one dispatch. lavapipe ends every loop of an invocation
+/// once 65535 loop iterations have run in total, and one ray costs tens of traversal
+/// iterations (`layout::STATUS_LOOP_LIMIT` reports a dispatch that still exceeds it).
+pub const RAYS_PER_INVOCATION: u64 = 64;
+/// Rays one dispatch may trace: well under a second on lavapipe, far below any GPU watchdog.
+pub const RAYS_PER_DISPATCH: u64 = 1 << 22;
 
 /// What one tile dispatch reported.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -112,11 +120,81 @@ impl RenderOutput {
     }
 }
 
-/// Sample range of every pass for `spp` samples over tiles of `tile_pixels` pixels.
-pub fn sample_passes(spp: u32, tile_pixels: u32) -> Vec<(u32, u32)> {
-    let per_pass = (SAMPLES_PER_DISPATCH / tile_pixels.max(1)).clamp(1, spp);
-    (0..spp.div_ceil(per_pass))
-        .map(|i| (i * per_pass, per_pass.min(spp - i * per_pass)))
+/// How a render is cut into dispatches: passes of samples, each over every tile, and within a
+/// pass the windows of light samples each dispatch covers in turn.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RenderPlan {
+    /// `(sample_start, sample_count)` of each pass.
+    pub passes: Vec<(u32, u32)>,
+    /// `(light_sample_start, light_sample_count)` of each dispatch of a pass; the last commits.
+    pub light_windows: Vec<(u32, u32)>,
+}
+
+/// An upper bound on the rays one camera sample traces: at every path vertex (one per bounce
+/// when a material reflects) the incoming ray, a shadow ray per point or directional light, and
+/// one per area-light sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RayBound {
+    pub vertices: u64,
+    pub punctual_per_vertex: u64,
+    pub light_samples_per_vertex: u64,
+}
+
+impl RayBound {
+    pub fn of(scene: &FlatScene) -> RayBound {
+        let reflects = scene
+            .materials
+            .iter()
+            .any(|m| m.mirror.iter().any(|&c| c > 0.0));
+        RayBound {
+            vertices: if reflects {
+                scene.frame.max_depth as u64 + 1
+            } else {
+                1
+            },
+            punctual_per_vertex: scene.lights.iter().filter(|l| l.kind != LIGHT_AREA).count()
+                as u64,
+            light_samples_per_vertex: scene.frame.light_samples_per_vertex as u64,
+        }
+    }
+
+    pub fn per_sample(&self) -> u64 {
+        self.vertices * (1 + self.punctual_per_vertex + self.light_samples_per_vertex)
+    }
+}
+
+/// The passes of a render over tiles of `tile_pixels` pixels: as many samples per dispatch as
+/// the ray budgets allow, or one sample split into light windows when a sample alone is over
+/// the per-invocation budget.
+pub fn plan_passes(scene: &FlatScene, tile_pixels: u32) -> RenderPlan {
+    let spp = scene.frame.spp;
+    let bound = RayBound::of(scene);
+    let rays = bound.per_sample();
+    let by_invocation = RAYS_PER_INVOCATION / rays;
+    let by_dispatch = RAYS_PER_DISPATCH / (tile_pixels.max(1) as u64 * rays);
+    let per_pass = by_invocation.min(by_dispatch).clamp(1, spp as u64) as u32;
+    RenderPlan {
+        passes: (0..spp.div_ceil(per_pass))
+            .map(|i| (i * per_pass, per_pass.min(spp - i * per_pass)))
+            .collect(),
+        light_windows: light_windows(scene, bound),
+    }
+}
+
+/// One window with every light sample when a sample fits the per-invocation budget; else
+/// windows of equal width, sized so that one window's rays fit it (at least one sample wide:
+/// a scene whose path vertices alone exceed the budget is left to the loop-limit check).
+fn light_windows(scene: &FlatScene, bound: RayBound) -> Vec<(u32, u32)> {
+    let area_lights = scene.lights.iter().filter(|l| l.kind == LIGHT_AREA);
+    let most = area_lights.clone().map(|l| l.samples).max().unwrap_or(0);
+    if bound.per_sample() <= RAYS_PER_INVOCATION || most <= 1 {
+        return vec![(0, u32::MAX)];
+    }
+    let per_vertex = RAYS_PER_INVOCATION / bound.vertices;
+    let for_light_samples = per_vertex.saturating_sub(1 + bound.punctual_per_vertex);
+    let width = (for_light_samples / area_lights.count() as u64).clamp(1, most as u64) as u32;
+    (0..most.div_ceil(width))
+        .map(|i| (i * width, width))
         .collect()
 }
 
@@ -140,8 +218,9 @@ pub fn render(
     let frame = &scene.frame;
     let start = Instant::now();
     let tiles = tiles(frame.width, frame.height);
-    let passes = sample_passes(frame.spp, TILE * TILE);
-    let total = (tiles.len() * passes.len()) as u64;
+    let plan = plan_passes(scene, TILE * TILE);
+    let windows = &plan.light_windows;
+    let total = (plan.passes.len() * tiles.len() * windows.len()) as u64;
     let mut done = 0;
     let mut output = RenderOutput {
         image: Image {
@@ -156,37 +235,43 @@ pub fn render(
         status_flags: 0,
         stopped: None,
     };
-    'passes: for &(sample_start, sample_count) in &passes {
+    'passes: for &(sample_start, sample_count) in &plan.passes {
         for &(tile_x, tile_y, tile_width, tile_height) in &tiles {
-            if cancel.load(Ordering::Relaxed) {
-                output.stopped = Some(Error::Interrupted {
-                    done: output.samples_per_pixel,
-                    total: frame.spp,
-                });
-                break 'passes;
-            }
-            let pass = GpuPass {
-                tile_x,
-                tile_y,
-                tile_width,
-                tile_height,
-                sample_start,
-                sample_count,
-                ..Default::default()
-            };
-            match backend.render_tile(pass) {
-                Ok(status) => {
-                    output.rays += status.rays;
-                    output.truncated_paths += status.truncated;
-                    output.status_flags |= status.flags;
-                }
-                Err(e) => {
-                    output.stopped = Some(e);
+            for (i, &(light_sample_start, light_sample_count)) in windows.iter().enumerate() {
+                if cancel.load(Ordering::Relaxed) {
+                    output.stopped = Some(Error::Interrupted {
+                        done: output.samples_per_pixel,
+                        total: frame.spp,
+                    });
                     break 'passes;
                 }
+                let dispatch = GpuPass {
+                    tile_x,
+                    tile_y,
+                    tile_width,
+                    tile_height,
+                    sample_start,
+                    sample_count,
+                    light_sample_start,
+                    light_sample_count,
+                    commit: (i + 1 == windows.len()) as u32,
+                    loop_check: LOOP_CHECK_ITERATIONS,
+                    ..Default::default()
+                };
+                match backend.render_tile(dispatch) {
+                    Ok(status) => {
+                        output.rays += status.rays;
+                        output.truncated_paths += status.truncated;
+                        output.status_flags |= status.flags;
+                    }
+                    Err(e) => {
+                        output.stopped = Some(e);
+                        break 'passes;
+                    }
+                }
+                done += 1;
+                progress.advance(done, total);
             }
-            done += 1;
-            progress.advance(done, total);
         }
         output.samples_per_pixel += sample_count;
     }
@@ -209,6 +294,13 @@ pub fn describe_status_flags(flags: u32) -> Option<String> {
     }
     if flags & STATUS_STACK_OVERFLOW != 0 {
         reasons.push("a BVH traversal overflowed its stack");
+    }
+    if flags & STATUS_LOOP_LIMIT != 0 {
+        reasons.push(
+            "the GPU driver cut the kernel's loops short (lavapipe stops an invocation after \
+             65535 loop iterations): this scene traces too many rays per sample for it; use \
+             --backend cpu",
+        );
     }
     if flags & STATUS_PERMUTE_CAP != 0 {
         reasons.push(

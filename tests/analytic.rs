@@ -6,7 +6,7 @@ use std::f32::consts::PI;
 
 use chambre::accel::flatten;
 use chambre::camera::{film_position_mm, generate_ray};
-use chambre::integrator::{SampleStats, trace_path};
+use chambre::integrator::{LightWindow, SampleStats, trace_path};
 use chambre::math::rng::Rng;
 use chambre::scene::Scene;
 use glam::{Vec2, Vec3};
@@ -62,6 +62,7 @@ fn lambert_sphere_under_point_light_matches_closed_form_on_cpu() {
             &flat,
             origin,
             (p - origin).normalize(),
+            LightWindow::ALL,
             &mut Rng::new(0, 0, 0),
             &mut SampleStats::default(),
         );
@@ -174,6 +175,7 @@ fn point_in_shadow_gets_only_the_ambient_term() {
         &flat,
         Vec3::new(3.0, 1.0, 0.0),
         Vec3::new(-3.0, -1.0, 0.0).normalize(),
+        LightWindow::ALL,
         &mut Rng::new(0, 0, 0),
         &mut SampleStats::default(),
     );
@@ -186,6 +188,7 @@ fn point_in_shadow_gets_only_the_ambient_term() {
         &flat,
         Vec3::new(3.0, 1.0, 0.0),
         Vec3::new(-1.0, -1.0, 0.0).normalize(),
+        LightWindow::ALL,
         &mut Rng::new(0, 0, 0),
         &mut SampleStats::default(),
     );

@@ -166,9 +166,10 @@ fn an_interrupted_render_keeps_the_samples_it_finished() {
         output.stopped,
         Some(chambre::Error::Interrupted { .. })
     ));
-    let passes = chambre::render::sample_passes(256, 128 * 128);
-    assert!(passes.len() > 1);
-    assert_eq!(output.samples_per_pixel, passes[0].1);
+    let plan = chambre::render::plan_passes(&flat, 128 * 128);
+    assert!(plan.passes.len() > 1);
+    assert_eq!(plan.light_windows.len(), 1);
+    assert_eq!(output.samples_per_pixel, plan.passes[0].1);
     assert_eq!(output.image.non_finite_count(), 0);
     let lit = output
         .image

@@ -185,7 +185,7 @@ fn shared_structs_have_identical_layouts() {
             pixel_table_offset,
             lens_table_offset,
             background,
-            _pad1,
+            light_samples_per_vertex,
             ambient,
             _pad2
         }
@@ -199,6 +199,10 @@ fn shared_structs_have_identical_layouts() {
             tile_height,
             sample_start,
             sample_count,
+            light_sample_start,
+            light_sample_count,
+            commit,
+            loop_check,
             _pad0,
             _pad1
         }

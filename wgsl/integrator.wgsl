@@ -89,12 +89,28 @@ fn eval_brdf(material: GpuMaterial, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) 
     return f;
 }
 
+// The window of every area light's shadow-ray samples one dispatch evaluates (see GpuPass).
+struct LightWindow {
+    start: u32,
+    count: u32,
+}
+
+fn window_is_first(window: LightWindow) -> bool {
+    return window.start == 0u;
+}
+
+fn light_dimension(depth: u32, offset: u32, k: u32) -> u32 {
+    return LIGHT_DIMENSION + 2u * (depth * frame.light_samples_per_vertex + offset + k);
+}
+
 fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<f32>,
+                depth: u32, window: LightWindow,
                 rng: ptr<function, Rng>, counters: ptr<function, PathCounters>) -> vec3<f32> {
     let n = surface.shading_normal;
     let ng = surface.geometric_normal;
     let origin = offset_ray_origin(surface.position, ng);
     var total = vec3<f32>(0.0);
+    var sample_offset = 0u;
     for (var l = 0u; l < frame.light_count; l += 1u) {
         let light = lights[l];
         if (light.kind == LIGHT_AREA) {
@@ -102,8 +118,13 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
             let c = cross(light.p1, light.p2);
             let area = length(c);
             let light_normal = c / area;
+            let first_sample = min(window.start, light.samples);
+            // A saturating end: start + count may exceed u32 (the whole-light window).
+            let end_sample = min(window.start + min(window.count, light.samples), light.samples);
+            rng_seek(rng, light_dimension(depth, sample_offset, first_sample));
+            sample_offset += light.samples;
             var sum = vec3<f32>(0.0);
-            for (var k = 0u; k < light.samples; k += 1u) {
+            for (var k = first_sample; k < end_sample; k += 1u) {
                 let u = stratified_2d(k, light.samples, light.strata_columns, rng_next_2d(rng));
                 let to_light = light.p0 + u.x * light.p1 + u.y * light.p2 - surface.position;
                 let distance = length(to_light);
@@ -118,7 +139,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
                 }
             }
             total += light.color * sum * (area / f32(light.samples));
-        } else {
+        } else if (window_is_first(window)) {
             var wi = light.p0;
             var distance = T_FAR;
             var falloff = 1.0;
@@ -140,8 +161,9 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
     return total;
 }
 
-fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, Rng>,
+fn trace_path(origin: vec3<f32>, direction: vec3<f32>, window: LightWindow, rng: ptr<function, Rng>,
               counters: ptr<function, PathCounters>) -> vec3<f32> {
+    let first = window_is_first(window);
     var radiance = vec3<f32>(0.0);
     var throughput = vec3<f32>(1.0);
     var ray = ray_query_new(origin, direction);
@@ -150,7 +172,9 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, Rng>,
         (*counters).rays += 1u;
         let found = closest_hit(ray, skip, T_FAR);
         if (found.prim == NONE) {
-            radiance += throughput * frame.background;
+            if (first) {
+                radiance += throughput * frame.background;
+            }
             break;
         }
         let prim = prims[found.prim];
@@ -158,20 +182,24 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, Rng>,
         let surface = surface_at(prim, ray, found.hit);
         // An area light shows its radiance from the front, is black from behind, reflects nothing.
         if (material.model == MODEL_EMITTER) {
-            if (surface.front_facing) {
+            if (surface.front_facing && first) {
                 radiance += throughput * material.emission;
             }
             break;
         }
         let wo = -ray.direction;
-        radiance += throughput * material.diffuse * frame.ambient;
-        radiance += throughput * direct_light(surface, material, found.prim, wo, rng, counters);
+        if (first) {
+            radiance += throughput * material.diffuse * frame.ambient;
+        }
+        radiance += throughput * direct_light(surface, material, found.prim, wo, depth, window, rng, counters);
         // Perfect mirror bounce.
         if (max(max(material.mirror.x, material.mirror.y), material.mirror.z) <= 0.0) {
             break;
         }
         if (depth == frame.max_depth) {
-            (*counters).truncated += 1u;
+            if (first) {
+                (*counters).truncated += 1u;
+            }
             break;
         }
         let n = surface.shading_normal;
@@ -189,7 +217,8 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, rng: ptr<function, Rng>,
     return radiance;
 }
 
-fn trace_sample(x: u32, y: u32, sample: u32, counters: ptr<function, PathCounters>) -> vec3<f32> {
+fn trace_sample(x: u32, y: u32, sample: u32, window: LightWindow,
+                counters: ptr<function, PathCounters>) -> vec3<f32> {
     var rng = rng_new(frame.seed, y * frame.width + x, sample);
     let pixel_source = PatternSource(frame.pixel_sampler, frame.pixel_strata_columns, frame.pixel_table_offset, PIXEL_DIMENSION);
     let jitter = sample_2d(pixel_source, x, y, sample, &rng);
@@ -201,5 +230,5 @@ fn trace_sample(x: u32, y: u32, sample: u32, counters: ptr<function, PathCounter
         lens = sample_aperture(sample_2d(lens_source, x, y, sample, &rng));
     }
     let ray = generate_ray(camera, film, lens);
-    return trace_path(ray.origin, ray.direction, &rng, counters);
+    return trace_path(ray.origin, ray.direction, window, &rng, counters);
 }

@@ -1,6 +1,9 @@
-// The render kernel: one invocation per pixel of a tile, a range of samples per dispatch,
-// accumulated into the pixel's running sum. Bindings are declared here only, so the
-// libraries above stay binding-free.
+// The render kernel: one invocation per pixel of a tile, a range of samples and a window of
+// light samples per dispatch. A pass's sum goes to the pixel's scratch slot (the second half of
+// the accumulation buffer, which exists only when passes are split) until the pass's last
+// light window commits it, with the sample count, to the running accumulation: the
+// accumulation is a valid per-pixel mean after every dispatch. Bindings are declared here only,
+// so the libraries above stay binding-free. Eight storage buffers: WebGPU's baseline limit.
 // Mirrors: src/cpu.rs (the CPU tile loop).
 
 @group(0) @binding(0) var<uniform> camera: GpuCamera;
@@ -22,13 +25,35 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let x = pass_info.tile_x + id.x;
     let y = pass_info.tile_y + id.y;
+    let window = LightWindow(pass_info.light_sample_start, pass_info.light_sample_count);
     var counters = PathCounters(0u, 0u);
     var sum = vec3<f32>(0.0);
     for (var s = 0u; s < pass_info.sample_count; s += 1u) {
-        sum += trace_sample(x, y, pass_info.sample_start + s, &counters);
+        sum += trace_sample(x, y, pass_info.sample_start + s, window, &counters);
     }
     let pixel = y * frame.width + x;
-    accumulation[pixel] += vec4<f32>(sum, f32(pass_info.sample_count));
+    let scratch = frame.width * frame.height + pixel;
+    if (!window_is_first(window)) {
+        sum += accumulation[scratch].xyz;
+    }
+    if (pass_info.commit != 0u) {
+        accumulation[pixel] += vec4<f32>(sum, f32(pass_info.sample_count));
+    } else {
+        accumulation[scratch] = vec4<f32>(sum, 0.0);
+    }
     atomicAdd(&status[STATUS_RAYS], counters.rays);
     atomicAdd(&status[STATUS_TRUNCATED], counters.truncated);
+    check_loop_limit();
+}
+
+// lavapipe ends all loops of an invocation once 65535 iterations have run in total; a loop
+// with a run-time trip count then stops after one iteration (see layout::STATUS_LOOP_LIMIT).
+fn check_loop_limit() {
+    var iterations = 0u;
+    for (var i = 0u; i < pass_info.loop_check; i += 1u) {
+        iterations += 1u;
+    }
+    if (iterations != pass_info.loop_check) {
+        flag_status(STATUS_LOOP_LIMIT);
+    }
 }

@@ -16,6 +16,10 @@ fn rng_new(seed: u32, pixel: u32, sample: u32) -> Rng {
     return Rng(pcg_hash(pcg_hash(pcg_hash(seed) ^ pixel) ^ sample), 0u);
 }
 
+fn rng_seek(rng: ptr<function, Rng>, dim: u32) {
+    (*rng).dim = dim;
+}
+
 fn rng_next_u32(rng: ptr<function, Rng>) -> u32 {
     let h = pcg_hash((*rng).key ^ pcg_hash((*rng).dim));
     (*rng).dim += 1u;

@@ -81,7 +81,7 @@ struct GpuFrame {
     pixel_table_offset: u32,
     lens_table_offset: u32,
     background: vec3<f32>,
-    _pad1: u32,
+    light_samples_per_vertex: u32,
     ambient: vec3<f32>,
     _pad2: u32,
 }
@@ -93,6 +93,10 @@ struct GpuPass {
     tile_height: u32,
     sample_start: u32,
     sample_count: u32,
+    light_sample_start: u32,
+    light_sample_count: u32,
+    commit: u32,
+    loop_check: u32,
     _pad0: u32,
     _pad1: u32,
 }

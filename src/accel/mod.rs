@@ -6,15 +6,17 @@
 //! primitives, tested by brute force. Node boxes are widened by a few ULPs once here, which
 //! makes obvhs's CPU slab test and the WGSL one conservative against rounding alike.
 
+pub mod build;
 pub mod intersect;
 pub mod traverse;
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use glam::{Vec3, Vec3A};
-use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
+
+use build::{build_bvh, tree_depth};
 
 use crate::layout::*;
 use crate::math::sampling::strata_columns;
@@ -154,18 +156,12 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         });
     }
 
-    let start = Instant::now();
     let aabbs: Vec<Aabb> = bounded.iter().map(|(p, _)| primitive_bounds(p)).collect();
-    let mut core_time = Duration::ZERO;
-    let mut bvh = if aabbs.is_empty() {
-        Bvh2::default()
-    } else {
-        obvhs::bvh2::builder::build_bvh2(&aabbs, BvhBuildParams::medium_build(), &mut core_time)
-    };
+    // The GPU's traversal stack bounds the depth (see `build`).
+    let (mut bvh, build_time) = build_bvh(&aabbs, BVH_STACK_SIZE as usize);
     for node in &mut bvh.nodes {
         widen(&mut node.aabb);
     }
-    let build_time = start.elapsed();
 
     // Reorder primitives so leaves index them directly; remap the area lights' quads.
     let order = &bvh.primitive_indices;
@@ -201,7 +197,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             first_index: n.first_index,
         })
         .collect();
-    let bvh_depth = tree_depth(&nodes);
+    let bvh_depth = tree_depth(&bvh.nodes);
     // obvhs sizes its CPU traversal stack from this field.
     bvh.max_depth = bvh.max_depth.max(bvh_depth + 1);
     let render = &scene.render;
@@ -233,6 +229,11 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         pixel_table_offset: table.pixel_offset,
         lens_table_offset: table.lens_offset,
         background: render.background.to_array(),
+        light_samples_per_vertex: lights
+            .iter()
+            .filter(|l| l.kind == LIGHT_AREA)
+            .map(|l| l.samples)
+            .sum(),
         ambient: render.ambient.to_array(),
         ..Default::default()
     };
@@ -277,21 +278,4 @@ fn widen(aabb: &mut Aabb) {
     let margin = Vec3A::splat(scale * BOX_WIDENING + f32::MIN_POSITIVE);
     aabb.min -= margin;
     aabb.max += margin;
-}
-
-fn tree_depth(nodes: &[GpuBvhNode]) -> usize {
-    if nodes.is_empty() {
-        return 0;
-    }
-    let mut deepest = 0;
-    let mut stack = vec![(0usize, 1usize)];
-    while let Some((index, depth)) = stack.pop() {
-        deepest = deepest.max(depth);
-        let node = nodes[index];
-        if node.prim_count == 0 {
-            stack.push((node.first_index as usize, depth + 1));
-            stack.push((node.first_index as usize + 1, depth + 1));
-        }
-    }
-    deepest
 }

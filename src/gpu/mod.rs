@@ -13,7 +13,7 @@ use wgpu::util::DeviceExt;
 use crate::accel::FlatScene;
 use crate::error::{Error, Result};
 use crate::layout::{BVH_STACK_SIZE, GpuPass, STATUS_WORDS, WORKGROUP_SIZE};
-use crate::render::{Backend, TileStatus};
+use crate::render::{Backend, TILE, TileStatus, plan_passes};
 
 /// Longest wait for one dispatch before the render is declared failed.
 const DISPATCH_TIMEOUT: Duration = Duration::from_secs(120);
@@ -47,6 +47,17 @@ pub fn describe_adapter(adapter: &wgpu::Adapter) -> String {
         limits.max_storage_buffers_per_shader_stage,
         limits.max_compute_invocations_per_workgroup,
     )
+}
+
+/// wgpu's own Display of a validation error is only "Validation Error"; the description
+/// holds the cause.
+fn wgpu_error_text(e: &wgpu::Error) -> String {
+    match e {
+        wgpu::Error::Validation { description, .. } | wgpu::Error::Internal { description, .. } => {
+            description.trim().replace('\n', " ")
+        }
+        other => other.to_string(),
+    }
 }
 
 /// A device ready to run chambre's kernels.
@@ -155,6 +166,8 @@ pub struct GpuRenderer {
     bind_group: wgpu::BindGroup,
     pass_buffer: wgpu::Buffer,
     accumulation: wgpu::Buffer,
+    /// Pixels of the image: the accumulation buffer's first half when it holds a scratch half.
+    pixel_count: usize,
     status: wgpu::Buffer,
 }
 
@@ -211,7 +224,10 @@ impl GpuRenderer {
         let lights = storage("lights", bytemuck::cast_slice(&scene.lights))?;
         let sample_table = storage("sample table", bytemuck::cast_slice(&scene.sample_table))?;
         let pixel_count = scene.frame.width as u64 * scene.frame.height as u64;
-        let accumulation_size = pixel_count * 16;
+        // A pass split into light windows keeps its partial sums in a second half (scratch)
+        // until it commits (see render.wgsl).
+        let split_passes = plan_passes(scene, TILE * TILE).light_windows.len() > 1;
+        let accumulation_size = pixel_count * 16 * if split_passes { 2 } else { 1 };
         if accumulation_size > limit {
             return Err(Error::Gpu(format!(
                 "the accumulation buffer ({} MiB) exceeds the adapter's max_storage_buffer_binding_size",
@@ -270,7 +286,10 @@ impl GpuRenderer {
             entries: &entries,
         });
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu(format!("creating the render pipeline: {e}")));
+            return Err(Error::Gpu(format!(
+                "creating the render pipeline: {}",
+                wgpu_error_text(&e)
+            )));
         }
         Ok(GpuRenderer {
             context,
@@ -278,6 +297,7 @@ impl GpuRenderer {
             bind_group,
             pass_buffer,
             accumulation,
+            pixel_count: pixel_count as usize,
             status,
         })
     }
@@ -313,6 +333,8 @@ impl Backend for GpuRenderer {
 
     fn accumulation(&mut self) -> Result<Vec<[f32; 4]>> {
         let bytes = self.context.read_buffer(&self.accumulation)?;
-        Ok(bytemuck::pod_collect_to_vec(&bytes))
+        let mut sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
+        sums.truncate(self.pixel_count);
+        Ok(sums)
     }
 }

@@ -26,6 +26,11 @@ impl Rng {
         Rng { key, dim: 0 }
     }
 
+    /// Continue the stream at dimension `dim` (light samples draw from computed dimensions).
+    pub fn seek(&mut self, dim: u32) {
+        self.dim = dim;
+    }
+
     pub fn next_u32(&mut self) -> u32 {
         let h = pcg_hash(self.key ^ pcg_hash(self.dim));
         self.dim += 1;
