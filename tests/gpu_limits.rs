@@ -165,3 +165,107 @@ material = "mirror"
         assert!(within >= 0.995 && mean_abs < 1e-4, "{within} {mean_abs}");
     }
 }
+
+/// Writes `name` (an OBJ) and a scene rendering it under a directional light into a scratch
+/// directory; returns the scene path.
+fn deep_mesh_scene(name: &str, obj: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("chambre-deep-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join(format!("{name}.obj")), obj).unwrap();
+    let scene = dir.join(format!("{name}.toml"));
+    std::fs::write(
+        &scene,
+        format!(
+            r#"[render]
+width = 24
+height = 24
+spp = 1
+[camera]
+position = [0.5, 0.2, 3.0]
+look_at = [0.5, 0.0, 0.0]
+film = [24.0, 24.0]
+[[materials]]
+name = "white"
+model = "lambert"
+[[shapes]]
+type = "mesh"
+file = "{name}.obj"
+material = "white"
+smooth = false
+[[lights]]
+type = "directional"
+direction = [0.3, -0.2, -1.0]
+irradiance = [1.0, 1.0, 1.0]
+"#
+        ),
+    )
+    .unwrap();
+    scene
+}
+
+/// A fan disc of 3,000 triangles around one vertex.
+fn fan_disc() -> String {
+    let n = 3000;
+    let mut obj = String::from("v 0 0 0\n");
+    for i in 0..n {
+        let a = std::f64::consts::TAU * i as f64 / n as f64;
+        obj += &format!("v {} {} 0\n", a.cos(), a.sin());
+    }
+    for i in 0..n {
+        obj += &format!("f 1 {} {}\n", 2 + i, 2 + (i + 1) % n);
+    }
+    obj
+}
+
+/// 400 nested triangles from the origin, each 2% longer than the last and a little behind it.
+fn nested_slivers() -> String {
+    let mut obj = String::new();
+    for i in 0..400 {
+        let l = 1.02f64.powi(i);
+        let z = -1e-3 * i as f64;
+        obj += &format!("v 0 0 {z}\nv {l} 0 {z}\nv {l} {} {z}\n", l * 0.3);
+    }
+    for i in 0..400 {
+        obj += &format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3);
+    }
+    obj
+}
+
+/// PLOC builds these 82 and 393 levels deep, beyond the GPU's 64-entry traversal stack, which
+/// once made the GPU refuse them; the depth-bounded build makes both paths render them.
+#[test]
+fn meshes_with_deep_bvhs_render_on_the_gpu_and_agree() {
+    for (name, obj) in [("fan", fan_disc()), ("slivers", nested_slivers())] {
+        let scene = chambre::scene::Scene::load(&deep_mesh_scene(name, &obj), &[]).unwrap();
+        let chambre::scene::Shape::Mesh { mesh, .. } = &scene.shapes[0] else {
+            unreachable!()
+        };
+        let boxes: Vec<obvhs::aabb::Aabb> = mesh
+            .triangles
+            .iter()
+            .map(|t| obvhs::aabb::Aabb::from_points(&t.map(|i| mesh.positions[i as usize].into())))
+            .collect();
+        let (unbounded, _) = chambre::accel::build::build_bvh(&boxes, usize::MAX);
+        let free_depth = chambre::accel::build::tree_depth(&unbounded.nodes);
+        assert!(free_depth > 64, "{name}: PLOC's tree is only {free_depth} deep");
+        let flat = flatten(&scene);
+        assert!(
+            flat.bvh_depth <= chambre::layout::BVH_STACK_SIZE as usize,
+            "{name}: depth {}",
+            flat.bvh_depth
+        );
+        let cpu = common::render_cpu(&flat);
+        let lit = cpu.pixels.iter().filter(|p| p.max_element() > 0.0).count();
+        assert!(lit > 20, "{name}: the mesh is in view ({lit} lit pixels)");
+        let Some(gpu) = common::render_gpu(&flat) else {
+            return;
+        };
+        let (within, mean_abs) = common::agreement(&cpu, &gpu, 1e-3);
+        eprintln!(
+            "{name}: depth {free_depth} bounded to {}, {lit} lit pixels, {:.2}% within 1e-3",
+            flat.bvh_depth,
+            within * 100.0
+        );
+        assert!(within >= 0.995 && mean_abs < 1e-4, "{name}: {within} {mean_abs}");
+    }
+}
