@@ -247,7 +247,10 @@ fn meshes_with_deep_bvhs_render_on_the_gpu_and_agree() {
             .collect();
         let (unbounded, _) = chambre::accel::build::build_bvh(&boxes, usize::MAX);
         let free_depth = chambre::accel::build::tree_depth(&unbounded.nodes);
-        assert!(free_depth > 64, "{name}: PLOC's tree is only {free_depth} deep");
+        assert!(
+            free_depth > 64,
+            "{name}: PLOC's tree is only {free_depth} deep"
+        );
         let flat = flatten(&scene);
         assert!(
             flat.bvh_depth <= chambre::layout::BVH_STACK_SIZE as usize,
@@ -266,6 +269,40 @@ fn meshes_with_deep_bvhs_render_on_the_gpu_and_agree() {
             flat.bvh_depth,
             within * 100.0
         );
-        assert!(within >= 0.995 && mean_abs < 1e-4, "{name}: {within} {mean_abs}");
+        assert!(
+            within >= 0.995 && mean_abs < 1e-4,
+            "{name}: {within} {mean_abs}"
+        );
+    }
+}
+
+/// An image whose accumulation buffer is larger than the adapter's largest storage binding
+/// (lavapipe: 128 MiB) is refused before any work, with the size, the limit and the flag to use;
+/// an adapter that can bind it accepts it.
+#[test]
+fn a_scene_over_the_binding_limit_is_refused_with_its_size_the_limit_and_the_flag() {
+    let scene = common::load(
+        "scenes/spheres.toml",
+        &["render.width=6144", "render.height=4096", "render.spp=1"],
+    );
+    let flat = flatten(&scene);
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let limit = context.device.limits().max_storage_buffer_binding_size;
+    let needed = 6144u64 * 4096 * 16;
+    match GpuRenderer::new(context, &flat) {
+        Err(e) => {
+            let message = e.to_string();
+            eprintln!("{message}");
+            assert!(needed > limit, "refused although it fits: {message}");
+            assert!(message.contains("384.0 MiB"), "{message}");
+            assert!(
+                message.contains(&format!("{:.1} MiB", limit as f64 / 1048576.0)),
+                "{message}"
+            );
+            assert!(message.contains("--backend cpu"), "{message}");
+        }
+        Ok(_) => assert!(needed <= limit, "accepted an image over the limit"),
     }
 }

@@ -225,7 +225,11 @@ mod tests {
     /// Every primitive is in exactly one leaf, every inner node's box holds its children's,
     /// and the depth is within the bound.
     fn check(bvh: &Bvh2, aabbs: &[Aabb], max_depth: usize) {
-        assert!(tree_depth(&bvh.nodes) <= max_depth, "{}", tree_depth(&bvh.nodes));
+        assert!(
+            tree_depth(&bvh.nodes) <= max_depth,
+            "{}",
+            tree_depth(&bvh.nodes)
+        );
         let mut seen = vec![0u32; aabbs.len()];
         let mut stack = vec![0usize];
         while let Some(i) = stack.pop() {
@@ -246,7 +250,10 @@ mod tests {
                 }
             }
         }
-        assert!(seen.iter().all(|&s| s == 1), "a primitive is lost or repeated");
+        assert!(
+            seen.iter().all(|&s| s == 1),
+            "a primitive is lost or repeated"
+        );
     }
 
     #[test]
@@ -257,7 +264,10 @@ mod tests {
             (Vec3A::ZERO, Vec3A::new(l, l * 1e-3, 0.0))
         });
         let (free, _) = build_bvh(&aabbs, usize::MAX);
-        assert!(tree_depth(&free.nodes) > 64, "the test case is no longer deep");
+        assert!(
+            tree_depth(&free.nodes) > 64,
+            "the test case is no longer deep"
+        );
         for max_depth in [64, 20, balanced_height(400)] {
             let (bvh, _) = build_bvh(&aabbs, max_depth);
             check(&bvh, &aabbs, max_depth);

@@ -49,6 +49,19 @@ pub fn describe_adapter(adapter: &wgpu::Adapter) -> String {
     )
 }
 
+/// The refusal of an array larger than one storage binding may hold on this adapter: what,
+/// how large, the limit, and what to do.
+fn over_binding_limit(what: &str, bytes: u64, limit: u64) -> Error {
+    let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+    Error::Gpu(format!(
+        "{what} takes {:.1} MiB, more than this adapter's largest storage binding \
+         (max_storage_buffer_binding_size = {:.1} MiB); render it with --backend cpu \
+         (--backend auto falls back to the CPU by itself) or make the scene or image smaller",
+        mib(bytes),
+        mib(limit)
+    ))
+}
+
 /// wgpu's own Display of a validation error is only "Validation Error"; the description
 /// holds the cause.
 fn wgpu_error_text(e: &wgpu::Error) -> String {
@@ -192,11 +205,7 @@ impl GpuRenderer {
         };
         let storage = |label: &str, bytes: &[u8]| -> Result<wgpu::Buffer> {
             if bytes.len() as u64 > limit {
-                return Err(Error::Gpu(format!(
-                    "{label}: {} MiB exceeds the adapter's max_storage_buffer_binding_size of {} MiB",
-                    bytes.len() >> 20,
-                    limit >> 20
-                )));
+                return Err(over_binding_limit(label, bytes.len() as u64, limit));
             }
             // wgpu refuses empty bindings: an empty array still gets one (unread) element.
             let padded;
@@ -217,9 +226,25 @@ impl GpuRenderer {
         let camera = uniform("camera", bytemuck::bytes_of(&scene.camera));
         let frame = uniform("frame", bytemuck::bytes_of(&scene.frame));
         let pass_buffer = uniform("pass", bytemuck::bytes_of(&GpuPass::default()));
-        let nodes = storage("BVH nodes", bytemuck::cast_slice(&scene.nodes))?;
-        let prims = storage("primitives", bytemuck::cast_slice(&scene.prims))?;
-        let normals = storage("normals", bytemuck::cast_slice(&scene.normals))?;
+        let nodes = storage(
+            &format!("the scene's {} BVH nodes", scene.nodes.len()),
+            bytemuck::cast_slice(&scene.nodes),
+        )?;
+        let prims = storage(
+            &format!(
+                "the scene's {} primitives ({} triangles)",
+                scene.prims.len(),
+                scene.triangle_count
+            ),
+            bytemuck::cast_slice(&scene.prims),
+        )?;
+        let normals = storage(
+            &format!(
+                "the vertex normals of {} smooth triangles",
+                scene.normals.len()
+            ),
+            bytemuck::cast_slice(&scene.normals),
+        )?;
         let materials = storage("materials", bytemuck::cast_slice(&scene.materials))?;
         let lights = storage("lights", bytemuck::cast_slice(&scene.lights))?;
         let sample_table = storage("sample table", bytemuck::cast_slice(&scene.sample_table))?;
@@ -229,10 +254,11 @@ impl GpuRenderer {
         let split_passes = plan_passes(scene, TILE * TILE).light_windows.len() > 1;
         let accumulation_size = pixel_count * 16 * if split_passes { 2 } else { 1 };
         if accumulation_size > limit {
-            return Err(Error::Gpu(format!(
-                "the accumulation buffer ({} MiB) exceeds the adapter's max_storage_buffer_binding_size",
-                accumulation_size >> 20
-            )));
+            let what = format!(
+                "the {}x{} image's accumulation buffer",
+                scene.frame.width, scene.frame.height
+            );
+            return Err(over_binding_limit(&what, accumulation_size, limit));
         }
         let accumulation = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("accumulation"),
