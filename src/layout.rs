@@ -56,6 +56,28 @@ pub const POISSON_SETS: u32 = 16;
 /// Interleaved sampling repeats a tile of INTERLEAVED_TILE x INTERLEAVED_TILE basis patterns.
 pub const INTERLEAVED_TILE: u32 = 3;
 
+/// Scene features a kernel variant can leave out. On the GPU each is a pipeline-overridable
+/// `bool` constant of the same name (true in the general kernel); on the CPU a bit of the
+/// integrator's const generic. A variant built without a feature the scene has is wrong, so the
+/// bits are always computed from the scene (`accel::FlatScene::features`).
+pub const FEATURE_LENS: u32 = 1;
+pub const FEATURE_MIRRORS: u32 = 2;
+pub const FEATURE_AREA_LIGHTS: u32 = 4;
+pub const FEATURE_PUNCTUAL_LIGHTS: u32 = 8;
+pub const FEATURE_TRIANGLES: u32 = 16;
+pub const FEATURE_PLANES: u32 = 32;
+/// Every feature: the general kernel.
+pub const FEATURES_ALL: u32 = 63;
+/// (WGSL override name, bit) of every feature.
+pub const FEATURES: [(&str, u32); 6] = [
+    ("FEATURE_LENS", FEATURE_LENS),
+    ("FEATURE_MIRRORS", FEATURE_MIRRORS),
+    ("FEATURE_AREA_LIGHTS", FEATURE_AREA_LIGHTS),
+    ("FEATURE_PUNCTUAL_LIGHTS", FEATURE_PUNCTUAL_LIGHTS),
+    ("FEATURE_TRIANGLES", FEATURE_TRIANGLES),
+    ("FEATURE_PLANES", FEATURE_PLANES),
+];
+
 /// Bits of the status word: a kernel loop hit its cap.
 pub const STATUS_TRAVERSAL_CAP: u32 = 1;
 pub const STATUS_STACK_OVERFLOW: u32 = 2;
@@ -233,6 +255,15 @@ impl GpuPass {
     }
 }
 
+const _: () = assert!(
+    FEATURES_ALL
+        == FEATURE_LENS
+            | FEATURE_MIRRORS
+            | FEATURE_AREA_LIGHTS
+            | FEATURE_PUNCTUAL_LIGHTS
+            | FEATURE_TRIANGLES
+            | FEATURE_PLANES
+);
 const _: () = assert!(size_of::<GpuBvhNode>() == 32);
 const _: () = assert!(size_of::<GpuPrimitive>() == 48);
 const _: () = assert!(size_of::<GpuNormals>() == 36);
@@ -284,5 +315,8 @@ pub fn wgsl_prelude() -> String {
         out += &format!("const {name}: u32 = {value}u;\n");
     }
     out += &format!("const T_FAR: f32 = {T_FAR:e};\n");
+    for (name, _) in FEATURES {
+        out += &format!("override {name}: bool = true;\n");
+    }
     out
 }

@@ -19,6 +19,10 @@
 //! | BVH traversal        | `accel/traverse.rs` (obvhs) | `wgsl/traverse.wgsl`   |
 //! | shading, shadows, mirrors | `integrator.rs`        | `wgsl/integrator.wgsl` |
 //! | pixel loop           | `cpu.rs`                    | `wgsl/render.wgsl`     |
+//! | bindings             | `gpu/kernels.rs` (table)    | `wgsl/bindings.wgsl`   |
+//!
+//! Kernels are listed in `gpu/kernels.rs` (modules, entry point, bindings) and built by its one
+//! pipeline builder, specialised to the scene's features (`layout::FEATURES`).
 
 pub mod accel;
 pub mod camera;

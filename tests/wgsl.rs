@@ -1,24 +1,113 @@
-//! Every WGSL module validates with naga, and every struct shared with Rust has the same size
-//! and field offsets on both sides.
+//! Every WGSL module validates with naga, every kernel in every feature variant validates,
+//! every struct shared with Rust has the same size and field offsets on both sides, and the
+//! bindings and feature constants the WGSL declares are the Rust tables'.
 
 use std::mem::{offset_of, size_of};
 
-use chambre::gpu::shader::{MODULES, render_kernel_source};
+use chambre::gpu::kernels::{
+    Access, KERNELS, MODULES, RENDER, SCENE_BINDINGS, feature_constants, kernel_source,
+};
 use chambre::layout::*;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
+
+fn validator() -> Validator {
+    Validator::new(ValidationFlags::all(), Capabilities::empty())
+}
 
 fn parse_and_validate(source: &str) -> naga::Module {
     let module = naga::front::wgsl::parse_str(source)
         .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
-    Validator::new(ValidationFlags::all(), Capabilities::empty())
+    validator()
         .validate(&module)
         .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
     module
 }
 
+fn render_kernel_source() -> String {
+    kernel_source(&RENDER)
+}
+
+/// Every kernel of the registry, specialised to each of the 64 feature sets, validates after
+/// its override constants are substituted (what a driver compiles).
 #[test]
-fn composed_render_kernel_validates() {
-    parse_and_validate(&render_kernel_source());
+fn every_kernel_validates_in_every_feature_variant() {
+    for kernel in KERNELS {
+        let source = kernel_source(kernel);
+        let module = parse_and_validate(&source);
+        let info = validator().validate(&module).unwrap();
+        for features in 0..=FEATURES_ALL {
+            let constants: naga::back::PipelineConstants = feature_constants(features)
+                .into_iter()
+                .map(|(name, value)| (name.to_string(), value))
+                .collect();
+            let (specialised, _) = naga::back::pipeline_constants::process_overrides(
+                &module,
+                &info,
+                Some((naga::ShaderStage::Compute, kernel.entry_point)),
+                &constants,
+            )
+            .unwrap_or_else(|e| panic!("{} with features {features:#x}: {e:?}", kernel.name));
+            validator()
+                .validate(&specialised)
+                .unwrap_or_else(|e| panic!("{} with features {features:#x}: {e:?}", kernel.name));
+        }
+    }
+}
+
+/// The bindings wgsl/bindings.wgsl declares are exactly `SCENE_BINDINGS`: numbers, names and
+/// access.
+#[test]
+fn declared_bindings_are_the_rust_table() {
+    let module = parse_and_validate(&render_kernel_source());
+    let mut declared: Vec<(u32, String, Access)> = module
+        .global_variables
+        .iter()
+        .filter_map(|(_, var)| {
+            let binding = var.binding.as_ref()?;
+            assert_eq!(binding.group, 0, "{:?}", var.name);
+            let access = match var.space {
+                naga::AddressSpace::Uniform => Access::Uniform,
+                naga::AddressSpace::Storage { access }
+                    if access.contains(naga::StorageAccess::STORE) =>
+                {
+                    Access::StorageReadWrite
+                }
+                naga::AddressSpace::Storage { .. } => Access::StorageRead,
+                other => panic!("{:?}: unexpected address space {other:?}", var.name),
+            };
+            Some((binding.binding, var.name.clone().unwrap(), access))
+        })
+        .collect();
+    declared.sort_by_key(|d| d.0);
+    let table: Vec<(u32, String, Access)> = SCENE_BINDINGS
+        .iter()
+        .map(|b| (b.binding, b.name.to_string(), b.access))
+        .collect();
+    assert_eq!(declared, table);
+}
+
+/// The override constants of the kernel are exactly `layout::FEATURES`, each a bool that is
+/// true by default (the general kernel).
+#[test]
+fn feature_constants_are_the_rust_table() {
+    let module = parse_and_validate(&render_kernel_source());
+    let mut declared: Vec<String> = module
+        .overrides
+        .iter()
+        .map(|(_, o)| {
+            assert_eq!(
+                module.types[o.ty].inner,
+                naga::TypeInner::Scalar(naga::Scalar::BOOL),
+                "{:?}",
+                o.name
+            );
+            o.name.clone().unwrap()
+        })
+        .collect();
+    declared.sort();
+    let mut table: Vec<String> = FEATURES.iter().map(|(n, _)| n.to_string()).collect();
+    table.sort();
+    assert_eq!(declared, table);
 }
 
 #[test]

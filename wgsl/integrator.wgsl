@@ -113,7 +113,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
     var sample_offset = 0u;
     for (var l = 0u; l < frame.light_count; l += 1u) {
         let light = lights[l];
-        if (light.kind == LIGHT_AREA) {
+        if (FEATURE_AREA_LIGHTS && light.kind == LIGHT_AREA) {
             // Stratified points on the parallelogram; numbers are drawn before any test.
             let c = cross(light.p1, light.p2);
             let area = length(c);
@@ -139,7 +139,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
                 }
             }
             total += light.color * sum * (area / f32(light.samples));
-        } else if (window_is_first(window)) {
+        } else if (FEATURE_PUNCTUAL_LIGHTS && window_is_first(window)) {
             var wi = light.p0;
             var distance = T_FAR;
             var falloff = 1.0;
@@ -193,7 +193,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, window: LightWindow, rng:
         }
         radiance += throughput * direct_light(surface, material, found.prim, wo, depth, window, rng, counters);
         // Perfect mirror bounce.
-        if (max(max(material.mirror.x, material.mirror.y), material.mirror.z) <= 0.0) {
+        if (!FEATURE_MIRRORS || max(max(material.mirror.x, material.mirror.y), material.mirror.z) <= 0.0) {
             break;
         }
         if (depth == frame.max_depth) {
@@ -225,7 +225,7 @@ fn trace_sample(x: u32, y: u32, sample: u32, window: LightWindow,
     let raster = vec2<f32>(f32(x) + jitter.x, f32(y) + jitter.y);
     let film = film_position_mm(camera, frame.width, frame.height, raster);
     var lens = vec2<f32>(0.0, 0.0);
-    if (camera.lens_radius_mm > 0.0) {
+    if (FEATURE_LENS && camera.lens_radius_mm > 0.0) {
         let lens_source = PatternSource(frame.lens_sampler, frame.lens_strata_columns, frame.lens_table_offset, LENS_DIMENSION);
         lens = sample_aperture(sample_2d(lens_source, x, y, sample, &rng));
     }

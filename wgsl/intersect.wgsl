@@ -163,7 +163,12 @@ fn intersect_plane(ray: RayQuery, point: vec3<f32>, normal: vec3<f32>, t_max: f3
 
 fn intersect_primitive(ray: RayQuery, prim: GpuPrimitive, t_max: f32) -> Hit {
     switch prim.kind {
-        case PRIM_TRIANGLE: { return intersect_triangle(ray, prim.p0, prim.p1, prim.p2, t_max); }
+        case PRIM_TRIANGLE: {
+            if (FEATURE_TRIANGLES) {
+                return intersect_triangle(ray, prim.p0, prim.p1, prim.p2, t_max);
+            }
+            return miss();
+        }
         case PRIM_SPHERE: { return intersect_sphere(ray, prim.p0, prim.p1.x, t_max); }
         case PRIM_QUAD: { return intersect_quad(ray, prim.p0, prim.p1, prim.p2, t_max); }
         case PRIM_PLANE: { return intersect_plane(ray, prim.p0, prim.p1, t_max); }

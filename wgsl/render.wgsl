@@ -2,21 +2,8 @@
 // light samples per dispatch. A pass's sum goes to the pixel's scratch slot (the second half of
 // the accumulation buffer, which exists only when passes are split) until the pass's last
 // light window commits it, with the sample count, to the running accumulation: the
-// accumulation is a valid per-pixel mean after every dispatch. Bindings are declared here only,
-// so the libraries above stay binding-free. Eight storage buffers: WebGPU's baseline limit.
+// accumulation is a valid per-pixel mean after every dispatch. Bindings: wgsl/bindings.wgsl.
 // Mirrors: src/cpu.rs (the CPU tile loop).
-
-@group(0) @binding(0) var<uniform> camera: GpuCamera;
-@group(0) @binding(1) var<uniform> frame: GpuFrame;
-@group(0) @binding(2) var<uniform> pass_info: GpuPass;
-@group(0) @binding(3) var<storage, read> nodes: array<GpuBvhNode>;
-@group(0) @binding(4) var<storage, read> prims: array<GpuPrimitive>;
-@group(0) @binding(5) var<storage, read> normals: array<GpuNormals>;
-@group(0) @binding(6) var<storage, read> materials: array<GpuMaterial>;
-@group(0) @binding(7) var<storage, read> lights: array<GpuLight>;
-@group(0) @binding(8) var<storage, read_write> accumulation: array<vec4<f32>>;
-@group(0) @binding(9) var<storage, read_write> status: array<atomic<u32>, STATUS_WORDS>;
-@group(0) @binding(10) var<storage, read> sample_table: array<vec2<f32>>;
 
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn render(@builtin(global_invocation_id) id: vec3<u32>) {

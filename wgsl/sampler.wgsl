@@ -1,6 +1,6 @@
 // Camera sample patterns: where sample i of a pixel falls in the pixel and on the aperture.
 // Mirrors: src/sampler.rs (see there for the five patterns; integer hashing is bit-identical).
-// Reads the `sample_table` binding declared in render.wgsl.
+// Reads the `sample_table` binding (wgsl/bindings.wgsl).
 
 
 struct PatternSource {

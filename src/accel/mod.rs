@@ -42,6 +42,40 @@ pub struct FlatScene {
     pub build_time: Duration,
 }
 
+impl FlatScene {
+    /// The `layout::FEATURE_*` bits this scene uses. A kernel built with these bits renders it
+    /// exactly as the general kernel does: a feature left out is code the scene never runs.
+    pub fn features(&self) -> u32 {
+        let mut features = 0;
+        let mut add = |present: bool, bit: u32| {
+            if present {
+                features |= bit;
+            }
+        };
+        add(self.camera.lens_radius_mm > 0.0, FEATURE_LENS);
+        add(
+            self.materials
+                .iter()
+                .any(|m| m.mirror.iter().any(|&c| c > 0.0)),
+            FEATURE_MIRRORS,
+        );
+        add(
+            self.lights.iter().any(|l| l.kind == LIGHT_AREA),
+            FEATURE_AREA_LIGHTS,
+        );
+        add(
+            self.lights.iter().any(|l| l.kind != LIGHT_AREA),
+            FEATURE_PUNCTUAL_LIGHTS,
+        );
+        add(
+            self.prims.iter().any(|p| p.kind == PRIM_TRIANGLE),
+            FEATURE_TRIANGLES,
+        );
+        add(self.frame.plane_count > 0, FEATURE_PLANES);
+        features
+    }
+}
+
 /// Relative widening of node boxes: 16 ULPs of the box's largest coordinate.
 const BOX_WIDENING: f32 = 16.0 * f32::EPSILON;
 

@@ -3,7 +3,7 @@
 //! Errors never panic: wgpu's default uncaptured-error handler panics, so a handler of ours
 //! records them, and every wait on the device has a timeout (lavapipe has no watchdog).
 
-pub mod shader;
+pub mod kernels;
 
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -177,6 +177,8 @@ pub struct GpuRenderer {
     context: GpuContext,
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
+    /// The `layout::FEATURE_*` bits the kernel was built with.
+    features: u32,
     pass_buffer: wgpu::Buffer,
     accumulation: wgpu::Buffer,
     /// Pixels of the image: the accumulation buffer's first half when it holds a scratch half.
@@ -185,7 +187,24 @@ pub struct GpuRenderer {
 }
 
 impl GpuRenderer {
+    /// Uploads `scene` and builds the render kernel specialised to the scene's features.
     pub fn new(context: GpuContext, scene: &FlatScene) -> Result<GpuRenderer> {
+        GpuRenderer::with_features(context, scene, scene.features())
+    }
+
+    /// Like [`GpuRenderer::new`] with the kernel built for `features` (`layout::FEATURE_*`;
+    /// `FEATURES_ALL` is the general kernel), which must include every feature of the scene.
+    pub fn with_features(
+        context: GpuContext,
+        scene: &FlatScene,
+        features: u32,
+    ) -> Result<GpuRenderer> {
+        let missing = scene.features() & !features;
+        if missing != 0 {
+            return Err(Error::Gpu(format!(
+                "a kernel without features {missing:#x} cannot render this scene, which uses them"
+            )));
+        }
         if scene.bvh_depth > BVH_STACK_SIZE as usize {
             return Err(Error::Gpu(format!(
                 "the BVH is {} levels deep, more than the kernel's traversal stack of {}; \
@@ -274,43 +293,23 @@ impl GpuRenderer {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("render.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(shader::render_kernel_source().into()),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("render"),
-            layout: None,
-            module: &module,
-            entry_point: Some("render"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let entries: Vec<wgpu::BindGroupEntry> = [
-            &camera,
-            &frame,
-            &pass_buffer,
-            &nodes,
-            &prims,
-            &normals,
-            &materials,
-            &lights,
-            &accumulation,
-            &status,
-            &sample_table,
-        ]
-        .iter()
-        .enumerate()
-        .map(|(i, b)| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scene"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        });
+        let pipeline = kernels::build_pipeline(device, &kernels::RENDER, features);
+        let bind_group = pipeline.bind_group(
+            device,
+            &[
+                ("camera", &camera),
+                ("frame", &frame),
+                ("pass_info", &pass_buffer),
+                ("nodes", &nodes),
+                ("prims", &prims),
+                ("normals", &normals),
+                ("materials", &materials),
+                ("lights", &lights),
+                ("accumulation", &accumulation),
+                ("status", &status),
+                ("sample_table", &sample_table),
+            ],
+        )?;
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
                 "creating the render pipeline: {}",
@@ -319,13 +318,19 @@ impl GpuRenderer {
         }
         Ok(GpuRenderer {
             context,
-            pipeline,
+            pipeline: pipeline.pipeline,
             bind_group,
+            features,
             pass_buffer,
             accumulation,
             pixel_count: pixel_count as usize,
             status,
         })
+    }
+
+    /// The `layout::FEATURE_*` bits the kernel was built with.
+    pub fn features(&self) -> u32 {
+        self.features
     }
 
     pub fn adapter_description(&self) -> &str {

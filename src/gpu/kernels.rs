@@ -1,0 +1,216 @@
+//! The registry of compute kernels and the one pipeline builder.
+//!
+//! A [`Kernel`] names its WGSL modules (composed after the generated constants of
+//! `layout::wgsl_prelude` and the bindings of `wgsl/bindings.wgsl`), its entry point and the
+//! bindings it reads. [`build_pipeline`] turns any kernel into a pipeline with an explicit bind
+//! group layout made from [`SCENE_BINDINGS`], specialised to the scene's features through
+//! WGSL's pipeline-overridable constants (`layout::FEATURES`): a scene without mirrors gets a
+//! kernel without the bounce, a pinhole one without lens sampling, and so on. Adding a kernel is
+//! adding an entry to [`KERNELS`], not copying set-up code.
+
+use crate::error::{Error, Result};
+use crate::layout::{FEATURES, wgsl_prelude};
+
+/// How a kernel accesses a binding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    Uniform,
+    StorageRead,
+    StorageReadWrite,
+}
+
+/// One binding of group 0: its number, its WGSL variable name, and its access.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    pub binding: u32,
+    pub name: &'static str,
+    pub access: Access,
+}
+
+const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
+    Binding {
+        binding,
+        name,
+        access,
+    }
+}
+
+/// Every binding of the scene bind group, as `wgsl/bindings.wgsl` declares them.
+pub const SCENE_BINDINGS: [Binding; 11] = [
+    binding(0, "camera", Access::Uniform),
+    binding(1, "frame", Access::Uniform),
+    binding(2, "pass_info", Access::Uniform),
+    binding(3, "nodes", Access::StorageRead),
+    binding(4, "prims", Access::StorageRead),
+    binding(5, "normals", Access::StorageRead),
+    binding(6, "materials", Access::StorageRead),
+    binding(7, "lights", Access::StorageRead),
+    binding(8, "accumulation", Access::StorageReadWrite),
+    binding(9, "status", Access::StorageReadWrite),
+    binding(10, "sample_table", Access::StorageRead),
+];
+
+/// (file name, source) of every WGSL module a kernel may compose.
+pub const MODULES: [(&str, &str); 10] = [
+    ("types.wgsl", include_str!("../../wgsl/types.wgsl")),
+    ("bindings.wgsl", include_str!("../../wgsl/bindings.wgsl")),
+    ("rng.wgsl", include_str!("../../wgsl/rng.wgsl")),
+    ("sampling.wgsl", include_str!("../../wgsl/sampling.wgsl")),
+    ("camera.wgsl", include_str!("../../wgsl/camera.wgsl")),
+    ("intersect.wgsl", include_str!("../../wgsl/intersect.wgsl")),
+    ("traverse.wgsl", include_str!("../../wgsl/traverse.wgsl")),
+    ("sampler.wgsl", include_str!("../../wgsl/sampler.wgsl")),
+    (
+        "integrator.wgsl",
+        include_str!("../../wgsl/integrator.wgsl"),
+    ),
+    ("render.wgsl", include_str!("../../wgsl/render.wgsl")),
+];
+
+/// A compute kernel: what it is made of and what it reads.
+#[derive(Debug)]
+pub struct Kernel {
+    pub name: &'static str,
+    /// Module file names (from [`MODULES`]), in composition order.
+    pub modules: &'static [&'static str],
+    pub entry_point: &'static str,
+    pub bindings: &'static [Binding],
+}
+
+/// The megakernel: camera samples to accumulated radiance, one invocation per pixel.
+pub const RENDER: Kernel = Kernel {
+    name: "render",
+    modules: &[
+        "types.wgsl",
+        "bindings.wgsl",
+        "rng.wgsl",
+        "sampling.wgsl",
+        "camera.wgsl",
+        "intersect.wgsl",
+        "traverse.wgsl",
+        "sampler.wgsl",
+        "integrator.wgsl",
+        "render.wgsl",
+    ],
+    entry_point: "render",
+    bindings: &SCENE_BINDINGS,
+};
+
+/// Every kernel chambre builds.
+pub const KERNELS: [&Kernel; 1] = [&RENDER];
+
+/// The complete source of `kernel`, with a marker comment where each module starts.
+pub fn kernel_source(kernel: &Kernel) -> String {
+    let mut source = wgsl_prelude();
+    for name in kernel.modules {
+        let (_, text) = MODULES
+            .iter()
+            .find(|(file, _)| file == name)
+            .unwrap_or_else(|| panic!("kernel {}: no module {name}", kernel.name));
+        source += &format!("\n// ---- {name} ----\n");
+        source += text;
+    }
+    source
+}
+
+/// The values of the feature constants for a kernel specialised to `features`
+/// (`layout::FEATURE_*` bits): 1.0 for a feature kept, 0.0 for one left out.
+pub fn feature_constants(features: u32) -> Vec<(&'static str, f64)> {
+    FEATURES
+        .iter()
+        .map(|&(name, bit)| (name, if features & bit != 0 { 1.0 } else { 0.0 }))
+        .collect()
+}
+
+/// A pipeline and the layout of the bind group it takes.
+pub struct Pipeline {
+    pub pipeline: wgpu::ComputePipeline,
+    pub bind_group_layout: wgpu::BindGroupLayout,
+    pub kernel: &'static Kernel,
+}
+
+fn layout_entry(b: &Binding) -> wgpu::BindGroupLayoutEntry {
+    let ty = match b.access {
+        Access::Uniform => wgpu::BufferBindingType::Uniform,
+        Access::StorageRead => wgpu::BufferBindingType::Storage { read_only: true },
+        Access::StorageReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
+    };
+    wgpu::BindGroupLayoutEntry {
+        binding: b.binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// Builds `kernel` specialised to `features`. Validation errors come back through the
+/// device's error handling (see `GpuContext`), not as panics.
+pub fn build_pipeline(device: &wgpu::Device, kernel: &'static Kernel, features: u32) -> Pipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(kernel.name),
+        source: wgpu::ShaderSource::Wgsl(kernel_source(kernel).into()),
+    });
+    let entries: Vec<_> = kernel.bindings.iter().map(layout_entry).collect();
+    let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(kernel.name),
+        entries: &entries,
+    });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(kernel.name),
+        bind_group_layouts: &[Some(&bind_group_layout)],
+        immediate_size: 0,
+    });
+    let constants = feature_constants(features);
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(kernel.name),
+        layout: Some(&layout),
+        module: &module,
+        entry_point: Some(kernel.entry_point),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: &constants,
+            ..Default::default()
+        },
+        cache: None,
+    });
+    Pipeline {
+        pipeline,
+        bind_group_layout,
+        kernel,
+    }
+}
+
+impl Pipeline {
+    /// A bind group with `buffers` (binding name, buffer) in the kernel's binding order; every
+    /// binding the kernel reads must be given.
+    pub fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        buffers: &[(&str, &wgpu::Buffer)],
+    ) -> Result<wgpu::BindGroup> {
+        let mut entries = Vec::with_capacity(self.kernel.bindings.len());
+        for b in self.kernel.bindings {
+            let (_, buffer) = buffers
+                .iter()
+                .find(|(name, _)| *name == b.name)
+                .ok_or_else(|| {
+                    Error::Gpu(format!(
+                        "kernel {}: no buffer for binding {} `{}`",
+                        self.kernel.name, b.binding, b.name
+                    ))
+                })?;
+            entries.push(wgpu::BindGroupEntry {
+                binding: b.binding,
+                resource: buffer.as_entire_binding(),
+            });
+        }
+        Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(self.kernel.name),
+            layout: &self.bind_group_layout,
+            entries: &entries,
+        }))
+    }
+}

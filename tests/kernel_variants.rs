@@ -1,0 +1,103 @@
+//! A kernel specialised to a scene's features renders the same image as the general kernel,
+//! bit for bit, on the sample scenes that leave features out; and no kernel can be built that
+//! lacks a feature its scene uses.
+
+mod common;
+
+use std::sync::atomic::AtomicBool;
+
+use chambre::accel::flatten;
+use chambre::gpu::GpuRenderer;
+use chambre::layout::*;
+use chambre::render::{Image, render};
+
+fn render_with(flat: &chambre::accel::FlatScene, features: u32) -> Option<(Image, u64)> {
+    let context = common::gpu_context()?;
+    let mut renderer = GpuRenderer::with_features(context, flat, features).unwrap();
+    assert_eq!(renderer.features(), features);
+    let output = render(flat, &mut renderer, &mut |_, _| {}, &AtomicBool::new(false)).unwrap();
+    assert!(output.stopped.is_none());
+    assert_eq!(output.status_flags, 0);
+    Some((output.image, output.rays))
+}
+
+#[test]
+fn specialised_kernels_render_the_general_kernels_image() {
+    let cases: [(&str, &[&str], u32); 5] = [
+        // mirrors, point light, plane; no lens, area lights or triangles
+        (
+            "scenes/spheres.toml",
+            &["render.width=96", "render.height=64"],
+            0x2a,
+        ),
+        // the same without the mirror: no bounce loop
+        (
+            "scenes/spheres.toml",
+            &[
+                "render.width=96",
+                "render.height=64",
+                "materials[2].mirror=[0, 0, 0]",
+            ],
+            0x28,
+        ),
+        // triangles and a point light only
+        (
+            "scenes/bunny.toml",
+            &["render.width=72", "render.height=48"],
+            0x18,
+        ),
+        // an area light and quads, spheres: no punctual lights, triangles or planes
+        (
+            "scenes/area_light.toml",
+            &["render.width=48", "render.height=48"],
+            0x04,
+        ),
+        // a thin lens
+        (
+            "scenes/thin_lens.toml",
+            &["render.width=72", "render.height=48"],
+            0x29,
+        ),
+    ];
+    for (path, overrides, expected) in cases {
+        let overrides = [overrides, &["render.spp=2"]].concat();
+        let flat = flatten(&common::load(path, &overrides));
+        assert_eq!(flat.features(), expected, "{path} {overrides:?}");
+        assert_ne!(flat.features(), FEATURES_ALL);
+        let Some((general, general_rays)) = render_with(&flat, FEATURES_ALL) else {
+            return;
+        };
+        let (specialised, rays) = render_with(&flat, flat.features()).unwrap();
+        assert_eq!(rays, general_rays, "{path}: rays traced");
+        let differing = general
+            .pixels
+            .iter()
+            .zip(&specialised.pixels)
+            .filter(|(a, b)| a != b)
+            .count();
+        eprintln!(
+            "{path} {overrides:?}: features {:#x}, {differing} of {} pixels differ",
+            flat.features(),
+            general.pixels.len()
+        );
+        assert_eq!(
+            differing, 0,
+            "{path}: the specialised kernel's image differs"
+        );
+    }
+}
+
+#[test]
+fn a_kernel_without_a_feature_the_scene_uses_is_refused() {
+    let flat = flatten(&common::load(
+        "scenes/spheres.toml",
+        &["render.width=24", "render.height=16"],
+    ));
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let error = GpuRenderer::with_features(context, &flat, flat.features() & !FEATURE_MIRRORS)
+        .err()
+        .expect("a kernel without mirrors for a scene with a mirror");
+    assert!(error.to_string().contains("0x2"), "{error}");
+}

@@ -1,0 +1,17 @@
+// The bindings of the scene bind group (group 0), declared once for every kernel.
+// Mirrors: src/gpu/kernels.rs (SCENE_BINDINGS: the same numbers, names and access, checked by
+// tests/wgsl.rs; the pipeline builder makes the bind group layout from that table).
+
+@group(0) @binding(0) var<uniform> camera: GpuCamera;
+@group(0) @binding(1) var<uniform> frame: GpuFrame;
+@group(0) @binding(2) var<uniform> pass_info: GpuPass;
+@group(0) @binding(3) var<storage, read> nodes: array<GpuBvhNode>;
+@group(0) @binding(4) var<storage, read> prims: array<GpuPrimitive>;
+@group(0) @binding(5) var<storage, read> normals: array<GpuNormals>;
+@group(0) @binding(6) var<storage, read> materials: array<GpuMaterial>;
+@group(0) @binding(7) var<storage, read> lights: array<GpuLight>;
+// The running per-pixel sums (rgb, samples); when passes are split into light windows, a second
+// half holds the scratch sums of the pass in progress (see render.wgsl).
+@group(0) @binding(8) var<storage, read_write> accumulation: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> status: array<atomic<u32>, STATUS_WORDS>;
+@group(0) @binding(10) var<storage, read> sample_table: array<vec2<f32>>;
