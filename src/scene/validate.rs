@@ -43,6 +43,15 @@ fn num(v: f64) -> String {
     }
 }
 
+/// A computed ratio as messages print it: four decimals, unless it is extreme.
+fn ratio(v: f64) -> String {
+    if (1.0e-4..1.0e6).contains(&v.abs()) {
+        format!("{v:.4}")
+    } else {
+        num(v)
+    }
+}
+
 /// A vector as messages print it, each element through [`num`].
 fn nums(v: &[f64]) -> String {
     let items: Vec<String> = v.iter().map(|&x| num(x)).collect();
@@ -251,10 +260,12 @@ fn validate_camera(
         return Err(check.err(
             "camera.film",
             format!(
-                "film aspect {film_aspect:.4} ({} x {} mm) does not match the image aspect \
-                 {image_aspect:.4} ({} x {} pixels)",
+                "film aspect {} ({} x {} mm) does not match the image aspect {} ({} x {} \
+                 pixels)",
+                ratio(film_aspect),
                 num(film[0]),
                 num(film[1]),
+                ratio(image_aspect),
                 render.width,
                 render.height
             ),
@@ -459,17 +470,17 @@ fn check_film_behind_lens(check: &Checker, camera: &CameraSpec) -> Result<()> {
             return Err(check.err(
                 "camera",
                 format!(
-                    "with film_tilt {:.3} and film_swing {:.3} (film {} x {} mm at {:.3} mm), \
+                    "with film_tilt {} and film_swing {} (film {} x {} mm at {} mm), \
                      lens_tilt {:.3} and lens_swing {:.3} degrees, a film corner reaches \
-                     {:.3} mm from the lens plane: no image can form; reduce the movements",
-                    m.film_tilt,
-                    m.film_swing,
+                     {} mm from the lens plane: no image can form; reduce the movements",
+                    num(m.film_tilt),
+                    num(m.film_swing),
                     num(camera.film_mm[0]),
                     num(camera.film_mm[1]),
-                    camera.film_distance_mm,
+                    num(camera.film_distance_mm),
                     m.lens_tilt,
                     m.lens_swing,
-                    -corner.z
+                    num(-corner.z)
                 ),
             ));
         }
