@@ -33,12 +33,13 @@ pub enum Error {
     #[error("{location}: {message}")]
     Scene { location: Location, message: String },
 
-    /// A file could not be read or written.
-    #[error("{path}: {source}")]
+    /// A file could not be read or written. The cause is part of the message and deliberately
+    /// not a `source` (a field of that name would become one): `main` prints an error with its
+    /// chain of sources, which would print the cause twice.
+    #[error("{path}: {cause}")]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        cause: std::io::Error,
     },
 
     /// A command-line override `--set key=value` is malformed.
@@ -63,10 +64,10 @@ pub enum Error {
 }
 
 impl Error {
-    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+    pub fn io(path: impl Into<PathBuf>, cause: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
-            source,
+            cause,
         }
     }
 }

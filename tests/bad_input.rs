@@ -4,6 +4,8 @@ use std::path::Path;
 
 use chambre::scene::Scene;
 
+mod common;
+
 const BASE: &str = r#"[render]
 width = 64
 height = 48
@@ -165,6 +167,11 @@ fn aspect_ratio_mismatch() {
 }
 
 fn mesh_error(mesh_name: &str, contents: Option<&str>, says: &str) {
+    mesh_error_with(mesh_name, contents.map(str::as_bytes), "", says);
+}
+
+/// Like `mesh_error`, with `fields` added to the mesh shape (after its `file` line).
+fn mesh_error_with(mesh_name: &str, contents: Option<&[u8]>, fields: &str, says: &str) {
     let dir = std::env::temp_dir().join(format!("chambre-mesh-{mesh_name}"));
     std::fs::create_dir_all(&dir).unwrap();
     if let Some(c) = contents {
@@ -172,7 +179,7 @@ fn mesh_error(mesh_name: &str, contents: Option<&str>, says: &str) {
     }
     let text = BASE.replacen(
         "type = \"quad\"\ncorner = [0.0, 0.0, 0.0]\nedge_u = [1.0, 0.0, 0.0]\nedge_v = [0.0, 0.0, 1.0]",
-        &format!("type = \"mesh\"\nfile = \"{mesh_name}\""),
+        &format!("type = \"mesh\"\nfile = \"{mesh_name}\"{fields}"),
         1,
     );
     let err = Scene::from_str(&dir.join("bad.toml"), &text, &[])
@@ -236,4 +243,296 @@ fn override_errors_name_the_override() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("key=value"), "{err}");
+}
+
+/// The error of loading the scene at `path`, as `main` prints it: with its chain of causes.
+fn printed_error(path: &Path, overrides: &[String]) -> String {
+    let err = Scene::load(path, overrides).expect_err("an error");
+    format!("{:#}", anyhow::Error::from(err))
+}
+
+fn scratch_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("chambre-bad-input-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn arrays_of_the_wrong_length_are_refused_with_their_field() {
+    // Too long: serde's fixed-size arrays would silently drop the surplus.
+    expect_error(
+        "position = [0.0, 1.0, 5.0]",
+        "position = [2, 3, 3, 9]",
+        5,
+        "camera.position",
+        "invalid length 4, expected an array of exactly 3 elements",
+    );
+    expect_error(
+        "film = [36.0, 27.0]",
+        "film = [36.0, 24.0, 1.0]",
+        8,
+        "camera.film",
+        "invalid length 3, expected an array of exactly 2 elements",
+    );
+    // Too short.
+    expect_error(
+        "center = [0.0, 1.0, 0.0]",
+        "center = [0.0, 1.0]",
+        14,
+        "shapes[0].center",
+        "invalid length 2",
+    );
+    expect_error(
+        "intensity = [5.0, 5.0, 5.0]",
+        "intensity = []",
+        26,
+        "lights[0].intensity",
+        "invalid length 0",
+    );
+    for shift in ["film_shift", "lens_shift"] {
+        expect_error(
+            "film = [36.0, 27.0]",
+            &format!("film = [36.0, 27.0]\n{shift} = [1.0, 2.0, 3.0]"),
+            9,
+            &format!("camera.{shift}"),
+            "invalid length 3",
+        );
+    }
+    let lens = "film = [36.0, 27.0]\nf_number = 4.0\nfocus_points = ";
+    expect_error(
+        "film = [36.0, 27.0]",
+        &format!("{lens}[[0, 0, 0], [1, 0, 0]]"),
+        10,
+        "camera.focus_points",
+        "invalid length 2",
+    );
+    expect_error(
+        "film = [36.0, 27.0]",
+        &format!("{lens}[[0, 0, 0], [1, 0, 0], [0, 0, 1, 7]]"),
+        10,
+        "camera.focus_points[2]",
+        "invalid length 4",
+    );
+    expect_error(
+        "type = \"quad\"\ncorner = [0.0, 0.0, 0.0]",
+        "type = \"mesh\"\nfile = \"m.obj\"\nscale = [1.0, 2.0]\ncorner = [0.0, 0.0, 0.0]",
+        20,
+        "shapes[1].scale",
+        "invalid length 2",
+    );
+}
+
+#[test]
+fn arrays_of_the_wrong_length_in_overrides_name_the_override() {
+    let set = |item: &str| vec![item.to_string()];
+    let path = Path::new("s.toml");
+    let err = Scene::from_str(path, BASE, &set("camera.position=[1, 2, 3, 4]"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("set on the command line")
+            && err.contains("field `camera.position`")
+            && err.contains("invalid length 4"),
+        "{err}"
+    );
+    let err = Scene::from_str(path, BASE, &set("shapes[1].edge_u=[1]"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("field `shapes[1].edge_u`") && err.contains("invalid length 1"),
+        "{err}"
+    );
+    // A bad array in the file is the file's fault, whatever the overrides.
+    let text = BASE.replacen("position = [0.0, 1.0, 5.0]", "position = [2, 3, 3, 9]", 1);
+    let err = Scene::from_str(path, &text, &set("render.spp=4"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("s.toml:5:") && err.contains("camera.position"),
+        "{err}"
+    );
+}
+
+#[test]
+fn radiometric_values_beyond_the_bound_are_refused() {
+    expect_error(
+        "intensity = [5.0, 5.0, 5.0]",
+        "intensity = [3.4e38, 5.0, 5.0]",
+        26,
+        "lights[0].intensity",
+        "exceeds 1e20",
+    );
+    expect_error(
+        "height = 48",
+        "height = 48\nbackground = [3.4e38, 3.4e38, 3.4e38]",
+        4,
+        "render.background",
+        "exceeds 1e20",
+    );
+    expect_error(
+        "height = 48",
+        "height = 48\nambient = [0.0, 1.0e21, 0.0]",
+        4,
+        "render.ambient",
+        "exceeds 1e20",
+    );
+}
+
+#[test]
+fn radiometric_values_at_the_bound_render_finite() {
+    // Every radiometric value at the bound, and the largest BRDF normalisation (Phong at
+    // shininess 1e4), close to the light: the image must stay finite.
+    let text = BASE
+        .replacen(
+            "height = 48",
+            "height = 6\nspp = 4\nbackground = [1e20, 1e20, 1e20]\nambient = [1e20, 1e20, 1e20]",
+            1,
+        )
+        .replacen("width = 64", "width = 8", 1)
+        .replacen("film = [36.0, 27.0]", "film = [36.0, 27.0]\nvertical_fov = 60.0", 1)
+        .replacen(
+            "model = \"lambert\"",
+            "model = \"phong\"\ndiffuse = [1.0, 1.0, 1.0]\nspecular = [1.0, 1.0, 1.0]\nshininess = 1e4",
+            1,
+        )
+        .replacen("intensity = [5.0, 5.0, 5.0]", "intensity = [1e20, 1e20, 1e20]", 1);
+    let scene =
+        Scene::from_str(Path::new("bound.toml"), &text, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let image = common::render_cpu(&chambre::accel::flatten(&scene));
+    assert!(
+        image.pixels.iter().all(|p| p.is_finite()),
+        "non-finite pixels at the radiometric bound"
+    );
+    let brightest = image
+        .pixels
+        .iter()
+        .map(|p| p.max_element())
+        .fold(0.0, f32::max);
+    assert!(
+        brightest >= 1e20,
+        "the bound did not reach the image: {brightest}"
+    );
+}
+
+#[test]
+fn invalid_utf8_is_placed_at_its_byte_and_said_once() {
+    let path = scratch_dir("utf8").join("latin1.toml");
+    let mut bytes = BASE.as_bytes().to_vec();
+    // "white" -> "wh\xefte", as a Latin-1 editor writes "whïte": line 10, column 11.
+    let at = BASE.find("\"white\"").unwrap() + 3;
+    bytes[at] = 0xef;
+    std::fs::write(&path, bytes).unwrap();
+    let err = printed_error(&path, &[]);
+    assert!(err.contains("latin1.toml:10:11"), "{err}");
+    assert_eq!(err.matches("valid UTF-8").count(), 1, "{err}");
+}
+
+#[test]
+fn an_unknown_key_is_named_once() {
+    expect_error(
+        "height = 48",
+        "height = 48\nsppp = 4",
+        4,
+        "field `render.sppp`",
+        "unknown field `sppp`",
+    );
+    expect_error(
+        "look_at = [0.0, 1.0, 0.0]",
+        "look_at = [0.0, 1.0, 0.0]\nfnumber = 2.8",
+        7,
+        "field `camera.fnumber`",
+        "unknown field",
+    );
+}
+
+#[test]
+fn a_missing_scene_file_gives_its_cause_once() {
+    let path = scratch_dir("missing").join("nowhere.toml");
+    let err = printed_error(&path, &[]);
+    assert!(err.contains("nowhere.toml"), "{err}");
+    let cause = std::fs::read(&path).unwrap_err().to_string();
+    assert_eq!(err.matches(cause.as_str()).count(), 1, "{err}");
+}
+
+#[test]
+fn huge_numbers_print_compactly() {
+    expect_error(
+        "radius = 1.0",
+        "radius = 1e300",
+        15,
+        "shapes[0].radius",
+        "1e300 does not fit in a 32-bit float",
+    );
+    expect_error(
+        "center = [0.0, 1.0, 0.0]",
+        "center = [0.0, 1.0, 3e30]",
+        14,
+        "shapes[0].center",
+        "[0, 1, 3e30] lies beyond",
+    );
+}
+
+#[test]
+fn a_bad_vertex_names_the_mesh_file_and_the_vertex() {
+    let obj = |second: &str| format!("v 0 0 0\n{second}\nv 0 1 0\nf 1 2 3\n");
+    mesh_error(
+        "nan.obj",
+        Some(&obj("v nan 0 0")),
+        "nan.obj: vertex 1 has a non-finite",
+    );
+    // Finite in the file's decimal text, infinite as the f32 every coordinate becomes.
+    mesh_error(
+        "big.obj",
+        Some(&obj("v 1e39 0 0")),
+        "big.obj: vertex 1 has a non-finite",
+    );
+    // ASCII PLY has no spelling for NaN; binary PLY carries its bits.
+    let mut ply = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n\
+                    property float y\nproperty float z\nelement face 1\n\
+                    property list uchar int vertex_indices\nend_header\n"
+        .to_vec();
+    for c in [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, f32::NAN, 0.0f32] {
+        ply.extend(c.to_le_bytes());
+    }
+    ply.push(3);
+    for i in [0i32, 1, 2] {
+        ply.extend(i.to_le_bytes());
+    }
+    mesh_error_with(
+        "nan.ply",
+        Some(&ply),
+        "",
+        "nan.ply: vertex 2 has a non-finite",
+    );
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    std::io::Write::write_all(&mut gz, obj("v 0 inf 0").as_bytes()).unwrap();
+    mesh_error_with(
+        "inf.obj.gz",
+        Some(&gz.finish().unwrap()),
+        "",
+        "inf.obj.gz: vertex 1 has a non-finite",
+    );
+    mesh_error_with(
+        "far.obj",
+        Some(obj("v 1 0 0").as_bytes()),
+        "\nscale = 2e9",
+        "far.obj: vertex 1 lies at [2e9, 0, 0] after transformation, beyond",
+    );
+}
+
+#[test]
+fn a_bad_face_names_the_mesh_file_and_the_face() {
+    let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+               property float z\nelement face 2\nproperty list uchar int vertex_indices\n\
+               end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 5\n";
+    mesh_error(
+        "face.ply",
+        Some(ply),
+        "face.ply: PLY face 1 has vertex index 5",
+    );
+    mesh_error(
+        "face.obj",
+        Some("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 x 3\n"),
+        "face.obj: malformed OBJ at line 5",
+    );
 }

@@ -153,3 +153,60 @@ fn a_corrupt_gzip_or_truncated_binary_ply_is_an_error_not_a_panic() {
     std::fs::write(&path, b"\x1f\x8b\x08\x00not really gzip").unwrap();
     assert!(load_mesh(&path).is_err());
 }
+
+/// The error of loading `path`, which must name the file.
+fn load_error(path: &std::path::Path) -> String {
+    let err = load_mesh(path).expect_err("an error");
+    assert!(err.contains(&path.display().to_string()), "{err}");
+    err
+}
+
+#[test]
+fn a_mesh_that_never_ends_is_an_error_not_an_abort() {
+    for name in ["zero.obj", "zero.ply"] {
+        let path = scratch(name);
+        let _ = std::fs::remove_file(&path);
+        std::os::unix::fs::symlink("/dev/zero", &path).unwrap();
+        let err = load_error(&path);
+        assert!(err.contains("line 1 is longer than 1048576 bytes"), "{err}");
+    }
+}
+
+#[test]
+fn an_endless_obj_line_is_cut_off() {
+    let mut text = b"v 0 0 0\nv 1 0 0\n# ".to_vec();
+    text.resize(text.len() + (3 << 20), b'x');
+    let path = scratch("long_line.obj");
+    std::fs::write(&path, &text).unwrap();
+    let err = load_error(&path);
+    assert!(err.contains("line 3 is longer than 1048576 bytes"), "{err}");
+    // The same line compressed: the limit applies to the decompressed text.
+    let path = scratch("long_line.obj.gz");
+    std::fs::write(&path, gzip(&text)).unwrap();
+    let err = load_error(&path);
+    assert!(err.contains("line 3 is longer"), "{err}");
+}
+
+#[test]
+fn a_ply_header_claiming_more_elements_than_its_bytes_is_refused() {
+    for format in ["ascii", "binary_little_endian"] {
+        let header = ply_header(format).replace("element vertex 5", "element vertex 4000000000");
+        let mut bytes = header.into_bytes();
+        bytes.extend([0u8; 64]);
+        let path = scratch(&format!("claims_{format}.ply"));
+        std::fs::write(&path, &bytes).unwrap();
+        let err = load_error(&path);
+        assert!(
+            err.contains("declares 4000000000 `vertex` elements") && err.contains("only 64 bytes"),
+            "{err}"
+        );
+        // Compressed, the size is unknown until read: the read limit bounds it instead.
+        let path = scratch(&format!("claims_{format}.ply.gz"));
+        std::fs::write(&path, gzip(&bytes)).unwrap();
+        let err = load_error(&path);
+        assert!(
+            err.contains("declares 4000000000 `vertex` elements"),
+            "{err}"
+        );
+    }
+}

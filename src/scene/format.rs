@@ -5,9 +5,61 @@
 //! than serde enums: serde buffers tagged enums, which would lose the position of a bad field.
 //! Which fields each `type` takes is checked in `validate.rs`. See `docs/scene-format.md`.
 
-use serde::Deserialize;
+use std::marker::PhantomData;
 
-pub type Vec3 = [f64; 3];
+use serde::Deserialize;
+use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
+
+/// A TOML array of exactly `N` elements. serde's own `[T; N]` stops reading after `N` and
+/// ignores the rest, so `position = [2, 3, 3, 9]` would pass as a point; this counts them all.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Exact<T, const N: usize>(pub [T; N]);
+
+pub type Vec3 = Exact<f64, 3>;
+/// A [x, y] or [width, height] pair in millimetres.
+pub type Pair = Exact<f64, 2>;
+
+impl<const N: usize> Default for Exact<f64, N> {
+    fn default() -> Self {
+        Exact([0.0; N])
+    }
+}
+
+impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Exact<T, N> {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserializer.deserialize_seq(ExactVisitor(PhantomData))
+    }
+}
+
+struct ExactVisitor<T, const N: usize>(PhantomData<T>);
+
+impl<'de, T: Deserialize<'de>, const N: usize> Visitor<'de> for ExactVisitor<T, N> {
+    type Value = Exact<T, N>;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "an array of exactly {N} elements")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        let mut items = Vec::with_capacity(N);
+        while let Some(item) = seq.next_element()? {
+            if items.len() == N {
+                // Count the surplus too, so the message says how many were given.
+                let mut given = N + 1;
+                while seq.next_element::<IgnoredAny>()?.is_some() {
+                    given += 1;
+                }
+                return Err(de::Error::invalid_length(given, &self));
+            }
+            items.push(item);
+        }
+        let given = items.len();
+        items
+            .try_into()
+            .map(Exact)
+            .map_err(|_| de::Error::invalid_length(given, &self))
+    }
+}
 
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -79,7 +131,7 @@ pub struct CameraSection {
     pub focal_length: Option<f64>,
     /// mm, width x height
     #[serde(default = "default_film")]
-    pub film: [f64; 2],
+    pub film: Pair,
     /// degrees; sets the focal length of a pinhole with this vertical field of view
     pub vertical_fov: Option<f64>,
     /// 0 or absent: pinhole
@@ -89,19 +141,19 @@ pub struct CameraSection {
     /// mm from the lens centre to the film along the rail (the bellows extension)
     pub film_distance: Option<f64>,
     /// three world points the plane of sharp focus must pass through
-    pub focus_points: Option<[Vec3; 3]>,
+    pub focus_points: Option<Exact<Vec3, 3>>,
     /// degrees: film rotation about the horizontal axis (corrects a camera pitched up by it)
     pub film_tilt: Option<f64>,
     /// degrees: film rotation about the vertical axis (corrects a camera yawed right by it)
     pub film_swing: Option<f64>,
     /// mm: [right, up] movement of the framing (rear standard shift, rise/fall)
-    pub film_shift: Option<[f64; 2]>,
+    pub film_shift: Option<Pair>,
     /// degrees: positive turns the plane of sharp focus down towards the ground
     pub lens_tilt: Option<f64>,
     /// degrees: positive turns the plane of sharp focus towards the right
     pub lens_swing: Option<f64>,
     /// mm: [right, up] movement of the lens (front standard shift)
-    pub lens_shift: Option<[f64; 2]>,
+    pub lens_shift: Option<Pair>,
     /// 0: circular; n >= 3: regular n-gon inscribed in the f/N circle
     pub aperture_blades: Option<i64>,
     /// degrees, counter-clockwise in the image
@@ -111,10 +163,10 @@ pub struct CameraSection {
 }
 
 fn default_up() -> Vec3 {
-    [0.0, 1.0, 0.0]
+    Exact([0.0, 1.0, 0.0])
 }
-fn default_film() -> [f64; 2] {
-    [36.0, 24.0]
+fn default_film() -> Pair {
+    Exact([36.0, 24.0])
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -147,11 +199,44 @@ pub enum ShapeType {
 }
 
 /// A uniform scale factor or one per axis.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(untagged)]
+#[derive(Debug, Clone, Copy)]
 pub enum Scale {
     Uniform(f64),
     PerAxis(Vec3),
+}
+
+/// By hand rather than `#[serde(untagged)]`: an untagged enum buffers the value and reports
+/// only "did not match any variant", losing why a per-axis array was refused.
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserializer.deserialize_any(ScaleVisitor)
+    }
+}
+
+struct ScaleVisitor;
+
+impl<'de> Visitor<'de> for ScaleVisitor {
+    type Value = Scale;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a number or an array of 3 numbers")
+    }
+
+    fn visit_f64<E: de::Error>(self, v: f64) -> Result<Scale, E> {
+        Ok(Scale::Uniform(v))
+    }
+
+    fn visit_i64<E: de::Error>(self, v: i64) -> Result<Scale, E> {
+        Ok(Scale::Uniform(v as f64))
+    }
+
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<Scale, E> {
+        Ok(Scale::Uniform(v as f64))
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Scale, A::Error> {
+        ExactVisitor(PhantomData).visit_seq(seq).map(Scale::PerAxis)
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]

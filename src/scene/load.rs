@@ -7,7 +7,6 @@
 
 use std::path::{Path, PathBuf};
 
-use serde::Deserialize;
 use toml::de::{DeTable, DeValue};
 
 use super::format::SceneFile;
@@ -25,11 +24,7 @@ pub struct ParsedScene {
 impl ParsedScene {
     /// An error about `field` (a path like `shapes[2].radius`).
     pub fn error(&self, field: &str, message: impl Into<String>) -> Error {
-        let (line, column) = if self
-            .overridden
-            .iter()
-            .any(|o| field.starts_with(o.as_str()))
-        {
+        let (line, column) = if self.overridden.iter().any(|o| is_within(field, o)) {
             (0, 0)
         } else {
             self.spans.line_col(field)
@@ -47,8 +42,31 @@ impl ParsedScene {
 }
 
 pub fn parse_scene_file(path: &Path, overrides: &[String]) -> Result<ParsedScene> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    parse_scene_text(path, &text, overrides)
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| invalid_utf8(path, &bytes, e))?;
+    parse_scene_text(path, text, overrides)
+}
+
+/// The line and column (in bytes) of the first byte that is not UTF-8.
+fn invalid_utf8(path: &Path, bytes: &[u8], e: std::str::Utf8Error) -> Error {
+    let offset = e.valid_up_to();
+    let before = &bytes[..offset];
+    let line_start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    Error::Scene {
+        location: Location {
+            file: path.to_path_buf(),
+            line: 1 + before.iter().filter(|&&b| b == b'\n').count(),
+            column: offset - line_start + 1,
+            field: String::new(),
+        },
+        message: format!(
+            "byte 0x{:02x} is not valid UTF-8: a scene file is UTF-8 text",
+            bytes[offset]
+        ),
+    }
 }
 
 pub fn parse_scene_text(path: &Path, text: &str, overrides: &[String]) -> Result<ParsedScene> {
@@ -86,16 +104,37 @@ pub fn parse_scene_text(path: &Path, text: &str, overrides: &[String]) -> Result
         })?;
         overridden.push(normalise_path(&key));
     }
-    let file = SceneFile::deserialize(toml::Value::Table(table)).map_err(|e| Error::Override {
-        key: overrides.join(" "),
-        message: e.message().trim().to_string(),
-    })?;
-    Ok(ParsedScene {
+    let mut parsed = ParsedScene {
         file,
         path: path.to_path_buf(),
         spans,
         overridden,
+    };
+    parsed.file = parse_with_overrides(&parsed, &table)?;
+    Ok(parsed)
+}
+
+/// The scene with its overrides applied, read back from TOML text so that an error in an
+/// overridden value is placed at its field like an error in the file (serde reports a span in
+/// text, but nothing for a value built in memory).
+fn parse_with_overrides(parsed: &ParsedScene, table: &toml::Table) -> Result<SceneFile> {
+    let merged = toml::to_string(table).map_err(|e| Error::Override {
+        key: parsed.overridden.join(" "),
+        message: e.to_string(),
+    })?;
+    toml::from_str(&merged).map_err(|e| {
+        let merged_spans = SpanIndex::new(&merged);
+        let offset = e.span().map_or(0, |s| s.start);
+        let field = merged_spans.field_at(offset, e.message());
+        parsed.error(&field, e.message().trim())
     })
+}
+
+/// Whether `field` is the path `outer` or lies inside it (`render.spp` is not inside `render.sp`).
+fn is_within(field: &str, outer: &str) -> bool {
+    field
+        .strip_prefix(outer)
+        .is_some_and(|rest| rest.is_empty() || rest.starts_with(['.', '[']))
 }
 
 /// Split `key=value`; the value is read as a TOML value (`16`, `2.8`, `[0, 1, 0]`, `"x"`), and
@@ -258,11 +297,14 @@ impl SpanIndex {
         if let Some(rest) = message.strip_prefix("unknown field `")
             && let Some(name) = rest.split('`').next()
         {
-            return if innermost.is_empty() {
-                name.to_string()
-            } else {
-                format!("{innermost}.{name}")
-            };
+            // The unknown key has a span of its own, which may be the innermost one already.
+            if innermost.is_empty() {
+                return name.to_string();
+            }
+            if innermost == name || innermost.ends_with(&format!(".{name}")) {
+                return innermost;
+            }
+            return format!("{innermost}.{name}");
         }
         innermost
     }

@@ -4,11 +4,19 @@
 //! and groups, with or without normals); PLY through `ply-rs-bw` (ASCII and binary of either byte
 //! order; properties other than positions, normals and faces are ignored).
 
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
 use glam::{Mat3, Vec3};
-use ply_rs_bw::ply::Property;
+use ply_rs_bw::parser::{Parser, Reader};
+use ply_rs_bw::ply::{DefaultElement, Encoding, Header, Property, PropertyType, ScalarType};
+
+/// Most bytes read from one mesh file, after decompression: a file that never ends (a device,
+/// a gzip bomb) stops here with an error instead of exhausting memory.
+pub const MAX_MESH_BYTES: u64 = 2 << 30;
+/// Longest text line of an OBJ file, a PLY header or an ASCII PLY body: the parsers grow one
+/// string per line, so an endless line must be cut off before it exhausts memory.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
 
 /// An indexed triangle mesh in scene space.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -21,37 +29,150 @@ pub struct TriangleMesh {
     pub dropped_degenerate: usize,
 }
 
-/// Reads a mesh; the error is a sentence ready to follow the file name.
+/// Reads a mesh; the error is a sentence that starts with the file's path.
 pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
+    read_mesh(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn read_mesh(path: &Path) -> Result<TriangleMesh, String> {
     let file = std::fs::File::open(path).map_err(|e| format!("cannot open mesh file: {e}"))?;
     let name = path.to_string_lossy().to_ascii_lowercase();
+    let compressed = name.ends_with(".gz");
     let inner_name = name.strip_suffix(".gz").unwrap_or(&name);
-    let mut reader: Box<dyn BufRead> = if name.ends_with(".gz") {
-        Box::new(BufReader::new(flate2::read::MultiGzDecoder::new(file)))
-    } else {
-        Box::new(BufReader::new(file))
+    // Only an uncompressed regular file tells its size; otherwise the read limit bounds it.
+    let available = match file.metadata() {
+        Ok(m) if m.is_file() && !compressed => m.len().min(MAX_MESH_BYTES),
+        _ => MAX_MESH_BYTES,
     };
+    let source: Box<dyn Read> = if compressed {
+        Box::new(flate2::read::MultiGzDecoder::new(file))
+    } else {
+        Box::new(file)
+    };
+    let mut reader = GuardedReader::new(source, MAX_MESH_BYTES, MAX_LINE_BYTES);
     let mesh = if inner_name.ends_with(".obj") {
         read_obj(&mut reader)?
     } else if inner_name.ends_with(".ply") {
-        read_ply(&mut reader)?
+        read_ply(&mut reader, available)?
     } else {
         return Err("unknown mesh format (expected .obj, .ply, .obj.gz or .ply.gz)".into());
     };
     check_mesh(mesh)
 }
 
-fn read_obj(reader: &mut dyn BufRead) -> Result<TriangleMesh, String> {
+/// A buffered reader with limits: at most `max_bytes` in all, and (while `line_limit` is set)
+/// at most that many bytes without a line break. It counts the lines its reader has consumed,
+/// so a parser's error can be placed, and keeps the reason of the first failure, because the
+/// parsers replace a read error by a generic one (tobj: "read error").
+struct GuardedReader {
+    inner: BufReader<Box<dyn Read>>,
+    max_bytes: u64,
+    line_limit: Option<usize>,
+    consumed: u64,
+    /// Line breaks consumed so far.
+    lines: usize,
+    /// Bytes consumed since the last line break.
+    line_length: usize,
+    failure: Option<String>,
+}
+
+impl GuardedReader {
+    fn new(source: Box<dyn Read>, max_bytes: u64, line_limit: usize) -> Self {
+        GuardedReader {
+            inner: BufReader::new(source),
+            max_bytes,
+            line_limit: Some(line_limit),
+            consumed: 0,
+            lines: 0,
+            line_length: 0,
+            failure: None,
+        }
+    }
+
+    /// 1-based number of the line being read (the last one consumed, if it has no break yet).
+    fn current_line(&self) -> usize {
+        if self.line_length > 0 {
+            self.lines + 1
+        } else {
+            self.lines.max(1)
+        }
+    }
+
+    fn fail(&mut self, reason: String) -> std::io::Error {
+        let error = std::io::Error::new(std::io::ErrorKind::InvalidData, reason.clone());
+        self.failure.get_or_insert(reason);
+        error
+    }
+
+    /// The reason of the reader's own failure if there was one, else the parser's `message`.
+    fn explain(&self, message: String) -> String {
+        self.failure.clone().unwrap_or(message)
+    }
+
+    /// Errors that must stop the read before more bytes are handed out.
+    fn check_limits(&mut self, buffered: usize) -> std::io::Result<()> {
+        if let Some(limit) = self.line_limit
+            && self.line_length > limit
+        {
+            let line = self.lines + 1;
+            return Err(self.fail(format!(
+                "line {line} is longer than {limit} bytes without a line break"
+            )));
+        }
+        if self.consumed >= self.max_bytes && buffered > 0 {
+            return Err(self.fail(format!(
+                "holds more than {} bytes (the limit on a mesh file, after decompression)",
+                self.max_bytes
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl Read for GuardedReader {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        let buffered = self.fill_buf()?;
+        let n = buffered.len().min(out.len());
+        out[..n].copy_from_slice(&buffered[..n]);
+        self.consume(n);
+        Ok(n)
+    }
+}
+
+impl BufRead for GuardedReader {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        let buffered = match self.inner.fill_buf() {
+            Ok(b) => b.len(),
+            Err(e) => return Err(self.fail(format!("cannot read: {e}"))),
+        };
+        self.check_limits(buffered)?;
+        let allowed = (self.max_bytes - self.consumed).min(buffered as u64) as usize;
+        Ok(&self.inner.buffer()[..allowed])
+    }
+
+    fn consume(&mut self, amount: usize) {
+        let taken = &self.inner.buffer()[..amount];
+        match taken.iter().rposition(|&b| b == b'\n') {
+            Some(last) => {
+                self.lines += taken.iter().filter(|&&b| b == b'\n').count();
+                self.line_length = amount - last - 1;
+            }
+            None => self.line_length += amount,
+        }
+        self.consumed += amount as u64;
+        self.inner.consume(amount);
+    }
+}
+
+fn read_obj(reader: &mut GuardedReader) -> Result<TriangleMesh, String> {
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
         ..Default::default()
     };
     // Materials are chambre's own, so `mtllib` files are not read.
-    let (models, _) = tobj::load_obj_buf(&mut BufReader::new(reader), &options, |_| {
-        Ok(Default::default())
-    })
-    .map_err(|e| format!("malformed OBJ: {e}"))?;
+    let (models, _) = tobj::load_obj_buf(reader, &options, |_| Ok(Default::default()))
+        .map_err(|e| reader.explain(obj_error_message(e, reader.current_line())))?;
     let mut mesh = TriangleMesh::default();
     let all_have_normals = models
         .iter()
@@ -84,20 +205,39 @@ fn read_obj(reader: &mut dyn BufRead) -> Result<TriangleMesh, String> {
     Ok(mesh)
 }
 
-fn read_ply(reader: &mut dyn BufRead) -> Result<TriangleMesh, String> {
-    let parser = ply_rs_bw::parser::Parser::<ply_rs_bw::ply::DefaultElement>::new();
-    let mut bytes = Vec::new();
-    reader
-        .read_to_end(&mut bytes)
-        .map_err(|e| format!("cannot read PLY: {e}"))?;
-    let ply = parser
-        .read_ply(&mut bytes.as_slice())
-        .map_err(|e| format!("malformed PLY: {e}"))?;
-    let vertices = ply
-        .payload
-        .get("vertex")
-        .ok_or("PLY has no `vertex` element")?;
-    let scalar = |e: &ply_rs_bw::ply::DefaultElement, key: &str| -> Option<f32> {
+/// tobj parses line by line, except that it resolves face indices when an object ends (at the
+/// next `o` line or at the end of the file), so those errors name the object's last line.
+fn obj_error_message(e: tobj::LoadError, line: usize) -> String {
+    use tobj::LoadError::*;
+    match e {
+        // Read errors from the file itself are kept by the reader; what is left is std's check
+        // that each line is UTF-8.
+        ReadError => format!("malformed OBJ: line {line} is not UTF-8 text"),
+        FaceVertexOutOfBounds
+        | FaceTexCoordOutOfBounds
+        | FaceNormalOutOfBounds
+        | FaceColorOutOfBounds => {
+            format!("malformed OBJ: {e} in a face of the object that ends at line {line}")
+        }
+        _ => format!("malformed OBJ at line {line}: {e}"),
+    }
+}
+
+fn read_ply(reader: &mut GuardedReader, available: u64) -> Result<TriangleMesh, String> {
+    let parser = Parser::<DefaultElement>::new();
+    let header = parser
+        .read_header(&mut Reader::new(&mut *reader))
+        .map_err(|e| reader.explain(format!("malformed PLY header: {e}")))?;
+    check_element_counts(&header, available.saturating_sub(reader.consumed))?;
+    if header.encoding != Encoding::Ascii {
+        // Binary data has no lines: any run of bytes without 0x0a is legitimate.
+        reader.line_limit = None;
+    }
+    let payload = parser
+        .read_payload(&mut Reader::new(&mut *reader), &header)
+        .map_err(|e| reader.explain(format!("malformed PLY: {e}")))?;
+    let vertices = payload.get("vertex").ok_or("PLY has no `vertex` element")?;
+    let scalar = |e: &DefaultElement, key: &str| -> Option<f32> {
         match e.get(key)? {
             Property::Float(v) => Some(*v),
             Property::Double(v) => Some(*v as f32),
@@ -125,11 +265,7 @@ fn read_ply(reader: &mut dyn BufRead) -> Result<TriangleMesh, String> {
     if normals.len() == mesh.positions.len() && !normals.is_empty() {
         mesh.normals = Some(normals);
     }
-    let faces = ply
-        .payload
-        .get("face")
-        .map(Vec::as_slice)
-        .unwrap_or_default();
+    let faces = payload.get("face").map(Vec::as_slice).unwrap_or_default();
     for (f, face) in faces.iter().enumerate() {
         let indices: Vec<i64> = match face
             .get("vertex_indices")
@@ -158,10 +294,61 @@ fn read_ply(reader: &mut dyn BufRead) -> Result<TriangleMesh, String> {
     Ok(mesh)
 }
 
+/// The header's element counts against the bytes that follow it, before the parser reads them:
+/// a header claiming 4e9 vertices in a small file is refused at once, not after a long loop.
+fn check_element_counts(header: &Header, available: u64) -> Result<(), String> {
+    let mut needed = 0u64;
+    for element in header.elements.values() {
+        // Every element takes at least a byte (an element without properties is refused by
+        // counting it as one), so a count can never outrun the data.
+        let smallest = element
+            .properties
+            .values()
+            .map(|p| smallest_encoding(&header.encoding, &p.data_type))
+            .sum::<u64>()
+            .max(1);
+        needed = needed.saturating_add((element.count as u64).saturating_mul(smallest));
+        if needed > available {
+            return Err(format!(
+                "PLY header declares {} `{}` elements, which need at least {needed} bytes, but \
+                 only {available} bytes follow the header",
+                element.count, element.name
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Fewest bytes one property can take: its binary size (a list: its length field alone), or in
+/// ASCII one digit and one separator.
+fn smallest_encoding(encoding: &Encoding, property: &PropertyType) -> u64 {
+    if *encoding == Encoding::Ascii {
+        return 2;
+    }
+    let scalar = match property {
+        PropertyType::Scalar(t) | PropertyType::List(t, _) => t,
+    };
+    match scalar {
+        ScalarType::Char | ScalarType::UChar => 1,
+        ScalarType::Short | ScalarType::UShort => 2,
+        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
+        ScalarType::Double => 8,
+    }
+}
+
 /// Rejects meshes that cannot be rendered and drops triangles that can never be hit.
 fn check_mesh(mut mesh: TriangleMesh) -> Result<TriangleMesh, String> {
-    if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
-        return Err(format!("vertex {i} has a non-finite coordinate"));
+    if let Some((i, p)) = mesh
+        .positions
+        .iter()
+        .enumerate()
+        .find(|(_, p)| !p.is_finite())
+    {
+        return Err(format!(
+            "vertex {i} has a non-finite coordinate ({}, {}, {}): NaN, infinity, or beyond \
+             the 32-bit float range",
+            p.x, p.y, p.z
+        ));
     }
     let count = mesh.positions.len() as u32;
     if let Some(t) = mesh
@@ -206,5 +393,36 @@ pub fn transform_mesh(mesh: &mut TriangleMesh, scale: Vec3, rotate_deg: Vec3, tr
         for n in normals.iter_mut() {
             *n = (normal_matrix * *n).normalize_or_zero();
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The 2 GiB limit scaled down: an endless stream of empty lines stops at `max_bytes`.
+    #[test]
+    fn the_byte_limit_stops_an_endless_stream() {
+        let mut reader = GuardedReader::new(Box::new(std::io::repeat(b'\n')), 1000, 10);
+        let mut sink = Vec::new();
+        let err = reader.read_to_end(&mut sink).unwrap_err();
+        assert_eq!(sink.len(), 1000);
+        assert!(err.to_string().contains("more than 1000 bytes"), "{err}");
+        assert_eq!(reader.explain("parser".into()), err.to_string());
+    }
+
+    #[test]
+    fn lines_are_counted_and_limited() {
+        let text = b"a\nbb\nccccccccccccccc".to_vec();
+        let mut reader = GuardedReader::new(Box::new(std::io::Cursor::new(text)), 1000, 10);
+        let mut line = String::new();
+        reader.read_line(&mut line).unwrap();
+        reader.read_line(&mut line).unwrap();
+        assert_eq!(reader.current_line(), 2);
+        let err = reader.read_line(&mut line).unwrap_err();
+        assert!(
+            err.to_string().contains("line 3 is longer than 10 bytes"),
+            "{err}"
+        );
     }
 }

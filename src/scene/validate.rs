@@ -7,7 +7,7 @@
 use glam::{DVec3, Vec3};
 
 use super::format::{
-    LightType, MaterialModel, SamplerName, Scale, SceneFile, ShapeType, Vec3 as F3,
+    Exact, LightType, MaterialModel, Pair, SamplerName, Scale, SceneFile, ShapeType, Vec3 as F3,
 };
 use super::load::ParsedScene;
 use super::mesh::{load_mesh, transform_mesh};
@@ -27,6 +27,36 @@ pub const MAX_DEPTH: i64 = 1024;
 pub const MAX_LIGHT_SAMPLES: i64 = 4096;
 /// Film and lens rotations lie strictly inside +-90 degrees (at 90 a standard is edge-on).
 pub const MAX_MOVEMENT_DEG: f64 = 90.0;
+/// Largest radiometric value (intensity, irradiance, radiance, background, ambient): the sum of
+/// 2^20 samples, each through up to 1025 path vertices with BRDF values up to 1.6e3 (Phong at
+/// shininess 1e4), stays below 2e32, far inside f32's 3.4e38. See `docs/scene-format.md`.
+pub const MAX_RADIOMETRIC: f64 = 1.0e20;
+
+/// A number as messages print it: plain in everyday magnitudes, in scientific notation beyond
+/// them, so that 1e300 does not print as 301 digits.
+fn num(v: f64) -> String {
+    let magnitude = v.abs();
+    if magnitude == 0.0 || !v.is_finite() || (1.0e-4..1.0e6).contains(&magnitude) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// A computed ratio as messages print it: four decimals, unless it is extreme.
+fn ratio(v: f64) -> String {
+    if (1.0e-4..1.0e6).contains(&v.abs()) {
+        format!("{v:.4}")
+    } else {
+        num(v)
+    }
+}
+
+/// A vector as messages print it, each element through [`num`].
+fn nums(v: &[f64]) -> String {
+    let items: Vec<String> = v.iter().map(|&x| num(x)).collect();
+    format!("[{}]", items.join(", "))
+}
 
 struct Checker<'a> {
     parsed: &'a ParsedScene,
@@ -42,7 +72,7 @@ impl Checker<'_> {
             return Err(self.err(field, format!("must be a finite number, not {v}")));
         }
         if v.abs() > f32::MAX as f64 {
-            return Err(self.err(field, format!("{v} does not fit in a 32-bit float")));
+            return Err(self.err(field, format!("{} does not fit in a 32-bit float", num(v))));
         }
         Ok(v)
     }
@@ -50,16 +80,16 @@ impl Checker<'_> {
     fn positive(&self, field: &str, v: f64) -> Result<f64> {
         let v = self.finite(field, v)?;
         if v <= 0.0 {
-            return Err(self.err(field, format!("must be positive, got {v}")));
+            return Err(self.err(field, format!("must be positive, got {}", num(v))));
         }
         Ok(v)
     }
 
     fn vector(&self, field: &str, v: F3) -> Result<DVec3> {
-        for (i, c) in v.iter().enumerate() {
+        for (i, c) in v.0.iter().enumerate() {
             self.finite(&format!("{field}[{i}]"), *c)?;
         }
-        Ok(DVec3::from_array(v))
+        Ok(DVec3::from_array(v.0))
     }
 
     fn point(&self, field: &str, v: F3) -> Result<DVec3> {
@@ -67,7 +97,10 @@ impl Checker<'_> {
         if p.abs().max_element() > MAX_COORDINATE {
             return Err(self.err(
                 field,
-                format!("{p} lies beyond +-{MAX_COORDINATE:e} scene units (f32 precision limit)"),
+                format!(
+                    "{} lies beyond +-{MAX_COORDINATE:e} scene units (f32 precision limit)",
+                    nums(&p.to_array())
+                ),
             ));
         }
         Ok(p)
@@ -82,25 +115,50 @@ impl Checker<'_> {
         Ok(d)
     }
 
-    fn color(&self, field: &str, v: F3) -> Result<Vec3> {
+    fn color(&self, field: &str, v: F3) -> Result<DVec3> {
         let c = self.vector(field, v)?;
         if c.min_element() < 0.0 {
-            return Err(self.err(field, format!("must not be negative, got {c}")));
+            return Err(self.err(
+                field,
+                format!("must not be negative, got {}", nums(&c.to_array())),
+            ));
         }
-        Ok(c.as_vec3())
+        Ok(c)
     }
 
     fn reflectance(&self, field: &str, v: F3) -> Result<Vec3> {
         let c = self.color(field, v)?;
         if c.max_element() > 1.0 {
-            return Err(self.err(field, format!("a reflectance lies in [0, 1], got {c}")));
+            return Err(self.err(
+                field,
+                format!("a reflectance lies in [0, 1], got {}", nums(&c.to_array())),
+            ));
         }
-        Ok(c)
+        Ok(c.as_vec3())
+    }
+
+    /// A light's or the environment's radiometric value, bounded so sums stay inside f32.
+    fn radiometric(&self, field: &str, v: F3) -> Result<Vec3> {
+        let c = self.color(field, v)?;
+        if c.max_element() > MAX_RADIOMETRIC {
+            return Err(self.err(
+                field,
+                format!(
+                    "{} exceeds {MAX_RADIOMETRIC:e}: sums of samples would overflow the 32-bit \
+                     floats of the render",
+                    nums(&c.to_array())
+                ),
+            ));
+        }
+        Ok(c.as_vec3())
     }
 
     fn integer(&self, field: &str, v: i64, min: i64, max: i64) -> Result<u32> {
         if v < min || v > max {
-            return Err(self.err(field, format!("must lie in {min}..={max}, got {v}")));
+            return Err(self.err(
+                field,
+                format!("must lie in {min}..={max}, got {}", num(v as f64)),
+            ));
         }
         Ok(v as u32)
     }
@@ -167,8 +225,8 @@ fn validate_render(check: &Checker, file: &SceneFile) -> Result<RenderSettings> 
         max_depth: check.integer("render.max_depth", r.max_depth, 0, MAX_DEPTH)?,
         seed: check.integer("render.seed", r.seed, 0, u32::MAX as i64)?,
         pixel_sampler: r.pixel_sampler,
-        background: check.color("render.background", r.background)?,
-        ambient: check.color("render.ambient", r.ambient)?,
+        background: check.radiometric("render.background", r.background)?,
+        ambient: check.radiometric("render.ambient", r.ambient)?,
     })
 }
 
@@ -193,8 +251,8 @@ fn validate_camera(
         return Err(check.err("camera.up", "is parallel to the viewing direction"));
     }
     let film = [
-        check.positive("camera.film[0]", c.film[0])?,
-        check.positive("camera.film[1]", c.film[1])?,
+        check.positive("camera.film[0]", c.film.0[0])?,
+        check.positive("camera.film[1]", c.film.0[1])?,
     ];
     let film_aspect = film[0] / film[1];
     let image_aspect = render.width as f64 / render.height as f64;
@@ -202,9 +260,14 @@ fn validate_camera(
         return Err(check.err(
             "camera.film",
             format!(
-                "film aspect {film_aspect:.4} ({} x {} mm) does not match the image aspect \
-                 {image_aspect:.4} ({} x {} pixels)",
-                film[0], film[1], render.width, render.height
+                "film aspect {} ({} x {} mm) does not match the image aspect {} ({} x {} \
+                 pixels)",
+                ratio(film_aspect),
+                num(film[0]),
+                num(film[1]),
+                ratio(image_aspect),
+                render.width,
+                render.height
             ),
         ));
     }
@@ -221,7 +284,7 @@ fn validate_camera(
             if fov <= 0.0 || fov >= 180.0 {
                 return Err(check.err(
                     "camera.vertical_fov",
-                    format!("must lie in (0, 180) degrees, got {fov}"),
+                    format!("must lie in (0, 180) degrees, got {}", num(fov)),
                 ));
             }
             0.5 * film[1] / (0.5 * fov.to_radians()).tan()
@@ -234,7 +297,7 @@ fn validate_camera(
             if n < 0.0 {
                 return Err(check.err(
                     "camera.f_number",
-                    format!("must be 0 (pinhole) or positive, got {n}"),
+                    format!("must be 0 (pinhole) or positive, got {}", num(n)),
                 ));
             }
             n
@@ -250,9 +313,11 @@ fn validate_camera(
                 return Err(check.err(
                     "camera.focus_distance",
                     format!(
-                        "{d} scene units ({} mm) is not beyond the focal length {focal_length_mm} mm: \
+                        "{} scene units ({} mm) is not beyond the focal length {} mm: \
                          no real image forms",
-                        d / units_per_mm
+                        num(d),
+                        num(d / units_per_mm),
+                        num(focal_length_mm)
                     ),
                 ));
             }
@@ -266,15 +331,16 @@ fn validate_camera(
             return Err(check.err(
                 field,
                 format!(
-                    "{a} degrees turns the standard edge-on or past it: movements lie strictly \
-                     between -{MAX_MOVEMENT_DEG} and {MAX_MOVEMENT_DEG} degrees"
+                    "{} degrees turns the standard edge-on or past it: movements lie strictly \
+                     between -{MAX_MOVEMENT_DEG} and {MAX_MOVEMENT_DEG} degrees",
+                    num(a)
                 ),
             ));
         }
         Ok(a)
     };
-    let shift = |field: &str, v: Option<[f64; 2]>| -> Result<[f64; 2]> {
-        let [x, y] = v.unwrap_or([0.0, 0.0]);
+    let shift = |field: &str, v: Option<Pair>| -> Result<[f64; 2]> {
+        let [x, y] = v.unwrap_or_default().0;
         Ok([
             check.finite(&format!("{field}[0]"), x)?,
             check.finite(&format!("{field}[1]"), y)?,
@@ -349,8 +415,10 @@ fn validate_camera(
             return Err(check.err(
                 "camera.film_distance",
                 format!(
-                    "{d} mm puts the film closer to the lens than its focal length \
-                     {focal_length_mm} mm: no real object is in focus there"
+                    "{} mm puts the film closer to the lens than its focal length \
+                     {} mm: no real object is in focus there",
+                    num(d),
+                    num(focal_length_mm)
                 ),
             ));
         }
@@ -373,7 +441,7 @@ fn validate_camera(
             }
         }
         let mut world = [DVec3::ZERO; 3];
-        for (i, p) in points.iter().enumerate() {
+        for (i, p) in points.0.iter().enumerate() {
             world[i] = check.point(&format!("{field}[{i}]"), *p)?;
         }
         let solution = solve_focus_points(&camera, world).map_err(|e| check.err(field, e))?;
@@ -402,17 +470,17 @@ fn check_film_behind_lens(check: &Checker, camera: &CameraSpec) -> Result<()> {
             return Err(check.err(
                 "camera",
                 format!(
-                    "with film_tilt {} and film_swing {} (film {} x {} mm at {:.3} mm), \
+                    "with film_tilt {} and film_swing {} (film {} x {} mm at {} mm), \
                      lens_tilt {:.3} and lens_swing {:.3} degrees, a film corner reaches \
-                     {:.3} mm from the lens plane: no image can form; reduce the movements",
-                    m.film_tilt,
-                    m.film_swing,
-                    camera.film_mm[0],
-                    camera.film_mm[1],
-                    camera.film_distance_mm,
+                     {} mm from the lens plane: no image can form; reduce the movements",
+                    num(m.film_tilt),
+                    num(m.film_swing),
+                    num(camera.film_mm[0]),
+                    num(camera.film_mm[1]),
+                    num(camera.film_distance_mm),
                     m.lens_tilt,
                     m.lens_swing,
-                    -corner.z
+                    num(-corner.z)
                 ),
             ));
         }
@@ -428,9 +496,9 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
             return Err(check.err(&at("name"), format!("duplicate material name `{}`", m.name)));
         }
         let is_mirror = m.model == MaterialModel::Mirror;
-        let default_diffuse = if is_mirror { [0.0; 3] } else { [0.8; 3] };
-        let default_mirror = if is_mirror { [1.0; 3] } else { [0.0; 3] };
-        let specular = check.reflectance(&at("specular"), m.specular.unwrap_or([0.0; 3]))?;
+        let default_diffuse = Exact(if is_mirror { [0.0; 3] } else { [0.8; 3] });
+        let default_mirror = Exact(if is_mirror { [1.0; 3] } else { [0.0; 3] });
+        let specular = check.reflectance(&at("specular"), m.specular.unwrap_or_default())?;
         let uses_lobe = matches!(m.model, MaterialModel::Phong | MaterialModel::BlinnPhong);
         if !uses_lobe && (m.specular.is_some() || m.shininess.is_some()) {
             let field = if m.specular.is_some() {
@@ -447,7 +515,7 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
         if !(0.0..=1.0e4).contains(&shininess) {
             return Err(check.err(
                 &at("shininess"),
-                format!("must lie in [0, 10000], got {shininess}"),
+                format!("must lie in [0, 10000], got {}", num(shininess)),
             ));
         }
         materials.push(Material {
@@ -571,8 +639,7 @@ fn validate_shapes(
                 )?;
                 let name = check.require(&at("file"), s.file.as_ref(), "mesh")?;
                 let path = scene_dir.join(name);
-                let mut mesh = load_mesh(&path)
-                    .map_err(|e| check.err(&at("file"), format!("{}: {e}", path.display())))?;
+                let mut mesh = load_mesh(&path).map_err(|e| check.err(&at("file"), e))?;
                 let scale = match s.scale.unwrap_or(Scale::Uniform(1.0)) {
                     Scale::Uniform(k) => DVec3::splat(check.finite(&at("scale"), k)?),
                     Scale::PerAxis(v) => check.vector(&at("scale"), v)?,
@@ -580,8 +647,8 @@ fn validate_shapes(
                 if scale.min_element() == 0.0 || scale.abs().min_element() == 0.0 {
                     return Err(check.err(&at("scale"), "a zero scale flattens the mesh"));
                 }
-                let rotate = check.vector(&at("rotate"), s.rotate.unwrap_or([0.0; 3]))?;
-                let translate = check.point(&at("translate"), s.translate.unwrap_or([0.0; 3]))?;
+                let rotate = check.vector(&at("rotate"), s.rotate.unwrap_or_default())?;
+                let translate = check.point(&at("translate"), s.translate.unwrap_or_default())?;
                 if !s.smooth.unwrap_or(true) {
                     mesh.normals = None;
                 }
@@ -591,14 +658,20 @@ fn validate_shapes(
                     rotate.as_vec3(),
                     translate.as_vec3(),
                 );
-                if let Some(p) = mesh
+                if let Some((v, p)) = mesh
                     .positions
                     .iter()
-                    .find(|p| p.abs().max_element() as f64 > MAX_COORDINATE)
+                    .enumerate()
+                    .find(|(_, p)| !within_coordinate_limit(**p))
                 {
                     return Err(check.err(
                         &at("file"),
-                        format!("vertex {p} lies beyond +-{MAX_COORDINATE:e} scene units after transformation"),
+                        format!(
+                            "{}: vertex {v} lies at {} after transformation, beyond \
+                             +-{MAX_COORDINATE:e} scene units",
+                            path.display(),
+                            nums(&p.as_dvec3().to_array())
+                        ),
                     ));
                 }
                 Shape::Mesh { mesh, material }
@@ -607,6 +680,11 @@ fn validate_shapes(
         shapes.push(shape);
     }
     Ok(shapes)
+}
+
+/// NaN compares false, so finiteness is tested first and explicitly.
+fn within_coordinate_limit(p: Vec3) -> bool {
+    p.is_finite() && p.abs().max_element() as f64 <= MAX_COORDINATE
 }
 
 /// Corner and two non-parallel, non-zero edges of a quad or an area light.
@@ -665,7 +743,7 @@ fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
                             check.require(&at("position"), l.position, "point light")?,
                         )?
                         .as_vec3(),
-                    intensity: check.color(
+                    intensity: check.radiometric(
                         &at("intensity"),
                         check.require(&at("intensity"), l.intensity, "point light")?,
                     )?,
@@ -683,7 +761,7 @@ fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
                 )?;
                 Light::Directional {
                     direction: direction.normalize().as_vec3(),
-                    irradiance: check.color(
+                    irradiance: check.radiometric(
                         &at("irradiance"),
                         check.require(&at("irradiance"), l.irradiance, "directional light")?,
                     )?,
@@ -701,7 +779,7 @@ fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
                     corner,
                     edge_u,
                     edge_v,
-                    radiance: check.color(
+                    radiance: check.radiometric(
                         &at("radiance"),
                         check.require(&at("radiance"), l.radiance, "area light")?,
                     )?,
