@@ -26,12 +26,23 @@ use std::f64::consts::TAU;
 use crate::layout::*;
 use crate::math::rng::{Rng, pcg_hash};
 use crate::math::sampling::{concentric_disk, strata_columns, stratified_2d};
-use crate::scene::SamplerName;
 
 /// Samples per pixel the table-based samplers (poisson, interleaved) accept.
 pub const MAX_TABLE_SPP: u32 = 4096;
 /// Largest number of aperture blades.
 pub const MAX_BLADES: u32 = 64;
+
+/// A sample pattern, as scene files and flags name it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SamplerName {
+    Random,
+    #[default]
+    Stratified,
+    Poisson,
+    Interleaved,
+    Sobol,
+}
 
 impl SamplerName {
     /// The `SAMPLER_*` code the kernels switch on.

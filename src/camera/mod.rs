@@ -21,7 +21,7 @@ pub mod report;
 use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
 
 use crate::layout::GpuCamera;
-use crate::scene::SamplerName;
+use crate::sampler::SamplerName;
 
 /// Film and lens movements in the scene file's units: degrees and millimetres.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -7,6 +7,7 @@
 
 use std::marker::PhantomData;
 
+pub use crate::sampler::SamplerName;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
 
@@ -81,17 +82,6 @@ pub struct SceneFile {
 pub struct SceneSection {
     /// Length of one scene unit in metres (default 1: scene units are metres).
     pub meters_per_unit: Option<f64>,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SamplerName {
-    Random,
-    #[default]
-    Stratified,
-    Poisson,
-    Interleaved,
-    Sobol,
 }
 
 #[derive(Debug, Clone, Deserialize)]

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 pub use crate::camera::CameraSpec;
-pub use format::SamplerName;
+pub use crate::sampler::SamplerName;
 pub use load::parse_override;
 pub use mesh::TriangleMesh;
 
