@@ -10,6 +10,8 @@ use bytemuck::{Pod, Zeroable};
 
 /// Kernel workgroup edge: a workgroup covers `WORKGROUP_SIZE x WORKGROUP_SIZE` pixels.
 pub const WORKGROUP_SIZE: u32 = 8;
+/// Invocations per workgroup of the ray-query kernels (one ray each).
+pub const TRACE_WORKGROUP_SIZE: u32 = 64;
 /// Depth of the per-invocation BVH traversal stack. Deeper BVHs are refused before upload.
 pub const BVH_STACK_SIZE: u32 = 64;
 /// Finite stand-in for an unbounded ray: WGSL may assume infinities never occur.
@@ -264,6 +266,17 @@ const _: () = assert!(
             | FEATURE_TRIANGLES
             | FEATURE_PLANES
 );
+/// A ray of the ray benchmark's buffer (`wgsl/trace.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuRay {
+    pub origin: [f32; 3],
+    pub t_max: f32,
+    pub direction: [f32; 3],
+    pub _pad0: u32,
+}
+
+const _: () = assert!(size_of::<GpuRay>() == 32);
 const _: () = assert!(size_of::<GpuBvhNode>() == 32);
 const _: () = assert!(size_of::<GpuPrimitive>() == 48);
 const _: () = assert!(size_of::<GpuNormals>() == 36);
@@ -277,6 +290,7 @@ const _: () = assert!(size_of::<GpuPass>() == 48);
 pub fn wgsl_prelude() -> String {
     let u32s = [
         ("WORKGROUP_SIZE", WORKGROUP_SIZE),
+        ("TRACE_WORKGROUP_SIZE", TRACE_WORKGROUP_SIZE),
         ("BVH_STACK_SIZE", BVH_STACK_SIZE),
         ("NONE", NONE),
         ("PRIM_TRIANGLE", PRIM_TRIANGLE),

@@ -25,6 +25,7 @@
 //! pipeline builder, specialised to the scene's features (`layout::FEATURES`).
 
 pub mod accel;
+pub mod bench;
 pub mod camera;
 pub mod cpu;
 pub mod error;

@@ -5,7 +5,7 @@
 use std::mem::{offset_of, size_of};
 
 use chambre::gpu::kernels::{
-    Access, KERNELS, MODULES, RENDER, SCENE_BINDINGS, feature_constants, kernel_source,
+    Access, BINDINGS, KERNELS, MODULES, RENDER, feature_constants, kernel_source,
 };
 use chambre::layout::*;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
@@ -54,8 +54,8 @@ fn every_kernel_validates_in_every_feature_variant() {
     }
 }
 
-/// The bindings wgsl/bindings.wgsl declares are exactly `SCENE_BINDINGS`: numbers, names and
-/// access.
+/// The bindings wgsl/bindings.wgsl declares are exactly `BINDINGS`: numbers, names and
+/// access; and each kernel's binding list is a subset of them.
 #[test]
 fn declared_bindings_are_the_rust_table() {
     let module = parse_and_validate(&render_kernel_source());
@@ -79,7 +79,14 @@ fn declared_bindings_are_the_rust_table() {
         })
         .collect();
     declared.sort_by_key(|d| d.0);
-    let table: Vec<(u32, String, Access)> = SCENE_BINDINGS
+    for kernel in KERNELS {
+        assert!(
+            kernel.bindings.iter().all(|b| BINDINGS.contains(b)),
+            "{}",
+            kernel.name
+        );
+    }
+    let table: Vec<(u32, String, Access)> = BINDINGS
         .iter()
         .map(|b| (b.binding, b.name.to_string(), b.access))
         .collect();
@@ -207,6 +214,15 @@ fn shared_structs_have_identical_layouts() {
     layout!(module, GpuNormals { n });
     layout!(
         module,
+        GpuRay {
+            origin,
+            t_max,
+            direction,
+            _pad0
+        }
+    );
+    layout!(
+        module,
         GpuMaterial {
             diffuse,
             model,
@@ -318,4 +334,29 @@ fn generated_constants_match_rust() {
     assert_eq!(constant("NONE"), NONE);
     assert_eq!(constant("SAMPLER_SOBOL"), SAMPLER_SOBOL);
     assert_eq!(constant("POISSON_SETS"), POISSON_SETS);
+}
+
+/// Each kernel's binding list in the registry is exactly what its entry point reads or writes,
+/// so the pipeline builder's layout and the kernel cannot drift apart.
+#[test]
+fn each_kernel_lists_exactly_the_bindings_it_uses() {
+    for kernel in KERNELS {
+        let module = parse_and_validate(&kernel_source(kernel));
+        let info = validator().validate(&module).unwrap();
+        let index = module
+            .entry_points
+            .iter()
+            .position(|e| e.name == kernel.entry_point)
+            .unwrap_or_else(|| panic!("{}: no entry point", kernel.name));
+        let uses = info.get_entry_point(index);
+        let mut used: Vec<u32> = module
+            .global_variables
+            .iter()
+            .filter(|(handle, var)| var.binding.is_some() && !uses[*handle].is_empty())
+            .map(|(_, var)| var.binding.as_ref().unwrap().binding)
+            .collect();
+        used.sort();
+        let listed: Vec<u32> = kernel.bindings.iter().map(|b| b.binding).collect();
+        assert_eq!(used, listed, "{}", kernel.name);
+    }
 }

@@ -1,5 +1,5 @@
 // The bindings of the scene bind group (group 0), declared once for every kernel.
-// Mirrors: src/gpu/kernels.rs (SCENE_BINDINGS: the same numbers, names and access, checked by
+// Mirrors: src/gpu/kernels.rs (BINDINGS: the same numbers, names and access, checked by
 // tests/wgsl.rs; the pipeline builder makes the bind group layout from that table).
 
 @group(0) @binding(0) var<uniform> camera: GpuCamera;
@@ -15,3 +15,6 @@
 @group(0) @binding(8) var<storage, read_write> accumulation: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read_write> status: array<atomic<u32>, STATUS_WORDS>;
 @group(0) @binding(10) var<storage, read> sample_table: array<vec2<f32>>;
+// The ray benchmark's rays and per-ray results (wgsl/trace.wgsl).
+@group(0) @binding(11) var<storage, read> rays: array<GpuRay>;
+@group(0) @binding(12) var<storage, read_write> distances: array<f32>;

@@ -32,15 +32,3 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     atomicAdd(&status[STATUS_TRUNCATED], counters.truncated);
     check_loop_limit();
 }
-
-// lavapipe ends all loops of an invocation once 65535 iterations have run in total; a loop
-// with a run-time trip count then stops after one iteration (see layout::STATUS_LOOP_LIMIT).
-fn check_loop_limit() {
-    var iterations = 0u;
-    for (var i = 0u; i < pass_info.loop_check; i += 1u) {
-        iterations += 1u;
-    }
-    if (iterations != pass_info.loop_check) {
-        flag_status(STATUS_LOOP_LIMIT);
-    }
-}

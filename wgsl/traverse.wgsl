@@ -1,15 +1,11 @@
 // Closest-hit and any-hit BVH2 traversal, then the unbounded planes by brute force.
 // Mirrors: src/accel/traverse.rs, which uses obvhs's Bvh2::ray_traverse_dynamic; the node order
 // below (nearer child first, far child pushed) is that function's.
-// Reads the module-scope bindings `nodes`, `prims`, `frame` and `status` of the kernel.
+// Reads the bindings `nodes`, `prims` and `frame`; reports caps through status.wgsl.
 
 struct PrimHit {
     prim: u32,
     hit: Hit,
-}
-
-fn flag_status(bit: u32) {
-    atomicOr(&status[STATUS_FLAGS], bit);
 }
 
 fn closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {

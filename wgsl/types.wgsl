@@ -100,3 +100,10 @@ struct GpuPass {
     _pad0: u32,
     _pad1: u32,
 }
+
+struct GpuRay {
+    origin: vec3<f32>,
+    t_max: f32,
+    direction: vec3<f32>,
+    _pad0: u32,
+}

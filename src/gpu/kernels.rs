@@ -3,7 +3,7 @@
 //! A [`Kernel`] names its WGSL modules (composed after the generated constants of
 //! `layout::wgsl_prelude` and the bindings of `wgsl/bindings.wgsl`), its entry point and the
 //! bindings it reads. [`build_pipeline`] turns any kernel into a pipeline with an explicit bind
-//! group layout made from [`SCENE_BINDINGS`], specialised to the scene's features through
+//! group layout made from its entries of [`BINDINGS`], specialised to the scene's features through
 //! WGSL's pipeline-overridable constants (`layout::FEATURES`): a scene without mirrors gets a
 //! kernel without the bounce, a pinhole one without lens sampling, and so on. Adding a kernel is
 //! adding an entry to [`KERNELS`], not copying set-up code.
@@ -35,8 +35,8 @@ const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
     }
 }
 
-/// Every binding of the scene bind group, as `wgsl/bindings.wgsl` declares them.
-pub const SCENE_BINDINGS: [Binding; 11] = [
+/// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
+pub const BINDINGS: [Binding; 13] = [
     binding(0, "camera", Access::Uniform),
     binding(1, "frame", Access::Uniform),
     binding(2, "pass_info", Access::Uniform),
@@ -48,12 +48,41 @@ pub const SCENE_BINDINGS: [Binding; 11] = [
     binding(8, "accumulation", Access::StorageReadWrite),
     binding(9, "status", Access::StorageReadWrite),
     binding(10, "sample_table", Access::StorageRead),
+    binding(11, "rays", Access::StorageRead),
+    binding(12, "distances", Access::StorageReadWrite),
+];
+
+/// The bindings of the render kernel (at most eight storage buffers: WebGPU's baseline).
+const RENDER_BINDINGS: [Binding; 11] = [
+    BINDINGS[0],
+    BINDINGS[1],
+    BINDINGS[2],
+    BINDINGS[3],
+    BINDINGS[4],
+    BINDINGS[5],
+    BINDINGS[6],
+    BINDINGS[7],
+    BINDINGS[8],
+    BINDINGS[9],
+    BINDINGS[10],
+];
+
+/// The bindings of the ray-query kernels.
+const TRACE_BINDINGS: [Binding; 7] = [
+    BINDINGS[1],
+    BINDINGS[2],
+    BINDINGS[3],
+    BINDINGS[4],
+    BINDINGS[9],
+    BINDINGS[11],
+    BINDINGS[12],
 ];
 
 /// (file name, source) of every WGSL module a kernel may compose.
-pub const MODULES: [(&str, &str); 10] = [
+pub const MODULES: [(&str, &str); 12] = [
     ("types.wgsl", include_str!("../../wgsl/types.wgsl")),
     ("bindings.wgsl", include_str!("../../wgsl/bindings.wgsl")),
+    ("status.wgsl", include_str!("../../wgsl/status.wgsl")),
     ("rng.wgsl", include_str!("../../wgsl/rng.wgsl")),
     ("sampling.wgsl", include_str!("../../wgsl/sampling.wgsl")),
     ("camera.wgsl", include_str!("../../wgsl/camera.wgsl")),
@@ -65,6 +94,7 @@ pub const MODULES: [(&str, &str); 10] = [
         include_str!("../../wgsl/integrator.wgsl"),
     ),
     ("render.wgsl", include_str!("../../wgsl/render.wgsl")),
+    ("trace.wgsl", include_str!("../../wgsl/trace.wgsl")),
 ];
 
 /// A compute kernel: what it is made of and what it reads.
@@ -83,6 +113,7 @@ pub const RENDER: Kernel = Kernel {
     modules: &[
         "types.wgsl",
         "bindings.wgsl",
+        "status.wgsl",
         "rng.wgsl",
         "sampling.wgsl",
         "camera.wgsl",
@@ -93,11 +124,36 @@ pub const RENDER: Kernel = Kernel {
         "render.wgsl",
     ],
     entry_point: "render",
-    bindings: &SCENE_BINDINGS,
+    bindings: &RENDER_BINDINGS,
+};
+
+const TRACE_MODULES: &[&str] = &[
+    "types.wgsl",
+    "bindings.wgsl",
+    "status.wgsl",
+    "intersect.wgsl",
+    "traverse.wgsl",
+    "trace.wgsl",
+];
+
+/// Closest hit of each ray of a buffer (the ray benchmark).
+pub const TRACE_CLOSEST: Kernel = Kernel {
+    name: "trace_closest",
+    modules: TRACE_MODULES,
+    entry_point: "trace_closest",
+    bindings: &TRACE_BINDINGS,
+};
+
+/// Any hit of each ray of a buffer (the ray benchmark).
+pub const TRACE_ANY: Kernel = Kernel {
+    name: "trace_any",
+    modules: TRACE_MODULES,
+    entry_point: "trace_any",
+    bindings: &TRACE_BINDINGS,
 };
 
 /// Every kernel chambre builds.
-pub const KERNELS: [&Kernel; 1] = [&RENDER];
+pub const KERNELS: [&Kernel; 3] = [&RENDER, &TRACE_CLOSEST, &TRACE_ANY];
 
 /// The complete source of `kernel`, with a marker comment where each module starts.
 pub fn kernel_source(kernel: &Kernel) -> String {

@@ -4,6 +4,7 @@
 //! records them, and every wait on the device has a timeout (lavapipe has no watchdog).
 
 pub mod kernels;
+pub mod trace;
 
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -117,6 +118,40 @@ impl GpuContext {
         })
     }
 
+    /// A uniform buffer holding `bytes`, writable later.
+    pub(crate) fn uniform_buffer(&self, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            })
+    }
+
+    /// A read-only storage buffer holding `bytes`, or the refusal of an array larger than one
+    /// binding may hold on this adapter (`label` says what the array is).
+    pub(crate) fn storage_buffer(&self, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer> {
+        let limit = self.device.limits().max_storage_buffer_binding_size;
+        if bytes.len() as u64 > limit {
+            return Err(over_binding_limit(label, bytes.len() as u64, limit));
+        }
+        // wgpu refuses empty bindings: an empty array still gets one (unread) element.
+        let padded;
+        let contents = if bytes.is_empty() {
+            padded = vec![0u8; 64];
+            &padded[..]
+        } else {
+            bytes
+        };
+        Ok(self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            }))
+    }
+
     fn take_uncaptured(&self) -> Result<()> {
         let errors = std::mem::take(&mut *self.uncaptured.lock().expect("error sink poisoned"));
         match errors.is_empty() {
@@ -125,7 +160,7 @@ impl GpuContext {
         }
     }
 
-    fn wait(&self, submission: wgpu::SubmissionIndex) -> Result<()> {
+    pub(crate) fn wait(&self, submission: wgpu::SubmissionIndex) -> Result<()> {
         self.device
             .poll(wgpu::PollType::Wait {
                 submission_index: Some(submission),
@@ -136,7 +171,7 @@ impl GpuContext {
     }
 
     /// Copies `buffer` back to the host (it must have COPY_SRC usage).
-    fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+    pub(crate) fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size: buffer.size(),
@@ -215,33 +250,8 @@ impl GpuRenderer {
         let device = &context.device;
         let limit = device.limits().max_storage_buffer_binding_size;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let uniform = |label: &str, bytes: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            })
-        };
-        let storage = |label: &str, bytes: &[u8]| -> Result<wgpu::Buffer> {
-            if bytes.len() as u64 > limit {
-                return Err(over_binding_limit(label, bytes.len() as u64, limit));
-            }
-            // wgpu refuses empty bindings: an empty array still gets one (unread) element.
-            let padded;
-            let contents = if bytes.is_empty() {
-                padded = vec![0u8; 64];
-                &padded[..]
-            } else {
-                bytes
-            };
-            Ok(
-                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage: wgpu::BufferUsages::STORAGE,
-                }),
-            )
-        };
+        let uniform = |label: &str, bytes: &[u8]| context.uniform_buffer(label, bytes);
+        let storage = |label: &str, bytes: &[u8]| context.storage_buffer(label, bytes);
         let camera = uniform("camera", bytemuck::bytes_of(&scene.camera));
         let frame = uniform("frame", bytemuck::bytes_of(&scene.frame));
         let pass_buffer = uniform("pass", bytemuck::bytes_of(&GpuPass::default()));

@@ -1,0 +1,318 @@
+//! The ray benchmark: the same rays traced by each backend, closest hit and any hit.
+//!
+//! Two ray sets over one mesh, both deterministic so another ray tracer can trace the very same
+//! rays and compare the checksum (hit count, sum of hit distances):
+//! - coherent: a pinhole camera (position, look_at, up, vertical field of view, resolution),
+//!   one ray per pixel per frame through a jittered point of the pixel;
+//! - incoherent: origins uniform in the mesh's bounding box scaled by 0.9 about its centre,
+//!   directions uniform on the sphere, as many rays as the coherent set.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::Spread;
+use crate::accel::intersect::RayQuery;
+use crate::accel::traverse::{closest_hit, occluded};
+use crate::accel::{FlatScene, flatten};
+use crate::error::{Error, Result};
+use crate::layout::{NONE, T_FAR};
+use crate::math::rng::Rng;
+use crate::scene::Scene;
+
+/// A pinhole camera as other ray tracers take it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Pinhole {
+    pub position: [f32; 3],
+    pub look_at: [f32; 3],
+    pub up: [f32; 3],
+    pub vertical_fov_deg: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Pinhole {
+    /// The camera of the benchmark figures: the Stanford dragon's head, 1024x1024.
+    pub const DRAGON: Pinhole = Pinhole {
+        position: [0.035_549_864, 0.152_570_43, 0.133_492_49],
+        look_at: [-0.005_878_899, 0.124_951_25, -0.004_603_401],
+        up: [0.0, 1.0, 0.0],
+        vertical_fov_deg: 40.0,
+        width: 1024,
+        height: 1024,
+    };
+}
+
+/// What to trace.
+#[derive(Clone, Debug, Serialize)]
+pub struct RaysConfig {
+    pub mesh: PathBuf,
+    pub camera: Pinhole,
+    /// Coherent frames: `width * height * frames` rays per set.
+    pub frames: u32,
+    /// Timed runs after one warm-up.
+    pub runs: u32,
+    pub seed: u32,
+}
+
+/// Rays as structure of arrays.
+#[derive(Clone, Debug, Default)]
+pub struct RaySet {
+    pub origins: Vec<Vec3>,
+    pub directions: Vec<Vec3>,
+}
+
+impl RaySet {
+    pub fn len(&self) -> usize {
+        self.origins.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.origins.is_empty()
+    }
+}
+
+/// One ray per pixel per frame through the pixel at a jittered point (random dimensions 0-1 of
+/// `Rng::new(seed, pixel, frame)`).
+pub fn coherent_rays(camera: &Pinhole, frames: u32, seed: u32) -> RaySet {
+    let position = Vec3::from(camera.position);
+    let forward = (Vec3::from(camera.look_at) - position).normalize();
+    let right = forward.cross(Vec3::from(camera.up)).normalize();
+    let up = right.cross(forward);
+    let half_height = (0.5 * camera.vertical_fov_deg).to_radians().tan();
+    let half_width = half_height * camera.width as f32 / camera.height as f32;
+    let (w, h) = (camera.width, camera.height);
+    let mut set = RaySet::default();
+    for frame in 0..frames {
+        for y in 0..h {
+            for x in 0..w {
+                let [jx, jy] = Rng::new(seed, y * w + x, frame).next_2d();
+                let sx = (2.0 * (x as f32 + jx) / w as f32 - 1.0) * half_width;
+                let sy = (1.0 - 2.0 * (y as f32 + jy) / h as f32) * half_height;
+                set.origins.push(position);
+                set.directions
+                    .push((forward + sx * right + sy * up).normalize());
+            }
+        }
+    }
+    set
+}
+
+/// `count` rays with origins uniform in `[lo, hi]` scaled by 0.9 about its centre and
+/// directions uniform on the sphere.
+pub fn incoherent_rays(lo: Vec3, hi: Vec3, count: usize, seed: u32) -> RaySet {
+    let centre = 0.5 * (lo + hi);
+    let half = 0.45 * (hi - lo);
+    let mut set = RaySet::default();
+    for i in 0..count {
+        let mut rng = Rng::new(seed ^ 0x1c0_4e27, i as u32, 0);
+        let [a, b] = rng.next_2d();
+        let [c, _] = rng.next_2d();
+        let [u, v] = rng.next_2d();
+        set.origins
+            .push(centre + half * Vec3::new(2.0 * a - 1.0, 2.0 * b - 1.0, 2.0 * c - 1.0));
+        let z = 1.0 - 2.0 * u;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let phi = std::f32::consts::TAU * v;
+        set.directions
+            .push(Vec3::new(r * phi.cos(), r * phi.sin(), z));
+    }
+    set
+}
+
+/// Closest hit or any hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Query {
+    ClosestHit,
+    AnyHit,
+}
+
+/// What the rays found: the checksum another tracer can compare.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Checksum {
+    pub hits: u64,
+    /// Sum of the closest-hit distances (0 for any-hit queries).
+    pub sum_t: f64,
+}
+
+impl Checksum {
+    /// The checksum of per-ray results: a distance below `T_FAR` is a hit.
+    pub fn of(distances: &[f32]) -> Checksum {
+        let hits = distances.iter().filter(|&&t| t < T_FAR);
+        Checksum {
+            hits: hits.clone().count() as u64,
+            sum_t: hits.map(|&t| t as f64).sum(),
+        }
+    }
+}
+
+/// Per ray: the closest-hit distance (`T_FAR` on a miss), or 0 / `T_FAR` for occluded / free.
+pub fn trace_cpu(scene: &FlatScene, rays: &RaySet, query: Query) -> Vec<f32> {
+    (0..rays.len())
+        .into_par_iter()
+        .with_min_len(1024)
+        .map(|i| {
+            let ray = RayQuery::new(rays.origins[i], rays.directions[i]);
+            match query {
+                Query::ClosestHit => {
+                    closest_hit(scene, &ray, NONE, T_FAR).map_or(T_FAR, |(_, hit)| hit.t)
+                }
+                Query::AnyHit => {
+                    if occluded(scene, &ray, NONE, NONE, T_FAR) {
+                        0.0
+                    } else {
+                        T_FAR
+                    }
+                }
+            }
+        })
+        .collect()
+}
+
+/// The figures of one ray set, query and backend.
+#[derive(Clone, Debug, Serialize)]
+pub struct RaysResult {
+    pub set: &'static str,
+    pub query: Query,
+    pub backend: String,
+    pub rays: usize,
+    pub mrays_per_s: Spread,
+    pub checksum: Checksum,
+}
+
+/// The whole benchmark's report.
+#[derive(Clone, Debug, Serialize)]
+pub struct RaysReport {
+    pub config: RaysConfig,
+    pub triangles: usize,
+    pub bvh_build_ms: f64,
+    pub results: Vec<RaysResult>,
+}
+
+/// A scene holding just the mesh, so the renderer's own loading and BVH build are measured.
+pub fn mesh_scene(mesh: &Path) -> Result<FlatScene> {
+    let absolute = std::path::absolute(mesh).map_err(|e| Error::io(mesh, e))?;
+    let text = format!(
+        "[render]\nwidth = 1\nheight = 1\n[camera]\nposition = [0.0, 0.0, 1.0]\n\
+         look_at = [0.0, 0.0, 0.0]\nfilm = [24.0, 24.0]\n[[materials]]\nname = \"m\"\n\
+         model = \"lambert\"\n[[shapes]]\ntype = \"mesh\"\nfile = {}\nmaterial = \"m\"\n",
+        toml::Value::String(absolute.to_string_lossy().into_owned())
+    );
+    let scene = Scene::from_str(Path::new("bench.toml"), &text, &[])?;
+    Ok(flatten(&scene))
+}
+
+/// Bounds of the scene's primitives (its BVH root).
+pub fn bounds(scene: &FlatScene) -> (Vec3, Vec3) {
+    scene
+        .nodes
+        .first()
+        .map_or((Vec3::ZERO, Vec3::ZERO), |root| {
+            (Vec3::from(root.min), Vec3::from(root.max))
+        })
+}
+
+/// Times `trace` on `rays`: one warm-up, then `runs` timed runs.
+pub fn measure(
+    runs: u32,
+    rays: usize,
+    mut trace: impl FnMut() -> Result<Vec<f32>>,
+) -> Result<(Spread, Checksum)> {
+    let checksum = Checksum::of(&trace()?);
+    let mut mrays = Vec::new();
+    for _ in 0..runs.max(1) {
+        let start = Instant::now();
+        let distances = trace()?;
+        mrays.push(rays as f64 / start.elapsed().as_secs_f64() / 1e6);
+        debug_assert_eq!(Checksum::of(&distances), checksum);
+    }
+    Ok((Spread::of(&mrays), checksum))
+}
+
+/// Traces both ray sets with both queries on the CPU path.
+pub fn run_cpu(config: &RaysConfig) -> Result<RaysReport> {
+    let scene = mesh_scene(&config.mesh)?;
+    let coherent = coherent_rays(&config.camera, config.frames, config.seed);
+    let (lo, hi) = bounds(&scene);
+    let incoherent = incoherent_rays(lo, hi, coherent.len(), config.seed);
+    let mut results = Vec::new();
+    for (set, rays) in [("coherent", &coherent), ("incoherent", &incoherent)] {
+        for query in [Query::ClosestHit, Query::AnyHit] {
+            let (mrays_per_s, checksum) = measure(config.runs, rays.len(), || {
+                Ok(trace_cpu(&scene, rays, query))
+            })?;
+            results.push(RaysResult {
+                set,
+                query,
+                backend: format!("cpu ({} threads)", rayon::current_num_threads()),
+                rays: rays.len(),
+                mrays_per_s,
+                checksum,
+            });
+        }
+    }
+    Ok(RaysReport {
+        config: config.clone(),
+        triangles: scene.triangle_count,
+        bvh_build_ms: scene.build_time.as_secs_f64() * 1e3,
+        results,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coherent_rays_pass_through_their_pixels() {
+        let camera = Pinhole {
+            position: [0.0, 0.0, 0.0],
+            look_at: [0.0, 0.0, -1.0],
+            up: [0.0, 1.0, 0.0],
+            vertical_fov_deg: 90.0,
+            width: 4,
+            height: 2,
+        };
+        let set = coherent_rays(&camera, 2, 1);
+        assert_eq!(set.len(), 16);
+        for (i, d) in set.directions.iter().enumerate() {
+            let (x, y) = ((i % 4) as f32, ((i / 4) % 2) as f32);
+            // On the plane z = -1 the image spans [-2, 2] x [-1, 1] (aspect 2, tan 45 = 1).
+            let p = *d / -d.z;
+            assert!((d.length() - 1.0).abs() < 1e-6);
+            assert!(p.x >= -2.0 + x && p.x <= -2.0 + x + 1.0, "{i}: {p}");
+            assert!(p.y <= 1.0 - y && p.y >= -y, "{i}: {p}");
+        }
+        assert_ne!(
+            set.directions[0], set.directions[8],
+            "frames jitter differently"
+        );
+    }
+
+    #[test]
+    fn incoherent_rays_start_inside_the_shrunk_box_and_cover_the_sphere() {
+        let set = incoherent_rays(Vec3::splat(-1.0), Vec3::new(1.0, 3.0, 1.0), 20_000, 3);
+        let mut octants = [0usize; 8];
+        for (o, d) in set.origins.iter().zip(&set.directions) {
+            assert!(o.x.abs() <= 0.9 && o.z.abs() <= 0.9 && (o.y - 1.0).abs() <= 1.8);
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            octants[(d.x > 0.0) as usize + 2 * (d.y > 0.0) as usize + 4 * (d.z > 0.0) as usize] +=
+                1;
+        }
+        // Uniform directions: each octant holds 1/8 of them (2,500 +- 5 sigma = 220).
+        assert!(
+            octants.iter().all(|&n| n.abs_diff(2500) < 220),
+            "{octants:?}"
+        );
+    }
+
+    #[test]
+    fn the_checksum_counts_hits_and_sums_their_distances() {
+        let c = Checksum::of(&[1.0, T_FAR, 2.5, T_FAR]);
+        assert_eq!((c.hits, c.sum_t), (2, 3.5));
+    }
+}

@@ -1,0 +1,168 @@
+//! Ray queries on the GPU for the ray benchmark: a buffer of rays in, a distance per ray out,
+//! through the `trace_closest` and `trace_any` kernels of the registry.
+//!
+//! Rays are uploaded once, in chunks that each fit one storage binding, and every chunk's
+//! dispatch goes into one submission: the timed part is the device's work and one wait.
+
+use std::time::{Duration, Instant};
+
+use super::GpuContext;
+use super::kernels::{self, Pipeline};
+use crate::accel::FlatScene;
+use crate::bench::rays::{Query, RaySet};
+use crate::error::{Error, Result};
+use crate::layout::{
+    GpuPass, GpuRay, LOOP_CHECK_ITERATIONS, STATUS_WORDS, T_FAR, TRACE_WORKGROUP_SIZE,
+};
+use crate::render::{TileStatus, describe_status_flags};
+
+/// Rays per chunk: 64 MiB of rays, half of lavapipe's largest binding, and
+/// 32,768 workgroups, half of the largest dispatch.
+const RAYS_PER_CHUNK: usize = 1 << 21;
+
+struct Chunk {
+    rays: usize,
+    distances: wgpu::Buffer,
+    closest: wgpu::BindGroup,
+    any: wgpu::BindGroup,
+}
+
+/// A scene's geometry and a ray set uploaded, ready to be traced many times.
+pub struct GpuTracer {
+    context: GpuContext,
+    closest: Pipeline,
+    any: Pipeline,
+    status: wgpu::Buffer,
+    chunks: Vec<Chunk>,
+}
+
+impl GpuTracer {
+    pub fn new(context: GpuContext, scene: &FlatScene, rays: &RaySet) -> Result<GpuTracer> {
+        let device = &context.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let features = scene.features();
+        let closest = kernels::build_pipeline(device, &kernels::TRACE_CLOSEST, features);
+        let any = kernels::build_pipeline(device, &kernels::TRACE_ANY, features);
+        let frame = context.uniform_buffer("frame", bytemuck::bytes_of(&scene.frame));
+        let nodes = context.storage_buffer(
+            &format!("the scene's {} BVH nodes", scene.nodes.len()),
+            bytemuck::cast_slice(&scene.nodes),
+        )?;
+        let prims = context.storage_buffer(
+            &format!("the scene's {} primitives", scene.prims.len()),
+            bytemuck::cast_slice(&scene.prims),
+        )?;
+        let status = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("status"),
+            size: STATUS_WORDS as u64 * 4,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut chunks = Vec::new();
+        for start in (0..rays.len()).step_by(RAYS_PER_CHUNK) {
+            let end = (start + RAYS_PER_CHUNK).min(rays.len());
+            let gpu_rays: Vec<GpuRay> = (start..end)
+                .map(|i| GpuRay {
+                    origin: rays.origins[i].to_array(),
+                    t_max: T_FAR,
+                    direction: rays.directions[i].to_array(),
+                    _pad0: 0,
+                })
+                .collect();
+            let ray_buffer = context.storage_buffer("rays", bytemuck::cast_slice(&gpu_rays))?;
+            let distances = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("distances"),
+                size: (end - start) as u64 * 4,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let pass = GpuPass {
+                sample_count: (end - start) as u32,
+                loop_check: LOOP_CHECK_ITERATIONS,
+                ..Default::default()
+            };
+            let pass_info = context.uniform_buffer("pass", bytemuck::bytes_of(&pass));
+            let buffers = [
+                ("frame", &frame),
+                ("pass_info", &pass_info),
+                ("nodes", &nodes),
+                ("prims", &prims),
+                ("status", &status),
+                ("rays", &ray_buffer),
+                ("distances", &distances),
+            ];
+            chunks.push(Chunk {
+                rays: end - start,
+                closest: closest.bind_group(device, &buffers)?,
+                any: any.bind_group(device, &buffers)?,
+                distances,
+            });
+        }
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu(format!(
+                "creating the ray-query kernels: {}",
+                super::wgpu_error_text(&e)
+            )));
+        }
+        Ok(GpuTracer {
+            context,
+            closest,
+            any,
+            status,
+            chunks,
+        })
+    }
+
+    /// Traces every ray once; returns the time from submission to completion. Any status flag
+    /// the kernel raised (a loop cap) is an error: its distances would be wrong.
+    pub fn trace(&self, query: Query) -> Result<Duration> {
+        let context = &self.context;
+        let pipeline = match query {
+            Query::ClosestHit => &self.closest,
+            Query::AnyHit => &self.any,
+        };
+        let mut encoder = context.device.create_command_encoder(&Default::default());
+        encoder.clear_buffer(&self.status, 0, None);
+        {
+            let mut compute = encoder.begin_compute_pass(&Default::default());
+            compute.set_pipeline(&pipeline.pipeline);
+            for chunk in &self.chunks {
+                let bind_group = match query {
+                    Query::ClosestHit => &chunk.closest,
+                    Query::AnyHit => &chunk.any,
+                };
+                compute.set_bind_group(0, bind_group, &[]);
+                compute.dispatch_workgroups(
+                    (chunk.rays as u32).div_ceil(TRACE_WORKGROUP_SIZE),
+                    1,
+                    1,
+                );
+            }
+        }
+        let start = Instant::now();
+        let submission = context.queue.submit([encoder.finish()]);
+        context.wait(submission)?;
+        let elapsed = start.elapsed();
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&context.read_buffer(&self.status)?);
+        if let Some(reason) = describe_status_flags(TileStatus::from_words(&words).flags) {
+            return Err(Error::Gpu(format!("the ray-query kernel: {reason}")));
+        }
+        Ok(elapsed)
+    }
+
+    /// The distances of the last `trace`, in ray order.
+    pub fn distances(&self) -> Result<Vec<f32>> {
+        let mut all = Vec::new();
+        for chunk in &self.chunks {
+            let bytes = self.context.read_buffer(&chunk.distances)?;
+            all.extend_from_slice(bytemuck::cast_slice::<u8, f32>(&bytes));
+        }
+        Ok(all)
+    }
+
+    pub fn adapter_description(&self) -> &str {
+        &self.context.adapter_description
+    }
+}
