@@ -158,9 +158,12 @@ fn encode(image: &Image, format: ImageFormat) -> std::result::Result<Vec<u8>, St
     let (w, h) = (image.width, image.height);
     let mut bytes = Vec::new();
     let encoded = match format {
-        ImageFormat::Png => {
-            PngEncoder::new(&mut bytes).write_image(&png_pixels(image), w, h, ExtendedColorType::Rgb8)
-        }
+        ImageFormat::Png => PngEncoder::new(&mut bytes).write_image(
+            &png_pixels(image),
+            w,
+            h,
+            ExtendedColorType::Rgb8,
+        ),
         ImageFormat::Exr => OpenExrEncoder::new(Cursor::new(&mut bytes)).write_image(
             bytemuck::cast_slice(&image.pixels),
             w,

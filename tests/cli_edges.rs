@@ -244,11 +244,7 @@ fn a_closed_stdout_or_stderr_is_not_a_panic() {
         &["camera", "scenes/tabletop.toml"],
         &["info"],
     ] {
-        let output = chambre()
-            .args(args)
-            .stdout(closed_pipe())
-            .output()
-            .unwrap();
+        let output = chambre().args(args).stdout(closed_pipe()).output().unwrap();
         let message = stderr_of(&output);
         assert!(output.status.success(), "{args:?}: {message}");
         assert!(
@@ -346,13 +342,19 @@ fn auto_backend_falls_back_to_the_cpu_when_the_gpu_refuses_the_scene() {
     let auto = render_on("auto");
     let message = stderr_of(&auto);
     assert!(auto.status.success(), "{message}");
-    let notices: Vec<&str> = message.lines().filter(|l| l.starts_with("notice:")).collect();
+    let notices: Vec<&str> = message
+        .lines()
+        .filter(|l| l.starts_with("notice:"))
+        .collect();
     assert_eq!(notices.len(), 1, "{message}");
     assert!(notices[0].contains("max_storage_buffer_binding_size"));
     assert!(notices[0].ends_with("rendering on the CPU"));
     assert!(message.contains("on CPU"));
     let written = image::open(&target).unwrap().into_rgb8();
-    assert_eq!((written.width() as u64, written.height() as u64), (width, height));
+    assert_eq!(
+        (written.width() as u64, written.height() as u64),
+        (width, height)
+    );
 }
 
 #[test]
@@ -367,7 +369,10 @@ fn non_finite_pixels_are_written_and_counted_and_the_exit_is_an_error() {
         assert_eq!(output.status.code(), Some(1), "{message}");
         let reported: usize = message
             .lines()
-            .find_map(|l| l.strip_prefix("error: ")?.split_once(" pixels are not finite"))
+            .find_map(|l| {
+                l.strip_prefix("error: ")?
+                    .split_once(" pixels are not finite")
+            })
             .and_then(|(n, _)| n.parse().ok())
             .unwrap_or_else(|| panic!("no count in {message}"));
         assert!(reported > 0);
@@ -375,9 +380,15 @@ fn non_finite_pixels_are_written_and_counted_and_the_exit_is_an_error() {
         let in_file = if name.ends_with(".exr") {
             assert!(message.contains("kept as inf/NaN in the EXR"), "{message}");
             let floats = written.into_rgb32f();
-            floats.pixels().filter(|p| p.0.iter().any(|c| !c.is_finite())).count()
+            floats
+                .pixels()
+                .filter(|p| p.0.iter().any(|c| !c.is_finite()))
+                .count()
         } else {
-            assert!(message.contains("written as magenta in the PNG"), "{message}");
+            assert!(
+                message.contains("written as magenta in the PNG"),
+                "{message}"
+            );
             let bytes = written.into_rgb8();
             bytes.pixels().filter(|p| p.0 == NON_FINITE_PNG).count()
         };
