@@ -1,8 +1,10 @@
-//! The `chambre` command line: render, check, info. Errors become one message and exit code 1;
-//! an interrupted render writes what it computed and exits with 130.
+//! The `chambre` command line: render, check, camera, info. Errors become one message and exit
+//! code 1; a render stopped by SIGINT, SIGTERM or SIGHUP writes what it computed and exits with
+//! 130 (the handler cannot tell the three apart, so they share the code of Ctrl-C).
 
-use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::fmt::Write as _;
+use std::io::{ErrorKind, IsTerminal, Write};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -10,12 +12,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use anyhow::{Context, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 
-use chambre::accel::flatten;
+use chambre::accel::{FlatScene, flatten};
 use chambre::camera::Focus;
 use chambre::camera::report::camera_report;
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::{GpuContext, GpuRenderer, describe_adapters};
-use chambre::output::write_image;
+use chambre::output::{ImageFormat, OutputTarget};
 use chambre::render::{Progress, RenderOutput, describe_status_flags, render};
 use chambre::scene::Scene;
 use chambre::{Error, Result};
@@ -66,7 +68,7 @@ enum Command {
         /// Circle of confusion in mm for the depth of field (default: film diagonal / 1500).
         #[arg(long)]
         coc: Option<f64>,
-        /// Far clipping distance of the raster projection, in scene units.
+        /// Far clipping distance of the raster projection, in scene units; beyond the near plane.
         #[arg(long, default_value_t = 1000.0)]
         far: f64,
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
@@ -105,10 +107,18 @@ impl SamplerChoice {
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum BackendChoice {
-    /// The GPU when an adapter exists (lavapipe included), else the CPU.
+    /// The GPU when it accepts the scene (lavapipe included), else the CPU, with a notice.
     Auto,
     Gpu,
     Cpu,
+}
+
+/// `eprintln!` that cannot panic: when stderr is closed (`chambre render ... 2>&1 | head -c1`)
+/// there is nowhere left to report to, and a render must still write its image.
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
 }
 
 fn main() -> ExitCode {
@@ -161,23 +171,50 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(code) => code,
+        // Whoever read stdout stopped reading (`chambre check x | head -c1`): not a failure.
+        Err(e) if e.is::<StdoutClosed>() => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            note!("error: {e:#}");
             ExitCode::FAILURE
         }
     }
 }
 
-fn load(path: &std::path::Path, overrides: &[String]) -> Result<Scene> {
+/// stdout's reader closed it before the report was out; the command ends quietly.
+#[derive(Debug)]
+struct StdoutClosed;
+
+impl std::fmt::Display for StdoutClosed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("stdout was closed by its reader")
+    }
+}
+
+impl std::error::Error for StdoutClosed {}
+
+/// Writes a command's report to stdout: a closed pipe becomes [`StdoutClosed`], any other
+/// failure (`> /dev/full`) an error.
+fn print(text: &str) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == ErrorKind::BrokenPipe => Err(StdoutClosed.into()),
+        Err(e) => Err(anyhow::Error::new(e).context("writing to stdout")),
+    }
+}
+
+fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
     Scene::load(path, overrides)
 }
 
-fn run_check(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<ExitCode> {
+fn run_check(path: &Path, overrides: &[String]) -> anyhow::Result<ExitCode> {
     let scene = load(path, overrides)?;
     let flat = flatten(&scene);
     let camera = &scene.camera;
     let fov = camera.field_of_view_deg();
-    println!(
+    let mut text = String::new();
+    writeln!(
+        text,
         "{}: ok: {}x{} at {} spp, {} shapes ({} triangles), {} lights, {} materials",
         path.display(),
         scene.render.width,
@@ -187,8 +224,9 @@ fn run_check(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<Exi
         scene.triangle_count(),
         scene.lights.len(),
         scene.materials.len()
-    );
-    println!(
+    )?;
+    writeln!(
+        text,
         "camera: f = {:.2} mm, film at {:.3} mm, field of view {:.2} x {:.2} deg, {}",
         camera.focal_length_mm,
         camera.film_distance_mm,
@@ -199,25 +237,28 @@ fn run_check(path: &std::path::Path, overrides: &[String]) -> anyhow::Result<Exi
         } else {
             format!("f/{}", camera.f_number)
         }
-    );
+    )?;
     if let Focus::Points(_) = camera.focus {
         let m = &camera.movements;
-        println!(
+        writeln!(
+            text,
             "focus_points: solved lens tilt {:.4} deg, lens swing {:.4} deg, film distance {:.4} mm",
             m.lens_tilt, m.lens_swing, camera.film_distance_mm
-        );
+        )?;
     }
-    println!(
+    writeln!(
+        text,
         "BVH: {} nodes, depth {}, built in {:.1} ms",
         flat.nodes.len(),
         flat.bvh_depth,
         flat.build_time.as_secs_f64() * 1e3
-    );
+    )?;
+    print(&text)?;
     Ok(ExitCode::SUCCESS)
 }
 
 fn run_camera(
-    path: &std::path::Path,
+    path: &Path,
     coc: Option<f64>,
     far: f64,
     overrides: &[String],
@@ -231,18 +272,31 @@ fn run_camera(
     if !(far.is_finite() && far > 0.0) {
         bail!("--far must be a positive distance, got {far}");
     }
-    print!("{}", camera_report(camera, coc, far));
+    // The near plane is the lens-to-film distance; a far plane not beyond it makes the
+    // projection matrix degenerate (a zero or negative depth range).
+    let near = camera.raster_projection(far).frustum.near;
+    if far <= near {
+        bail!(
+            "--far {far} must lie beyond the near plane of the raster projection, at {near:.8} \
+             scene units (the lens-to-film distance)"
+        );
+    }
+    print(&camera_report(camera, coc, far))?;
     Ok(ExitCode::SUCCESS)
 }
 
 fn run_info() -> anyhow::Result<ExitCode> {
     let adapters = describe_adapters();
+    let mut text = String::new();
     if adapters.is_empty() {
-        println!("no GPU adapter found (Vulkan, Metal or DX12); renders fall back to the CPU");
+        text.push_str(
+            "no GPU adapter found (Vulkan, Metal or DX12); renders fall back to the CPU\n",
+        );
     }
     for a in adapters {
-        println!("{a}");
+        writeln!(text, "{a}")?;
     }
+    print(&text)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -268,39 +322,31 @@ fn progress_reporter() -> Box<dyn Progress> {
             let decile = done * 10 / total.max(1);
             if decile > last_decile {
                 last_decile = decile;
-                eprintln!("progress: {}% ({done}/{total} tiles)", decile * 10);
+                note!("progress: {}% ({done}/{total} tiles)", decile * 10);
             }
         })
     }
 }
 
 fn run_render(
-    path: &std::path::Path,
-    output_path: &std::path::Path,
+    path: &Path,
+    output_path: &Path,
     choice: BackendChoice,
     overrides: &[String],
 ) -> anyhow::Result<ExitCode> {
     let scene = load(path, overrides)?;
+    // Before any render time is spent: a path that cannot take the image fails now.
+    let target = OutputTarget::prepare(output_path)?;
     let flat = flatten(&scene);
     let cancel = Arc::new(AtomicBool::new(false));
     let flag = cancel.clone();
+    // With ctrlc's `termination` feature this also catches SIGTERM and SIGHUP, what `kill` and
+    // batch schedulers send, so they too stop the render and keep its image.
     ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
-        .context("installing the Ctrl-C handler")?;
+        .context("installing the SIGINT/SIGTERM/SIGHUP handler")?;
     let mut progress = progress_reporter();
-    let gpu = match choice {
-        BackendChoice::Cpu => None,
-        BackendChoice::Gpu => Some(GpuContext::new()?),
-        BackendChoice::Auto => match GpuContext::new() {
-            Ok(context) => Some(context),
-            Err(e) => {
-                eprintln!("notice: {e}; rendering on the CPU");
-                None
-            }
-        },
-    };
-    let (output, backend_name) = match gpu {
-        Some(context) => {
-            let mut renderer = GpuRenderer::new(context, &flat)?;
+    let (output, backend_name) = match gpu_renderer(choice, &flat)? {
+        Some(mut renderer) => {
             let name = format!("GPU: {}", renderer.adapter_description());
             (
                 render(&flat, &mut renderer, progress.as_mut(), &cancel)?,
@@ -308,7 +354,7 @@ fn run_render(
             )
         }
         None => {
-            let mut renderer = CpuRenderer::new(&flat);
+            let mut renderer = CpuRenderer::new(&flat).with_cancel(&cancel);
             let name = format!("CPU: {} threads", rayon::current_num_threads());
             (
                 render(&flat, &mut renderer, progress.as_mut(), &cancel)?,
@@ -316,48 +362,96 @@ fn run_render(
             )
         }
     };
-    finish(output, output_path, &backend_name)
+    finish(output, &target, &backend_name)
 }
 
-fn finish(output: RenderOutput, path: &std::path::Path, backend: &str) -> anyhow::Result<ExitCode> {
-    let bad = output.image.non_finite_count();
-    if bad > 0 {
-        bail!(
-            "{bad} pixels are not finite numbers: refusing to write {}",
-            path.display()
-        );
+/// The GPU renderer the choice asks for. `auto` takes the CPU, with a notice, whenever the GPU
+/// refuses: no adapter, a BVH deeper than the kernel's stack, a buffer over a binding limit.
+fn gpu_renderer(choice: BackendChoice, flat: &FlatScene) -> Result<Option<GpuRenderer>> {
+    let start = || GpuContext::new().and_then(|context| GpuRenderer::new(context, flat));
+    match choice {
+        BackendChoice::Cpu => Ok(None),
+        BackendChoice::Gpu => start().map(Some),
+        BackendChoice::Auto => match start() {
+            Ok(renderer) => Ok(Some(renderer)),
+            Err(e) => {
+                note!("notice: {e}; rendering on the CPU");
+                Ok(None)
+            }
+        },
     }
-    if output.samples_per_pixel > 0 {
-        write_image(&output.image, path)?;
+}
+
+/// Writes what the render computed, reports it, and picks the exit code: 1 when anything went
+/// wrong (the image is still written), else 130 when the render was stopped by a signal.
+fn finish(output: RenderOutput, target: &OutputTarget, backend: &str) -> anyhow::Result<ExitCode> {
+    let path = target.path().display();
+    let written = output.max_samples_per_pixel > 0;
+    if written {
+        target.write(&output.image)?;
     }
-    eprintln!(
-        "{}: {}x{}, {} spp in {:.2} s, {:.2} Mrays/s ({} rays) on {backend}",
-        path.display(),
+    note!(
+        "{path}: {}x{}, {} in {:.2} s, {:.2} Mrays/s ({} rays) on {backend}",
         output.image.width,
         output.image.height,
-        output.samples_per_pixel,
+        describe_samples(&output),
         output.elapsed.as_secs_f64(),
         output.rays_per_second() / 1e6,
         output.rays
     );
     if output.truncated_paths > 0 {
-        eprintln!(
+        note!(
             "note: {} mirror paths were cut off at max_depth",
             output.truncated_paths
         );
     }
-    if let Some(reason) = describe_status_flags(output.status_flags) {
-        bail!("the render kernel reported a problem: {reason}");
+    let mut failed = false;
+    let non_finite = output.image.non_finite_count();
+    if non_finite > 0 {
+        let shown = match (written, target.format()) {
+            (false, _) => "",
+            (true, ImageFormat::Png) => "; written as magenta in the PNG",
+            (true, ImageFormat::Exr) => "; kept as inf/NaN in the EXR",
+        };
+        note!("error: {non_finite} pixels are not finite numbers{shown}");
+        failed = true;
     }
-    match output.stopped {
-        None => Ok(ExitCode::SUCCESS),
-        Some(e @ Error::Interrupted { .. }) => {
-            eprintln!("error: {e}; wrote the partial image");
-            Ok(ExitCode::from(130))
+    if let Some(reason) = describe_status_flags(output.status_flags) {
+        note!("error: the render kernel reported a problem: {reason}");
+        failed = true;
+    }
+    let outcome = match written {
+        true => "wrote the partial image",
+        false => "wrote nothing: no pixel had a sample yet",
+    };
+    match &output.stopped {
+        None => {}
+        // Its sample count is that of the passes begun; the line above says what the image holds.
+        Some(Error::Interrupted { total, .. }) => {
+            note!("error: render interrupted before its {total} spp were taken; {outcome}")
         }
-        Some(e) => bail!(
-            "{e}; wrote the partial image ({} spp)",
-            output.samples_per_pixel
-        ),
+        Some(e) => {
+            note!("error: {e}; {outcome}");
+            failed = true;
+        }
+    }
+    Ok(match (failed, &output.stopped) {
+        (true, _) => ExitCode::FAILURE,
+        (false, Some(Error::Interrupted { .. })) => ExitCode::from(130),
+        (false, _) => ExitCode::SUCCESS,
+    })
+}
+
+/// "16 spp", or for a stopped render exactly what the image holds.
+fn describe_samples(output: &RenderOutput) -> String {
+    let (min, max) = (output.samples_per_pixel, output.max_samples_per_pixel);
+    let spread = match min == max {
+        true => format!("{min} spp"),
+        false => format!("{min} to {max} spp per pixel"),
+    };
+    match output.pixels_without_samples {
+        0 => spread,
+        n if max == 0 => format!("no samples ({n} pixels), not written"),
+        n => format!("{spread}, {n} pixels without a sample (written as black)"),
     }
 }

@@ -104,7 +104,12 @@ impl<F: FnMut(u64, u64)> Progress for F {
 #[derive(Debug)]
 pub struct RenderOutput {
     pub image: Image,
+    /// Samples of the least-sampled pixel: `spp` when the render completed.
     pub samples_per_pixel: u32,
+    /// Samples of the most-sampled pixel: a stopped render can end inside a pass.
+    pub max_samples_per_pixel: u32,
+    /// Pixels without a single sample (a render stopped before reaching them); they are 0.
+    pub pixels_without_samples: usize,
     pub elapsed: Duration,
     pub rays: u64,
     pub truncated_paths: u64,
@@ -229,6 +234,8 @@ pub fn render(
             pixels: Vec::new(),
         },
         samples_per_pixel: 0,
+        max_samples_per_pixel: 0,
+        pixels_without_samples: 0,
         elapsed: Duration::ZERO,
         rays: 0,
         truncated_paths: 0,
@@ -280,7 +287,12 @@ pub fn render(
     if output.stopped.is_some() {
         // Pixels of an unfinished pass carry more samples than the rest; the image stays a
         // per-pixel mean, so it is still correct, only less converged in places.
-        output.samples_per_pixel = accumulation.iter().map(|a| a[3] as u32).min().unwrap_or(0);
+        let counts = || accumulation.iter().map(|a| a[3] as u32);
+        output.samples_per_pixel = counts().min().unwrap_or(0);
+        output.max_samples_per_pixel = counts().max().unwrap_or(0);
+        output.pixels_without_samples = counts().filter(|&n| n == 0).count();
+    } else {
+        output.max_samples_per_pixel = output.samples_per_pixel;
     }
     output.elapsed = start.elapsed();
     Ok(output)

@@ -1,0 +1,457 @@
+//! The `chambre` command line at its edges: output paths that cannot take the image fail before
+//! the render, writes are atomic and every write error is an error, SIGINT and SIGTERM stop a
+//! long render promptly and keep its samples, a closed stdout or stderr is not a panic, a far
+//! plane before the near plane is refused, `--backend auto` survives a GPU refusal, and
+//! non-finite pixels are written and reported.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Output, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+
+use chambre::accel::flatten;
+use chambre::cpu::CpuRenderer;
+use chambre::layout::GpuPass;
+use chambre::output::{NON_FINITE_PNG, OutputTarget};
+use chambre::render::{Backend, Image, render};
+
+mod common;
+
+fn chambre() -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_chambre"));
+    command.current_dir(env!("CARGO_MANIFEST_DIR"));
+    command
+}
+
+/// A fresh, empty directory for one test.
+fn scratch_dir(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("chambre-edges-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn entries(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+fn stderr_of(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// A 48x32 CPU render of the sample scene into `out`, with extra arguments.
+fn small_render(out: &Path, extra: &[&str]) -> Output {
+    chambre()
+        .args(["render", "scenes/spheres.toml", "--backend", "cpu"])
+        .args(["--width", "48", "--height", "32", "--spp", "2", "-o"])
+        .arg(out)
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn an_output_path_that_cannot_take_the_image_fails_before_the_render() {
+    let dir = scratch_dir("precheck");
+    std::fs::write(dir.join("file.png"), b"not a directory").unwrap();
+    std::os::unix::fs::symlink("/dev/full", dir.join("full.png")).unwrap();
+    let before = entries(&dir);
+    let cases = [
+        ("missing/out.png", "directory"),
+        ("file.png/out.png", "is not a directory"),
+        ("out.pfm", "unknown image format `.pfm`"),
+        ("out.bmp", "unknown image format `.bmp`"),
+        ("out", "no file extension"),
+        ("full.png", "not a regular file"),
+        (".", "no file extension"),
+    ];
+    for (name, reason) in cases {
+        let target = dir.join(name);
+        let output = small_render(&target, &[]);
+        let message = stderr_of(&output);
+        assert_eq!(output.status.code(), Some(1), "{name}: {message}");
+        assert!(message.contains(&*target.to_string_lossy()), "{message}");
+        assert!(message.contains(reason), "{name}: {message}");
+        assert!(
+            !message.contains("progress:") && !message.contains("spp in"),
+            "{name}: rendered before checking the output: {message}"
+        );
+    }
+    assert_eq!(entries(&dir), before, "a refused output creates nothing");
+}
+
+#[test]
+fn a_failed_write_keeps_the_previous_image_and_a_good_one_replaces_it() {
+    let dir = scratch_dir("atomic");
+    let target = dir.join("out.exr");
+    let previous = b"the previous image, which a failed write must not touch".repeat(100);
+    std::fs::write(&target, &previous).unwrap();
+    // Files of this process tree may not exceed 16 blocks (8 or 16 KiB), far below the 18 KiB
+    // of the EXR; with SIGXFSZ ignored the write fails with EFBIG instead of killing chambre.
+    let output = Command::new("sh")
+        .args(["-c", r#"trap "" XFSZ; ulimit -f 16; exec "$0" "$@""#])
+        .arg(env!("CARGO_BIN_EXE_chambre"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["render", "scenes/spheres.toml", "--backend", "cpu"])
+        .args(["--width", "48", "--height", "32", "--spp", "2", "-o"])
+        .arg(&target)
+        .output()
+        .unwrap();
+    let message = stderr_of(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(message.contains("out.exr: cannot write image"), "{message}");
+    assert_eq!(std::fs::read(&target).unwrap(), previous);
+    assert_eq!(entries(&dir), ["out.exr"], "no temporary file is left");
+
+    let output = small_render(&target, &[]);
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    let written = image::open(&target).unwrap().into_rgb32f();
+    assert_eq!((written.width(), written.height()), (48, 32));
+    assert_eq!(entries(&dir), ["out.exr"]);
+}
+
+/// Waits for `child` at most `limit`; a hang is a test failure, not a stuck suite.
+fn wait_at_most(child: &mut Child, limit: Duration) -> ExitStatus {
+    let start = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            return status;
+        }
+        if start.elapsed() > limit {
+            child.kill().unwrap();
+            panic!("chambre did not stop within {limit:?} of the signal");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// Starts a CPU render that would take most of an hour, sends `signal` once it is under way,
+/// and checks it stops with code 130 and writes a readable image holding samples.
+fn signal_stops_a_long_render_and_keeps_its_samples(signal: &str) {
+    let dir = scratch_dir(signal);
+    let target = dir.join("long.png");
+    let mut child = chambre()
+        .args(["render", "scenes/spheres.toml", "--backend", "cpu"])
+        .args(["--width", "384", "--height", "256", "--spp", "100000", "-o"])
+        .arg(&target)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Loading takes milliseconds and a row of 128 pixels x 8 samples about one; two seconds
+    // leave many rows rendered even on a loaded machine.
+    std::thread::sleep(Duration::from_secs(2));
+    let kill = Command::new("kill")
+        .arg(format!("-{signal}"))
+        .arg(child.id().to_string())
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = wait_at_most(&mut child, Duration::from_secs(20));
+    let mut message = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut message).unwrap();
+    assert_eq!(status.code(), Some(130), "{message}");
+    assert!(message.contains("render interrupted"), "{message}");
+    assert!(message.contains("wrote the partial image"), "{message}");
+    let written = image::open(&target).unwrap().into_rgb8();
+    assert_eq!((written.width(), written.height()), (384, 256));
+    assert!(
+        written.pixels().any(|p| p.0 != [0, 0, 0]),
+        "the partial image holds the samples taken"
+    );
+    assert_eq!(entries(&dir), ["long.png"]);
+}
+
+#[test]
+fn sigint_stops_a_long_render_and_keeps_its_samples() {
+    signal_stops_a_long_render_and_keeps_its_samples("INT");
+}
+
+#[test]
+fn sigterm_stops_a_long_render_and_keeps_its_samples() {
+    signal_stops_a_long_render_and_keeps_its_samples("TERM");
+}
+
+#[test]
+fn a_render_stopped_between_tiles_reports_the_samples_each_pixel_holds() {
+    // 192 x 128 pixels: two tiles (128 and 64 wide), one pass of 4 samples. Stop after the first tile.
+    let scene = common::load(
+        "scenes/spheres.toml",
+        &["render.width=192", "render.height=128", "render.spp=4"],
+    );
+    let flat = flatten(&scene);
+    let cancel = AtomicBool::new(false);
+    let mut cpu = CpuRenderer::new(&flat).with_cancel(&cancel);
+    let output = render(
+        &flat,
+        &mut cpu,
+        &mut |done, _| cancel.store(done == 1, Ordering::Relaxed),
+        &cancel,
+    )
+    .unwrap();
+    assert!(output.stopped.is_some());
+    assert_eq!(output.samples_per_pixel, 0);
+    assert_eq!(output.max_samples_per_pixel, 4);
+    assert_eq!(output.pixels_without_samples, 64 * 128, "the second tile");
+    // A stop before the first tile: no pixel has a sample.
+    let mut cpu = CpuRenderer::new(&flat);
+    let output = render(&flat, &mut cpu, &mut |_, _| {}, &AtomicBool::new(true)).unwrap();
+    assert_eq!(output.max_samples_per_pixel, 0);
+    assert_eq!(output.pixels_without_samples, 192 * 128);
+}
+
+#[test]
+fn a_cancelled_cpu_renderer_adds_no_row_to_the_accumulation() {
+    let scene = common::load(
+        "scenes/spheres.toml",
+        &["render.width=48", "render.height=32", "render.spp=2"],
+    );
+    let flat = flatten(&scene);
+    let cancel = AtomicBool::new(true);
+    let mut cpu = CpuRenderer::new(&flat).with_cancel(&cancel);
+    let pass = GpuPass {
+        tile_width: 48,
+        tile_height: 32,
+        sample_count: 2,
+        light_sample_count: u32::MAX,
+        commit: 1,
+        ..Default::default()
+    };
+    let status = cpu.render_tile(pass).unwrap();
+    assert_eq!(status.rays, 0);
+    assert!(cpu.accumulation().unwrap().iter().all(|a| *a == [0.0; 4]));
+    cancel.store(false, Ordering::Relaxed);
+    let mut cpu = CpuRenderer::new(&flat).with_cancel(&cancel);
+    assert!(cpu.render_tile(pass).unwrap().rays > 0);
+    assert!(cpu.accumulation().unwrap().iter().all(|a| a[3] == 2.0));
+}
+
+/// A pipe whose reader is already gone: writing to it fails with EPIPE every time.
+fn closed_pipe() -> std::io::PipeWriter {
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    writer
+}
+
+#[test]
+fn a_closed_stdout_or_stderr_is_not_a_panic() {
+    for args in [
+        &["check", "scenes/tabletop.toml"][..],
+        &["camera", "scenes/tabletop.toml"],
+        &["info"],
+    ] {
+        let output = chambre().args(args).stdout(closed_pipe()).output().unwrap();
+        let message = stderr_of(&output);
+        assert!(output.status.success(), "{args:?}: {message}");
+        assert!(
+            !message.contains("panicked") && !message.contains("error"),
+            "{args:?} exits quietly: {message}"
+        );
+    }
+    // A full disk behind `>` is an error, not a quiet exit.
+    let output = chambre()
+        .args(["check", "scenes/tabletop.toml"])
+        .stdout(std::fs::File::create("/dev/full").unwrap())
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stderr_of(&output).contains("writing to stdout"));
+    // A render whose log reader went away still writes its image.
+    let target = scratch_dir("stderr").join("out.png");
+    let status = chambre()
+        .args(["render", "scenes/spheres.toml", "--backend", "cpu"])
+        .args(["--width", "48", "--height", "32", "--spp", "2", "-o"])
+        .arg(&target)
+        .stderr(closed_pipe())
+        .status()
+        .unwrap();
+    assert!(status.success());
+    assert_eq!(image::open(&target).unwrap().width(), 48);
+}
+
+#[test]
+fn a_far_plane_not_beyond_the_near_plane_is_refused_naming_both() {
+    let report = chambre()
+        .args(["camera", "scenes/spheres.toml"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8(report.stdout).unwrap();
+    let near = text
+        .split("near ")
+        .nth(1)
+        .and_then(|rest| rest.split(',').next())
+        .unwrap_or_else(|| panic!("no frustum near in\n{text}"));
+    let far = near.parse::<f64>().unwrap() / 2.0;
+    for far in [far.to_string(), near.to_string()] {
+        let output = chambre()
+            .args(["camera", "scenes/spheres.toml", "--far", &far])
+            .output()
+            .unwrap();
+        let message = stderr_of(&output);
+        assert_eq!(output.status.code(), Some(1), "{message}");
+        assert!(message.contains(&format!("--far {}", far.parse::<f64>().unwrap())));
+        assert!(message.contains(&format!("near plane of the raster projection, at {near}")));
+        assert!(output.stdout.is_empty(), "no degenerate matrix is printed");
+    }
+}
+
+#[test]
+fn auto_backend_falls_back_to_the_cpu_when_the_gpu_refuses_the_scene() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    // An accumulation buffer (16 bytes a pixel) one row over the adapter's binding limit.
+    let limit = context.device.limits().max_storage_buffer_binding_size;
+    let width = 4096u64;
+    let height = (limit / 16).div_ceil(width) + 1;
+    assert!(
+        height <= 16384,
+        "the adapter's binding limit ({limit} bytes) is beyond any image chambre renders"
+    );
+    let dir = scratch_dir("auto");
+    let scene = dir.join("empty.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[render]\nwidth = {width}\nheight = {height}\nspp = 1\nbackground = [0.2, 0.3, 0.4]\n\
+             [camera]\nposition = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+             film = [{}, {}]\n",
+            width as f64 / 100.0,
+            height as f64 / 100.0
+        ),
+    )
+    .unwrap();
+    let target = dir.join("empty.png");
+    let render_on = |backend: &str| {
+        chambre()
+            .arg("render")
+            .arg(&scene)
+            .args(["--backend", backend, "-o"])
+            .arg(&target)
+            .output()
+            .unwrap()
+    };
+    let gpu = render_on("gpu");
+    assert_eq!(gpu.status.code(), Some(1));
+    assert!(stderr_of(&gpu).contains("max_storage_buffer_binding_size"));
+    assert!(!target.exists());
+    let auto = render_on("auto");
+    let message = stderr_of(&auto);
+    assert!(auto.status.success(), "{message}");
+    let notices: Vec<&str> = message
+        .lines()
+        .filter(|l| l.starts_with("notice:"))
+        .collect();
+    assert_eq!(notices.len(), 1, "{message}");
+    assert!(notices[0].contains("max_storage_buffer_binding_size"));
+    assert!(notices[0].ends_with("rendering on the CPU"));
+    assert!(message.contains("on CPU"));
+    let written = image::open(&target).unwrap().into_rgb8();
+    assert_eq!(
+        (written.width() as u64, written.height() as u64),
+        (width, height)
+    );
+}
+
+/// Validation bounds intensities (1e20), but not distances: a point light 1e-10 from a sphere
+/// of radius 1e-9 gives irradiances of 1e40, beyond f32, on the pixels nearest the light.
+const TINY_SCENE: &str = r#"[render]
+width = 48
+height = 32
+spp = 2
+[camera]
+position = [0.0, 0.0, 4e-9]
+look_at = [0.0, 0.0, 0.0]
+[[materials]]
+name = "white"
+model = "lambert"
+[[shapes]]
+type = "sphere"
+center = [0.0, 0.0, 0.0]
+radius = 1e-9
+material = "white"
+[[lights]]
+type = "point"
+position = [0.0, 0.0, 1.1e-9]
+intensity = [1e20, 1e20, 1e20]
+"#;
+
+#[test]
+fn non_finite_pixels_are_written_and_counted_and_the_exit_is_an_error() {
+    let dir = scratch_dir("nonfinite");
+    let scene = dir.join("tiny.toml");
+    std::fs::write(&scene, TINY_SCENE).unwrap();
+    for name in ["inf.exr", "inf.png"] {
+        let target = dir.join(name);
+        let output = chambre()
+            .args(["render", "--backend", "cpu", "-o"])
+            .arg(&target)
+            .arg(&scene)
+            .output()
+            .unwrap();
+        let message = stderr_of(&output);
+        assert_eq!(output.status.code(), Some(1), "{message}");
+        let reported: usize = message
+            .lines()
+            .find_map(|l| {
+                l.strip_prefix("error: ")?
+                    .split_once(" pixels are not finite")
+            })
+            .and_then(|(n, _)| n.parse().ok())
+            .unwrap_or_else(|| panic!("no count in {message}"));
+        assert!(reported > 0);
+        let written = image::open(&target).unwrap();
+        let in_file = if name.ends_with(".exr") {
+            assert!(message.contains("kept as inf/NaN in the EXR"), "{message}");
+            let floats = written.into_rgb32f();
+            floats
+                .pixels()
+                .filter(|p| p.0.iter().any(|c| !c.is_finite()))
+                .count()
+        } else {
+            assert!(
+                message.contains("written as magenta in the PNG"),
+                "{message}"
+            );
+            let bytes = written.into_rgb8();
+            bytes.pixels().filter(|p| p.0 == NON_FINITE_PNG).count()
+        };
+        assert_eq!(in_file, reported, "{name}");
+    }
+}
+
+#[test]
+fn the_written_exr_keeps_inf_and_nan_and_the_png_marks_them() {
+    let pixels = vec![
+        Vec3::new(0.5, 0.25, 1.0),
+        Vec3::new(f32::INFINITY, 0.0, 0.0),
+        Vec3::new(0.0, f32::NAN, 0.0),
+        Vec3::new(0.0, 0.0, f32::NEG_INFINITY),
+    ];
+    let image = Image {
+        width: 2,
+        height: 2,
+        pixels: pixels.clone(),
+    };
+    let dir = scratch_dir("library");
+    let exr = OutputTarget::prepare(&dir.join("x.exr")).unwrap();
+    exr.write(&image).unwrap();
+    let floats = image::open(dir.join("x.exr")).unwrap().into_rgb32f();
+    for (read, expected) in floats.pixels().zip(&pixels) {
+        for (r, e) in read.0.iter().zip(expected.to_array()) {
+            assert!(r == &e || (r.is_nan() && e.is_nan()), "{r} != {e}");
+        }
+    }
+    let png = OutputTarget::prepare(&dir.join("x.png")).unwrap();
+    png.write(&image).unwrap();
+    let bytes = image::open(dir.join("x.png")).unwrap().into_rgb8();
+    let read: Vec<[u8; 3]> = bytes.pixels().map(|p| p.0).collect();
+    assert_eq!(read[0], [188, 137, 255]);
+    assert_eq!(&read[1..], [NON_FINITE_PNG; 3]);
+}
