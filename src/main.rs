@@ -82,6 +82,9 @@ enum Command {
     },
     /// List the GPU adapters found and their relevant limits.
     Info,
+    /// Measure: the figures of BENCHMARKS.md, as a table and optionally JSON.
+    #[command(subcommand)]
+    Bench(chambre::bench::BenchCommand),
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -161,6 +164,7 @@ fn main() -> ExitCode {
             run_render(&scene, &output, backend, &overrides)
         }
         Command::Check { scene, set } => run_check(&scene, &set),
+        Command::Bench(command) => run_bench(&command),
         Command::Camera {
             scene,
             coc,
@@ -205,6 +209,11 @@ fn print(text: &str) -> anyhow::Result<()> {
 
 fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
     Scene::load(path, overrides)
+}
+
+fn run_bench(command: &chambre::bench::BenchCommand) -> anyhow::Result<ExitCode> {
+    print(&chambre::bench::run(command)?)?;
+    Ok(ExitCode::SUCCESS)
 }
 
 fn run_check(path: &Path, overrides: &[String]) -> anyhow::Result<ExitCode> {

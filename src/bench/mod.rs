@@ -9,7 +9,121 @@
 
 pub mod rays;
 
+use std::path::PathBuf;
+
 use serde::Serialize;
+
+use crate::error::{Error, Result};
+use rays::{Backend, Pinhole, RaysConfig};
+
+/// `chambre bench` and its parts.
+#[derive(Debug, clap::Subcommand)]
+pub enum BenchCommand {
+    /// Trace the same coherent and incoherent rays on a mesh: closest hit and any hit, Mrays/s
+    /// and a checksum (hits, sum of hit distances) another ray tracer can reproduce.
+    Rays(RaysArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct RaysArgs {
+    /// Mesh file (OBJ or PLY, optionally .gz).
+    #[arg(long, default_value = "scenes/meshes/dragon_vrip.obj.gz")]
+    pub mesh: PathBuf,
+    /// Camera position.
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true,
+          default_values_t = Pinhole::DRAGON.position)]
+    pub position: Vec<f32>,
+    /// Point the camera looks at.
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true,
+          default_values_t = Pinhole::DRAGON.look_at)]
+    pub look_at: Vec<f32>,
+    /// Camera up vector.
+    #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true,
+          default_values_t = Pinhole::DRAGON.up)]
+    pub up: Vec<f32>,
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = Pinhole::DRAGON.vertical_fov_deg)]
+    pub vertical_fov: f32,
+    #[arg(long, default_value_t = Pinhole::DRAGON.width)]
+    pub width: u32,
+    #[arg(long, default_value_t = Pinhole::DRAGON.height)]
+    pub height: u32,
+    /// Coherent frames (one jittered ray per pixel each); the incoherent set has as many rays.
+    #[arg(long, default_value_t = 8)]
+    pub frames: u32,
+    /// Timed runs after one warm-up.
+    #[arg(long, default_value_t = 5)]
+    pub runs: u32,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u32,
+    /// Backends to measure, side by side.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::Gpu])]
+    pub backends: Vec<Backend>,
+    /// Also write the report as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// A benchmark's report with where it ran, as written to JSON.
+#[derive(Debug, Serialize)]
+pub struct Report<T: Serialize> {
+    pub command: String,
+    pub machine: Machine,
+    pub report: T,
+}
+
+/// Runs `command`; returns the Markdown report and writes the JSON one if asked.
+pub fn run(command: &BenchCommand) -> Result<String> {
+    let command_line = std::env::args().collect::<Vec<_>>().join(" ");
+    let machine = Machine::here();
+    match command {
+        BenchCommand::Rays(args) => {
+            let config = RaysConfig {
+                mesh: args.mesh.clone(),
+                camera: Pinhole {
+                    position: vec3(&args.position),
+                    look_at: vec3(&args.look_at),
+                    up: vec3(&args.up),
+                    vertical_fov_deg: args.vertical_fov,
+                    width: args.width,
+                    height: args.height,
+                },
+                frames: args.frames,
+                runs: args.runs,
+                seed: args.seed,
+            };
+            let report = rays::run(&config, &args.backends)?;
+            let markdown = format!(
+                "{}\n{}",
+                machine.to_markdown(&command_line),
+                report.to_markdown()
+            );
+            if let Some(path) = &args.json {
+                write_json(
+                    path,
+                    &Report {
+                        command: command_line,
+                        machine,
+                        report,
+                    },
+                )?;
+            }
+            Ok(markdown)
+        }
+    }
+}
+
+fn vec3(v: &[f32]) -> [f32; 3] {
+    [v[0], v[1], v[2]]
+}
+
+fn write_json<T: Serialize>(path: &std::path::Path, value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| Error::Output {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    std::fs::write(path, text + "\n").map_err(|e| Error::io(path, e))
+}
 
 /// Median, minimum and maximum of repeated measurements.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -44,6 +158,14 @@ pub struct Machine {
 }
 
 impl Machine {
+    /// One line for a report: the command and where and when it ran.
+    pub fn to_markdown(&self, command: &str) -> String {
+        format!(
+            "`{command}` — chambre {}, {}, {} CPU threads, adapter: {}\n",
+            self.chambre_version, self.date_utc, self.cpu_threads, self.adapter
+        )
+    }
+
     pub fn here() -> Machine {
         Machine {
             chambre_version: env!("CARGO_PKG_VERSION").to_string(),

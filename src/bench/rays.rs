@@ -8,7 +8,7 @@
 //!   directions uniform on the sphere, as many rays as the coherent set.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -19,6 +19,8 @@ use crate::accel::intersect::RayQuery;
 use crate::accel::traverse::{closest_hit, occluded};
 use crate::accel::{FlatScene, flatten};
 use crate::error::{Error, Result};
+use crate::gpu::GpuContext;
+use crate::gpu::trace::GpuTracer;
 use crate::layout::{NONE, T_FAR};
 use crate::math::rng::Rng;
 use crate::scene::Scene;
@@ -216,43 +218,84 @@ pub fn bounds(scene: &FlatScene) -> (Vec3, Vec3) {
         })
 }
 
-/// Times `trace` on `rays`: one warm-up, then `runs` timed runs.
-pub fn measure(
-    runs: u32,
-    rays: usize,
-    mut trace: impl FnMut() -> Result<Vec<f32>>,
-) -> Result<(Spread, Checksum)> {
-    let checksum = Checksum::of(&trace()?);
-    let mut mrays = Vec::new();
-    for _ in 0..runs.max(1) {
-        let start = Instant::now();
-        let distances = trace()?;
-        mrays.push(rays as f64 / start.elapsed().as_secs_f64() / 1e6);
-        debug_assert_eq!(Checksum::of(&distances), checksum);
-    }
-    Ok((Spread::of(&mrays), checksum))
+/// Which path traces the rays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    Cpu,
+    Gpu,
 }
 
-/// Traces both ray sets with both queries on the CPU path.
-pub fn run_cpu(config: &RaysConfig) -> Result<RaysReport> {
+/// Mrays/s of `runs` timed runs after one warm-up, each run's time given by `trace`.
+fn measure(runs: u32, rays: usize, mut trace: impl FnMut() -> Result<Duration>) -> Result<Spread> {
+    trace()?;
+    let mut mrays = Vec::new();
+    for _ in 0..runs.max(1) {
+        mrays.push(rays as f64 / trace()?.as_secs_f64() / 1e6);
+    }
+    Ok(Spread::of(&mrays))
+}
+
+/// Traces `rays` with `query` on the CPU path, `runs` times after a warm-up.
+fn measure_cpu(
+    scene: &FlatScene,
+    rays: &RaySet,
+    query: Query,
+    runs: u32,
+) -> Result<(Spread, Checksum)> {
+    let checksum = Checksum::of(&trace_cpu(scene, rays, query));
+    let spread = measure(runs, rays.len(), || {
+        let start = Instant::now();
+        trace_cpu(scene, rays, query);
+        Ok(start.elapsed())
+    })?;
+    Ok((spread, checksum))
+}
+
+/// The same on the GPU: the time of each run is the device's, from submission to completion.
+fn measure_gpu(
+    tracer: &GpuTracer,
+    rays: &RaySet,
+    query: Query,
+    runs: u32,
+) -> Result<(Spread, Checksum)> {
+    let spread = measure(runs, rays.len(), || tracer.trace(query))?;
+    Ok((spread, Checksum::of(&tracer.distances()?)))
+}
+
+/// Traces both ray sets with both queries on each of `backends`.
+pub fn run(config: &RaysConfig, backends: &[Backend]) -> Result<RaysReport> {
     let scene = mesh_scene(&config.mesh)?;
     let coherent = coherent_rays(&config.camera, config.frames, config.seed);
     let (lo, hi) = bounds(&scene);
     let incoherent = incoherent_rays(lo, hi, coherent.len(), config.seed);
     let mut results = Vec::new();
     for (set, rays) in [("coherent", &coherent), ("incoherent", &incoherent)] {
-        for query in [Query::ClosestHit, Query::AnyHit] {
-            let (mrays_per_s, checksum) = measure(config.runs, rays.len(), || {
-                Ok(trace_cpu(&scene, rays, query))
-            })?;
-            results.push(RaysResult {
-                set,
-                query,
-                backend: format!("cpu ({} threads)", rayon::current_num_threads()),
-                rays: rays.len(),
-                mrays_per_s,
-                checksum,
-            });
+        for &backend in backends {
+            let (name, tracer) = match backend {
+                Backend::Cpu => (
+                    format!("cpu ({} threads)", rayon::current_num_threads()),
+                    None,
+                ),
+                Backend::Gpu => {
+                    let tracer = GpuTracer::new(GpuContext::new()?, &scene, rays)?;
+                    (format!("gpu ({})", tracer.adapter_name()), Some(tracer))
+                }
+            };
+            for query in [Query::ClosestHit, Query::AnyHit] {
+                let (mrays_per_s, checksum) = match &tracer {
+                    None => measure_cpu(&scene, rays, query, config.runs)?,
+                    Some(tracer) => measure_gpu(tracer, rays, query, config.runs)?,
+                };
+                results.push(RaysResult {
+                    set,
+                    query,
+                    backend: name.clone(),
+                    rays: rays.len(),
+                    mrays_per_s,
+                    checksum,
+                });
+            }
         }
     }
     Ok(RaysReport {
@@ -261,6 +304,51 @@ pub fn run_cpu(config: &RaysConfig) -> Result<RaysReport> {
         bvh_build_ms: scene.build_time.as_secs_f64() * 1e3,
         results,
     })
+}
+
+impl RaysReport {
+    /// The report as a Markdown table.
+    pub fn to_markdown(&self) -> String {
+        let c = &self.config;
+        let cam = &c.camera;
+        let mut out = format!(
+            "rays: {} ({} triangles, BVH built in {:.0} ms); camera {:?} -> {:?}, up {:?}, \
+             vertical fov {} deg, {}x{}, {} frames ({} rays per set), seed {}; median of {} \
+             runs after a warm-up\n\n",
+            c.mesh.display(),
+            self.triangles,
+            self.bvh_build_ms,
+            cam.position,
+            cam.look_at,
+            cam.up,
+            cam.vertical_fov_deg,
+            cam.width,
+            cam.height,
+            c.frames,
+            cam.width as u64 * cam.height as u64 * c.frames as u64,
+            c.seed,
+            c.runs
+        );
+        out += "| rays | query | backend | Mrays/s median | min | max | hits | sum of t |\n";
+        out += "|---|---|---|---|---|---|---|---|\n";
+        for r in &self.results {
+            let query = match r.query {
+                Query::ClosestHit => "closest",
+                Query::AnyHit => "any",
+            };
+            out += &format!(
+                "| {} | {query} | {} | {:.2} | {:.2} | {:.2} | {} | {:.6e} |\n",
+                r.set,
+                r.backend,
+                r.mrays_per_s.median,
+                r.mrays_per_s.min,
+                r.mrays_per_s.max,
+                r.checksum.hits,
+                r.checksum.sum_t
+            );
+        }
+        out
+    }
 }
 
 #[cfg(test)]

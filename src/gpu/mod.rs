@@ -79,6 +79,8 @@ pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub adapter_description: String,
+    /// The adapter's name alone (e.g. "llvmpipe (LLVM 15.0.6, 256 bits)").
+    pub adapter_name: String,
     /// Errors wgpu reported outside an error scope; checked after every dispatch.
     uncaptured: Arc<Mutex<Vec<String>>>,
 }
@@ -114,6 +116,7 @@ impl GpuContext {
             device,
             queue,
             adapter_description: describe_adapter(&adapter),
+            adapter_name: adapter.get_info().name,
             uncaptured,
         })
     }

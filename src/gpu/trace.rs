@@ -162,7 +162,7 @@ impl GpuTracer {
         Ok(all)
     }
 
-    pub fn adapter_description(&self) -> &str {
-        &self.context.adapter_description
+    pub fn adapter_name(&self) -> &str {
+        &self.context.adapter_name
     }
 }

@@ -1,0 +1,97 @@
+//! `chambre bench` runs end to end on a small mesh, and its JSON holds every field with sane
+//! values: the same rays give the same checksum on every backend. No timing is asserted.
+
+mod common;
+
+use std::process::Command;
+
+fn run_bench(args: &[&str], json: &std::path::Path) -> serde_json::Value {
+    let output = Command::new(env!("CARGO_BIN_EXE_chambre"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["bench"])
+        .args(args)
+        .arg("--json")
+        .arg(json)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let table = String::from_utf8_lossy(&output.stdout);
+    assert!(table.contains("| rays | query | backend |"), "{table}");
+    serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
+}
+
+#[test]
+fn bench_rays_reports_the_same_checksum_on_every_backend() {
+    // The GPU must be there: the helper fails without an adapter (see common::gpu_context).
+    drop(common::gpu_context());
+    let json = std::env::temp_dir().join(format!("chambre-bench-{}.json", std::process::id()));
+    let report = run_bench(
+        &[
+            "rays",
+            "--mesh",
+            "scenes/meshes/bunny-npm-lowres.obj",
+            "--position",
+            "0",
+            "0",
+            "30",
+            "--look-at",
+            "0",
+            "0",
+            "0",
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--frames",
+            "2",
+            "--runs",
+            "2",
+            "--backends",
+            "cpu,gpu",
+        ],
+        &json,
+    );
+    let machine = &report["machine"];
+    assert!(machine["cpu_threads"].as_u64().unwrap() >= 1);
+    assert_eq!(machine["date_utc"].as_str().unwrap().len(), 10);
+    assert!(report["command"].as_str().unwrap().contains("bench rays"));
+    let body = &report["report"];
+    assert_eq!(body["triangles"].as_u64(), Some(3674));
+    assert!(body["bvh_build_ms"].as_f64().unwrap() > 0.0);
+    let results = body["results"].as_array().unwrap();
+    assert_eq!(results.len(), 8, "2 sets x 2 queries x 2 backends");
+    for r in results {
+        assert_eq!(r["rays"].as_u64(), Some(48 * 32 * 2));
+        let m = &r["mrays_per_s"];
+        let (min, median, max) = (
+            m["min"].as_f64().unwrap(),
+            m["median"].as_f64().unwrap(),
+            m["max"].as_f64().unwrap(),
+        );
+        assert!(0.0 < min && min <= median && median <= max, "{m}");
+        let hits = r["checksum"]["hits"].as_u64().unwrap();
+        assert!(hits > 0 && hits < 48 * 32 * 2, "{r}");
+        // The same set and query traced by the other backend found the same hits.
+        let twin = results
+            .iter()
+            .find(|o| {
+                o["set"] == r["set"] && o["query"] == r["query"] && o["backend"] != r["backend"]
+            })
+            .unwrap();
+        assert_eq!(
+            twin["checksum"]["hits"], r["checksum"]["hits"],
+            "{r} vs {twin}"
+        );
+        let (a, b) = (
+            r["checksum"]["sum_t"].as_f64().unwrap(),
+            twin["checksum"]["sum_t"].as_f64().unwrap(),
+        );
+        assert!((a - b).abs() <= 1e-5 * a.abs(), "{a} vs {b}");
+        if r["query"] == "any_hit" {
+            assert_eq!(a, 0.0);
+        } else {
+            assert!(a > 0.0);
+        }
+    }
+}
