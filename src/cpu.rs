@@ -2,6 +2,7 @@
 //! Twin: `wgsl/render.wgsl` (the per-pixel sample loop, the scratch sum of a pass split into
 //! light windows, and the accumulation).
 
+use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::Vec3;
@@ -11,7 +12,7 @@ use crate::accel::FlatScene;
 use crate::error::Result;
 use crate::integrator::{LightWindow, SampleStats, trace_sample};
 use crate::layout::GpuPass;
-use crate::render::{Backend, TileStatus};
+use crate::render::{Backend, DispatchStatus};
 
 pub struct CpuRenderer<'a> {
     scene: &'a FlatScene,
@@ -19,7 +20,13 @@ pub struct CpuRenderer<'a> {
     /// Sums of a pass whose light windows are not all done (allocated on first use).
     scratch: Vec<Vec3>,
     cancel: Option<&'a AtomicBool>,
+    /// Status of each batch run and not yet collected by `finish`.
+    finished: VecDeque<DispatchStatus>,
 }
+
+/// Pixels of a row one work item renders: small enough to balance a band of few wide rows over
+/// the threads, large enough to amortise the scheduling.
+const SEGMENT: u32 = 64;
 
 impl<'a> CpuRenderer<'a> {
     pub fn new(scene: &'a FlatScene) -> Self {
@@ -29,12 +36,14 @@ impl<'a> CpuRenderer<'a> {
             accumulation: vec![[0.0; 4]; pixels],
             scratch: Vec::new(),
             cancel: None,
+            finished: VecDeque::new(),
         }
     }
 
-    /// Rows not yet started when `cancel` is set are skipped, so a stop takes effect within a
-    /// row, not a whole tile (one tile can take minutes with many light samples). A skipped
-    /// row adds nothing, not even to its pixels' sample counts, so every pixel stays a mean.
+    /// Row segments not yet started when `cancel` is set are skipped, so a stop takes effect
+    /// within a segment, not a whole dispatch (one can take minutes with many light samples).
+    /// A skipped segment adds nothing, not even to its pixels' sample counts, so every pixel
+    /// stays a mean.
     pub fn with_cancel(mut self, cancel: &'a AtomicBool) -> Self {
         self.cancel = Some(cancel);
         self
@@ -43,20 +52,26 @@ impl<'a> CpuRenderer<'a> {
     fn cancelled(&self) -> bool {
         self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
     }
-}
 
-impl Backend for CpuRenderer<'_> {
-    fn render_tile(&mut self, pass: GpuPass) -> Result<TileStatus> {
+    /// Runs one dispatch: every sample of `pass` for its rows, in parallel over row segments.
+    pub fn run_dispatch(&mut self, pass: &GpuPass) -> DispatchStatus {
         let scene = self.scene;
         let width = scene.frame.width;
-        let window = LightWindow::of_pass(&pass);
-        let rows: Vec<(u32, Vec<Vec3>, SampleStats)> = (pass.tile_y
-            ..pass.tile_y + pass.tile_height)
+        let window = LightWindow::of_pass(pass);
+        let segments: Vec<(u32, u32, u32)> = (pass.tile_y..pass.tile_y + pass.tile_height)
+            .flat_map(|y| {
+                let end = pass.tile_x + pass.tile_width;
+                (pass.tile_x..end)
+                    .step_by(SEGMENT as usize)
+                    .map(move |x| (y, x, (x + SEGMENT).min(end)))
+            })
+            .collect();
+        let rendered: Vec<(u32, u32, Vec<Vec3>, SampleStats)> = segments
             .into_par_iter()
             .filter(|_| !self.cancelled())
-            .map(|y| {
+            .map(|(y, x0, x1)| {
                 let mut stats = SampleStats::default();
-                let row = (pass.tile_x..pass.tile_x + pass.tile_width)
+                let sums = (x0..x1)
                     .map(|x| {
                         let mut sum = Vec3::ZERO;
                         for s in 0..pass.sample_count {
@@ -66,16 +81,16 @@ impl Backend for CpuRenderer<'_> {
                         sum
                     })
                     .collect();
-                (y, row, stats)
+                (y, x0, sums, stats)
             })
             .collect();
         if pass.commit == 0 && self.scratch.is_empty() {
             self.scratch = vec![Vec3::ZERO; self.accumulation.len()];
         }
-        let mut status = TileStatus::default();
-        for (y, row, stats) in rows {
-            let start = (y * width + pass.tile_x) as usize;
-            for (i, mut sum) in row.into_iter().enumerate() {
+        let mut status = DispatchStatus::default();
+        for (y, x0, sums, stats) in rendered {
+            let start = (y * width + x0) as usize;
+            for (i, mut sum) in sums.into_iter().enumerate() {
                 let pixel = start + i;
                 if !window.is_first() {
                     sum += self.scratch[pixel];
@@ -94,7 +109,29 @@ impl Backend for CpuRenderer<'_> {
             status.truncated += stats.truncated;
             status.flags |= stats.flags;
         }
-        Ok(status)
+        status
+    }
+}
+
+impl Backend for CpuRenderer<'_> {
+    fn submit(&mut self, dispatches: &[GpuPass]) -> Result<()> {
+        let mut status = DispatchStatus::default();
+        for pass in dispatches {
+            let s = self.run_dispatch(pass);
+            status.rays += s.rays;
+            status.truncated += s.truncated;
+            status.flags |= s.flags;
+        }
+        self.finished.push_back(status);
+        Ok(())
+    }
+
+    fn finish(&mut self) -> Result<DispatchStatus> {
+        Ok(self.finished.pop_front().unwrap_or_default())
+    }
+
+    fn in_flight(&self) -> usize {
+        self.finished.len()
     }
 
     /// Moves the accumulation out (it is read once, at the end): a copy of a 16384^2 image

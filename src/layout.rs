@@ -225,10 +225,11 @@ pub struct GpuFrame {
     pub _pad2: u32,
 }
 
-/// What one dispatch renders: a tile of pixels, a range of sample indices, and a window of
-/// every area light's shadow-ray samples. A pass whose light samples need several windows
-/// (dispatches) sums them in a scratch buffer and commits the sum to the accumulation with the
-/// last window, so the accumulation is a valid mean after every dispatch (see `render.rs`).
+/// What one dispatch renders: a rectangle of pixels (whole rows: a band), a range of sample
+/// indices, and a window of every area light's shadow-ray samples. A pass whose light samples
+/// need several windows (dispatches) sums them in a scratch buffer and commits the sum to the
+/// accumulation with the last window, so the accumulation is a valid mean after every dispatch
+/// (see `render.rs`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuPass {

@@ -331,7 +331,7 @@ fn progress_reporter() -> Box<dyn Progress> {
             let decile = done * 10 / total.max(1);
             if decile > last_decile {
                 last_decile = decile;
-                note!("progress: {}% ({done}/{total} tiles)", decile * 10);
+                note!("progress: {}% ({done}/{total} batches)", decile * 10);
             }
         })
     }
@@ -399,8 +399,11 @@ fn finish(output: RenderOutput, target: &OutputTarget, backend: &str) -> anyhow:
     if written {
         target.write(&output.image)?;
     }
+    let kernel = output.kernel_time.map_or(String::new(), |k| {
+        format!(" (kernels {:.2} s)", k.as_secs_f64())
+    });
     note!(
-        "{path}: {}x{}, {} in {:.2} s, {:.2} Mrays/s ({} rays) on {backend}",
+        "{path}: {}x{}, {} in {:.2} s{kernel}, {:.2} Mrays/s ({} rays) on {backend}",
         output.image.width,
         output.image.height,
         describe_samples(&output),

@@ -1,12 +1,20 @@
-//! The render driver: splits a render into passes of samples and tiles of pixels, runs them on
-//! a [`Backend`] (GPU or CPU), reports progress, and returns an [`Image`].
+//! The render driver: cuts a render into passes of samples over the whole image, each pass into
+//! dispatches over bands of rows, and the dispatches into batches; runs the batches on a
+//! [`Backend`] (GPU or CPU), reports progress, and returns an [`Image`].
 //!
-//! Each pass adds the same number of samples to every pixel, so the accumulation is a valid
-//! image at every pass boundary: an interrupted or failing render keeps what it computed.
+//! Every dispatch covers whole rows of the image (the whole frame when the ray budget allows),
+//! so a real GPU gets hundreds of thousands of invocations per dispatch. The host never waits
+//! between dispatches: a batch is one submission, and up to [`BATCHES_IN_FLIGHT`] batches are
+//! queued while the host reads the status words of older ones, asynchronously.
 //!
-//! Passes are sized by the rays they may trace, not by samples alone: one invocation traces at
-//! most [`RAYS_PER_INVOCATION`] rays per dispatch, so a sample whose area lights ask for more
-//! shadow rays is split into windows of light samples (`GpuPass`), each its own dispatch.
+//! Sizes come from [`RayBudgets`], not samples alone: one invocation traces a bounded number
+//! of rays per dispatch (a sample whose area lights ask for more shadow rays is split into
+//! windows of light samples, each its own dispatch), one dispatch a bounded number (no driver
+//! watchdog trips), one batch too (a Ctrl-C waits for at most the batches in flight).
+//!
+//! Each dispatch adds whole samples to the pixels it covers (light windows sum in a scratch
+//! buffer until the last commits), so the accumulation is a per-pixel mean after every
+//! dispatch: an interrupted or failing render keeps what it computed.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -20,26 +28,41 @@ use crate::layout::{
     STATUS_PERMUTE_CAP, STATUS_RAYS, STATUS_STACK_OVERFLOW, STATUS_TRAVERSAL_CAP, STATUS_TRUNCATED,
 };
 
-/// Tile edge in pixels: one dispatch covers at most TILE x TILE pixels.
-pub const TILE: u32 = 128;
-/// Rays one invocation may trace in one dispatch. lavapipe ends every loop of an invocation
-/// once 65535 loop iterations have run in total, and one ray costs tens of traversal
-/// iterations (`layout::STATUS_LOOP_LIMIT` reports a dispatch that still exceeds it).
-pub const RAYS_PER_INVOCATION: u64 = 64;
-/// Rays one dispatch may trace: well under a second on lavapipe, far below any GPU watchdog.
-pub const RAYS_PER_DISPATCH: u64 = 1 << 22;
+/// Upper bounds on the rays traced by one invocation, one dispatch and one batch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RayBudgets {
+    /// lavapipe ends every loop of an invocation once 65535 loop iterations have run in total,
+    /// and one ray costs tens of traversal iterations (`layout::STATUS_LOOP_LIMIT` reports a
+    /// dispatch that still exceeds it).
+    pub per_invocation: u64,
+    /// Well under a second on lavapipe, far below any GPU watchdog.
+    pub per_dispatch: u64,
+    /// One submission: a few seconds on lavapipe, milliseconds on a real GPU, where the
+    /// batches in flight keep it busy; a Ctrl-C waits for at most the batches in flight.
+    pub per_batch: u64,
+}
 
-/// What one tile dispatch reported.
+impl RayBudgets {
+    pub const DEFAULT: RayBudgets = RayBudgets {
+        per_invocation: 64,
+        per_dispatch: 1 << 22,
+        per_batch: 1 << 24,
+    };
+}
+/// Batches queued on the device at once: the next is queued while the last is read back.
+pub const BATCHES_IN_FLIGHT: usize = 2;
+
+/// What the dispatches of a batch reported.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TileStatus {
+pub struct DispatchStatus {
     pub flags: u32,
     pub rays: u64,
     pub truncated: u64,
 }
 
-impl TileStatus {
-    pub fn from_words(words: &[u32]) -> TileStatus {
-        TileStatus {
+impl DispatchStatus {
+    pub fn from_words(words: &[u32]) -> DispatchStatus {
+        DispatchStatus {
             flags: words[STATUS_FLAGS as usize],
             rays: words[STATUS_RAYS as usize] as u64,
             truncated: words[STATUS_TRUNCATED as usize] as u64,
@@ -47,10 +70,21 @@ impl TileStatus {
     }
 }
 
-/// A device that renders tiles into its own accumulation buffer (sum of radiance, samples).
+/// A device that runs dispatches into its own accumulation buffer (sum of radiance, samples).
 pub trait Backend {
-    fn render_tile(&mut self, pass: GpuPass) -> Result<TileStatus>;
+    /// Starts a batch of dispatches, run in order. The GPU queues them and returns at once; the
+    /// CPU runs them before it returns.
+    fn submit(&mut self, dispatches: &[GpuPass]) -> Result<()>;
+    /// Waits for the oldest batch submitted and not yet finished; returns what it reported.
+    fn finish(&mut self) -> Result<DispatchStatus>;
+    /// Batches submitted and not yet finished.
+    fn in_flight(&self) -> usize;
+    /// The accumulation, read once at the end.
     fn accumulation(&mut self) -> Result<Vec<[f32; 4]>>;
+    /// Device time spent in the kernels of finished batches, where the device measures it.
+    fn kernel_time(&self) -> Option<Duration> {
+        None
+    }
 }
 
 /// Linear radiance, row 0 at the top.
@@ -111,6 +145,8 @@ pub struct RenderOutput {
     /// Pixels without a single sample (a render stopped before reaching them); they are 0.
     pub pixels_without_samples: usize,
     pub elapsed: Duration,
+    /// Device time in the kernels (GPU timestamp queries), where the adapter offers them.
+    pub kernel_time: Option<Duration>,
     pub rays: u64,
     pub truncated_paths: u64,
     /// Kernel loop caps hit (`layout::STATUS_*` bits); a non-zero value is reported as an error.
@@ -125,14 +161,48 @@ impl RenderOutput {
     }
 }
 
-/// How a render is cut into dispatches: passes of samples, each over every tile, and within a
-/// pass the windows of light samples each dispatch covers in turn.
+/// How a render is cut into dispatches: passes of samples over the whole image; within a pass,
+/// bands of rows, each band once per window of light samples.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct RenderPlan {
     /// `(sample_start, sample_count)` of each pass.
     pub passes: Vec<(u32, u32)>,
-    /// `(light_sample_start, light_sample_count)` of each dispatch of a pass; the last commits.
+    /// `(light_sample_start, light_sample_count)` of each window; the last commits.
     pub light_windows: Vec<(u32, u32)>,
+    /// `(first row, rows)` of each band.
+    pub bands: Vec<(u32, u32)>,
+    pub width: u32,
+    /// Upper bound on the rays one dispatch traces.
+    pub rays_per_dispatch: u64,
+    /// Dispatches per batch: as many as fit the batch budget, at least one.
+    pub dispatches_per_batch: usize,
+}
+
+impl RenderPlan {
+    /// The dispatches of pass `pass`, in order: each band in every light window.
+    pub fn dispatches(&self, pass: usize) -> Vec<GpuPass> {
+        let (sample_start, sample_count) = self.passes[pass];
+        let windows = &self.light_windows;
+        let mut dispatches = Vec::with_capacity(self.bands.len() * windows.len());
+        for &(tile_y, tile_height) in &self.bands {
+            for (i, &(light_sample_start, light_sample_count)) in windows.iter().enumerate() {
+                dispatches.push(GpuPass {
+                    tile_x: 0,
+                    tile_y,
+                    tile_width: self.width,
+                    tile_height,
+                    sample_start,
+                    sample_count,
+                    light_sample_start,
+                    light_sample_count,
+                    commit: (i + 1 == windows.len()) as u32,
+                    loop_check: LOOP_CHECK_ITERATIONS,
+                    ..Default::default()
+                });
+            }
+        }
+        dispatches
+    }
 }
 
 /// An upper bound on the rays one camera sample traces: at every path vertex (one per bounce
@@ -168,34 +238,48 @@ impl RayBound {
     }
 }
 
-/// The passes of a render over tiles of `tile_pixels` pixels: as many samples per dispatch as
-/// the ray budgets allow, or one sample split into light windows when a sample alone is over
-/// the per-invocation budget.
-pub fn plan_passes(scene: &FlatScene, tile_pixels: u32) -> RenderPlan {
-    let spp = scene.frame.spp;
+/// The plan of a render: as many samples per pass as one invocation may trace, then bands of
+/// as many rows as one dispatch may trace.
+pub fn plan_passes(scene: &FlatScene, budgets: &RayBudgets) -> RenderPlan {
+    let frame = &scene.frame;
+    let spp = frame.spp;
     let bound = RayBound::of(scene);
-    let rays = bound.per_sample();
-    let by_invocation = RAYS_PER_INVOCATION / rays;
-    let by_dispatch = RAYS_PER_DISPATCH / (tile_pixels.max(1) as u64 * rays);
-    let per_pass = by_invocation.min(by_dispatch).clamp(1, spp as u64) as u32;
+    let per_pass = (budgets.per_invocation / bound.per_sample()).clamp(1, spp as u64) as u32;
+    let light_windows = light_windows(scene, bound, budgets.per_invocation);
+    let window_width = light_windows[0].1.min(frame.light_samples_per_vertex) as u64;
+    let area_lights = scene.lights.iter().filter(|l| l.kind == LIGHT_AREA).count() as u64;
+    let rays_per_sample_and_window = if light_windows.len() > 1 {
+        bound.vertices * (1 + bound.punctual_per_vertex + window_width * area_lights)
+    } else {
+        bound.per_sample()
+    };
+    let rays_per_row = frame.width as u64 * per_pass as u64 * rays_per_sample_and_window;
+    let rows = (budgets.per_dispatch / rays_per_row).clamp(1, frame.height as u64) as u32;
+    let rays_per_dispatch = rows as u64 * rays_per_row;
     RenderPlan {
         passes: (0..spp.div_ceil(per_pass))
             .map(|i| (i * per_pass, per_pass.min(spp - i * per_pass)))
             .collect(),
-        light_windows: light_windows(scene, bound),
+        light_windows,
+        bands: (0..frame.height.div_ceil(rows))
+            .map(|i| (i * rows, rows.min(frame.height - i * rows)))
+            .collect(),
+        width: frame.width,
+        rays_per_dispatch,
+        dispatches_per_batch: (budgets.per_batch / rays_per_dispatch).max(1) as usize,
     }
 }
 
 /// One window with every light sample when a sample fits the per-invocation budget; else
 /// windows of equal width, sized so that one window's rays fit it (at least one sample wide:
 /// a scene whose path vertices alone exceed the budget is left to the loop-limit check).
-fn light_windows(scene: &FlatScene, bound: RayBound) -> Vec<(u32, u32)> {
+fn light_windows(scene: &FlatScene, bound: RayBound, per_invocation: u64) -> Vec<(u32, u32)> {
     let area_lights = scene.lights.iter().filter(|l| l.kind == LIGHT_AREA);
     let most = area_lights.clone().map(|l| l.samples).max().unwrap_or(0);
-    if bound.per_sample() <= RAYS_PER_INVOCATION || most <= 1 {
+    if bound.per_sample() <= per_invocation || most <= 1 {
         return vec![(0, u32::MAX)];
     }
-    let per_vertex = RAYS_PER_INVOCATION / bound.vertices;
+    let per_vertex = per_invocation / bound.vertices;
     let for_light_samples = per_vertex.saturating_sub(1 + bound.punctual_per_vertex);
     let width = (for_light_samples / area_lights.count() as u64).clamp(1, most as u64) as u32;
     (0..most.div_ceil(width))
@@ -203,30 +287,28 @@ fn light_windows(scene: &FlatScene, bound: RayBound) -> Vec<(u32, u32)> {
         .collect()
 }
 
-pub fn tiles(width: u32, height: u32) -> Vec<(u32, u32, u32, u32)> {
-    let mut tiles = Vec::new();
-    for y in (0..height).step_by(TILE as usize) {
-        for x in (0..width).step_by(TILE as usize) {
-            tiles.push((x, y, TILE.min(width - x), TILE.min(height - y)));
-        }
-    }
-    tiles
-}
-
-/// Renders `scene` on `backend`. `cancel` is polled between dispatches.
+/// Renders `scene` on `backend` with the default budgets. `cancel` is polled before each
+/// batch; the batches already queued finish (at most [`BATCHES_IN_FLIGHT`]).
 pub fn render(
     scene: &FlatScene,
     backend: &mut dyn Backend,
     progress: &mut dyn Progress,
     cancel: &AtomicBool,
 ) -> Result<RenderOutput> {
+    render_with_budgets(scene, backend, progress, cancel, &RayBudgets::DEFAULT)
+}
+
+/// [`render`] with chosen budgets (tests use small ones to split small renders).
+pub fn render_with_budgets(
+    scene: &FlatScene,
+    backend: &mut dyn Backend,
+    progress: &mut dyn Progress,
+    cancel: &AtomicBool,
+    budgets: &RayBudgets,
+) -> Result<RenderOutput> {
     let frame = &scene.frame;
     let start = Instant::now();
-    let tiles = tiles(frame.width, frame.height);
-    let plan = plan_passes(scene, TILE * TILE);
-    let windows = &plan.light_windows;
-    let total = (plan.passes.len() * tiles.len() * windows.len()) as u64;
-    let mut done = 0;
+    let plan = plan_passes(scene, budgets);
     let mut output = RenderOutput {
         image: Image {
             width: frame.width,
@@ -237,50 +319,77 @@ pub fn render(
         max_samples_per_pixel: 0,
         pixels_without_samples: 0,
         elapsed: Duration::ZERO,
+        kernel_time: None,
         rays: 0,
         truncated_paths: 0,
         status_flags: 0,
         stopped: None,
     };
-    'passes: for &(sample_start, sample_count) in &plan.passes {
-        for &(tile_x, tile_y, tile_width, tile_height) in &tiles {
-            for (i, &(light_sample_start, light_sample_count)) in windows.iter().enumerate() {
-                if cancel.load(Ordering::Relaxed) {
-                    output.stopped = Some(Error::Interrupted {
-                        done: output.samples_per_pixel,
-                        total: frame.spp,
-                    });
-                    break 'passes;
-                }
-                let dispatch = GpuPass {
-                    tile_x,
-                    tile_y,
-                    tile_width,
-                    tile_height,
-                    sample_start,
-                    sample_count,
-                    light_sample_start,
-                    light_sample_count,
-                    commit: (i + 1 == windows.len()) as u32,
-                    loop_check: LOOP_CHECK_ITERATIONS,
-                    ..Default::default()
-                };
-                match backend.render_tile(dispatch) {
-                    Ok(status) => {
-                        output.rays += status.rays;
-                        output.truncated_paths += status.truncated;
-                        output.status_flags |= status.flags;
-                    }
-                    Err(e) => {
-                        output.stopped = Some(e);
-                        break 'passes;
-                    }
-                }
-                done += 1;
-                progress.advance(done, total);
+    let mut batches = Vec::new();
+    for pass in 0..plan.passes.len() {
+        let dispatches = plan.dispatches(pass);
+        let chunks: Vec<_> = dispatches.chunks(plan.dispatches_per_batch).collect();
+        for (i, chunk) in chunks.iter().enumerate() {
+            // The samples a batch completes: its pass's, at the pass's last batch.
+            let completes = if i + 1 == chunks.len() {
+                plan.passes[pass].1
+            } else {
+                0
+            };
+            batches.push((chunk.to_vec(), completes));
+        }
+    }
+    let total = batches.len() as u64;
+    let mut finished = 0;
+    // The samples each batch in flight completes, oldest first.
+    let mut completions = std::collections::VecDeque::new();
+    let mut finish_one = |backend: &mut dyn Backend,
+                          output: &mut RenderOutput,
+                          completions: &mut std::collections::VecDeque<u32>|
+     -> bool {
+        let completes = completions.pop_front().unwrap_or(0);
+        match backend.finish() {
+            Ok(status) => {
+                output.rays += status.rays;
+                output.truncated_paths += status.truncated;
+                output.status_flags |= status.flags;
+                output.samples_per_pixel += completes;
+                finished += 1;
+                progress.advance(finished, total);
+                true
+            }
+            Err(e) => {
+                output.stopped.get_or_insert(e);
+                false
             }
         }
-        output.samples_per_pixel += sample_count;
+    };
+    for (dispatches, completes) in &batches {
+        while backend.in_flight() >= BATCHES_IN_FLIGHT {
+            if !finish_one(backend, &mut output, &mut completions) {
+                break;
+            }
+        }
+        if output.stopped.is_some() {
+            break;
+        }
+        if cancel.load(Ordering::Relaxed) {
+            output.stopped = Some(Error::Interrupted {
+                done: output.samples_per_pixel,
+                total: frame.spp,
+            });
+            break;
+        }
+        if let Err(e) = backend.submit(dispatches) {
+            output.stopped = Some(e);
+            break;
+        }
+        completions.push_back(*completes);
+    }
+    while backend.in_flight() > 0 {
+        if !finish_one(backend, &mut output, &mut completions) {
+            break;
+        }
     }
     let accumulation = backend.accumulation()?;
     output.image = Image::from_accumulation(frame.width, frame.height, &accumulation);
@@ -294,6 +403,7 @@ pub fn render(
     } else {
         output.max_samples_per_pixel = output.samples_per_pixel;
     }
+    output.kernel_time = backend.kernel_time();
     output.elapsed = start.elapsed();
     Ok(output)
 }

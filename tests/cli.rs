@@ -142,7 +142,7 @@ fn bad_input_exits_non_zero_naming_file_line_and_field() {
 
 #[test]
 fn an_interrupted_render_keeps_the_samples_it_finished() {
-    // One 128 x 128 tile; the spp is split into several sample passes.
+    // One band; the spp is split into several sample passes, one batch each.
     let overrides: Vec<String> = ["render.spp=256", "render.width=72", "render.height=48"]
         .map(String::from)
         .to_vec();
@@ -150,7 +150,7 @@ fn an_interrupted_render_keeps_the_samples_it_finished() {
     let flat = flatten(&scene);
     let mut cpu = CpuRenderer::new(&flat);
     let cancel = AtomicBool::new(false);
-    // Stop after the first sample pass has been rendered on the one tile.
+    // Stop when the first pass has finished: the batches already in flight finish too.
     let output = render(
         &flat,
         &mut cpu,
@@ -166,10 +166,18 @@ fn an_interrupted_render_keeps_the_samples_it_finished() {
         output.stopped,
         Some(chambre::Error::Interrupted { .. })
     ));
-    let plan = chambre::render::plan_passes(&flat, 128 * 128);
+    let plan = chambre::render::plan_passes(&flat, &chambre::render::RayBudgets::DEFAULT);
     assert!(plan.passes.len() > 1);
     assert_eq!(plan.light_windows.len(), 1);
-    assert_eq!(output.samples_per_pixel, plan.passes[0].1);
+    assert_eq!(
+        plan.dispatches(0).len(),
+        1,
+        "one dispatch, so one batch, per pass"
+    );
+    assert_eq!(
+        output.samples_per_pixel,
+        chambre::render::BATCHES_IN_FLIGHT as u32 * plan.passes[0].1
+    );
     assert_eq!(output.image.non_finite_count(), 0);
     let lit = output
         .image

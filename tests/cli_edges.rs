@@ -15,7 +15,7 @@ use chambre::accel::flatten;
 use chambre::cpu::CpuRenderer;
 use chambre::layout::GpuPass;
 use chambre::output::{NON_FINITE_PNG, OutputTarget};
-use chambre::render::{Backend, Image, render};
+use chambre::render::{Backend, Image, RayBudgets, render, render_with_budgets};
 
 mod common;
 
@@ -179,27 +179,39 @@ fn sigterm_stops_a_long_render_and_keeps_its_samples() {
 }
 
 #[test]
-fn a_render_stopped_between_tiles_reports_the_samples_each_pixel_holds() {
-    // 192 x 128 pixels: two tiles (128 and 64 wide), one pass of 4 samples. Stop after the first tile.
+fn a_render_stopped_between_batches_reports_the_samples_each_pixel_holds() {
+    // 192 x 128 pixels, one pass of 4 samples; budgets small enough that a dispatch covers 8
+    // rows and a batch one dispatch. Stop when the first batch has finished: the batches in
+    // flight by then (BATCHES_IN_FLIGHT of them) finish too, the other rows get nothing.
     let scene = common::load(
         "scenes/spheres.toml",
         &["render.width=192", "render.height=128", "render.spp=4"],
     );
     let flat = flatten(&scene);
+    let rays_per_row = 192 * 4 * chambre::render::RayBound::of(&flat).per_sample();
+    let budgets = RayBudgets {
+        per_invocation: RayBudgets::DEFAULT.per_invocation,
+        per_dispatch: 8 * rays_per_row,
+        per_batch: 8 * rays_per_row,
+    };
+    let plan = chambre::render::plan_passes(&flat, &budgets);
+    assert_eq!((plan.passes.len(), plan.bands.len()), (1, 16));
     let cancel = AtomicBool::new(false);
     let mut cpu = CpuRenderer::new(&flat).with_cancel(&cancel);
-    let output = render(
+    let output = render_with_budgets(
         &flat,
         &mut cpu,
         &mut |done, _| cancel.store(done == 1, Ordering::Relaxed),
         &cancel,
+        &budgets,
     )
     .unwrap();
     assert!(output.stopped.is_some());
     assert_eq!(output.samples_per_pixel, 0);
     assert_eq!(output.max_samples_per_pixel, 4);
-    assert_eq!(output.pixels_without_samples, 64 * 128, "the second tile");
-    // A stop before the first tile: no pixel has a sample.
+    let rendered_rows = 8 * chambre::render::BATCHES_IN_FLIGHT;
+    assert_eq!(output.pixels_without_samples, 192 * (128 - rendered_rows));
+    // A stop before the first batch: no pixel has a sample.
     let mut cpu = CpuRenderer::new(&flat);
     let output = render(&flat, &mut cpu, &mut |_, _| {}, &AtomicBool::new(true)).unwrap();
     assert_eq!(output.max_samples_per_pixel, 0);
@@ -223,12 +235,12 @@ fn a_cancelled_cpu_renderer_adds_no_row_to_the_accumulation() {
         commit: 1,
         ..Default::default()
     };
-    let status = cpu.render_tile(pass).unwrap();
+    let status = cpu.run_dispatch(&pass);
     assert_eq!(status.rays, 0);
     assert!(cpu.accumulation().unwrap().iter().all(|a| *a == [0.0; 4]));
     cancel.store(false, Ordering::Relaxed);
     let mut cpu = CpuRenderer::new(&flat).with_cancel(&cancel);
-    assert!(cpu.render_tile(pass).unwrap().rays > 0);
+    assert!(cpu.run_dispatch(&pass).rays > 0);
     assert!(cpu.accumulation().unwrap().iter().all(|a| a[3] == 2.0));
 }
 

@@ -9,7 +9,7 @@ use std::sync::atomic::AtomicBool;
 use chambre::accel::flatten;
 use chambre::gpu::GpuRenderer;
 use chambre::layout::STATUS_LOOP_LIMIT;
-use chambre::render::{RAYS_PER_INVOCATION, RayBound, describe_status_flags, plan_passes, render};
+use chambre::render::{RayBound, RayBudgets, describe_status_flags, plan_passes, render};
 
 /// An area light with 4096 samples (the most a scene may ask) rendered on lavapipe with a mean
 /// of 0.047 against the CPU's 0.127, exit 0, before light samples were split into windows: every
@@ -26,7 +26,7 @@ fn an_area_light_with_4096_samples_agrees_with_the_cpu() {
         ],
     );
     let flat = flatten(&scene);
-    let plan = plan_passes(&flat, 128 * 128);
+    let plan = plan_passes(&flat, &RayBudgets::DEFAULT);
     assert!(
         plan.light_windows.len() > 1,
         "4096 shadow rays per sample must be split into windows"
@@ -58,7 +58,7 @@ fn light_windows_sum_to_the_unsplit_estimate() {
         &[&small[..], &["lights[0].samples=400"]].concat(),
     );
     let flat = flatten(&split);
-    assert!(plan_passes(&flat, 128 * 128).light_windows.len() > 1);
+    assert!(plan_passes(&flat, &RayBudgets::DEFAULT).light_windows.len() > 1);
     let windowed = common::render_cpu(&flat);
     // The same estimate, every light sample in one call per camera sample.
     let whole = chambre::render::Image {
@@ -136,7 +136,7 @@ material = "mirror"
     let scene =
         chambre::scene::Scene::from_str(std::path::Path::new("corridor.toml"), &text, &[]).unwrap();
     let flat = flatten(&scene);
-    assert!(RayBound::of(&flat).per_sample() > 64 * RAYS_PER_INVOCATION);
+    assert!(RayBound::of(&flat).per_sample() > 64 * RayBudgets::DEFAULT.per_invocation);
     let Some(context) = common::gpu_context() else {
         return;
     };

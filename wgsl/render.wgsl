@@ -1,9 +1,9 @@
-// The render kernel: one invocation per pixel of a tile, a range of samples and a window of
+// The render kernel: one invocation per pixel of a band of rows, a range of samples and a window of
 // light samples per dispatch. A pass's sum goes to the pixel's scratch slot (the second half of
 // the accumulation buffer, which exists only when passes are split) until the pass's last
 // light window commits it, with the sample count, to the running accumulation: the
 // accumulation is a valid per-pixel mean after every dispatch. Bindings: wgsl/bindings.wgsl.
-// Mirrors: src/cpu.rs (the CPU tile loop).
+// Mirrors: src/cpu.rs (CpuRenderer::run_dispatch).
 
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn render(@builtin(global_invocation_id) id: vec3<u32>) {

@@ -1,5 +1,5 @@
 // The status words every kernel reports through: loop caps hit, rays traced, paths truncated.
-// Mirrors: src/render.rs (TileStatus, describe_status_flags).
+// Mirrors: src/render.rs (DispatchStatus, describe_status_flags).
 // Reads the `status` and `pass_info` bindings (wgsl/bindings.wgsl).
 
 fn flag_status(bit: u32) {

@@ -9,7 +9,7 @@
 //! adding an entry to [`KERNELS`], not copying set-up code.
 
 use crate::error::{Error, Result};
-use crate::layout::{FEATURES, wgsl_prelude};
+use crate::layout::{FEATURES, GpuPass, wgsl_prelude};
 
 /// How a kernel accesses a binding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -25,6 +25,9 @@ pub struct Binding {
     pub binding: u32,
     pub name: &'static str,
     pub access: Access,
+    /// Bytes of one element, for a binding bound at a dynamic offset into an array of them
+    /// (one per dispatch of a batch); 0 for a binding of the whole buffer.
+    pub dynamic_size: u64,
 }
 
 const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
@@ -32,6 +35,7 @@ const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
         binding,
         name,
         access,
+        dynamic_size: 0,
     }
 }
 
@@ -39,7 +43,11 @@ const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
 pub const BINDINGS: [Binding; 13] = [
     binding(0, "camera", Access::Uniform),
     binding(1, "frame", Access::Uniform),
-    binding(2, "pass_info", Access::Uniform),
+    // One GpuPass per dispatch of a batch, each at its own dynamic offset.
+    Binding {
+        dynamic_size: size_of::<GpuPass>() as u64,
+        ..binding(2, "pass_info", Access::Uniform)
+    },
     binding(3, "nodes", Access::StorageRead),
     binding(4, "prims", Access::StorageRead),
     binding(5, "normals", Access::StorageRead),
@@ -196,7 +204,7 @@ fn layout_entry(b: &Binding) -> wgpu::BindGroupLayoutEntry {
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
             ty,
-            has_dynamic_offset: false,
+            has_dynamic_offset: b.dynamic_size > 0,
             min_binding_size: None,
         },
         count: None,
@@ -258,9 +266,17 @@ impl Pipeline {
                         self.kernel.name, b.binding, b.name
                     ))
                 })?;
+            let resource = match std::num::NonZeroU64::new(b.dynamic_size) {
+                None => buffer.as_entire_binding(),
+                Some(size) => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer,
+                    offset: 0,
+                    size: Some(size),
+                }),
+            };
             entries.push(wgpu::BindGroupEntry {
                 binding: b.binding,
-                resource: buffer.as_entire_binding(),
+                resource,
             });
         }
         Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -1,22 +1,24 @@
-//! The GPU path: wgpu device set-up, scene upload, and the tiled render dispatches.
+//! The GPU path: wgpu device set-up and the helpers every GPU stage shares; the kernels'
+//! registry (`kernels`), the render backend (`render`) and the ray queries (`trace`).
 //!
 //! Errors never panic: wgpu's default uncaptured-error handler panics, so a handler of ours
 //! records them, and every wait on the device has a timeout (lavapipe has no watchdog).
 
 pub mod kernels;
+pub mod render;
 pub mod trace;
+
+pub use render::GpuRenderer;
 
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use wgpu::util::DeviceExt;
 
-use crate::accel::FlatScene;
 use crate::error::{Error, Result};
-use crate::layout::{BVH_STACK_SIZE, GpuPass, STATUS_WORDS, WORKGROUP_SIZE};
-use crate::render::{Backend, TILE, TileStatus, plan_passes};
 
-/// Longest wait for one dispatch before the render is declared failed.
+/// Longest wait for one submission (a batch of dispatches) before the render is declared
+/// failed: a batch is planned to take seconds on lavapipe, milliseconds on a real GPU.
 const DISPATCH_TIMEOUT: Duration = Duration::from_secs(120);
 
 fn instance() -> wgpu::Instance {
@@ -99,9 +101,12 @@ impl GpuContext {
             max_buffer_size: adapter_limits.max_buffer_size,
             ..wgpu::Limits::default()
         };
+        // Kernel time is measured with timestamps where the adapter offers them.
+        let required_features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("chambre"),
             required_limits,
+            required_features,
             ..Default::default()
         }))
         .map_err(|e| Error::NoAdapter(format!("{}: {e}", adapter.get_info().name)))?;
@@ -173,6 +178,13 @@ impl GpuContext {
         self.take_uncaptured()
     }
 
+    /// Whether the device can time kernels (timestamp queries).
+    pub fn has_timestamps(&self) -> bool {
+        self.device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+    }
+
     /// Copies `buffer` back to the host (it must have COPY_SRC usage).
     pub(crate) fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -207,178 +219,5 @@ impl GpuContext {
             .to_vec();
         staging.unmap();
         Ok(bytes)
-    }
-}
-
-/// The scene uploaded and the kernel compiled; renders tiles into a device-side accumulation.
-pub struct GpuRenderer {
-    context: GpuContext,
-    pipeline: wgpu::ComputePipeline,
-    bind_group: wgpu::BindGroup,
-    /// The `layout::FEATURE_*` bits the kernel was built with.
-    features: u32,
-    pass_buffer: wgpu::Buffer,
-    accumulation: wgpu::Buffer,
-    /// Pixels of the image: the accumulation buffer's first half when it holds a scratch half.
-    pixel_count: usize,
-    status: wgpu::Buffer,
-}
-
-impl GpuRenderer {
-    /// Uploads `scene` and builds the render kernel specialised to the scene's features.
-    pub fn new(context: GpuContext, scene: &FlatScene) -> Result<GpuRenderer> {
-        GpuRenderer::with_features(context, scene, scene.features())
-    }
-
-    /// Like [`GpuRenderer::new`] with the kernel built for `features` (`layout::FEATURE_*`;
-    /// `FEATURES_ALL` is the general kernel), which must include every feature of the scene.
-    pub fn with_features(
-        context: GpuContext,
-        scene: &FlatScene,
-        features: u32,
-    ) -> Result<GpuRenderer> {
-        let missing = scene.features() & !features;
-        if missing != 0 {
-            return Err(Error::Gpu(format!(
-                "a kernel without features {missing:#x} cannot render this scene, which uses them"
-            )));
-        }
-        if scene.bvh_depth > BVH_STACK_SIZE as usize {
-            return Err(Error::Gpu(format!(
-                "the BVH is {} levels deep, more than the kernel's traversal stack of {}; \
-                 render this scene with --backend cpu",
-                scene.bvh_depth, BVH_STACK_SIZE
-            )));
-        }
-        let device = &context.device;
-        let limit = device.limits().max_storage_buffer_binding_size;
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let uniform = |label: &str, bytes: &[u8]| context.uniform_buffer(label, bytes);
-        let storage = |label: &str, bytes: &[u8]| context.storage_buffer(label, bytes);
-        let camera = uniform("camera", bytemuck::bytes_of(&scene.camera));
-        let frame = uniform("frame", bytemuck::bytes_of(&scene.frame));
-        let pass_buffer = uniform("pass", bytemuck::bytes_of(&GpuPass::default()));
-        let nodes = storage(
-            &format!("the scene's {} BVH nodes", scene.nodes.len()),
-            bytemuck::cast_slice(&scene.nodes),
-        )?;
-        let prims = storage(
-            &format!(
-                "the scene's {} primitives ({} triangles)",
-                scene.prims.len(),
-                scene.triangle_count
-            ),
-            bytemuck::cast_slice(&scene.prims),
-        )?;
-        let normals = storage(
-            &format!(
-                "the vertex normals of {} smooth triangles",
-                scene.normals.len()
-            ),
-            bytemuck::cast_slice(&scene.normals),
-        )?;
-        let materials = storage("materials", bytemuck::cast_slice(&scene.materials))?;
-        let lights = storage("lights", bytemuck::cast_slice(&scene.lights))?;
-        let sample_table = storage("sample table", bytemuck::cast_slice(&scene.sample_table))?;
-        let pixel_count = scene.frame.width as u64 * scene.frame.height as u64;
-        // A pass split into light windows keeps its partial sums in a second half (scratch)
-        // until it commits (see render.wgsl).
-        let split_passes = plan_passes(scene, TILE * TILE).light_windows.len() > 1;
-        let accumulation_size = pixel_count * 16 * if split_passes { 2 } else { 1 };
-        if accumulation_size > limit {
-            let what = format!(
-                "the {}x{} image's accumulation buffer",
-                scene.frame.width, scene.frame.height
-            );
-            return Err(over_binding_limit(&what, accumulation_size, limit));
-        }
-        let accumulation = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("accumulation"),
-            size: accumulation_size,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let status = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("status"),
-            size: STATUS_WORDS as u64 * 4,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let pipeline = kernels::build_pipeline(device, &kernels::RENDER, features);
-        let bind_group = pipeline.bind_group(
-            device,
-            &[
-                ("camera", &camera),
-                ("frame", &frame),
-                ("pass_info", &pass_buffer),
-                ("nodes", &nodes),
-                ("prims", &prims),
-                ("normals", &normals),
-                ("materials", &materials),
-                ("lights", &lights),
-                ("accumulation", &accumulation),
-                ("status", &status),
-                ("sample_table", &sample_table),
-            ],
-        )?;
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu(format!(
-                "creating the render pipeline: {}",
-                wgpu_error_text(&e)
-            )));
-        }
-        Ok(GpuRenderer {
-            context,
-            pipeline: pipeline.pipeline,
-            bind_group,
-            features,
-            pass_buffer,
-            accumulation,
-            pixel_count: pixel_count as usize,
-            status,
-        })
-    }
-
-    /// The `layout::FEATURE_*` bits the kernel was built with.
-    pub fn features(&self) -> u32 {
-        self.features
-    }
-
-    pub fn adapter_description(&self) -> &str {
-        &self.context.adapter_description
-    }
-}
-
-impl Backend for GpuRenderer {
-    fn render_tile(&mut self, pass: GpuPass) -> Result<TileStatus> {
-        let context = &self.context;
-        context
-            .queue
-            .write_buffer(&self.pass_buffer, 0, bytemuck::bytes_of(&pass));
-        let mut encoder = context.device.create_command_encoder(&Default::default());
-        encoder.clear_buffer(&self.status, 0, None);
-        {
-            let mut compute = encoder.begin_compute_pass(&Default::default());
-            compute.set_pipeline(&self.pipeline);
-            compute.set_bind_group(0, &self.bind_group, &[]);
-            compute.dispatch_workgroups(
-                pass.tile_width.div_ceil(WORKGROUP_SIZE),
-                pass.tile_height.div_ceil(WORKGROUP_SIZE),
-                1,
-            );
-        }
-        let submission = context.queue.submit([encoder.finish()]);
-        context.wait(submission)?;
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&context.read_buffer(&self.status)?);
-        Ok(TileStatus::from_words(&words))
-    }
-
-    fn accumulation(&mut self) -> Result<Vec<[f32; 4]>> {
-        let bytes = self.context.read_buffer(&self.accumulation)?;
-        let mut sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
-        sums.truncate(self.pixel_count);
-        Ok(sums)
     }
 }

@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 use crate::layout::{
     GpuPass, GpuRay, LOOP_CHECK_ITERATIONS, STATUS_WORDS, T_FAR, TRACE_WORKGROUP_SIZE,
 };
-use crate::render::{TileStatus, describe_status_flags};
+use crate::render::{DispatchStatus, describe_status_flags};
 
 /// Rays per chunk: 64 MiB of rays, half of lavapipe's largest binding, and
 /// 32,768 workgroups, half of the largest dispatch.
@@ -133,7 +133,7 @@ impl GpuTracer {
                     Query::ClosestHit => &chunk.closest,
                     Query::AnyHit => &chunk.any,
                 };
-                compute.set_bind_group(0, bind_group, &[]);
+                compute.set_bind_group(0, bind_group, &[0]);
                 compute.dispatch_workgroups(
                     (chunk.rays as u32).div_ceil(TRACE_WORKGROUP_SIZE),
                     1,
@@ -146,7 +146,7 @@ impl GpuTracer {
         context.wait(submission)?;
         let elapsed = start.elapsed();
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&context.read_buffer(&self.status)?);
-        if let Some(reason) = describe_status_flags(TileStatus::from_words(&words).flags) {
+        if let Some(reason) = describe_status_flags(DispatchStatus::from_words(&words).flags) {
             return Err(Error::Gpu(format!("the ray-query kernel: {reason}")));
         }
         Ok(elapsed)

@@ -1,0 +1,345 @@
+//! The GPU render backend: the scene uploaded, the render kernel built for the scene's
+//! features, and batches of dispatches queued without waiting.
+//!
+//! A batch is one submission: its dispatches (whole rows of the image each, one `GpuPass` per
+//! dispatch at its own dynamic offset of a uniform buffer), then copies of its status words and
+//! timestamps to mappable buffers whose mapping is requested at once. The host waits only in
+//! `finish`, for the oldest batch, while the next one is already queued.
+
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use super::kernels::{self, Pipeline};
+use super::{GpuContext, wgpu_error_text};
+use crate::accel::FlatScene;
+use crate::error::{Error, Result};
+use crate::layout::{BVH_STACK_SIZE, GpuPass, STATUS_WORDS, WORKGROUP_SIZE};
+use crate::render::{Backend, DispatchStatus, RayBudgets, plan_passes};
+
+/// A buffer copied back to the host after a submission: the map is requested when the batch
+/// is submitted, and read when the batch is finished.
+struct Readback {
+    buffer: wgpu::Buffer,
+    mapped: Arc<Mutex<Option<std::result::Result<(), wgpu::BufferAsyncError>>>>,
+}
+
+impl Readback {
+    fn new(device: &wgpu::Device, label: &str, size: u64) -> Readback {
+        Readback {
+            buffer: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            }),
+            mapped: Arc::new(Mutex::new(None)),
+        }
+    }
+
+    /// Asks for the mapping; it completes once the submission that fills the buffer is done.
+    fn request(&self) {
+        let signal = self.mapped.clone();
+        self.buffer
+            .slice(..)
+            .map_async(wgpu::MapMode::Read, move |r| {
+                *signal.lock().expect("map signal poisoned") = Some(r);
+            });
+    }
+
+    /// The bytes, once the device has been polled past the submission.
+    fn bytes(&self) -> Result<Vec<u8>> {
+        match self.mapped.lock().expect("map signal poisoned").take() {
+            Some(Ok(())) => {}
+            Some(Err(e)) => return Err(Error::Gpu(format!("mapping results: {e}"))),
+            None => return Err(Error::Gpu("mapping results did not complete".into())),
+        }
+        let bytes = self
+            .buffer
+            .slice(..)
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(format!("mapping results: {e}")))?
+            .to_vec();
+        self.buffer.unmap();
+        Ok(bytes)
+    }
+}
+
+/// A batch on the device: what `finish` reads, and the buffers its commands use.
+struct Batch {
+    submission: wgpu::SubmissionIndex,
+    status: Readback,
+    timestamps: Option<Readback>,
+    _passes: wgpu::Buffer,
+    _status: wgpu::Buffer,
+    _bind_group: wgpu::BindGroup,
+}
+
+/// The scene uploaded and the kernel compiled; runs batches into a device-side accumulation.
+pub struct GpuRenderer {
+    context: GpuContext,
+    pipeline: Pipeline,
+    /// Every buffer of the bind group but the per-batch `pass_info` and `status`.
+    scene_buffers: Vec<(&'static str, wgpu::Buffer)>,
+    /// The `layout::FEATURE_*` bits the kernel was built with.
+    features: u32,
+    /// Pixels of the image: the accumulation buffer's first half when it holds a scratch half.
+    pixel_count: usize,
+    /// Bytes between consecutive `GpuPass` of a batch (the dynamic-offset alignment).
+    pass_stride: u64,
+    in_flight: VecDeque<Batch>,
+    kernel_time: Option<Duration>,
+}
+
+impl GpuRenderer {
+    /// Uploads `scene` and builds the render kernel specialised to the scene's features.
+    pub fn new(context: GpuContext, scene: &FlatScene) -> Result<GpuRenderer> {
+        GpuRenderer::with_features(context, scene, scene.features())
+    }
+
+    /// Like [`GpuRenderer::new`] with the kernel built for `features` (`layout::FEATURE_*`;
+    /// `FEATURES_ALL` is the general kernel), which must include every feature of the scene.
+    pub fn with_features(
+        context: GpuContext,
+        scene: &FlatScene,
+        features: u32,
+    ) -> Result<GpuRenderer> {
+        let missing = scene.features() & !features;
+        if missing != 0 {
+            return Err(Error::Gpu(format!(
+                "a kernel without features {missing:#x} cannot render this scene, which uses them"
+            )));
+        }
+        if scene.bvh_depth > BVH_STACK_SIZE as usize {
+            return Err(Error::Gpu(format!(
+                "the BVH is {} levels deep, more than the kernel's traversal stack of {}",
+                scene.bvh_depth, BVH_STACK_SIZE
+            )));
+        }
+        let device = &context.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scene_buffers = upload_scene(&context, scene)?;
+        let pixel_count = scene.frame.width as usize * scene.frame.height as usize;
+        let pipeline = kernels::build_pipeline(device, &kernels::RENDER, features);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu(format!(
+                "creating the render pipeline: {}",
+                wgpu_error_text(&e)
+            )));
+        }
+        let alignment = device.limits().min_uniform_buffer_offset_alignment as u64;
+        let pass_stride = (size_of::<GpuPass>() as u64).div_ceil(alignment) * alignment;
+        Ok(GpuRenderer {
+            kernel_time: context.has_timestamps().then_some(Duration::ZERO),
+            context,
+            pipeline,
+            scene_buffers,
+            features,
+            pixel_count,
+            pass_stride,
+            in_flight: VecDeque::new(),
+        })
+    }
+
+    /// The `layout::FEATURE_*` bits the kernel was built with.
+    pub fn features(&self) -> u32 {
+        self.features
+    }
+
+    pub fn adapter_description(&self) -> &str {
+        &self.context.adapter_description
+    }
+
+    fn buffer(&self, name: &str) -> &wgpu::Buffer {
+        &self
+            .scene_buffers
+            .iter()
+            .find(|(n, _)| *n == name)
+            .expect("uploaded with the scene")
+            .1
+    }
+}
+
+/// Uploads what the render kernel reads, named by binding.
+fn upload_scene(
+    context: &GpuContext,
+    scene: &FlatScene,
+) -> Result<Vec<(&'static str, wgpu::Buffer)>> {
+    let uniform = |label: &str, bytes: &[u8]| context.uniform_buffer(label, bytes);
+    let storage = |label: &str, bytes: &[u8]| context.storage_buffer(label, bytes);
+    let nodes = storage(
+        &format!("the scene's {} BVH nodes", scene.nodes.len()),
+        bytemuck::cast_slice(&scene.nodes),
+    )?;
+    let prims = storage(
+        &format!(
+            "the scene's {} primitives ({} triangles)",
+            scene.prims.len(),
+            scene.triangle_count
+        ),
+        bytemuck::cast_slice(&scene.prims),
+    )?;
+    let normals = storage(
+        &format!(
+            "the vertex normals of {} smooth triangles",
+            scene.normals.len()
+        ),
+        bytemuck::cast_slice(&scene.normals),
+    )?;
+    let pixel_count = scene.frame.width as u64 * scene.frame.height as u64;
+    // A pass split into light windows keeps its partial sums in a second half (scratch)
+    // until it commits (see render.wgsl).
+    let split_passes = plan_passes(scene, &RayBudgets::DEFAULT).light_windows.len() > 1;
+    let accumulation_size = pixel_count * 16 * if split_passes { 2 } else { 1 };
+    let limit = context.device.limits().max_storage_buffer_binding_size;
+    if accumulation_size > limit {
+        let what = format!(
+            "the {}x{} image's accumulation buffer",
+            scene.frame.width, scene.frame.height
+        );
+        return Err(super::over_binding_limit(&what, accumulation_size, limit));
+    }
+    let accumulation = context.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("accumulation"),
+        size: accumulation_size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    Ok(vec![
+        (
+            "camera",
+            uniform("camera", bytemuck::bytes_of(&scene.camera)),
+        ),
+        ("frame", uniform("frame", bytemuck::bytes_of(&scene.frame))),
+        ("nodes", nodes),
+        ("prims", prims),
+        ("normals", normals),
+        (
+            "materials",
+            storage("materials", bytemuck::cast_slice(&scene.materials))?,
+        ),
+        (
+            "lights",
+            storage("lights", bytemuck::cast_slice(&scene.lights))?,
+        ),
+        ("accumulation", accumulation),
+        (
+            "sample_table",
+            storage("sample table", bytemuck::cast_slice(&scene.sample_table))?,
+        ),
+    ])
+}
+
+impl Backend for GpuRenderer {
+    fn submit(&mut self, dispatches: &[GpuPass]) -> Result<()> {
+        let context = &self.context;
+        let device = &context.device;
+        let stride = self.pass_stride as usize;
+        let mut pass_bytes = vec![0u8; stride * dispatches.len()];
+        for (i, pass) in dispatches.iter().enumerate() {
+            pass_bytes[i * stride..i * stride + size_of::<GpuPass>()]
+                .copy_from_slice(bytemuck::bytes_of(pass));
+        }
+        let passes = context.uniform_buffer("passes", &pass_bytes);
+        let status = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("status"),
+            size: STATUS_WORDS as u64 * 4,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let mut buffers: Vec<(&str, &wgpu::Buffer)> =
+            self.scene_buffers.iter().map(|(n, b)| (*n, b)).collect();
+        buffers.push(("pass_info", &passes));
+        buffers.push(("status", &status));
+        let bind_group = self.pipeline.bind_group(device, &buffers)?;
+        let queries = context.has_timestamps().then(|| {
+            device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("kernel time"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            })
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let timestamp_writes =
+                queries
+                    .as_ref()
+                    .map(|query_set| wgpu::ComputePassTimestampWrites {
+                        query_set,
+                        beginning_of_pass_write_index: Some(0),
+                        end_of_pass_write_index: Some(1),
+                    });
+            let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("render batch"),
+                timestamp_writes,
+            });
+            compute.set_pipeline(&self.pipeline.pipeline);
+            for (i, pass) in dispatches.iter().enumerate() {
+                compute.set_bind_group(0, &bind_group, &[(i * stride) as u32]);
+                compute.dispatch_workgroups(
+                    pass.tile_width.div_ceil(WORKGROUP_SIZE),
+                    pass.tile_height.div_ceil(WORKGROUP_SIZE),
+                    1,
+                );
+            }
+        }
+        let status_readback = Readback::new(device, "status readback", status.size());
+        encoder.copy_buffer_to_buffer(&status, 0, &status_readback.buffer, 0, status.size());
+        let timestamps = queries.as_ref().map(|query_set| {
+            let resolved = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timestamps"),
+                size: 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            encoder.resolve_query_set(query_set, 0..2, &resolved, 0);
+            let readback = Readback::new(device, "timestamp readback", 16);
+            encoder.copy_buffer_to_buffer(&resolved, 0, &readback.buffer, 0, 16);
+            readback
+        });
+        let submission = context.queue.submit([encoder.finish()]);
+        status_readback.request();
+        if let Some(t) = &timestamps {
+            t.request();
+        }
+        self.in_flight.push_back(Batch {
+            submission,
+            status: status_readback,
+            timestamps,
+            _passes: passes,
+            _status: status,
+            _bind_group: bind_group,
+        });
+        Ok(())
+    }
+
+    fn finish(&mut self) -> Result<DispatchStatus> {
+        let Some(batch) = self.in_flight.pop_front() else {
+            return Ok(DispatchStatus::default());
+        };
+        self.context.wait(batch.submission)?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&batch.status.bytes()?);
+        if let (Some(readback), Some(total)) = (&batch.timestamps, &mut self.kernel_time) {
+            let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&readback.bytes()?);
+            let period_ns = self.context.queue.get_timestamp_period() as f64;
+            let ns = ticks[1].saturating_sub(ticks[0]) as f64 * period_ns;
+            *total += Duration::from_nanos(ns as u64);
+        }
+        Ok(DispatchStatus::from_words(&words))
+    }
+
+    fn in_flight(&self) -> usize {
+        self.in_flight.len()
+    }
+
+    fn accumulation(&mut self) -> Result<Vec<[f32; 4]>> {
+        let bytes = self.context.read_buffer(self.buffer("accumulation"))?;
+        let mut sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
+        sums.truncate(self.pixel_count);
+        Ok(sums)
+    }
+
+    fn kernel_time(&self) -> Option<Duration> {
+        self.kernel_time
+    }
+}
