@@ -6,12 +6,16 @@
 //!   canonical vertex order so that two triangles sharing an edge compute the very same value
 //!   even where a compiler fuses multiply-adds. <https://jcgt.org/published/0002/01/05/>
 //! - Spheres: the cancellation-free quadratic of Haines et al., "Precision Improvements for
-//!   Ray/Sphere Intersection", Ray Tracing Gems ch. 7.
+//!   Ray/Sphere Intersection", Ray Tracing Gems ch. 7, with the constant term |o - c|^2 - r^2
+//!   taken from whichever of two forms loses less to cancellation (see `intersect_sphere`), and
+//!   a bound on the relative error of t carried to the shading point.
 //! - Boxes: slab test with reciprocals kept finite for zero direction components and a widened
 //!   far distance (pbrt-v4's 1 + 2*gamma(3)), so rounding never culls a box the ray touches.
-//! - Secondary-ray origins: Wachter and Binder, "A Fast and Robust Method for Avoiding
-//!   Self-Intersection", Ray Tracing Gems ch. 6: an offset of a few ULPs that scales with the
-//!   position, valid at any scene scale, instead of a fixed epsilon.
+//! - Secondary-ray origins: pbrt-v4's `OffsetRayOrigin` (Pharr, Jakob and Humphreys, Physically
+//!   Based Rendering 4th ed., section 6.8.6): each shading point carries a per-component bound on
+//!   its own rounding error, and the new ray starts that far off the surface along the normal,
+//!   rounded away from it. The offset scales with the error actually made, so it holds at any
+//!   scene scale and for spheres whose radius dwarfs the scene around them.
 
 use glam::{Vec3, Vec3A};
 
@@ -88,7 +92,8 @@ impl RayQuery {
     }
 }
 
-/// A hit: distance and, for triangles and quads, surface coordinates (b1, b2).
+/// A hit: distance and, for triangles and quads, surface coordinates (b1, b2). For spheres,
+/// `b1` is instead a bound on the relative error of `t` (see `intersect_sphere`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     pub t: f32,
@@ -153,12 +158,39 @@ pub fn intersect_triangle(ray: &RayQuery, v0: Vec3, v1: Vec3, v2: Vec3, t_max: f
     }
 }
 
-pub fn intersect_sphere(ray: &RayQuery, center: Vec3, radius: f32, t_max: f32) -> Hit {
+/// Rounding-error bound for `n` operations in arithmetic whose rounding direction is
+/// unspecified (WGSL): pbrt-v4's gamma(n) with a whole ULP per operation, not half. The CPU path
+/// uses the same bounds so both paths offset rays identically.
+pub const fn gamma(n: u32) -> f32 {
+    let n_eps = n as f32 * f32::EPSILON;
+    n_eps / (1.0 - n_eps)
+}
+
+/// `|c|^2 - r^2`, the power of the world origin with respect to a sphere, computed in f64 from
+/// the f32 centre and radius the kernels see: the exact value, rounded once. It lets
+/// `intersect_sphere` evaluate |o - c|^2 - r^2 without cancellation when the ray starts near
+/// the origin and the sphere is huge (a planet under a scene: o - c rounds to ULPs of r).
+pub fn sphere_origin_power(center: Vec3, radius: f32) -> f32 {
+    (center.as_dvec3().length_squared() - (radius as f64) * (radius as f64)) as f32
+}
+
+/// The sphere of centre `center`, radius `radius` and `origin_power` = |c|^2 - r^2. The hit
+/// carries in `b1` a bound on the relative error of `t`, from which `sphere_surface_point`
+/// bounds the hit point's error.
+pub fn intersect_sphere(
+    ray: &RayQuery,
+    center: Vec3,
+    radius: f32,
+    origin_power: f32,
+    t_max: f32,
+) -> Hit {
     let f = ray.origin - center;
     let b = f.dot(ray.direction);
     // r^2 - |f - (f.d) d|^2 instead of b^2 - (|f|^2 - r^2): no cancellation far from the sphere.
     let perpendicular = f - b * ray.direction;
-    let discriminant = radius * radius - perpendicular.dot(perpendicular);
+    let r2 = radius * radius;
+    let p2 = perpendicular.dot(perpendicular);
+    let discriminant = r2 - p2;
     if discriminant < 0.0 {
         return MISS;
     }
@@ -167,16 +199,43 @@ pub fn intersect_sphere(ray: &RayQuery, center: Vec3, radius: f32, t_max: f32) -
     if q == 0.0 {
         return MISS;
     }
-    let c = f.dot(f) - radius * radius;
+    // |o - c|^2 - r^2 in two forms; each one's error bound is gamma(6) times its terms' sizes.
+    // Direct: cheap, but `f` is rounded to ULPs of |o - c|, so a ray starting near a huge
+    // sphere loses every digit. Expanded, |o|^2 - 2 o.c + (|c|^2 - r^2): exact terms near the
+    // origin, but cancels when o and c are both far out. Take the better-conditioned one.
+    let f2 = f.dot(f);
+    let direct_size = f2 + r2;
+    let expanded_size = ray.origin.dot(ray.origin)
+        + 2.0 * (ray.origin * center).abs().element_sum()
+        + origin_power.abs();
+    let (c, c_size) = if direct_size <= expanded_size {
+        (f2 - r2, direct_size)
+    } else {
+        (
+            ray.origin.dot(ray.origin) - 2.0 * ray.origin.dot(center) + origin_power,
+            expanded_size,
+        )
+    };
     let t0 = (c / q).min(q);
     let t1 = (c / q).max(q);
     let t = if t0 > 0.0 { t0 } else { t1 };
     if t <= 0.0 || t >= t_max {
         return MISS;
     }
+    // |q| = |b| + root (same signs). b inherits f's rounding; the discriminant's error turns
+    // into root's through d(sqrt x) = dx / (2 sqrt x), capped by sqrt(dx) where root ~ 0.
+    let f_length = f2.sqrt();
+    let discriminant_error = gamma(8) * (r2 + p2 + 2.0 * p2.sqrt() * f_length);
+    let root_error = discriminant_error / (root + discriminant_error.sqrt());
+    let q_relative = (gamma(4) * f_length + root_error) / q.abs();
+    let c_relative = if t == q {
+        0.0
+    } else {
+        gamma(6) * c_size / c.abs()
+    };
     Hit {
         t,
-        b1: 0.0,
+        b1: q_relative + c_relative + gamma(2),
         b2: 0.0,
     }
 }
@@ -224,7 +283,7 @@ pub fn intersect_primitive(ray: &RayQuery, prim: &GpuPrimitive, t_max: f32) -> H
     let p2 = Vec3::from(prim.p2);
     match prim.kind {
         PRIM_TRIANGLE => intersect_triangle(ray, p0, p1, p2, t_max),
-        PRIM_SPHERE => intersect_sphere(ray, p0, p1.x, t_max),
+        PRIM_SPHERE => intersect_sphere(ray, p0, p1.x, p1.y, t_max),
         PRIM_QUAD => intersect_quad(ray, p0, p1, p2, t_max),
         PRIM_PLANE => intersect_plane(ray, p0, p1, t_max),
         _ => MISS,
@@ -245,24 +304,106 @@ pub fn intersect_box(ray: &RayQuery, min: Vec3, max: Vec3, t_max: f32) -> f32 {
     }
 }
 
-/// Ray Tracing Gems ch. 6: move `p` off its surface along `n` (unit, pointing to the side the
-/// new ray leaves on) by a few ULPs of `p` itself, or by a fixed amount near the origin where
-/// ULPs are tiny.
-pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
-    const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-    const INT_SCALE: f32 = 256.0;
-    let offset = |p: f32, n: f32| -> f32 {
-        let of_i = (INT_SCALE * n) as i32;
-        let moved =
-            f32::from_bits(
-                (p.to_bits() as i32).wrapping_add(if p < 0.0 { -of_i } else { of_i }) as u32,
-            );
-        if p.abs() < ORIGIN {
-            p + FLOAT_SCALE * n
-        } else {
-            moved
+/// A shading point and the per-component bound on its distance from the true surface point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    pub position: Vec3,
+    pub error: Vec3,
+}
+
+/// Barycentric reconstruction b0 p0 + b1 p1 + b2 p2 (pbrt-v4: error gamma(7) sum |b_i p_i|).
+pub fn triangle_point(v: [Vec3; 3], b1: f32, b2: f32) -> SurfacePoint {
+    let terms = [(1.0 - b1 - b2) * v[0], b1 * v[1], b2 * v[2]];
+    SurfacePoint {
+        position: terms[0] + terms[1] + terms[2],
+        error: gamma(7) * (terms[0].abs() + terms[1].abs() + terms[2].abs()),
+    }
+}
+
+/// corner + u edge_u + v edge_v: two products and two sums per component.
+pub fn quad_point(corner: Vec3, edge_u: Vec3, edge_v: Vec3, u: f32, v: f32) -> SurfacePoint {
+    let (along_u, along_v) = (u * edge_u, v * edge_v);
+    SurfacePoint {
+        position: corner + along_u + along_v,
+        error: gamma(5) * (corner.abs() + along_u.abs() + along_v.abs()),
+    }
+}
+
+/// The ray's point at `t`, projected onto the plane through `point` with unit `normal`. The
+/// projection mixes components, so every component gets the bound of the largest.
+pub fn plane_point(ray: &RayQuery, t: f32, point: Vec3, normal: Vec3) -> SurfacePoint {
+    let raw = ray.origin + t * ray.direction;
+    let size = (raw.abs() + point.abs()).max_element();
+    SurfacePoint {
+        position: raw - (raw - point).dot(normal) * normal,
+        error: Vec3::splat(gamma(9) * size),
+    }
+}
+
+/// The hit point of `intersect_sphere` and its outward normal. Two candidates: the ray's point
+/// o + t d, whose error is that of t times |d| plus the rounding of o + t d, and the re-projection
+/// c + r n (pbrt-v4), whose error is ULPs of |c| + r. The smaller bound wins: re-projection for
+/// spheres seen from afar, the ray's point for a huge sphere under a small scene, where c + r n
+/// could not even represent the point to within ULPs of r.
+pub fn sphere_surface_point(
+    ray: &RayQuery,
+    hit: Hit,
+    center: Vec3,
+    radius: f32,
+) -> (SurfacePoint, Vec3) {
+    let along = hit.t * ray.direction;
+    let on_ray = ray.origin + along;
+    let outward = (on_ray - center).normalize();
+    let t_error = hit.t * hit.b1;
+    let on_ray_error = gamma(3) * (ray.origin.abs() + along.abs()) + t_error * ray.direction.abs();
+    let scaled_normal = radius * outward;
+    let projected_error = gamma(6) * (center.abs() + scaled_normal.abs());
+    let normal_size = outward.abs();
+    let point = if normal_size.dot(on_ray_error) < normal_size.dot(projected_error) {
+        SurfacePoint {
+            position: on_ray,
+            error: on_ray_error,
+        }
+    } else {
+        SurfacePoint {
+            position: center + scaled_normal,
+            error: projected_error,
         }
     };
-    Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
+    (point, outward)
+}
+
+/// pbrt-v4's `OffsetRayOrigin`: move `position` off its surface along `n` (unit, pointing to
+/// the side the new ray leaves on) by the projection of its per-component `error` bound on `n`,
+/// then one more ULP away, so that the rounding of the addition cannot undo the offset.
+pub fn offset_ray_origin(position: Vec3, error: Vec3, n: Vec3) -> Vec3 {
+    let offset = n.abs().dot(error) * n;
+    let moved = position + offset;
+    Vec3::new(
+        round_away(moved.x, offset.x),
+        round_away(moved.y, offset.y),
+        round_away(moved.z, offset.z),
+    )
+}
+
+/// The neighbouring float of `v` in the direction of `sign`'s sign; `v` if `sign` is zero.
+fn round_away(v: f32, sign: f32) -> f32 {
+    if sign > 0.0 {
+        next_float_up(v)
+    } else if sign < 0.0 {
+        -next_float_up(-v)
+    } else {
+        v
+    }
+}
+
+/// The next float above the finite `v`, by integer steps on its bits (as the WGSL twin must).
+fn next_float_up(v: f32) -> f32 {
+    if v == 0.0 {
+        f32::from_bits(1)
+    } else if v > 0.0 {
+        f32::from_bits(v.to_bits() + 1)
+    } else {
+        f32::from_bits(v.to_bits() - 1)
+    }
 }

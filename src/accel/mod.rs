@@ -70,7 +70,11 @@ pub fn flatten(scene: &Scene) -> FlatScene {
                     PRIM_SPHERE,
                     *material,
                     *center,
-                    Vec3::new(*radius, 0.0, 0.0),
+                    Vec3::new(
+                        *radius,
+                        intersect::sphere_origin_power(*center, *radius),
+                        0.0,
+                    ),
                     Vec3::ZERO,
                 ),
                 None,
