@@ -89,7 +89,8 @@ fn intersect_triangle(ray: RayQuery, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>
         return miss();
     }
     // Scaled distance, compared against t_max * det to avoid the division until a hit.
-    let t_scaled = e0 * (s.z * a[ray.kz]) + e1 * (s.z * b[ray.kz]) + e2 * (s.z * c[ray.kz]);
+    let z = vec3<f32>(s.z * a[ray.kz], s.z * b[ray.kz], s.z * c[ray.kz]);
+    let t_scaled = e0 * z.x + e1 * z.y + e2 * z.z;
     if (det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det)) {
         return miss();
     }
@@ -97,7 +98,29 @@ fn intersect_triangle(ray: RayQuery, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>
         return miss();
     }
     let inv_det = 1.0 / det;
-    return Hit(t_scaled * inv_det, e1 * inv_det, e2 * inv_det);
+    let t = t_scaled * inv_det;
+    if (t <= triangle_t_error(p0, p1, p2, z, vec3<f32>(e0, e1, e2), inv_det)) {
+        return miss();
+    }
+    return Hit(t, e1 * inv_det, e2 * inv_det);
+}
+
+fn max_abs(v: vec3<f32>) -> f32 {
+    let a = abs(v);
+    return max(max(a.x, a.y), a.z);
+}
+
+// pbrt-v4's bound on the error of t (deltaT); hits no farther are the ray's own surface.
+fn triangle_t_error(p0: vec2<f32>, p1: vec2<f32>, p2: vec2<f32>, z: vec3<f32>, e: vec3<f32>, inv_det: f32) -> f32 {
+    let max_x = max_abs(vec3<f32>(p0.x, p1.x, p2.x));
+    let max_y = max_abs(vec3<f32>(p0.y, p1.y, p2.y));
+    let max_z = max_abs(z);
+    let max_e = max_abs(e);
+    let delta_x = gamma(5.0) * (max_x + max_z);
+    let delta_y = gamma(5.0) * (max_y + max_z);
+    let delta_z = gamma(3.0) * max_z;
+    let delta_e = 2.0 * (gamma(2.0) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    return 3.0 * (gamma(3.0) * max_e * max_z + delta_e * max_z + delta_z * max_e) * abs(inv_det);
 }
 
 // pbrt-v4's gamma(n) with a whole ULP per operation (WGSL leaves the rounding direction open).
@@ -220,24 +243,27 @@ struct SurfacePoint {
     error: vec3<f32>,
 }
 
+// v0 + b1 (v1 - v0) + b2 (v2 - v0); bounds as in the Rust twin.
 fn triangle_point(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>, b1: f32, b2: f32) -> SurfacePoint {
-    let t0 = (1.0 - b1 - b2) * v0;
-    let t1 = b1 * v1;
-    let t2 = b2 * v2;
-    return SurfacePoint(t0 + t1 + t2, gamma(7.0) * (abs(t0) + abs(t1) + abs(t2)));
+    let along1 = b1 * (v1 - v0);
+    let along2 = b2 * (v2 - v0);
+    let position = v0 + (along1 + along2);
+    return SurfacePoint(position, gamma(3.0) * (abs(along1) + abs(along2)) + gamma(1.0) * abs(position));
 }
 
 fn quad_point(corner: vec3<f32>, edge_u: vec3<f32>, edge_v: vec3<f32>, u: f32, v: f32) -> SurfacePoint {
     let along_u = u * edge_u;
     let along_v = v * edge_v;
-    return SurfacePoint(corner + along_u + along_v, gamma(5.0) * (abs(corner) + abs(along_u) + abs(along_v)));
+    let position = corner + (along_u + along_v);
+    return SurfacePoint(position, gamma(2.0) * (abs(along_u) + abs(along_v)) + gamma(1.0) * abs(position));
 }
 
 fn plane_point(ray: RayQuery, t: f32, point: vec3<f32>, normal: vec3<f32>) -> SurfacePoint {
     let raw = ray.origin + t * ray.direction;
-    let sizes = abs(raw) + abs(point);
-    let size = max(max(sizes.x, sizes.y), sizes.z);
-    return SurfacePoint(raw - dot(raw - point, normal) * normal, vec3<f32>(gamma(9.0) * size));
+    let from_point = raw - point;
+    let position = raw - dot(from_point, normal) * normal;
+    let size = abs(from_point);
+    return SurfacePoint(position, vec3<f32>(gamma(5.0) * max(max(size.x, size.y), size.z)) + gamma(1.0) * abs(position));
 }
 
 struct SphereSurface {
@@ -249,16 +275,17 @@ struct SphereSurface {
 fn sphere_surface_point(ray: RayQuery, hit: Hit, center: vec3<f32>, radius: f32) -> SphereSurface {
     let along = hit.t * ray.direction;
     let on_ray = ray.origin + along;
-    let outward = normalize(on_ray - center);
+    let outward = normalize((ray.origin - center) + along);
     let t_error = hit.t * hit.b1;
-    let on_ray_error = gamma(3.0) * (abs(ray.origin) + abs(along)) + t_error * abs(ray.direction);
+    let on_ray_error = gamma(1.0) * (abs(on_ray) + abs(along)) + t_error * abs(ray.direction);
     let scaled_normal = radius * outward;
-    let projected_error = gamma(6.0) * (abs(center) + abs(scaled_normal));
+    let projected = center + scaled_normal;
+    let projected_error = gamma(4.0) * abs(scaled_normal) + gamma(1.0) * abs(projected);
     let normal_size = abs(outward);
     if (dot(normal_size, on_ray_error) < dot(normal_size, projected_error)) {
         return SphereSurface(SurfacePoint(on_ray, on_ray_error), outward);
     }
-    return SphereSurface(SurfacePoint(center + scaled_normal, projected_error), outward);
+    return SphereSurface(SurfacePoint(projected, projected_error), outward);
 }
 
 fn next_float_up(v: f32) -> f32 {

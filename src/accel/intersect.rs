@@ -143,7 +143,8 @@ pub fn intersect_triangle(ray: &RayQuery, v0: Vec3, v1: Vec3, v2: Vec3, t_max: f
         return MISS;
     }
     // Scaled distance, compared against t_max * det to avoid the division until a hit.
-    let t_scaled = e0 * (s.z * a[kz]) + e1 * (s.z * b[kz]) + e2 * (s.z * c[kz]);
+    let z = [s.z * a[kz], s.z * b[kz], s.z * c[kz]];
+    let t_scaled = e0 * z[0] + e1 * z[1] + e2 * z[2];
     if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
         return MISS;
     }
@@ -151,11 +152,32 @@ pub fn intersect_triangle(ray: &RayQuery, v0: Vec3, v1: Vec3, v2: Vec3, t_max: f
         return MISS;
     }
     let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    if t <= triangle_t_error([p0, p1, p2], z, [e0, e1, e2], inv_det) {
+        return MISS;
+    }
     Hit {
-        t: t_scaled * inv_det,
+        t,
         b1: e1 * inv_det,
         b2: e2 * inv_det,
     }
+}
+
+/// pbrt-v4's bound on the error of the watertight test's t (`Triangle::Intersect`, deltaT),
+/// from the sheared vertices `p`, their scaled z and the edge functions. A hit no farther than
+/// this may lie behind the origin: it is the ray's own surface (a secondary ray leaving a
+/// triangle whose origin offset is below the t error of a steep test), so it is rejected.
+fn triangle_t_error(p: [[f32; 2]; 3], z: [f32; 3], e: [f32; 3], inv_det: f32) -> f32 {
+    let max_of = |v: [f32; 3]| v[0].abs().max(v[1].abs()).max(v[2].abs());
+    let max_x = max_of([p[0][0], p[1][0], p[2][0]]);
+    let max_y = max_of([p[0][1], p[1][1], p[2][1]]);
+    let max_z = max_of(z);
+    let max_e = max_of(e);
+    let delta_x = gamma(5) * (max_x + max_z);
+    let delta_y = gamma(5) * (max_y + max_z);
+    let delta_z = gamma(3) * max_z;
+    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs()
 }
 
 /// Rounding-error bound for `n` operations in arithmetic whose rounding direction is
@@ -311,32 +333,39 @@ pub struct SurfacePoint {
     pub error: Vec3,
 }
 
-/// Barycentric reconstruction b0 p0 + b1 p1 + b2 p2 (pbrt-v4: error gamma(7) sum |b_i p_i|).
+/// v0 + b1 (v1 - v0) + b2 (v2 - v0): on the triangle's plane whatever the barycentrics'
+/// rounding, and, unlike pbrt-v4's b0 v0 + b1 v1 + b2 v2 (error gamma(7) sum |b_i v_i|), only
+/// the final sum is rounded at the scale of the coordinates, which matters far from the origin.
+/// Errors: edges, products and their sum (gamma(3) of the two terms), then that final sum.
 pub fn triangle_point(v: [Vec3; 3], b1: f32, b2: f32) -> SurfacePoint {
-    let terms = [(1.0 - b1 - b2) * v[0], b1 * v[1], b2 * v[2]];
+    let along = [b1 * (v[1] - v[0]), b2 * (v[2] - v[0])];
+    let position = v[0] + (along[0] + along[1]);
     SurfacePoint {
-        position: terms[0] + terms[1] + terms[2],
-        error: gamma(7) * (terms[0].abs() + terms[1].abs() + terms[2].abs()),
+        position,
+        error: gamma(3) * (along[0].abs() + along[1].abs()) + gamma(1) * position.abs(),
     }
 }
 
-/// corner + u edge_u + v edge_v: two products and two sums per component.
+/// corner + (u edge_u + v edge_v): the same form and bound as `triangle_point`.
 pub fn quad_point(corner: Vec3, edge_u: Vec3, edge_v: Vec3, u: f32, v: f32) -> SurfacePoint {
     let (along_u, along_v) = (u * edge_u, v * edge_v);
+    let position = corner + (along_u + along_v);
     SurfacePoint {
-        position: corner + along_u + along_v,
-        error: gamma(5) * (corner.abs() + along_u.abs() + along_v.abs()),
+        position,
+        error: gamma(2) * (along_u.abs() + along_v.abs()) + gamma(1) * position.abs(),
     }
 }
 
 /// The ray's point at `t`, projected onto the plane through `point` with unit `normal`. The
-/// projection mixes components, so every component gets the bound of the largest.
+/// distance s to the plane comes from the small difference raw - point (gamma(5) of its size,
+/// on every component since the projection mixes them), then s n is subtracted.
 pub fn plane_point(ray: &RayQuery, t: f32, point: Vec3, normal: Vec3) -> SurfacePoint {
     let raw = ray.origin + t * ray.direction;
-    let size = (raw.abs() + point.abs()).max_element();
+    let from_point = raw - point;
+    let position = raw - from_point.dot(normal) * normal;
     SurfacePoint {
-        position: raw - (raw - point).dot(normal) * normal,
-        error: Vec3::splat(gamma(9) * size),
+        position,
+        error: Vec3::splat(gamma(5) * from_point.abs().max_element()) + gamma(1) * position.abs(),
     }
 }
 
@@ -353,11 +382,15 @@ pub fn sphere_surface_point(
 ) -> (SurfacePoint, Vec3) {
     let along = hit.t * ray.direction;
     let on_ray = ray.origin + along;
-    let outward = (on_ray - center).normalize();
+    // From the centre along the ray: rounded at the scale of |o - c|, not of |c|, so the normal
+    // stays accurate for a small sphere far from the origin.
+    let outward = ((ray.origin - center) + along).normalize();
     let t_error = hit.t * hit.b1;
-    let on_ray_error = gamma(3) * (ray.origin.abs() + along.abs()) + t_error * ray.direction.abs();
+    let on_ray_error = gamma(1) * (on_ray.abs() + along.abs()) + t_error * ray.direction.abs();
+    // The normal's length is 1 within gamma(3); r n adds one rounding, c + r n another.
     let scaled_normal = radius * outward;
-    let projected_error = gamma(6) * (center.abs() + scaled_normal.abs());
+    let projected = center + scaled_normal;
+    let projected_error = gamma(4) * scaled_normal.abs() + gamma(1) * projected.abs();
     let normal_size = outward.abs();
     let point = if normal_size.dot(on_ray_error) < normal_size.dot(projected_error) {
         SurfacePoint {
@@ -366,7 +399,7 @@ pub fn sphere_surface_point(
         }
     } else {
         SurfacePoint {
-            position: center + scaled_normal,
+            position: projected,
             error: projected_error,
         }
     };
