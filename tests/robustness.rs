@@ -354,13 +354,13 @@ fn renders_far_from_the_origin_and_at_extreme_scales_match_the_origin() {
                 within * 100.0
             );
             // What may differ: pixels on silhouettes (the floor's far edge; one of 4 samples
-            // flips as f32 positions move by half an ULP of the offset), and the mirror
-            // sphere's grazing rim, where the reflected ray starts 256 ULPs off the surface
-            // (Ray Tracing Gems' offset: 0.25 units at 1e4) and sees the floor or the sky.
-            // Everywhere else the images agree; a leak or self-shadowing acne would flip whole
-            // regions.
+            // flips as f32 positions move by half an ULP of the offset) and the mirror
+            // sphere's grazing rim. Secondary rays start the hit point's own error bound off the
+            // surface (a few 1e-3 units at 1e4, where Ray Tracing Gems' 256-ULP offset was 0.25),
+            // so nothing else moves. Measured: >= 99.94% within 1e-2, mean |diff| <= 6.9e-5.
+            // A leak or self-shadowing acne would flip whole regions.
             assert!(
-                within > 0.97 && mean_abs < 1e-2,
+                within > 0.995 && mean_abs < 5e-4,
                 "lens {lens}, scale {scale}, offset {offset}"
             );
         }
