@@ -14,7 +14,8 @@ use glam::{Vec2, Vec3};
 
 use crate::accel::FlatScene;
 use crate::accel::intersect::{
-    Hit, RayQuery, offset_ray_origin, plane_point, quad_point, sphere_surface_point, triangle_point,
+    Hit, RayQuery, offset_ray_origin, plane_point, quad_point, shadow_ray_length,
+    sphere_surface_point, triangle_point,
 };
 use crate::accel::traverse::{closest_hit, occluded};
 use crate::camera::{film_position_mm, generate_ray};
@@ -158,7 +159,7 @@ fn direct_light(
                         &RayQuery::new(origin, wi),
                         prim_id,
                         light.prim,
-                        distance,
+                        shadow_ray_length(distance),
                     ) {
                         sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light
                             / (distance * distance);
@@ -177,7 +178,13 @@ fn direct_light(
             let cos_surface = n.dot(wi);
             if cos_surface > 0.0 && ng.dot(wi) > 0.0 {
                 stats.rays += 1;
-                if !occluded(scene, &RayQuery::new(origin, wi), prim_id, NONE, distance) {
+                if !occluded(
+                    scene,
+                    &RayQuery::new(origin, wi),
+                    prim_id,
+                    NONE,
+                    shadow_ray_length(distance),
+                ) {
                     total += eval_brdf(material, n, wo, wi) * color * (cos_surface * falloff);
                 }
             }

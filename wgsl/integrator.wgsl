@@ -113,7 +113,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
                 let cos_light = -dot(light_normal, wi);
                 if (cos_surface > 0.0 && cos_light > 0.0 && dot(ng, wi) > 0.0) {
                     (*counters).rays += 1u;
-                    if (!occluded(ray_query_new(origin, wi), prim_id, light.prim, distance)) {
+                    if (!occluded(ray_query_new(origin, wi), prim_id, light.prim, shadow_ray_length(distance))) {
                         sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance);
                     }
                 }
@@ -132,7 +132,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
             let cos_surface = dot(n, wi);
             if (cos_surface > 0.0 && dot(ng, wi) > 0.0) {
                 (*counters).rays += 1u;
-                if (!occluded(ray_query_new(origin, wi), prim_id, NONE, distance)) {
+                if (!occluded(ray_query_new(origin, wi), prim_id, NONE, shadow_ray_length(distance))) {
                     total += eval_brdf(material, n, wo, wi) * light.color * (cos_surface * falloff);
                 }
             }

@@ -237,6 +237,13 @@ fn intersect_box(ray: RayQuery, bmin: vec3<f32>, bmax: vec3<f32>, t_max: f32) ->
     return T_FAR;
 }
 
+// pbrt-v4's ShadowEpsilon: shadow rays stop this fraction short of the light point (Rust twin).
+const SHADOW_EPSILON: f32 = 1.0e-4;
+
+fn shadow_ray_length(distance: f32) -> f32 {
+    return distance * (1.0 - SHADOW_EPSILON);
+}
+
 // A shading point and the per-component bound on its distance from the true surface point.
 struct SurfacePoint {
     position: vec3<f32>,

@@ -326,6 +326,17 @@ pub fn intersect_box(ray: &RayQuery, min: Vec3, max: Vec3, t_max: f32) -> f32 {
     }
 }
 
+/// pbrt-v4's `ShadowEpsilon`: the fraction of its length by which a shadow ray toward a light
+/// point stops short, so that a surface through that point (a point light on a wall, an area
+/// light flush with a ceiling, whose hits round to either side of the light's distance) does
+/// not shadow it.
+pub const SHADOW_EPSILON: f32 = 1.0e-4;
+
+/// Length of a shadow ray toward a light point `distance` away.
+pub fn shadow_ray_length(distance: f32) -> f32 {
+    distance * (1.0 - SHADOW_EPSILON)
+}
+
 /// A shading point and the per-component bound on its distance from the true surface point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
