@@ -5,6 +5,8 @@
 //!   Intersection", JCGT 2(1), 2013 (as in pbrt-v4), with each edge function evaluated in a
 //!   canonical vertex order so that two triangles sharing an edge compute the very same value
 //!   even where a compiler fuses multiply-adds. <https://jcgt.org/published/0002/01/05/>
+//!   Hits no farther than pbrt-v4's bound on t's error are rejected (they may lie behind the
+//!   origin).
 //! - Spheres: the cancellation-free quadratic of Haines et al., "Precision Improvements for
 //!   Ray/Sphere Intersection", Ray Tracing Gems ch. 7, with the constant term |o - c|^2 - r^2
 //!   taken from whichever of two forms loses less to cancellation (see `intersect_sphere`), and
