@@ -13,7 +13,10 @@ use std::f32::consts::PI;
 use glam::{Vec2, Vec3};
 
 use crate::accel::FlatScene;
-use crate::accel::intersect::{Hit, RayQuery, offset_ray_origin};
+use crate::accel::intersect::{
+    Hit, RayQuery, offset_ray_origin, plane_point, quad_point, shadow_ray_length,
+    sphere_surface_point, triangle_point,
+};
 use crate::accel::traverse::{closest_hit, occluded};
 use crate::camera::{film_position_mm, generate_ray};
 use crate::layout::*;
@@ -33,6 +36,8 @@ pub struct SampleStats {
 /// A surface point as shading needs it; normals face the side the ray came from.
 struct Surface {
     position: Vec3,
+    /// Per-component bound on the rounding error of `position` (for `offset_ray_origin`).
+    position_error: Vec3,
     geometric_normal: Vec3,
     shading_normal: Vec3,
     front_facing: bool,
@@ -45,16 +50,17 @@ fn surface_at(scene: &FlatScene, prim: &GpuPrimitive, ray: &RayQuery, hit: Hit) 
         Vec3::from(prim.p2),
     );
     // Recompute the position from the primitive itself: its error then scales with the
-    // primitive's coordinates, not with the distance travelled (origin offsets rely on it).
-    let (position, normal, shading) = match prim.kind {
+    // primitive's coordinates, not with the distance travelled, and is bounded (origin offsets
+    // rely on the bound).
+    let (point, normal, shading) = match prim.kind {
         PRIM_TRIANGLE => {
-            let b0 = 1.0 - hit.b1 - hit.b2;
-            let position = b0 * p0 + hit.b1 * p1 + hit.b2 * p2;
+            let point = triangle_point([p0, p1, p2], hit.b1, hit.b2);
             let normal = (p1 - p0).cross(p2 - p0).normalize();
             let shading = if prim.normals == NONE {
                 normal
             } else {
                 let n = scene.normals[prim.normals as usize].n;
+                let b0 = 1.0 - hit.b1 - hit.b2;
                 let interpolated = b0 * Vec3::new(n[0], n[1], n[2])
                     + hit.b1 * Vec3::new(n[3], n[4], n[5])
                     + hit.b2 * Vec3::new(n[6], n[7], n[8]);
@@ -65,20 +71,17 @@ fn surface_at(scene: &FlatScene, prim: &GpuPrimitive, ray: &RayQuery, hit: Hit) 
                     normal
                 }
             };
-            (position, normal, shading)
+            (point, normal, shading)
         }
         PRIM_SPHERE => {
-            let outward = (ray.origin + hit.t * ray.direction - p0).normalize();
-            (p0 + p1.x * outward, outward, outward)
+            let (point, outward) = sphere_surface_point(ray, hit, p0, p1.x);
+            (point, outward, outward)
         }
         PRIM_QUAD => {
             let normal = p1.cross(p2).normalize();
-            (p0 + hit.b1 * p1 + hit.b2 * p2, normal, normal)
+            (quad_point(p0, p1, p2, hit.b1, hit.b2), normal, normal)
         }
-        _ => {
-            let raw = ray.origin + hit.t * ray.direction;
-            (raw - (raw - p0).dot(p1) * p1, p1, p1)
-        }
+        _ => (plane_point(ray, hit.t, p0, p1), p1, p1),
     };
     // Two-sided shading: turn both normals towards the incoming ray.
     let front_facing = normal.dot(ray.direction) < 0.0;
@@ -88,7 +91,8 @@ fn surface_at(scene: &FlatScene, prim: &GpuPrimitive, ray: &RayQuery, hit: Hit) 
         shading_normal = -shading_normal;
     }
     Surface {
-        position,
+        position: point.position,
+        position_error: point.error,
         geometric_normal,
         shading_normal,
         front_facing,
@@ -177,7 +181,7 @@ fn direct_light(
 ) -> Vec3 {
     let n = surface.shading_normal;
     let ng = surface.geometric_normal;
-    let origin = offset_ray_origin(surface.position, ng);
+    let origin = offset_ray_origin(surface.position, surface.position_error, ng);
     let mut total = Vec3::ZERO;
     let mut sample_offset = 0;
     for light in &scene.lights[..scene.frame.light_count as usize] {
@@ -213,7 +217,7 @@ fn direct_light(
                         &RayQuery::new(origin, wi),
                         prim_id,
                         light.prim,
-                        distance,
+                        shadow_ray_length(distance),
                     ) {
                         sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light
                             / (distance * distance);
@@ -232,7 +236,13 @@ fn direct_light(
             let cos_surface = n.dot(wi);
             if cos_surface > 0.0 && ng.dot(wi) > 0.0 {
                 stats.rays += 1;
-                if !occluded(scene, &RayQuery::new(origin, wi), prim_id, NONE, distance) {
+                if !occluded(
+                    scene,
+                    &RayQuery::new(origin, wi),
+                    prim_id,
+                    NONE,
+                    shadow_ray_length(distance),
+                ) {
                     total += eval_brdf(material, n, wo, wi) * color * (cos_surface * falloff);
                 }
             }
@@ -301,7 +311,11 @@ pub fn trace_path(
         }
         throughput *= mirror;
         ray = RayQuery::new(
-            offset_ray_origin(surface.position, surface.geometric_normal),
+            offset_ray_origin(
+                surface.position,
+                surface.position_error,
+                surface.geometric_normal,
+            ),
             reflected.normalize(),
         );
         skip = if prim.kind == PRIM_SPHERE {

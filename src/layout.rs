@@ -112,9 +112,9 @@ pub struct GpuBvhNode {
 }
 
 /// One primitive. Triangle: `p0, p1, p2` are its vertices, `normals` indexes `GpuNormals` or is
-/// `NONE`. Sphere: `p0` centre, `p1.x` radius. Quad: `p0` corner, `p1` edge_u, `p2` edge_v.
-/// Plane: `p0` a point, `p1` the unit normal. Planes are unbounded and live after the BVH's
-/// primitives (`GpuFrame::plane_start`).
+/// `NONE`. Sphere: `p0` centre, `p1.x` radius, `p1.y` |centre|^2 - radius^2 (rounded once from
+/// f64). Quad: `p0` corner, `p1` edge_u, `p2` edge_v. Plane: `p0` a point, `p1` the unit normal.
+/// Planes are unbounded and live after the BVH's primitives (`GpuFrame::plane_start`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuPrimitive {

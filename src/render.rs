@@ -29,12 +29,16 @@ use crate::layout::{
 };
 
 /// Upper bounds on the rays traced by one invocation, one dispatch and one batch.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RayBudgets {
-    /// lavapipe ends every loop of an invocation once 65535 loop iterations have run in total,
-    /// and one ray costs tens of traversal iterations (`layout::STATUS_LOOP_LIMIT` reports a
-    /// dispatch that still exceeds it).
+    /// Rays per invocation and dispatch, at most. Fewer when the BVH makes rays expensive:
+    /// lavapipe ends every loop of an invocation once 65535 loop iterations have run in total
+    /// (`layout::STATUS_LOOP_LIMIT` reports a dispatch that still exceeds it).
     pub per_invocation: u64,
+    /// Loop iterations one invocation may expect to run: a quarter of lavapipe's 65535, since
+    /// the 8 lanes of a SIMD group loop as long as the slowest and the estimate is an average
+    /// (`FlatScene::traversal_iterations`).
+    pub loop_iterations_per_invocation: f64,
     /// Well under a second on lavapipe, far below any GPU watchdog.
     pub per_dispatch: u64,
     /// One submission: a few seconds on lavapipe, milliseconds on a real GPU, where the
@@ -45,6 +49,7 @@ pub struct RayBudgets {
 impl RayBudgets {
     pub const DEFAULT: RayBudgets = RayBudgets {
         per_invocation: 64,
+        loop_iterations_per_invocation: 16384.0,
         per_dispatch: 1 << 22,
         per_batch: 1 << 24,
     };
@@ -244,8 +249,13 @@ pub fn plan_passes(scene: &FlatScene, budgets: &RayBudgets) -> RenderPlan {
     let frame = &scene.frame;
     let spp = frame.spp;
     let bound = RayBound::of(scene);
-    let per_pass = (budgets.per_invocation / bound.per_sample()).clamp(1, spp as u64) as u32;
-    let light_windows = light_windows(scene, bound, budgets.per_invocation);
+    // The loop itself, the light loop's iteration, and the expected traversal.
+    let iterations_per_ray = 2.0 + scene.traversal_iterations as f64;
+    let rays_per_invocation = ((budgets.loop_iterations_per_invocation / iterations_per_ray)
+        as u64)
+        .clamp(1, budgets.per_invocation);
+    let per_pass = (rays_per_invocation / bound.per_sample()).clamp(1, spp as u64) as u32;
+    let light_windows = light_windows(scene, bound, rays_per_invocation);
     let window_width = light_windows[0].1.min(frame.light_samples_per_vertex) as u64;
     let area_lights = scene.lights.iter().filter(|l| l.kind == LIGHT_AREA).count() as u64;
     let rays_per_sample_and_window = if light_windows.len() > 1 {

@@ -190,9 +190,9 @@ fn a_render_stopped_between_batches_reports_the_samples_each_pixel_holds() {
     let flat = flatten(&scene);
     let rays_per_row = 192 * 4 * chambre::render::RayBound::of(&flat).per_sample();
     let budgets = RayBudgets {
-        per_invocation: RayBudgets::DEFAULT.per_invocation,
         per_dispatch: 8 * rays_per_row,
         per_batch: 8 * rays_per_row,
+        ..RayBudgets::DEFAULT
     };
     let plan = chambre::render::plan_passes(&flat, &budgets);
     assert_eq!((plan.passes.len(), plan.bands.len()), (1, 16));

@@ -7,7 +7,10 @@ mod common;
 use std::path::Path;
 
 use chambre::accel::flatten;
-use chambre::accel::intersect::{RayQuery, intersect_box, intersect_triangle};
+use chambre::accel::intersect::{
+    Hit, RayQuery, intersect_box, intersect_sphere, intersect_triangle, offset_ray_origin,
+    sphere_origin_power, sphere_surface_point, triangle_point,
+};
 use chambre::layout::T_FAR;
 use chambre::math::rng::Rng;
 use chambre::scene::Scene;
@@ -121,6 +124,173 @@ fn slab_test_survives_zero_direction_components_and_grazing_faces() {
     }
 }
 
+fn log_uniform(rng: &mut Rng, low_exp: f32, high_exp: f32) -> f32 {
+    10f32.powf(low_exp + (high_exp - low_exp) * rng.next_f32())
+}
+
+fn random_unit(rng: &mut Rng) -> Vec3 {
+    loop {
+        let [u, v] = rng.next_2d();
+        let d = Vec3::new(2.0 * u - 1.0, 2.0 * v - 1.0, 2.0 * rng.next_f32() - 1.0);
+        let length = d.length();
+        if length > 0.1 && length <= 1.0 {
+            return d / length;
+        }
+    }
+}
+
+/// A random direction on the side of `n`.
+fn random_on_side(rng: &mut Rng, n: Vec3) -> Vec3 {
+    let d = random_unit(rng);
+    if d.dot(n) < 0.0 { -d } else { d }
+}
+
+/// pbrt-v4's Reintersect tests: from a hit, rays leaving the offset origin to the side they
+/// came from never hit the same surface again, whatever the scale and position. Returns
+/// (re-hits, largest offset relative to the largest coordinate of the hit point).
+fn reintersect_spheres(
+    rng: &mut Rng,
+    center_exp: (f32, f32),
+    radius_exp: (f32, f32),
+) -> (usize, f32) {
+    let (mut rehits, mut largest_offset) = (0, 0f32);
+    for _ in 0..400 {
+        let radius = log_uniform(rng, radius_exp.0, radius_exp.1);
+        let center = random_unit(rng) * log_uniform(rng, center_exp.0, center_exp.1);
+        let power = sphere_origin_power(center, radius);
+        // A ray from outside at 1.01 to 100 radii, aimed at a random point of the sphere.
+        let origin = center + random_unit(rng) * radius * log_uniform(rng, 0.005, 2.0);
+        let target = center + random_unit(rng) * radius;
+        let ray = RayQuery::new(origin, (target - origin).normalize());
+        let hit = intersect_sphere(&ray, center, radius, power, f32::MAX);
+        if hit.t == chambre::layout::T_FAR {
+            continue;
+        }
+        let (point, outward) = sphere_surface_point(&ray, hit, center, radius);
+        let n = if outward.dot(ray.direction) < 0.0 {
+            outward
+        } else {
+            -outward
+        };
+        let start = offset_ray_origin(point.position, point.error, n);
+        let scale = point.position.abs().max_element().max(radius);
+        largest_offset = largest_offset.max((start - point.position).length() / scale);
+        for _ in 0..16 {
+            let again = RayQuery::new(start, random_on_side(rng, n));
+            if intersect_sphere(&again, center, radius, power, f32::MAX).t < chambre::layout::T_FAR
+            {
+                rehits += 1;
+            }
+        }
+    }
+    (rehits, largest_offset)
+}
+
+#[test]
+fn rays_leaving_spheres_never_hit_them_again_at_any_scale() {
+    let mut rng = Rng::new(11, 0, 0);
+    for (centres, radii) in [
+        ((-4.0, 4.0), (-4.0, 4.0)),
+        ((-6.0, -4.0), (-6.0, -4.0)),
+        ((4.0, 6.0), (0.0, 2.0)),
+        ((6.0, 8.0), (5.0, 8.0)),
+    ] {
+        let (rehits, largest_offset) = reintersect_spheres(&mut rng, centres, radii);
+        eprintln!(
+            "centres 1e{centres:?}, radii 1e{radii:?}: {rehits} re-hits, largest offset {largest_offset:.2e} of the coordinates"
+        );
+        assert_eq!(rehits, 0, "centres 1e{centres:?}, radii 1e{radii:?}");
+        assert!(largest_offset < 1e-5, "offset {largest_offset}");
+    }
+}
+
+/// A planet of radius 1e6 to 1e9 whose top touches the origin, hit from a few units above:
+/// the shading point must land within a few ULPs of the small coordinates (not ULPs of the
+/// radius), and rays leaving it upwards must clear the sphere.
+#[test]
+fn points_on_a_huge_sphere_near_the_origin_are_accurate_and_rays_leave_them() {
+    let mut rng = Rng::new(12, 0, 0);
+    for radius in [1.0e6f32, 1.0e7, 1.0e8, 1.0e9] {
+        let center = Vec3::new(0.0, -radius, 0.0);
+        let power = sphere_origin_power(center, radius);
+        for _ in 0..200 {
+            let [u, v] = rng.next_2d();
+            let origin = Vec3::new(0.0, 1.0 + 4.0 * u, 6.0);
+            let target = Vec3::new(8.0 * v - 4.0, 0.0, 8.0 * rng.next_f32() - 4.0);
+            let ray = RayQuery::new(origin, (target - origin).normalize());
+            let hit: Hit = intersect_sphere(&ray, center, radius, power, f32::MAX);
+            assert!(
+                hit.t < chambre::layout::T_FAR,
+                "radius {radius}: ray missed"
+            );
+            let (point, outward) = sphere_surface_point(&ray, hit, center, radius);
+            // In f64: the true sphere passes |p - c| = r; near the origin y = -(x^2+z^2)/2r.
+            let p = point.position.as_dvec3();
+            let height = (p - center.as_dvec3()).length() - radius as f64;
+            assert!(
+                height.abs() < 1e-5,
+                "radius {radius}: point {p} is {height} off the sphere"
+            );
+            let start = offset_ray_origin(point.position, point.error, outward);
+            assert!((start - point.position).length() < 1e-3);
+            for _ in 0..8 {
+                let again = RayQuery::new(start, random_on_side(&mut rng, outward));
+                assert_eq!(
+                    intersect_sphere(&again, center, radius, power, f32::MAX).t,
+                    chambre::layout::T_FAR,
+                    "radius {radius}: a ray leaving {p} hit the sphere again"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn rays_leaving_triangles_never_hit_them_again_at_any_scale() {
+    let mut rng = Rng::new(13, 0, 0);
+    for (offset_exp, size_exp) in [
+        (-6.0, -6.0),
+        (-2.0, 0.0),
+        (0.0, 0.0),
+        (4.0, 1.0),
+        (6.0, 2.0),
+        (8.0, 5.0),
+    ] {
+        let mut rehits = 0;
+        for _ in 0..400 {
+            let centre =
+                random_unit(&mut rng) * log_uniform(&mut rng, offset_exp - 1.0, offset_exp);
+            let size = log_uniform(&mut rng, size_exp - 1.0, size_exp);
+            let v = [0, 1, 2].map(|_| centre + random_unit(&mut rng) * size);
+            let n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            let [u, w] = rng.next_2d();
+            let (b1, b2) = if u + w > 1.0 {
+                (1.0 - u, 1.0 - w)
+            } else {
+                (u, w)
+            };
+            let target = v[0] + b1 * (v[1] - v[0]) + b2 * (v[2] - v[0]);
+            let origin = target + random_unit(&mut rng) * size * 3.0;
+            let ray = RayQuery::new(origin, (target - origin).normalize());
+            let hit = intersect_triangle(&ray, v[0], v[1], v[2], f32::MAX);
+            if hit.t == chambre::layout::T_FAR {
+                continue;
+            }
+            let point = triangle_point(v, hit.b1, hit.b2);
+            let side = if n.dot(ray.direction) < 0.0 { n } else { -n };
+            let start = offset_ray_origin(point.position, point.error, side);
+            for _ in 0..16 {
+                let again = RayQuery::new(start, random_on_side(&mut rng, side));
+                if intersect_triangle(&again, v[0], v[1], v[2], f32::MAX).t < chambre::layout::T_FAR
+                {
+                    rehits += 1;
+                }
+            }
+        }
+        assert_eq!(rehits, 0, "offsets 1e{offset_exp}, sizes 1e{size_exp}");
+    }
+}
+
 /// A sphere on a plane under a directional light, seen from above, everything scaled by
 /// `scale` and moved by `offset`; meters_per_unit follows the scale so the optics are unchanged.
 fn far_scene(scale: f64, offset: f64, lens: bool) -> String {
@@ -184,13 +354,13 @@ fn renders_far_from_the_origin_and_at_extreme_scales_match_the_origin() {
                 within * 100.0
             );
             // What may differ: pixels on silhouettes (the floor's far edge; one of 4 samples
-            // flips as f32 positions move by half an ULP of the offset), and the mirror
-            // sphere's grazing rim, where the reflected ray starts 256 ULPs off the surface
-            // (Ray Tracing Gems' offset: 0.25 units at 1e4) and sees the floor or the sky.
-            // Everywhere else the images agree; a leak or self-shadowing acne would flip whole
-            // regions.
+            // flips as f32 positions move by half an ULP of the offset) and the mirror
+            // sphere's grazing rim. Secondary rays start the hit point's own error bound off the
+            // surface (a few 1e-3 units at 1e4, where Ray Tracing Gems' 256-ULP offset was 0.25),
+            // so nothing else moves. Measured: >= 99.94% within 1e-2, mean |diff| <= 6.9e-5.
+            // A leak or self-shadowing acne would flip whole regions.
             assert!(
-                within > 0.97 && mean_abs < 1e-2,
+                within > 0.995 && mean_abs < 5e-4,
                 "lens {lens}, scale {scale}, offset {offset}"
             );
         }

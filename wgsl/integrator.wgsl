@@ -6,6 +6,8 @@ const PI: f32 = 3.14159265358979323846;
 
 struct Surface {
     position: vec3<f32>,
+    // Per-component bound on the rounding error of position (for offset_ray_origin).
+    position_error: vec3<f32>,
     geometric_normal: vec3<f32>,
     shading_normal: vec3<f32>,
     front_facing: bool,
@@ -17,18 +19,18 @@ struct PathCounters {
 }
 
 fn surface_at(prim: GpuPrimitive, ray: RayQuery, hit: Hit) -> Surface {
-    // Recompute the position from the primitive itself (see the Rust twin).
-    var position: vec3<f32>;
+    // Recompute the position from the primitive itself, with its error bound (see the Rust twin).
+    var point: SurfacePoint;
     var normal: vec3<f32>;
     var shading: vec3<f32>;
     switch prim.kind {
         case PRIM_TRIANGLE: {
-            let b0 = 1.0 - hit.b1 - hit.b2;
-            position = b0 * prim.p0 + hit.b1 * prim.p1 + hit.b2 * prim.p2;
+            point = triangle_point(prim.p0, prim.p1, prim.p2, hit.b1, hit.b2);
             normal = normalize(cross(prim.p1 - prim.p0, prim.p2 - prim.p0));
             shading = normal;
             if (prim.normals != NONE) {
                 let n = normals[prim.normals].n;
+                let b0 = 1.0 - hit.b1 - hit.b2;
                 let interpolated = b0 * vec3<f32>(n[0], n[1], n[2])
                     + hit.b1 * vec3<f32>(n[3], n[4], n[5])
                     + hit.b2 * vec3<f32>(n[6], n[7], n[8]);
@@ -39,19 +41,18 @@ fn surface_at(prim: GpuPrimitive, ray: RayQuery, hit: Hit) -> Surface {
             }
         }
         case PRIM_SPHERE: {
-            let outward = normalize(ray.origin + hit.t * ray.direction - prim.p0);
-            position = prim.p0 + prim.p1.x * outward;
-            normal = outward;
-            shading = outward;
+            let sphere = sphere_surface_point(ray, hit, prim.p0, prim.p1.x);
+            point = sphere.point;
+            normal = sphere.outward;
+            shading = sphere.outward;
         }
         case PRIM_QUAD: {
             normal = normalize(cross(prim.p1, prim.p2));
-            position = prim.p0 + hit.b1 * prim.p1 + hit.b2 * prim.p2;
+            point = quad_point(prim.p0, prim.p1, prim.p2, hit.b1, hit.b2);
             shading = normal;
         }
         default: {
-            let raw = ray.origin + hit.t * ray.direction;
-            position = raw - dot(raw - prim.p0, prim.p1) * prim.p1;
+            point = plane_point(ray, hit.t, prim.p0, prim.p1);
             normal = prim.p1;
             shading = prim.p1;
         }
@@ -67,7 +68,7 @@ fn surface_at(prim: GpuPrimitive, ray: RayQuery, hit: Hit) -> Surface {
     if (dot(shading_normal, geometric_normal) < 0.0) {
         shading_normal = -shading_normal;
     }
-    return Surface(position, geometric_normal, shading_normal, front_facing);
+    return Surface(point.position, point.error, geometric_normal, shading_normal, front_facing);
 }
 
 fn eval_brdf(material: GpuMaterial, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
@@ -108,7 +109,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
                 rng: ptr<function, Rng>, counters: ptr<function, PathCounters>) -> vec3<f32> {
     let n = surface.shading_normal;
     let ng = surface.geometric_normal;
-    let origin = offset_ray_origin(surface.position, ng);
+    let origin = offset_ray_origin(surface.position, surface.position_error, ng);
     var total = vec3<f32>(0.0);
     var sample_offset = 0u;
     for (var l = 0u; l < frame.light_count; l += 1u) {
@@ -133,7 +134,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
                 let cos_light = -dot(light_normal, wi);
                 if (cos_surface > 0.0 && cos_light > 0.0 && dot(ng, wi) > 0.0) {
                     (*counters).rays += 1u;
-                    if (!occluded(ray_query_new(origin, wi), prim_id, light.prim, distance)) {
+                    if (!occluded(ray_query_new(origin, wi), prim_id, light.prim, shadow_ray_length(distance))) {
                         sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance);
                     }
                 }
@@ -152,7 +153,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
             let cos_surface = dot(n, wi);
             if (cos_surface > 0.0 && dot(ng, wi) > 0.0) {
                 (*counters).rays += 1u;
-                if (!occluded(ray_query_new(origin, wi), prim_id, NONE, distance)) {
+                if (!occluded(ray_query_new(origin, wi), prim_id, NONE, shadow_ray_length(distance))) {
                     total += eval_brdf(material, n, wo, wi) * light.color * (cos_surface * falloff);
                 }
             }
@@ -208,7 +209,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, window: LightWindow, rng:
             break;
         }
         throughput *= material.mirror;
-        ray = ray_query_new(offset_ray_origin(surface.position, surface.geometric_normal), normalize(reflected));
+        ray = ray_query_new(offset_ray_origin(surface.position, surface.position_error, surface.geometric_normal), normalize(reflected));
         skip = found.prim;
         if (prim.kind == PRIM_SPHERE) {
             skip = NONE;

@@ -1,5 +1,5 @@
 // Ray/primitive intersection: watertight triangles, robust spheres, quads, planes, slabs,
-// and the integer-ULP origin offset.
+// shading points with error bounds, and pbrt-v4's error-bounded origin offset.
 // Mirrors: src/accel/intersect.rs (references there).
 
 const MIN_DIRECTION: f32 = 1.0e-20;
@@ -16,6 +16,7 @@ struct RayQuery {
     shear: vec3<f32>,
 }
 
+// For spheres, b1 is the bound on t's relative error (see intersect_sphere).
 struct Hit {
     t: f32,
     b1: f32,
@@ -88,7 +89,8 @@ fn intersect_triangle(ray: RayQuery, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>
         return miss();
     }
     // Scaled distance, compared against t_max * det to avoid the division until a hit.
-    let t_scaled = e0 * (s.z * a[ray.kz]) + e1 * (s.z * b[ray.kz]) + e2 * (s.z * c[ray.kz]);
+    let z = vec3<f32>(s.z * a[ray.kz], s.z * b[ray.kz], s.z * c[ray.kz]);
+    let t_scaled = e0 * z.x + e1 * z.y + e2 * z.z;
     if (det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det)) {
         return miss();
     }
@@ -96,15 +98,46 @@ fn intersect_triangle(ray: RayQuery, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>
         return miss();
     }
     let inv_det = 1.0 / det;
-    return Hit(t_scaled * inv_det, e1 * inv_det, e2 * inv_det);
+    let t = t_scaled * inv_det;
+    if (t <= triangle_t_error(p0, p1, p2, z, vec3<f32>(e0, e1, e2), inv_det)) {
+        return miss();
+    }
+    return Hit(t, e1 * inv_det, e2 * inv_det);
 }
 
-fn intersect_sphere(ray: RayQuery, center: vec3<f32>, radius: f32, t_max: f32) -> Hit {
+fn max_abs(v: vec3<f32>) -> f32 {
+    let a = abs(v);
+    return max(max(a.x, a.y), a.z);
+}
+
+// pbrt-v4's bound on the error of t (deltaT); hits no farther are the ray's own surface.
+fn triangle_t_error(p0: vec2<f32>, p1: vec2<f32>, p2: vec2<f32>, z: vec3<f32>, e: vec3<f32>, inv_det: f32) -> f32 {
+    let max_x = max_abs(vec3<f32>(p0.x, p1.x, p2.x));
+    let max_y = max_abs(vec3<f32>(p0.y, p1.y, p2.y));
+    let max_z = max_abs(z);
+    let max_e = max_abs(e);
+    let delta_x = gamma(5.0) * (max_x + max_z);
+    let delta_y = gamma(5.0) * (max_y + max_z);
+    let delta_z = gamma(3.0) * max_z;
+    let delta_e = 2.0 * (gamma(2.0) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    return 3.0 * (gamma(3.0) * max_e * max_z + delta_e * max_z + delta_z * max_e) * abs(inv_det);
+}
+
+// pbrt-v4's gamma(n) with a whole ULP per operation (WGSL leaves the rounding direction open).
+fn gamma(n: f32) -> f32 {
+    let n_eps = n * 1.1920928955078125e-7;
+    return n_eps / (1.0 - n_eps);
+}
+
+// origin_power = |c|^2 - r^2, rounded once from f64 on the CPU.
+fn intersect_sphere(ray: RayQuery, center: vec3<f32>, radius: f32, origin_power: f32, t_max: f32) -> Hit {
     let f = ray.origin - center;
     let b = dot(f, ray.direction);
     // r^2 - |f - (f.d) d|^2 instead of b^2 - (|f|^2 - r^2): no cancellation far from the sphere.
     let perpendicular = f - b * ray.direction;
-    let discriminant = radius * radius - dot(perpendicular, perpendicular);
+    let r2 = radius * radius;
+    let p2 = dot(perpendicular, perpendicular);
+    let discriminant = r2 - p2;
     if (discriminant < 0.0) {
         return miss();
     }
@@ -116,7 +149,19 @@ fn intersect_sphere(ray: RayQuery, center: vec3<f32>, radius: f32, t_max: f32) -
     if (q == 0.0) {
         return miss();
     }
-    let c = dot(f, f) - radius * radius;
+    // |o - c|^2 - r^2 directly or expanded as |o|^2 - 2 o.c + (|c|^2 - r^2), whichever is
+    // better conditioned (see the Rust twin).
+    let f2 = dot(f, f);
+    let direct_size = f2 + r2;
+    let o = ray.origin;
+    let oc = abs(o * center);
+    let expanded_size = dot(o, o) + 2.0 * (oc.x + oc.y + oc.z) + abs(origin_power);
+    var c = f2 - r2;
+    var c_size = direct_size;
+    if (direct_size > expanded_size) {
+        c = dot(o, o) - 2.0 * dot(o, center) + origin_power;
+        c_size = expanded_size;
+    }
     let t0 = min(c / q, q);
     let t1 = max(c / q, q);
     var t = t1;
@@ -126,7 +171,15 @@ fn intersect_sphere(ray: RayQuery, center: vec3<f32>, radius: f32, t_max: f32) -
     if (t <= 0.0 || t >= t_max) {
         return miss();
     }
-    return Hit(t, 0.0, 0.0);
+    let f_length = sqrt(f2);
+    let discriminant_error = gamma(8.0) * (r2 + p2 + 2.0 * sqrt(p2) * f_length);
+    let root_error = discriminant_error / (root + sqrt(discriminant_error));
+    let q_relative = (gamma(4.0) * f_length + root_error) / abs(q);
+    var c_relative = 0.0;
+    if (t != q) {
+        c_relative = gamma(6.0) * c_size / abs(c);
+    }
+    return Hit(t, q_relative + c_relative + gamma(2.0), 0.0);
 }
 
 fn intersect_quad(ray: RayQuery, corner: vec3<f32>, edge_u: vec3<f32>, edge_v: vec3<f32>, t_max: f32) -> Hit {
@@ -169,7 +222,7 @@ fn intersect_primitive(ray: RayQuery, prim: GpuPrimitive, t_max: f32) -> Hit {
             }
             return miss();
         }
-        case PRIM_SPHERE: { return intersect_sphere(ray, prim.p0, prim.p1.x, t_max); }
+        case PRIM_SPHERE: { return intersect_sphere(ray, prim.p0, prim.p1.x, prim.p1.y, t_max); }
         case PRIM_QUAD: { return intersect_quad(ray, prim.p0, prim.p1, prim.p2, t_max); }
         case PRIM_PLANE: { return intersect_plane(ray, prim.p0, prim.p1, t_max); }
         default: { return miss(); }
@@ -189,19 +242,87 @@ fn intersect_box(ray: RayQuery, bmin: vec3<f32>, bmax: vec3<f32>, t_max: f32) ->
     return T_FAR;
 }
 
-fn offset_component(p: f32, n: f32) -> f32 {
-    let of_i = i32(256.0 * n);
-    var delta = of_i;
-    if (p < 0.0) {
-        delta = -of_i;
-    }
-    let moved = bitcast<f32>(bitcast<i32>(p) + delta);
-    if (abs(p) < 1.0 / 32.0) {
-        return p + (1.0 / 65536.0) * n;
-    }
-    return moved;
+// pbrt-v4's ShadowEpsilon: shadow rays stop this fraction short of the light point (Rust twin).
+const SHADOW_EPSILON: f32 = 1.0e-4;
+
+fn shadow_ray_length(distance: f32) -> f32 {
+    return distance * (1.0 - SHADOW_EPSILON);
 }
 
-fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(offset_component(p.x, n.x), offset_component(p.y, n.y), offset_component(p.z, n.z));
+// A shading point and the per-component bound on its distance from the true surface point.
+struct SurfacePoint {
+    position: vec3<f32>,
+    error: vec3<f32>,
+}
+
+// v0 + b1 (v1 - v0) + b2 (v2 - v0); bounds as in the Rust twin.
+fn triangle_point(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>, b1: f32, b2: f32) -> SurfacePoint {
+    let along1 = b1 * (v1 - v0);
+    let along2 = b2 * (v2 - v0);
+    let position = v0 + (along1 + along2);
+    return SurfacePoint(position, gamma(3.0) * (abs(along1) + abs(along2)) + gamma(1.0) * abs(position));
+}
+
+fn quad_point(corner: vec3<f32>, edge_u: vec3<f32>, edge_v: vec3<f32>, u: f32, v: f32) -> SurfacePoint {
+    let along_u = u * edge_u;
+    let along_v = v * edge_v;
+    let position = corner + (along_u + along_v);
+    return SurfacePoint(position, gamma(2.0) * (abs(along_u) + abs(along_v)) + gamma(1.0) * abs(position));
+}
+
+fn plane_point(ray: RayQuery, t: f32, point: vec3<f32>, normal: vec3<f32>) -> SurfacePoint {
+    let raw = ray.origin + t * ray.direction;
+    let from_point = raw - point;
+    let position = raw - dot(from_point, normal) * normal;
+    let size = abs(from_point);
+    return SurfacePoint(position, vec3<f32>(gamma(5.0) * max(max(size.x, size.y), size.z)) + gamma(1.0) * abs(position));
+}
+
+struct SphereSurface {
+    point: SurfacePoint,
+    outward: vec3<f32>,
+}
+
+// The ray's point or the re-projection onto the sphere, whichever has the smaller error bound.
+fn sphere_surface_point(ray: RayQuery, hit: Hit, center: vec3<f32>, radius: f32) -> SphereSurface {
+    let along = hit.t * ray.direction;
+    let on_ray = ray.origin + along;
+    let outward = normalize((ray.origin - center) + along);
+    let t_error = hit.t * hit.b1;
+    let on_ray_error = gamma(1.0) * (abs(on_ray) + abs(along)) + t_error * abs(ray.direction);
+    let scaled_normal = radius * outward;
+    let projected = center + scaled_normal;
+    let projected_error = gamma(4.0) * abs(scaled_normal) + gamma(1.0) * abs(projected);
+    let normal_size = abs(outward);
+    if (dot(normal_size, on_ray_error) < dot(normal_size, projected_error)) {
+        return SphereSurface(SurfacePoint(on_ray, on_ray_error), outward);
+    }
+    return SphereSurface(SurfacePoint(projected, projected_error), outward);
+}
+
+fn next_float_up(v: f32) -> f32 {
+    if (v == 0.0) {
+        return bitcast<f32>(1u);
+    }
+    if (v > 0.0) {
+        return bitcast<f32>(bitcast<u32>(v) + 1u);
+    }
+    return bitcast<f32>(bitcast<u32>(v) - 1u);
+}
+
+fn round_away(v: f32, sign: f32) -> f32 {
+    if (sign > 0.0) {
+        return next_float_up(v);
+    }
+    if (sign < 0.0) {
+        return -next_float_up(-v);
+    }
+    return v;
+}
+
+// pbrt-v4's OffsetRayOrigin: off the surface by the error bound projected on n, one ULP more.
+fn offset_ray_origin(position: vec3<f32>, error: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let offset = dot(abs(n), error) * n;
+    let moved = position + offset;
+    return vec3<f32>(round_away(moved.x, offset.x), round_away(moved.y, offset.y), round_away(moved.z, offset.z));
 }

@@ -52,6 +52,32 @@ pub fn tree_depth(nodes: &[Bvh2Node]) -> usize {
     deepest
 }
 
+/// Expected loop iterations of one traversal of a ray that enters the root box, by the surface
+/// area heuristic: a node is entered with probability area(node) / area(root); entering an
+/// inner node costs one iteration (its children's pair test), a leaf one per primitive. The
+/// render driver sizes dispatches from it (`render::plan_passes`), since lavapipe cuts an
+/// invocation's loops after 65535 iterations in total.
+pub fn expected_traversal_iterations(nodes: &[Bvh2Node]) -> f32 {
+    let Some(root) = nodes.first() else {
+        return 0.0;
+    };
+    let root_area = root.aabb.half_area().max(f32::MIN_POSITIVE);
+    let mut expected = 0.0f64;
+    let mut stack = vec![0usize];
+    while let Some(index) = stack.pop() {
+        let node = &nodes[index];
+        let p = (node.aabb.half_area() / root_area).min(1.0) as f64;
+        if node.prim_count > 0 {
+            expected += p * node.prim_count as f64;
+        } else {
+            expected += p;
+            stack.push(node.first_index as usize);
+            stack.push(node.first_index as usize + 1);
+        }
+    }
+    expected as f32
+}
+
 /// Height of the balanced tree `rebuild_balanced` makes over `n` primitives.
 fn balanced_height(n: usize) -> usize {
     n.max(1).next_power_of_two().trailing_zeros() as usize + 1
@@ -272,6 +298,23 @@ mod tests {
             let (bvh, _) = build_bvh(&aabbs, max_depth);
             check(&bvh, &aabbs, max_depth);
         }
+    }
+
+    #[test]
+    fn expected_iterations_count_every_node_of_nested_boxes_once() {
+        // Identical boxes: every node is entered by every ray that enters the root.
+        let aabbs = boxes(8, |_| (Vec3A::ZERO, Vec3A::ONE));
+        let (bvh, _) = build_bvh(&aabbs, 64);
+        let inner = bvh.nodes.iter().filter(|n| n.prim_count == 0).count();
+        let expected = inner as f32 + 8.0;
+        assert!((expected_traversal_iterations(&bvh.nodes) - expected).abs() < 1e-4);
+        // Disjoint boxes along a line: far fewer than the node count.
+        let spread = boxes(1024, |i| {
+            let p = Vec3A::new(i as f32 * 10.0, 0.0, 0.0);
+            (p, p + 1.0)
+        });
+        let (bvh, _) = build_bvh(&spread, 64);
+        assert!(expected_traversal_iterations(&bvh.nodes) < 0.05 * bvh.nodes.len() as f32);
     }
 
     #[test]

@@ -16,7 +16,7 @@ use glam::{Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
 
-use build::{build_bvh, tree_depth};
+use build::{build_bvh, expected_traversal_iterations, tree_depth};
 
 use crate::layout::*;
 use crate::math::sampling::strata_columns;
@@ -38,6 +38,9 @@ pub struct FlatScene {
     pub sample_table: Vec<[f32; 2]>,
     /// Longest root-to-leaf path (nodes); bounds the traversal stack.
     pub bvh_depth: usize,
+    /// Expected loop iterations of one traversal (`build::expected_traversal_iterations`),
+    /// planes included.
+    pub traversal_iterations: f32,
     pub triangle_count: usize,
     pub build_time: Duration,
 }
@@ -106,7 +109,11 @@ pub fn flatten(scene: &Scene) -> FlatScene {
                     PRIM_SPHERE,
                     *material,
                     *center,
-                    Vec3::new(*radius, 0.0, 0.0),
+                    Vec3::new(
+                        *radius,
+                        intersect::sphere_origin_power(*center, *radius),
+                        0.0,
+                    ),
                     Vec3::ZERO,
                 ),
                 None,
@@ -232,6 +239,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         })
         .collect();
     let bvh_depth = tree_depth(&bvh.nodes);
+    let traversal_iterations = expected_traversal_iterations(&bvh.nodes) + planes.len() as f32;
     // obvhs sizes its CPU traversal stack from this field.
     bvh.max_depth = bvh.max_depth.max(bvh_depth + 1);
     let render = &scene.render;
@@ -282,6 +290,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         frame,
         sample_table: table.points,
         bvh_depth,
+        traversal_iterations,
         triangle_count,
         build_time,
     }

@@ -45,15 +45,23 @@ pub fn render_cpu(flat: &FlatScene) -> Image {
 }
 
 pub fn render_gpu(flat: &FlatScene) -> Option<Image> {
+    let (image, flags, _) = render_gpu_with_flags(flat)?;
+    assert_eq!(flags, 0, "kernel status flags");
+    Some(image)
+}
+
+/// The GPU image, the kernel's status flags, and whether the adapter is lavapipe (whose loop
+/// limit, `layout::STATUS_LOOP_LIMIT`, real GPUs do not have).
+pub fn render_gpu_with_flags(flat: &FlatScene) -> Option<(Image, u32, bool)> {
     let context = gpu_context()?;
+    let lavapipe = context.adapter_name.contains("llvmpipe");
     let mut renderer = GpuRenderer::new(context, flat).unwrap_or_else(|e| panic!("{e}"));
     let output =
         render(flat, &mut renderer, &mut |_, _| {}, &AtomicBool::new(false)).expect("GPU render");
     if let Some(e) = output.stopped {
         panic!("GPU render stopped: {e}");
     }
-    assert_eq!(output.status_flags, 0, "kernel status flags");
-    Some(output.image)
+    Some((output.image, output.status_flags, lavapipe))
 }
 
 pub fn render_both(path: &str, overrides: &[&str]) -> Option<(Image, Image)> {
