@@ -42,6 +42,10 @@ pub enum Error {
         cause: std::io::Error,
     },
 
+    /// A mesh file named outside a scene (`chambre bench --mesh`) could not be read.
+    #[error("{path}: {message}")]
+    Mesh { path: PathBuf, message: String },
+
     /// A command-line override `--set key=value` is malformed.
     #[error("--set {key}: {message}")]
     Override { key: String, message: String },

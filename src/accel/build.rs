@@ -16,16 +16,35 @@ use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::{Bvh2, node::Bvh2Node};
 
+/// obvhs's build presets, fastest first; chambre builds with `medium`, the one measured best
+/// for build time plus render time in `BENCHMARKS.md`.
+pub const PRESETS: [(&str, BvhBuildParams); 6] = [
+    ("fastest", BvhBuildParams::fastest_build()),
+    ("very_fast", BvhBuildParams::very_fast_build()),
+    ("fast", BvhBuildParams::fast_build()),
+    ("medium", BvhBuildParams::medium_build()),
+    ("slow", BvhBuildParams::slow_build()),
+    ("very_slow", BvhBuildParams::very_slow_build()),
+];
+
 /// A BVH over `aabbs` whose leaves lie at most `max_depth` levels deep (the root is level 1),
 /// and the time the build took.
 pub fn build_bvh(aabbs: &[Aabb], max_depth: usize) -> (Bvh2, Duration) {
+    build_bvh_with(aabbs, BvhBuildParams::medium_build(), max_depth)
+}
+
+/// [`build_bvh`] with the given obvhs parameters (see [`PRESETS`]).
+pub fn build_bvh_with(
+    aabbs: &[Aabb],
+    params: BvhBuildParams,
+    max_depth: usize,
+) -> (Bvh2, Duration) {
     let start = Instant::now();
     if aabbs.is_empty() {
         return (Bvh2::default(), start.elapsed());
     }
     let mut core_time = Duration::ZERO;
-    let bvh =
-        obvhs::bvh2::builder::build_bvh2(aabbs, BvhBuildParams::medium_build(), &mut core_time);
+    let bvh = obvhs::bvh2::builder::build_bvh2(aabbs, params, &mut core_time);
     let bvh = if tree_depth(&bvh.nodes) > max_depth {
         bound_depth(&bvh, aabbs, max_depth)
     } else {
@@ -54,9 +73,10 @@ pub fn tree_depth(nodes: &[Bvh2Node]) -> usize {
 
 /// Expected loop iterations of one traversal of a ray that enters the root box, by the surface
 /// area heuristic: a node is entered with probability area(node) / area(root); entering an
-/// inner node costs one iteration (its children's pair test), a leaf one per primitive. The
-/// render driver sizes dispatches from it (`render::plan_passes`), since lavapipe cuts an
-/// invocation's loops after 65535 iterations in total.
+/// inner node costs one iteration (its children's pair test), a leaf one per primitive. This is
+/// the tree's SAH cost with unit traversal and intersection costs. The render driver sizes
+/// dispatches from it (`render::plan_passes`), since lavapipe cuts an invocation's loops after
+/// 65535 iterations in total.
 pub fn expected_traversal_iterations(nodes: &[Bvh2Node]) -> f32 {
     let Some(root) = nodes.first() else {
         return 0.0;

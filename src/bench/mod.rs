@@ -3,11 +3,18 @@
 //! - [`rays`]: a mesh and a pinhole camera; coherent camera rays and incoherent rays, closest
 //!   hit and any hit, Mrays/s with a checksum (hits, sum of hit distances) that another ray
 //!   tracer can reproduce on the same rays.
+//! - [`build`]: every obvhs build preset on a mesh: time, nodes, depth, SAH cost, memory.
+//! - [`frame`]: the sample scenes on each backend, and the GPU kernel specialised to the scene
+//!   against the general one.
+//! - [`samplers`]: the lens sample patterns' error against samples and time.
 //!
 //! Timings are medians (with min and max) of several runs after a warm-up, measured side by side
 //! in one process: machines here are noisy, so only ratios within one run are compared.
 
+pub mod build;
+pub mod frame;
 pub mod rays;
+pub mod samplers;
 
 use std::path::PathBuf;
 
@@ -22,6 +29,52 @@ pub enum BenchCommand {
     /// Trace the same coherent and incoherent rays on a mesh: closest hit and any hit, Mrays/s
     /// and a checksum (hits, sum of hit distances) another ray tracer can reproduce.
     Rays(RaysArgs),
+    /// Build the BVH of a mesh with every obvhs preset: time, nodes, depth, SAH cost, memory.
+    Build(BuildArgs),
+    /// Render the sample scenes on each backend, and on the GPU with the kernel specialised to
+    /// each scene against the general kernel.
+    Frame(FrameArgs),
+    /// The lens sample patterns' RMSE against a converged reference, by sample count.
+    Samplers(SamplersArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct SamplersArgs {
+    /// Samples per pixel of the reference image.
+    #[arg(long, default_value_t = 4096)]
+    pub reference_spp: u32,
+    /// Also write the report as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct BuildArgs {
+    /// Mesh file (OBJ or PLY, optionally .gz).
+    #[arg(long, default_value = "scenes/meshes/dragon_vrip.obj.gz")]
+    pub mesh: PathBuf,
+    /// Timed runs after one warm-up.
+    #[arg(long, default_value_t = 5)]
+    pub runs: u32,
+    /// Also write the report as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct FrameArgs {
+    /// Scenes of `scenes/`, by name (default: every sample scene).
+    #[arg(long, value_delimiter = ',')]
+    pub scenes: Vec<String>,
+    /// Timed runs after one warm-up, interleaved across backends.
+    #[arg(long, default_value_t = 3)]
+    pub runs: u32,
+    /// Backends to measure, side by side (gpu measures the specialised and the general kernel).
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::Gpu])]
+    pub backends: Vec<Backend>,
+    /// Also write the report as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -66,10 +119,10 @@ pub struct RaysArgs {
 
 /// A benchmark's report with where it ran, as written to JSON.
 #[derive(Debug, Serialize)]
-pub struct Report<T: Serialize> {
+pub struct Report<'a, T: Serialize> {
     pub command: String,
     pub machine: Machine,
-    pub report: T,
+    pub report: &'a T,
 }
 
 /// Runs `command`; returns the Markdown report and writes the JSON one if asked.
@@ -93,24 +146,73 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 seed: args.seed,
             };
             let report = rays::run(&config, &args.backends)?;
-            let markdown = format!(
-                "{}\n{}",
-                machine.to_markdown(&command_line),
-                report.to_markdown()
-            );
-            if let Some(path) = &args.json {
-                write_json(
-                    path,
-                    &Report {
-                        command: command_line,
-                        machine,
-                        report,
-                    },
-                )?;
-            }
-            Ok(markdown)
+            finish(
+                command_line,
+                machine,
+                report.to_markdown(),
+                &report,
+                &args.json,
+            )
+        }
+        BenchCommand::Build(args) => {
+            let report = build::run(&args.mesh, args.runs)?;
+            finish(
+                command_line,
+                machine,
+                report.to_markdown(),
+                &report,
+                &args.json,
+            )
+        }
+        BenchCommand::Frame(args) => {
+            let scenes = if args.scenes.is_empty() {
+                frame::SCENES.iter().map(|s| s.to_string()).collect()
+            } else {
+                args.scenes.clone()
+            };
+            let gpu = args.backends.contains(&Backend::Gpu);
+            let report = frame::run(&scenes, gpu, args.runs)?;
+            finish(
+                command_line,
+                machine,
+                report.to_markdown(),
+                &report,
+                &args.json,
+            )
+        }
+        BenchCommand::Samplers(args) => {
+            let report = samplers::run(args.reference_spp)?;
+            finish(
+                command_line,
+                machine,
+                report.to_markdown(),
+                &report,
+                &args.json,
+            )
         }
     }
+}
+
+/// The Markdown report with its header line; the JSON one written where asked.
+fn finish<T: Serialize>(
+    command: String,
+    machine: Machine,
+    markdown: String,
+    report: &T,
+    json: &Option<PathBuf>,
+) -> Result<String> {
+    let text = format!("{}\n{markdown}", machine.to_markdown(&command));
+    if let Some(path) = json {
+        write_json(
+            path,
+            &Report {
+                command,
+                machine,
+                report,
+            },
+        )?;
+    }
+    Ok(text)
 }
 
 fn vec3(v: &[f32]) -> [f32; 3] {

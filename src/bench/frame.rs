@@ -1,0 +1,191 @@
+//! The frame benchmark: each sample scene rendered whole on each backend, side by side; on the
+//! GPU with the kernel specialised to the scene's features and with the general kernel, so the
+//! specialisation's speed-up is measured in the same run.
+
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+
+use serde::Serialize;
+
+use super::Spread;
+use crate::accel::{FlatScene, flatten};
+use crate::cpu::CpuRenderer;
+use crate::error::Result;
+use crate::gpu::{GpuContext, GpuRenderer};
+use crate::layout::FEATURES_ALL;
+use crate::render::{RenderOutput, render};
+use crate::scene::Scene;
+
+/// The sample scenes, at their own resolution and spp.
+pub const SCENES: [&str; 9] = [
+    "spheres",
+    "bunny",
+    "mirrors",
+    "area_light",
+    "thin_lens",
+    "phong",
+    "architecture",
+    "tabletop",
+    "miniature",
+];
+
+/// One way of rendering a frame, and its figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameRun {
+    /// `cpu`, `gpu` (kernel specialised to the scene) or `gpu-general` (every feature).
+    pub backend: &'static str,
+    pub frame_ms: Spread,
+    /// GPU kernel time from timestamp queries, where the adapter has them.
+    pub kernel_ms: Option<Spread>,
+    pub mrays_per_s: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameResult {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub triangles: usize,
+    /// `layout::FEATURE_*` bits of the scene (the specialised kernel's).
+    pub features: u32,
+    pub rays: u64,
+    pub runs: Vec<FrameRun>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameReport {
+    pub results: Vec<FrameResult>,
+}
+
+/// How one run renders.
+#[derive(Clone, Copy)]
+enum Way {
+    Cpu,
+    Gpu { features: u32 },
+}
+
+fn render_once(scene: &FlatScene, way: Way) -> Result<RenderOutput> {
+    let cancel = AtomicBool::new(false);
+    match way {
+        Way::Cpu => render(scene, &mut CpuRenderer::new(scene), &mut |_, _| {}, &cancel),
+        Way::Gpu { features } => {
+            let mut renderer = GpuRenderer::with_features(GpuContext::new()?, scene, features)?;
+            render(scene, &mut renderer, &mut |_, _| {}, &cancel)
+        }
+    }
+}
+
+/// Renders each scene of `scenes` (names in `scenes/`) with each backend of `backends`
+/// interleaved run by run, after one warm-up run each.
+pub fn run(scenes: &[String], gpu: bool, runs: u32) -> Result<FrameReport> {
+    let mut results = Vec::new();
+    for name in scenes {
+        let scene = Scene::load(Path::new(&format!("scenes/{name}.toml")), &[])?;
+        let flat = flatten(&scene);
+        let mut ways = vec![("cpu", Way::Cpu)];
+        if gpu {
+            ways.push((
+                "gpu",
+                Way::Gpu {
+                    features: flat.features(),
+                },
+            ));
+            ways.push((
+                "gpu-general",
+                Way::Gpu {
+                    features: FEATURES_ALL,
+                },
+            ));
+        }
+        let mut frame_ms = vec![Vec::new(); ways.len()];
+        let mut kernel_ms = vec![Vec::new(); ways.len()];
+        let mut rays = 0;
+        for run in 0..=runs.max(1) {
+            for (i, &(_, way)) in ways.iter().enumerate() {
+                let output = render_once(&flat, way)?;
+                if let Some(e) = output.stopped {
+                    return Err(e);
+                }
+                rays = output.rays;
+                if run > 0 {
+                    frame_ms[i].push(output.elapsed.as_secs_f64() * 1e3);
+                    if let Some(k) = output.kernel_time {
+                        kernel_ms[i].push(k.as_secs_f64() * 1e3);
+                    }
+                }
+            }
+        }
+        let runs = ways
+            .iter()
+            .enumerate()
+            .map(|(i, &(backend, _))| {
+                let frame = Spread::of(&frame_ms[i]);
+                FrameRun {
+                    backend,
+                    frame_ms: frame,
+                    kernel_ms: (!kernel_ms[i].is_empty()).then(|| Spread::of(&kernel_ms[i])),
+                    mrays_per_s: rays as f64 / frame.median / 1e3,
+                }
+            })
+            .collect();
+        let f = &flat.frame;
+        results.push(FrameResult {
+            scene: name.clone(),
+            width: f.width,
+            height: f.height,
+            spp: f.spp,
+            triangles: flat.triangle_count,
+            features: flat.features(),
+            rays,
+            runs,
+        });
+    }
+    Ok(FrameReport { results })
+}
+
+impl FrameReport {
+    pub fn to_markdown(&self) -> String {
+        let mut out = String::from(
+            "frame: each sample scene at its own size and spp; median (min–max) ms of the timed \
+             runs, interleaved; `gpu` is the kernel specialised to the scene's features, \
+             `gpu-general` the kernel with every feature\n\n",
+        );
+        out += "| scene | size x spp | triangles | features | backend | frame ms | kernel ms | Mrays/s | vs CPU | vs general |\n";
+        out += "|---|---|---|---|---|---|---|---|---|---|\n";
+        for r in &self.results {
+            let cpu = r.runs.iter().find(|x| x.backend == "cpu");
+            let general = r.runs.iter().find(|x| x.backend == "gpu-general");
+            for x in &r.runs {
+                let ratio = |other: Option<&FrameRun>| {
+                    other.map_or("-".into(), |o| {
+                        format!("{:.2}x", o.frame_ms.median / x.frame_ms.median)
+                    })
+                };
+                out += &format!(
+                    "| {} | {}x{} x {} | {} | {:#x} | {} | {:.1} ({:.1}–{:.1}) | {} | {:.2} | {} | {} |\n",
+                    r.scene,
+                    r.width,
+                    r.height,
+                    r.spp,
+                    r.triangles,
+                    r.features,
+                    x.backend,
+                    x.frame_ms.median,
+                    x.frame_ms.min,
+                    x.frame_ms.max,
+                    x.kernel_ms
+                        .map_or("-".into(), |k| format!("{:.1}", k.median)),
+                    x.mrays_per_s,
+                    ratio(cpu),
+                    if x.backend == "gpu" {
+                        ratio(general)
+                    } else {
+                        "-".into()
+                    },
+                );
+            }
+        }
+        out
+    }
+}
