@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use crate::accel::FlatScene;
 use crate::error::Result;
 use crate::integrator::{LightWindow, SampleStats, trace_sample};
-use crate::layout::GpuPass;
+use crate::layout::{FEATURES_ALL, GpuPass};
 use crate::render::{Backend, DispatchStatus};
 
 pub struct CpuRenderer<'a> {
@@ -22,7 +22,27 @@ pub struct CpuRenderer<'a> {
     cancel: Option<&'a AtomicBool>,
     /// Status of each batch run and not yet collected by `finish`.
     finished: VecDeque<DispatchStatus>,
+    /// The integrator instance for the scene's features (`layout::FEATURE_*`).
+    trace: TraceSample,
+    features: u32,
 }
+
+/// `integrator::trace_sample` for one feature set.
+type TraceSample = fn(&FlatScene, u32, u32, u32, LightWindow, &mut SampleStats) -> glam::Vec3;
+
+macro_rules! instances {
+    ($($features:literal)*) => {
+        [$(trace_sample::<$features> as TraceSample),*]
+    };
+}
+
+/// `trace_sample` compiled for each of the 64 feature sets, indexed by the set.
+const TRACE_SAMPLE: [TraceSample; 64] = instances!(
+    0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31
+    32 33 34 35 36 37 38 39 40 41 42 43 44 45 46 47 48 49 50 51 52 53 54 55 56 57 58 59 60 61
+    62 63
+);
+const _: () = assert!(TRACE_SAMPLE.len() == FEATURES_ALL as usize + 1);
 
 /// Pixels of a row one work item renders: small enough to balance a band of few wide rows over
 /// the threads, large enough to amortise the scheduling.
@@ -37,7 +57,28 @@ impl<'a> CpuRenderer<'a> {
             scratch: Vec::new(),
             cancel: None,
             finished: VecDeque::new(),
+            trace: TRACE_SAMPLE[scene.features() as usize],
+            features: scene.features(),
         }
+    }
+
+    /// The integrator compiled for `features` (`FEATURES_ALL`: the general one), which must
+    /// include every feature of the scene.
+    pub fn with_features(mut self, features: u32) -> Result<Self> {
+        let missing = self.scene.features() & !features;
+        if missing != 0 {
+            return Err(crate::error::Error::Gpu(format!(
+                "an integrator without features {missing:#x} cannot render this scene"
+            )));
+        }
+        self.trace = TRACE_SAMPLE[(features & FEATURES_ALL) as usize];
+        self.features = features;
+        Ok(self)
+    }
+
+    /// The `layout::FEATURE_*` bits the integrator was compiled for.
+    pub fn features(&self) -> u32 {
+        self.features
     }
 
     /// Row segments not yet started when `cancel` is set are skipped, so a stop takes effect
@@ -76,7 +117,7 @@ impl<'a> CpuRenderer<'a> {
                         let mut sum = Vec3::ZERO;
                         for s in 0..pass.sample_count {
                             let sample = pass.sample_start + s;
-                            sum += trace_sample(scene, x, y, sample, window, &mut stats);
+                            sum += (self.trace)(scene, x, y, sample, window, &mut stats);
                         }
                         sum
                     })

@@ -7,6 +7,11 @@
 //! Lambert = diffuse / pi; normalised Phong = ks (n + 2) / (2 pi) cos^n(alpha) with alpha between
 //! the mirror direction of the light and the viewer; normalised Blinn-Phong = ks (n + 8) / (8 pi)
 //! cos^n(theta_h).
+//!
+//! Like the GPU kernel, the integrator is specialised to the scene's features: the functions
+//! take the `layout::FEATURE_*` bits as a const generic `F`, so code for a feature the scene
+//! lacks is compiled out (`FEATURES_ALL` is the general integrator); `cpu.rs` picks the
+//! instance for the scene.
 
 use std::f32::consts::PI;
 
@@ -168,7 +173,7 @@ fn light_dimension(frame: &GpuFrame, depth: u32, offset: u32, k: u32) -> u32 {
 /// Light reflected towards `wo` from every light, with shadow rays: the area-light samples in
 /// `window`, and the point and directional lights in the first window.
 #[allow(clippy::too_many_arguments)]
-fn direct_light(
+fn direct_light<const F: u32>(
     scene: &FlatScene,
     surface: &Surface,
     material: &GpuMaterial,
@@ -186,7 +191,7 @@ fn direct_light(
     let mut sample_offset = 0;
     for light in &scene.lights[..scene.frame.light_count as usize] {
         let color = Vec3::from(light.color);
-        if light.kind == LIGHT_AREA {
+        if has(F, FEATURE_AREA_LIGHTS) && light.kind == LIGHT_AREA {
             // Stratified points on the parallelogram; each sample draws its numbers first so
             // both paths consume the same dimensions whatever the visibility.
             let corner = Vec3::from(light.p0);
@@ -212,7 +217,7 @@ fn direct_light(
                 let cos_light = -light_normal.dot(wi);
                 if cos_surface > 0.0 && cos_light > 0.0 && ng.dot(wi) > 0.0 {
                     stats.rays += 1;
-                    if !occluded(
+                    if !occluded::<F>(
                         scene,
                         &RayQuery::new(origin, wi),
                         prim_id,
@@ -225,7 +230,7 @@ fn direct_light(
                 }
             }
             total += color * sum * (area / light.samples as f32);
-        } else if window.is_first() {
+        } else if has(F, FEATURE_PUNCTUAL_LIGHTS) && window.is_first() {
             let (wi, distance, falloff) = if light.kind == LIGHT_POINT {
                 let to_light = Vec3::from(light.p0) - surface.position;
                 let distance = to_light.length();
@@ -236,7 +241,7 @@ fn direct_light(
             let cos_surface = n.dot(wi);
             if cos_surface > 0.0 && ng.dot(wi) > 0.0 {
                 stats.rays += 1;
-                if !occluded(
+                if !occluded::<F>(
                     scene,
                     &RayQuery::new(origin, wi),
                     prim_id,
@@ -253,7 +258,7 @@ fn direct_light(
 
 /// Radiance along one path that starts with `origin`, `direction`, with the area-light samples
 /// in `window` (the path itself is deterministic: every window retraces the same rays).
-pub fn trace_path(
+pub fn trace_path<const F: u32>(
     scene: &FlatScene,
     origin: Vec3,
     direction: Vec3,
@@ -269,7 +274,7 @@ pub fn trace_path(
     let mut skip = NONE;
     for depth in 0..=frame.max_depth {
         stats.rays += 1;
-        let Some((prim_id, hit)) = closest_hit(scene, &ray, skip, T_FAR) else {
+        let Some((prim_id, hit)) = closest_hit::<F>(scene, &ray, skip, T_FAR) else {
             if first {
                 radiance += throughput * Vec3::from(frame.background);
             }
@@ -290,12 +295,12 @@ pub fn trace_path(
             radiance += throughput * Vec3::from(material.diffuse) * Vec3::from(frame.ambient);
         }
         radiance += throughput
-            * direct_light(
+            * direct_light::<F>(
                 scene, &surface, material, prim_id, wo, depth, window, rng, stats,
             );
         // Perfect mirror bounce.
         let mirror = Vec3::from(material.mirror);
-        if mirror.max_element() <= 0.0 {
+        if !has(F, FEATURE_MIRRORS) || mirror.max_element() <= 0.0 {
             break;
         }
         if depth == frame.max_depth {
@@ -329,7 +334,7 @@ pub fn trace_path(
 
 /// Radiance of sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1),
 /// lens point (2-3, drawn only by a lens), then the path with the light samples in `window`.
-pub fn trace_sample(
+pub fn trace_sample<const F: u32>(
     scene: &FlatScene,
     x: u32,
     y: u32,
@@ -353,7 +358,7 @@ pub fn trace_sample(
     let raster = Vec2::new(x as f32 + jitter[0], y as f32 + jitter[1]);
     let film = film_position_mm(camera, frame.width, frame.height, raster);
     let mut lens = Vec2::ZERO;
-    if camera.lens_radius_mm > 0.0 {
+    if has(F, FEATURE_LENS) && camera.lens_radius_mm > 0.0 {
         let u = sample_2d(
             frame,
             &scene.sample_table,
@@ -367,5 +372,5 @@ pub fn trace_sample(
         lens = Vec2::from(sample_aperture(camera, &scene.sample_table, u));
     }
     let ray = generate_ray(camera, film, lens);
-    trace_path(scene, ray.origin, ray.direction, window, &mut rng, stats)
+    trace_path::<F>(scene, ray.origin, ray.direction, window, &mut rng, stats)
 }

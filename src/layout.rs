@@ -70,6 +70,12 @@ pub const FEATURE_TRIANGLES: u32 = 16;
 pub const FEATURE_PLANES: u32 = 32;
 /// Every feature: the general kernel.
 pub const FEATURES_ALL: u32 = 63;
+/// Whether the feature set `features` has `bit` (a `FEATURE_*`); const, for the CPU
+/// integrator's const generic.
+pub const fn has(features: u32, bit: u32) -> bool {
+    features & bit != 0
+}
+
 /// (WGSL override name, bit) of every feature.
 pub const FEATURES: [(&str, u32); 6] = [
     ("FEATURE_LENS", FEATURE_LENS),

@@ -7,6 +7,7 @@ use std::f32::consts::PI;
 use chambre::accel::flatten;
 use chambre::camera::{film_position_mm, generate_ray};
 use chambre::integrator::{LightWindow, SampleStats, trace_path};
+use chambre::layout::FEATURES_ALL;
 use chambre::math::rng::Rng;
 use chambre::scene::Scene;
 use glam::{Vec2, Vec3};
@@ -58,7 +59,7 @@ fn lambert_sphere_under_point_light_matches_closed_form_on_cpu() {
         Vec3::new(-0.5, 0.2, 0.842_615),
     ] {
         let p = target.normalize();
-        let radiance = trace_path(
+        let radiance = trace_path::<FEATURES_ALL>(
             &flat,
             origin,
             (p - origin).normalize(),
@@ -171,7 +172,7 @@ intensity = [20.0, 20.0, 20.0]
 fn point_in_shadow_gets_only_the_ambient_term() {
     let flat = flatten(&scene(SHADOW));
     let ambient_only = Vec3::new(0.8, 0.6, 0.4) * 0.2;
-    let radiance = trace_path(
+    let radiance = trace_path::<FEATURES_ALL>(
         &flat,
         Vec3::new(3.0, 1.0, 0.0),
         Vec3::new(-3.0, -1.0, 0.0).normalize(),
@@ -184,7 +185,7 @@ fn point_in_shadow_gets_only_the_ambient_term() {
         "{radiance}"
     );
     // A point outside the shadow gets more.
-    let lit = trace_path(
+    let lit = trace_path::<FEATURES_ALL>(
         &flat,
         Vec3::new(3.0, 1.0, 0.0),
         Vec3::new(-1.0, -1.0, 0.0).normalize(),

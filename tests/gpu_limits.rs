@@ -69,7 +69,7 @@ fn light_windows_sum_to_the_unsplit_estimate() {
                 let mut stats = Default::default();
                 let sum: glam::Vec3 = (0..2)
                     .map(|s| {
-                        chambre::integrator::trace_sample(
+                        chambre::integrator::trace_sample::<{ chambre::layout::FEATURES_ALL }>(
                             &flat,
                             i % 16,
                             i / 16,

@@ -7,6 +7,7 @@ mod common;
 use std::sync::atomic::AtomicBool;
 
 use chambre::accel::flatten;
+use chambre::cpu::CpuRenderer;
 use chambre::gpu::GpuRenderer;
 use chambre::layout::*;
 use chambre::render::{Image, render};
@@ -100,4 +101,51 @@ fn a_kernel_without_a_feature_the_scene_uses_is_refused() {
         .err()
         .expect("a kernel without mirrors for a scene with a mirror");
     assert!(error.to_string().contains("0x2"), "{error}");
+}
+
+/// The CPU integrator compiled for a scene's features renders the general integrator's image,
+/// bit for bit.
+#[test]
+fn specialised_cpu_integrators_render_the_general_integrators_image() {
+    for (path, overrides) in [
+        (
+            "scenes/spheres.toml",
+            &["render.width=48", "render.height=32"][..],
+        ),
+        (
+            "scenes/bunny.toml",
+            &["render.width=48", "render.height=32"][..],
+        ),
+        (
+            "scenes/area_light.toml",
+            &["render.width=32", "render.height=32"][..],
+        ),
+        (
+            "scenes/thin_lens.toml",
+            &["render.width=48", "render.height=32"][..],
+        ),
+    ] {
+        let flat = flatten(&common::load(
+            path,
+            &[overrides, &["render.spp=2"]].concat(),
+        ));
+        let cancel = AtomicBool::new(false);
+        let mut images = Vec::new();
+        for features in [flat.features(), FEATURES_ALL] {
+            let mut cpu = CpuRenderer::new(&flat).with_features(features).unwrap();
+            assert_eq!(cpu.features(), features);
+            images.push(
+                render(&flat, &mut cpu, &mut |_, _| {}, &cancel)
+                    .unwrap()
+                    .image,
+            );
+        }
+        assert_ne!(flat.features(), FEATURES_ALL, "{path}");
+        assert_eq!(images[0], images[1], "{path}");
+    }
+    let flat = flatten(&common::load(
+        "scenes/spheres.toml",
+        &["render.width=24", "render.height=16"],
+    ));
+    assert!(CpuRenderer::new(&flat).with_features(0).is_err());
 }

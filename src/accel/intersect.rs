@@ -21,7 +21,9 @@
 
 use glam::{Vec3, Vec3A};
 
-use crate::layout::{GpuPrimitive, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE, T_FAR};
+use crate::layout::{
+    FEATURE_TRIANGLES, GpuPrimitive, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE, T_FAR, has,
+};
 
 /// Smallest direction magnitude used for the slab reciprocals: with coordinates below 1e9
 /// (validated), products stay far below f32::MAX.
@@ -301,12 +303,14 @@ pub fn intersect_plane(ray: &RayQuery, point: Vec3, normal: Vec3, t_max: f32) ->
 }
 
 /// Intersect any primitive; `t == T_FAR` means a miss.
-pub fn intersect_primitive(ray: &RayQuery, prim: &GpuPrimitive, t_max: f32) -> Hit {
+/// `F` is the scene's `layout::FEATURE_*` set: without `FEATURE_TRIANGLES` the triangle test
+/// is compiled out, as in the specialised kernel.
+pub fn intersect_primitive<const F: u32>(ray: &RayQuery, prim: &GpuPrimitive, t_max: f32) -> Hit {
     let p0 = Vec3::from(prim.p0);
     let p1 = Vec3::from(prim.p1);
     let p2 = Vec3::from(prim.p2);
     match prim.kind {
-        PRIM_TRIANGLE => intersect_triangle(ray, p0, p1, p2, t_max),
+        PRIM_TRIANGLE if has(F, FEATURE_TRIANGLES) => intersect_triangle(ray, p0, p1, p2, t_max),
         PRIM_SPHERE => intersect_sphere(ray, p0, p1.x, p1.y, t_max),
         PRIM_QUAD => intersect_quad(ray, p0, p1, p2, t_max),
         PRIM_PLANE => intersect_plane(ray, p0, p1, t_max),

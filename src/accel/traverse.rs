@@ -4,11 +4,18 @@
 
 use super::FlatScene;
 use super::intersect::{Hit, RayQuery, intersect_primitive};
-use crate::layout::{NONE, T_FAR};
+use crate::layout::{FEATURE_PLANES, NONE, T_FAR, has};
 
 /// Closest intersection along `ray` before `t_max`, ignoring primitive `skip` (the planar
 /// primitive a secondary ray leaves, which it can never hit again). Returns (primitive, hit).
-pub fn closest_hit(scene: &FlatScene, ray: &RayQuery, skip: u32, t_max: f32) -> Option<(u32, Hit)> {
+/// `F` is the scene's `layout::FEATURE_*` set: without `FEATURE_PLANES` the plane loop is
+/// compiled out.
+pub fn closest_hit<const F: u32>(
+    scene: &FlatScene,
+    ray: &RayQuery,
+    skip: u32,
+    t_max: f32,
+) -> Option<(u32, Hit)> {
     let mut best = Hit {
         t: t_max,
         b1: 0.0,
@@ -23,7 +30,7 @@ pub fn closest_hit(scene: &FlatScene, ray: &RayQuery, skip: u32, t_max: f32) -> 
                 if id as u32 == skip {
                     return f32::INFINITY;
                 }
-                let hit = intersect_primitive(ray, &scene.prims[id], r.tmax);
+                let hit = intersect_primitive::<F>(ray, &scene.prims[id], r.tmax);
                 if hit.t < r.tmax {
                     best = hit;
                     best_prim = id as u32;
@@ -33,12 +40,17 @@ pub fn closest_hit(scene: &FlatScene, ray: &RayQuery, skip: u32, t_max: f32) -> 
                 }
             });
     }
-    let planes = scene.frame.plane_start..scene.frame.plane_start + scene.frame.plane_count;
+    let plane_count = if has(F, FEATURE_PLANES) {
+        scene.frame.plane_count
+    } else {
+        0
+    };
+    let planes = scene.frame.plane_start..scene.frame.plane_start + plane_count;
     for id in planes {
         if id == skip {
             continue;
         }
-        let hit = intersect_primitive(ray, &scene.prims[id as usize], best.t);
+        let hit = intersect_primitive::<F>(ray, &scene.prims[id as usize], best.t);
         if hit.t < best.t {
             best = hit;
             best_prim = id;
@@ -48,20 +60,31 @@ pub fn closest_hit(scene: &FlatScene, ray: &RayQuery, skip: u32, t_max: f32) -> 
 }
 
 /// Whether anything but `skip_a` and `skip_b` lies along `ray` before `t_max`.
-pub fn occluded(scene: &FlatScene, ray: &RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
+pub fn occluded<const F: u32>(
+    scene: &FlatScene,
+    ray: &RayQuery,
+    skip_a: u32,
+    skip_b: u32,
+    t_max: f32,
+) -> bool {
     if !scene.bvh.nodes.is_empty() {
         let missed = scene.bvh.ray_traverse_miss(ray.to_obvhs(t_max), |r, id| {
             if id as u32 == skip_a || id as u32 == skip_b {
                 return f32::INFINITY;
             }
-            intersect_primitive(ray, &scene.prims[id], r.tmax).t
+            intersect_primitive::<F>(ray, &scene.prims[id], r.tmax).t
         });
         if !missed {
             return true;
         }
     }
-    let planes = scene.frame.plane_start..scene.frame.plane_start + scene.frame.plane_count;
+    let plane_count = if has(F, FEATURE_PLANES) {
+        scene.frame.plane_count
+    } else {
+        0
+    };
+    let planes = scene.frame.plane_start..scene.frame.plane_start + plane_count;
     planes
         .filter(|&id| id != skip_a && id != skip_b)
-        .any(|id| intersect_primitive(ray, &scene.prims[id as usize], t_max).t < T_FAR)
+        .any(|id| intersect_primitive::<F>(ray, &scene.prims[id as usize], t_max).t < T_FAR)
 }

@@ -1,5 +1,5 @@
-//! The frame benchmark: each sample scene rendered whole on each backend, side by side; on the
-//! GPU with the kernel specialised to the scene's features and with the general kernel, so the
+//! The frame benchmark: each sample scene rendered whole on each backend, side by side; each
+//! with the code specialised to the scene's features and with the general code, so the
 //! specialisation's speed-up is measured in the same run.
 
 use std::path::Path;
@@ -32,7 +32,8 @@ pub const SCENES: [&str; 9] = [
 /// One way of rendering a frame, and its figures.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameRun {
-    /// `cpu`, `gpu` (kernel specialised to the scene) or `gpu-general` (every feature).
+    /// `cpu` or `gpu` (code specialised to the scene's features), `cpu-general` or
+    /// `gpu-general` (every feature).
     pub backend: &'static str,
     pub frame_ms: Spread,
     /// GPU kernel time from timestamp queries, where the adapter has them.
@@ -58,17 +59,20 @@ pub struct FrameReport {
     pub results: Vec<FrameResult>,
 }
 
-/// How one run renders.
+/// How one run renders: the backend and the feature set its code was built for.
 #[derive(Clone, Copy)]
 enum Way {
-    Cpu,
+    Cpu { features: u32 },
     Gpu { features: u32 },
 }
 
 fn render_once(scene: &FlatScene, way: Way) -> Result<RenderOutput> {
     let cancel = AtomicBool::new(false);
     match way {
-        Way::Cpu => render(scene, &mut CpuRenderer::new(scene), &mut |_, _| {}, &cancel),
+        Way::Cpu { features } => {
+            let mut renderer = CpuRenderer::new(scene).with_features(features)?;
+            render(scene, &mut renderer, &mut |_, _| {}, &cancel)
+        }
         Way::Gpu { features } => {
             let mut renderer = GpuRenderer::with_features(GpuContext::new()?, scene, features)?;
             render(scene, &mut renderer, &mut |_, _| {}, &cancel)
@@ -83,7 +87,20 @@ pub fn run(scenes: &[String], gpu: bool, runs: u32) -> Result<FrameReport> {
     for name in scenes {
         let scene = Scene::load(Path::new(&format!("scenes/{name}.toml")), &[])?;
         let flat = flatten(&scene);
-        let mut ways = vec![("cpu", Way::Cpu)];
+        let mut ways = vec![
+            (
+                "cpu",
+                Way::Cpu {
+                    features: flat.features(),
+                },
+            ),
+            (
+                "cpu-general",
+                Way::Cpu {
+                    features: FEATURES_ALL,
+                },
+            ),
+        ];
         if gpu {
             ways.push((
                 "gpu",
@@ -148,14 +165,17 @@ impl FrameReport {
     pub fn to_markdown(&self) -> String {
         let mut out = String::from(
             "frame: each sample scene at its own size and spp; median (min–max) ms of the timed \
-             runs, interleaved; `gpu` is the kernel specialised to the scene's features, \
-             `gpu-general` the kernel with every feature\n\n",
+             runs, interleaved; `cpu` and `gpu` run code specialised to the scene's features, \
+             `cpu-general` and `gpu-general` the code with every feature; ratios are speed-ups\n\n",
         );
         out += "| scene | size x spp | triangles | features | backend | frame ms | kernel ms | Mrays/s | vs CPU | vs general |\n";
         out += "|---|---|---|---|---|---|---|---|---|---|\n";
         for r in &self.results {
             let cpu = r.runs.iter().find(|x| x.backend == "cpu");
-            let general = r.runs.iter().find(|x| x.backend == "gpu-general");
+            let general_of = |backend: &str| {
+                let name = format!("{backend}-general");
+                r.runs.iter().find(|x| x.backend == name)
+            };
             for x in &r.runs {
                 let ratio = |other: Option<&FrameRun>| {
                     other.map_or("-".into(), |o| {
@@ -178,11 +198,7 @@ impl FrameReport {
                         .map_or("-".into(), |k| format!("{:.1}", k.median)),
                     x.mrays_per_s,
                     ratio(cpu),
-                    if x.backend == "gpu" {
-                        ratio(general)
-                    } else {
-                        "-".into()
-                    },
+                    ratio(general_of(x.backend)),
                 );
             }
         }
