@@ -60,6 +60,10 @@ enum Command {
         /// Override any scene field, e.g. --set camera.f_number=2.8 (also -D).
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Print statistics: rays, wall, kernel and host time, dispatches and batches, the BVH,
+        /// and the features the code was specialised to.
+        #[arg(long)]
+        stats: bool,
     },
     /// Print what the camera does: field of view, plane of sharp focus, hinge and Scheimpflug
     /// lines, depth of field, and the equivalent raster projection matrix.
@@ -138,6 +142,7 @@ fn main() -> ExitCode {
             pixel_sampler,
             lens_sampler,
             set,
+            stats,
         } => {
             let mut overrides = Vec::new();
             let fields = [
@@ -161,7 +166,7 @@ fn main() -> ExitCode {
                 }
             }
             overrides.extend(set);
-            run_render(&scene, &output, backend, &overrides)
+            run_render(&scene, &output, backend, &overrides, stats)
         }
         Command::Check { scene, set } => run_check(&scene, &set),
         Command::Bench(command) => run_bench(&command),
@@ -342,6 +347,7 @@ fn run_render(
     output_path: &Path,
     choice: BackendChoice,
     overrides: &[String],
+    stats: bool,
 ) -> anyhow::Result<ExitCode> {
     let scene = load(path, overrides)?;
     // Before any render time is spent: a path that cannot take the image fails now.
@@ -354,24 +360,69 @@ fn run_render(
     ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
         .context("installing the SIGINT/SIGTERM/SIGHUP handler")?;
     let mut progress = progress_reporter();
-    let (output, backend_name) = match gpu_renderer(choice, &flat)? {
+    let (output, backend_name, features) = match gpu_renderer(choice, &flat)? {
         Some(mut renderer) => {
             let name = format!("GPU: {}", renderer.adapter_description());
+            let features = renderer.features();
             (
                 render(&flat, &mut renderer, progress.as_mut(), &cancel)?,
                 name,
+                features,
             )
         }
         None => {
             let mut renderer = CpuRenderer::new(&flat).with_cancel(&cancel);
             let name = format!("CPU: {} threads", rayon::current_num_threads());
+            let features = renderer.features();
             (
                 render(&flat, &mut renderer, progress.as_mut(), &cancel)?,
                 name,
+                features,
             )
         }
     };
+    if stats {
+        note!("{}", render_stats(&output, &flat, features));
+    }
     finish(output, &target, &backend_name)
+}
+
+/// `--stats`: where the time and the rays went.
+fn render_stats(output: &RenderOutput, flat: &FlatScene, features: u32) -> String {
+    let wall = output.elapsed.as_secs_f64();
+    let kernels = match output.kernel_time {
+        Some(k) => format!(
+            "kernels {:.3} s (timestamps), host and waits {:.3} s",
+            k.as_secs_f64(),
+            (wall - k.as_secs_f64()).max(0.0)
+        ),
+        None => "kernel time not measured (no timestamp queries here)".to_string(),
+    };
+    let named: Vec<&str> = chambre::layout::FEATURES
+        .iter()
+        .filter(|(_, bit)| features & bit != 0)
+        .map(|(name, _)| name.trim_start_matches("FEATURE_"))
+        .collect();
+    format!(
+        "stats: {} rays ({:.2} Mrays/s), {} paths cut at max_depth\n\
+         stats: wall {wall:.3} s; {kernels}\n\
+         stats: {} dispatches in {} batches\n\
+         stats: BVH {} nodes, depth {}, {:.1} expected loop iterations per ray, built in {:.1} ms; \
+         {} primitives ({} triangles)\n\
+         stats: code specialised to features {features:#x} ({})",
+        output.rays,
+        output.rays_per_second() / 1e6,
+        output.truncated_paths,
+        output.dispatches,
+        output.batches,
+        flat.nodes.len(),
+        flat.bvh_depth,
+        flat.traversal_iterations,
+        flat.build_time.as_secs_f64() * 1e3,
+        flat.prims.len(),
+        flat.triangle_count,
+        named.join(", ")
+    )
 }
 
 /// The GPU renderer the choice asks for. `auto` takes the CPU, with a notice, whenever the GPU

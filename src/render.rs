@@ -154,6 +154,9 @@ pub struct RenderOutput {
     pub elapsed: Duration,
     /// Device time in the kernels (GPU timestamp queries), where the adapter offers them.
     pub kernel_time: Option<Duration>,
+    /// Dispatches and batches (submissions) finished.
+    pub dispatches: u64,
+    pub batches: u64,
     pub rays: u64,
     pub truncated_paths: u64,
     /// Kernel loop caps hit (`layout::STATUS_*` bits); a non-zero value is reported as an error.
@@ -338,6 +341,8 @@ pub fn render_with_budgets(
         pixels_without_samples: 0,
         elapsed: Duration::ZERO,
         kernel_time: None,
+        dispatches: 0,
+        batches: 0,
         rays: 0,
         truncated_paths: 0,
         status_flags: 0,
@@ -358,19 +363,21 @@ pub fn render_with_budgets(
     });
     let total = plan.batch_count() as u64;
     let mut finished = 0;
-    // The samples each batch in flight completes, oldest first.
+    // The samples each batch in flight completes, and its dispatches, oldest first.
     let mut completions = std::collections::VecDeque::new();
     let mut finish_one = |backend: &mut dyn Backend,
                           output: &mut RenderOutput,
-                          completions: &mut std::collections::VecDeque<u32>|
+                          completions: &mut std::collections::VecDeque<(u32, u64)>|
      -> bool {
-        let completes = completions.pop_front().unwrap_or(0);
+        let (completes, dispatches) = completions.pop_front().unwrap_or_default();
         match backend.finish() {
             Ok(status) => {
                 output.rays += status.rays;
                 output.truncated_paths += status.truncated;
                 output.status_flags |= status.flags;
                 output.samples_per_pixel += completes;
+                output.dispatches += dispatches;
+                output.batches += 1;
                 finished += 1;
                 progress.advance(finished, total);
                 true
@@ -401,7 +408,7 @@ pub fn render_with_budgets(
             output.stopped = Some(e);
             break;
         }
-        completions.push_back(completes);
+        completions.push_back((completes, dispatches.len() as u64));
     }
     while backend.in_flight() > 0 {
         if !finish_one(backend, &mut output, &mut completions) {

@@ -467,3 +467,47 @@ fn the_written_exr_keeps_inf_and_nan_and_the_png_marks_them() {
     assert_eq!(read[0], [188, 137, 255]);
     assert_eq!(&read[1..], [NON_FINITE_PNG; 3]);
 }
+
+/// `--stats` reports where the time and rays went: the same ray count as the summary line, the
+/// dispatches and batches, the BVH, and the features the code was specialised to.
+#[test]
+fn stats_report_rays_time_dispatches_bvh_and_features() {
+    let target = scratch_dir("stats").join("stats.exr");
+    let output = small_render(&target, &["--stats"]);
+    let message = stderr_of(&output);
+    assert!(output.status.success(), "{message}");
+    let stat = |prefix: &str| -> String {
+        message
+            .lines()
+            .find(|l| l.starts_with(prefix))
+            .unwrap_or_else(|| panic!("no `{prefix}` in {message}"))
+            .to_string()
+    };
+    let rays: u64 = stat("stats: ")
+        .trim_start_matches("stats: ")
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(message.contains(&format!("({rays} rays)")), "{message}");
+    assert!(
+        stat("stats: wall").contains("kernel time not measured"),
+        "CPU path"
+    );
+    assert!(stat("stats: BVH").contains("expected loop iterations per ray"));
+    // spheres.toml: mirrors, a point light, a plane (0x2a).
+    assert!(stat("stats: code specialised").contains("0x2a (MIRRORS, PUNCTUAL_LIGHTS, PLANES)"));
+    let counts: Vec<u64> = message
+        .lines()
+        .find(|l| l.contains(" dispatches in "))
+        .unwrap_or_else(|| panic!("no dispatch count in {message}"))
+        .split_whitespace()
+        .filter_map(|w| w.parse().ok())
+        .collect();
+    let (dispatches, batches) = (counts[0], counts[1]);
+    assert!(
+        dispatches >= batches && batches >= 1,
+        "{dispatches} {batches}"
+    );
+}
