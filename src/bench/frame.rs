@@ -17,7 +17,8 @@ use crate::render::{RenderOutput, render};
 use crate::scene::Scene;
 
 /// The sample scenes, at their own resolution and spp.
-pub const SCENES: [&str; 9] = [
+pub const SCENES: [&str; 10] = [
+    "cornell_direct",
     "spheres",
     "bunny",
     "mirrors",
