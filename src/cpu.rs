@@ -8,10 +8,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::accel::FlatScene;
 use crate::error::Result;
 use crate::integrator::{LightWindow, SampleStats, trace_sample};
 use crate::layout::{FEATURES_ALL, GpuPass};
+use crate::pack::FlatScene;
 use crate::render::{Backend, DispatchStatus};
 
 pub struct CpuRenderer<'a> {

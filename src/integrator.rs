@@ -17,7 +17,6 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use crate::accel::FlatScene;
 use crate::accel::intersect::{
     Hit, RayQuery, offset_ray_origin, plane_point, quad_point, shadow_ray_length,
     sphere_surface_point, triangle_point,
@@ -27,6 +26,7 @@ use crate::camera::{film_position_mm, generate_ray};
 use crate::layout::*;
 use crate::math::rng::Rng;
 use crate::math::sampling::stratified_2d;
+use crate::pack::FlatScene;
 use crate::sampler::{PatternSource, sample_2d, sample_aperture};
 
 /// Counters a sample adds to (rays traced, paths cut off at `max_depth`).
@@ -218,7 +218,7 @@ fn direct_light<const F: u32>(
                 if cos_surface > 0.0 && cos_light > 0.0 && ng.dot(wi) > 0.0 {
                     stats.rays += 1;
                     if !occluded::<F>(
-                        scene,
+                        scene.primitives(),
                         &RayQuery::new(origin, wi),
                         prim_id,
                         light.prim,
@@ -242,7 +242,7 @@ fn direct_light<const F: u32>(
             if cos_surface > 0.0 && ng.dot(wi) > 0.0 {
                 stats.rays += 1;
                 if !occluded::<F>(
-                    scene,
+                    scene.primitives(),
                     &RayQuery::new(origin, wi),
                     prim_id,
                     NONE,
@@ -274,7 +274,7 @@ pub fn trace_path<const F: u32>(
     let mut skip = NONE;
     for depth in 0..=frame.max_depth {
         stats.rays += 1;
-        let Some((prim_id, hit)) = closest_hit::<F>(scene, &ray, skip, T_FAR) else {
+        let Some((prim_id, hit)) = closest_hit::<F>(scene.primitives(), &ray, skip, T_FAR) else {
             if first {
                 radiance += throughput * Vec3::from(frame.background);
             }

@@ -61,7 +61,7 @@ pub const INTERLEAVED_TILE: u32 = 3;
 /// Scene features a kernel variant can leave out. On the GPU each is a pipeline-overridable
 /// `bool` constant of the same name (true in the general kernel); on the CPU a bit of the
 /// integrator's const generic. A variant built without a feature the scene has is wrong, so the
-/// bits are always computed from the scene (`accel::FlatScene::features`).
+/// bits are always computed from the scene (`pack::FlatScene::features`).
 pub const FEATURE_LENS: u32 = 1;
 pub const FEATURE_MIRRORS: u32 = 2;
 pub const FEATURE_AREA_LIGHTS: u32 = 4;

@@ -4,7 +4,7 @@
 //! that the CPU reference path runs and the tests compare against:
 //!
 //! ```text
-//! scene.toml --scene::load--> Scene --accel::flatten--> FlatScene (obvhs BVH, layout::Gpu*)
+//! scene.toml --scene::load--> Scene --pack::flatten--> FlatScene (accel: obvhs BVH; layout::Gpu*)
 //!     |-- gpu::GpuRenderer  (wgsl/*.wgsl, wgpu compute) --|
 //!     |-- cpu::CpuRenderer  (integrator.rs, camera.rs...) --+--> render::Image --> output
 //! ```
@@ -34,6 +34,7 @@ pub mod integrator;
 pub mod layout;
 pub mod math;
 pub mod output;
+pub mod pack;
 pub mod render;
 pub mod sampler;
 pub mod scene;

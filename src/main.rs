@@ -12,12 +12,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use anyhow::{Context, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 
-use chambre::accel::{FlatScene, flatten};
 use chambre::camera::Focus;
 use chambre::camera::report::camera_report;
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::{GpuContext, GpuRenderer, describe_adapters};
 use chambre::output::{ImageFormat, OutputTarget};
+use chambre::pack::{FlatScene, flatten};
 use chambre::render::{Progress, RenderOutput, describe_status_flags, render};
 use chambre::scene::Scene;
 use chambre::{Error, Result};

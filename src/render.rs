@@ -21,12 +21,12 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-use crate::accel::FlatScene;
 use crate::error::{Error, Result};
 use crate::layout::{
     GpuPass, LIGHT_AREA, LOOP_CHECK_ITERATIONS, STATUS_FLAGS, STATUS_LOOP_LIMIT,
     STATUS_PERMUTE_CAP, STATUS_RAYS, STATUS_STACK_OVERFLOW, STATUS_TRAVERSAL_CAP, STATUS_TRUNCATED,
 };
+use crate::pack::FlatScene;
 
 /// Upper bounds on the rays traced by one invocation, one dispatch and one batch.
 #[derive(Clone, Copy, Debug, PartialEq)]

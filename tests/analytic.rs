@@ -4,11 +4,11 @@ mod common;
 
 use std::f32::consts::PI;
 
-use chambre::accel::flatten;
 use chambre::camera::{film_position_mm, generate_ray};
 use chambre::integrator::{LightWindow, SampleStats, trace_path};
 use chambre::layout::FEATURES_ALL;
 use chambre::math::rng::Rng;
+use chambre::pack::flatten;
 use chambre::scene::Scene;
 use glam::{Vec2, Vec3};
 

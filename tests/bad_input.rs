@@ -398,7 +398,7 @@ fn radiometric_values_at_the_bound_render_finite() {
         .replacen("intensity = [5.0, 5.0, 5.0]", "intensity = [1e20, 1e20, 1e20]", 1);
     let scene =
         Scene::from_str(Path::new("bound.toml"), &text, &[]).unwrap_or_else(|e| panic!("{e}"));
-    let image = common::render_cpu(&chambre::accel::flatten(&scene));
+    let image = common::render_cpu(&chambre::pack::flatten(&scene));
     assert!(
         image.pixels.iter().all(|p| p.is_finite()),
         "non-finite pixels at the radiometric bound"

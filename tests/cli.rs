@@ -8,8 +8,8 @@ use std::process::Command;
 mod common;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use chambre::accel::flatten;
 use chambre::cpu::CpuRenderer;
+use chambre::pack::flatten;
 use chambre::render::render;
 use chambre::scene::Scene;
 

@@ -11,10 +11,10 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-use chambre::accel::flatten;
 use chambre::cpu::CpuRenderer;
 use chambre::layout::GpuPass;
 use chambre::output::{NON_FINITE_PNG, OutputTarget};
+use chambre::pack::flatten;
 use chambre::render::{Backend, Image, RayBudgets, render, render_with_budgets};
 
 mod common;

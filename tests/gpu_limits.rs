@@ -6,9 +6,9 @@ mod common;
 
 use std::sync::atomic::AtomicBool;
 
-use chambre::accel::flatten;
 use chambre::gpu::GpuRenderer;
 use chambre::layout::STATUS_LOOP_LIMIT;
+use chambre::pack::flatten;
 use chambre::render::{RayBound, RayBudgets, describe_status_flags, plan_passes, render};
 
 /// An area light with 4096 samples (the most a scene may ask) rendered on lavapipe with a mean

@@ -6,13 +6,13 @@ mod common;
 
 use std::sync::atomic::AtomicBool;
 
-use chambre::accel::flatten;
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::GpuRenderer;
 use chambre::layout::*;
+use chambre::pack::flatten;
 use chambre::render::{Image, render};
 
-fn render_with(flat: &chambre::accel::FlatScene, features: u32) -> Option<(Image, u64)> {
+fn render_with(flat: &chambre::pack::FlatScene, features: u32) -> Option<(Image, u64)> {
     let context = common::gpu_context()?;
     let mut renderer = GpuRenderer::with_features(context, flat, features).unwrap();
     assert_eq!(renderer.features(), features);

@@ -6,13 +6,13 @@ mod common;
 
 use std::path::Path;
 
-use chambre::accel::flatten;
 use chambre::accel::intersect::{
     Hit, RayQuery, intersect_box, intersect_sphere, intersect_triangle, offset_ray_origin,
     sphere_origin_power, sphere_surface_point, triangle_point,
 };
 use chambre::layout::T_FAR;
 use chambre::math::rng::Rng;
+use chambre::pack::flatten;
 use chambre::scene::Scene;
 use glam::Vec3;
 

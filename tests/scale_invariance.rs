@@ -13,7 +13,7 @@ mod common;
 use chambre::layout::STATUS_LOOP_LIMIT;
 use std::path::Path;
 
-use chambre::accel::{FlatScene, flatten};
+use chambre::pack::{FlatScene, flatten};
 use chambre::render::Image;
 use chambre::scene::Scene;
 

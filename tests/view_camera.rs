@@ -5,10 +5,10 @@ mod common;
 
 use std::path::Path;
 
-use chambre::accel::flatten;
 use chambre::camera::optics::solve_focus_points;
 use chambre::camera::{CameraSpec, Focus, film_position_mm, generate_ray};
 use chambre::math::rng::Rng;
+use chambre::pack::flatten;
 use chambre::sampler::sample_aperture;
 use chambre::scene::Scene;
 use glam::{DVec2, DVec3, Vec2};

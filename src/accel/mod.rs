@@ -1,10 +1,11 @@
-//! The acceleration stage: [`Scene`] -> [`FlatScene`], the flattened arrays both paths render.
-//!
-//! Bounded primitives (triangles, spheres, quads, area-light quads) go into one obvhs BVH2, and
-//! are then reordered by the BVH's `primitive_indices`, so a leaf's `first_index` indexes the
-//! primitive array directly on both paths. Infinite planes cannot be bounded and follow the BVH's
-//! primitives, tested by brute force. Node boxes are widened by a few ULPs once here, which
-//! makes obvhs's CPU slab test and the WGSL one conservative against rounding alike.
+//! The acceleration stage: boxes and primitives. The bounded primitives (triangles, spheres,
+//! quads) go into one obvhs BVH2 (`build`, with a depth bound) and are then reordered by the
+//! BVH's `primitive_indices`, so a leaf's `first_index` indexes the primitive array directly on
+//! both paths. Infinite planes cannot be bounded and follow the BVH's primitives, tested by
+//! brute force. Node boxes are widened by a few ULPs once here, which makes obvhs's CPU slab
+//! test and the WGSL one conservative against rounding alike. `intersect` tests rays against
+//! primitives and boxes, `traverse` walks the BVH; `pack` turns a whole scene into the arrays
+//! the kernels read.
 
 pub mod build;
 pub mod intersect;
@@ -12,191 +13,53 @@ pub mod traverse;
 
 use std::time::Duration;
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
 
 use build::{build_bvh, expected_traversal_iterations, tree_depth};
 
 use crate::layout::*;
-use crate::math::sampling::strata_columns;
-use crate::sampler::SampleTable;
-use crate::scene::{Light, Scene, Shape};
 
-/// Everything the kernels (and the CPU reference) read, ready to upload.
-pub struct FlatScene {
-    /// obvhs BVH over `prims[..frame.plane_start]`; leaves index `prims` directly.
+/// The primitives in BVH order, the BVH over them, and the unbounded planes after them.
+pub struct Geometry {
+    /// obvhs BVH over `prims[..plane_start]`; leaves index `prims` directly.
     pub bvh: Bvh2,
+    /// The BVH's nodes as the GPU reads them.
     pub nodes: Vec<GpuBvhNode>,
     pub prims: Vec<GpuPrimitive>,
     pub normals: Vec<GpuNormals>,
-    pub materials: Vec<GpuMaterial>,
-    pub lights: Vec<GpuLight>,
-    pub camera: GpuCamera,
-    pub frame: GpuFrame,
-    /// Precomputed sample patterns and aperture vertices (`sampler::SampleTable`).
-    pub sample_table: Vec<[f32; 2]>,
+    pub plane_start: u32,
+    pub plane_count: u32,
+    /// For each bounded primitive as given, its index in `prims`.
+    pub new_index: Vec<u32>,
     /// Longest root-to-leaf path (nodes); bounds the traversal stack.
     pub bvh_depth: usize,
     /// Expected loop iterations of one traversal (`build::expected_traversal_iterations`),
     /// planes included.
     pub traversal_iterations: f32,
-    pub triangle_count: usize,
     pub build_time: Duration,
 }
 
-impl FlatScene {
-    /// The `layout::FEATURE_*` bits this scene uses. A kernel built with these bits renders it
-    /// exactly as the general kernel does: a feature left out is code the scene never runs.
-    pub fn features(&self) -> u32 {
-        let mut features = 0;
-        let mut add = |present: bool, bit: u32| {
-            if present {
-                features |= bit;
-            }
-        };
-        add(self.camera.lens_radius_mm > 0.0, FEATURE_LENS);
-        add(
-            self.materials
-                .iter()
-                .any(|m| m.mirror.iter().any(|&c| c > 0.0)),
-            FEATURE_MIRRORS,
-        );
-        add(
-            self.lights.iter().any(|l| l.kind == LIGHT_AREA),
-            FEATURE_AREA_LIGHTS,
-        );
-        add(
-            self.lights.iter().any(|l| l.kind != LIGHT_AREA),
-            FEATURE_PUNCTUAL_LIGHTS,
-        );
-        add(
-            self.prims.iter().any(|p| p.kind == PRIM_TRIANGLE),
-            FEATURE_TRIANGLES,
-        );
-        add(self.frame.plane_count > 0, FEATURE_PLANES);
-        features
-    }
+/// What a traversal reads: the BVH, the primitives its leaves index, and the planes.
+#[derive(Clone, Copy)]
+pub struct Primitives<'a> {
+    pub bvh: &'a Bvh2,
+    pub prims: &'a [GpuPrimitive],
+    /// The planes are `prims[plane_start .. plane_start + plane_count]`.
+    pub plane_start: u32,
+    pub plane_count: u32,
 }
 
 /// Relative widening of node boxes: 16 ULPs of the box's largest coordinate.
 const BOX_WIDENING: f32 = 16.0 * f32::EPSILON;
 
-pub fn flatten(scene: &Scene) -> FlatScene {
-    let mut materials: Vec<GpuMaterial> = scene
-        .materials
-        .iter()
-        .map(|m| GpuMaterial {
-            diffuse: m.diffuse.to_array(),
-            model: m.model,
-            specular: m.specular.to_array(),
-            shininess: m.shininess,
-            mirror: m.mirror.to_array(),
-            ..Default::default()
-        })
-        .collect();
-    let mut bounded: Vec<(GpuPrimitive, Option<GpuNormals>)> = Vec::new();
-    let mut planes = Vec::new();
-    let mut triangle_count = 0;
-    for shape in &scene.shapes {
-        match shape {
-            Shape::Sphere {
-                center,
-                radius,
-                material,
-            } => bounded.push((
-                prim(
-                    PRIM_SPHERE,
-                    *material,
-                    *center,
-                    Vec3::new(
-                        *radius,
-                        intersect::sphere_origin_power(*center, *radius),
-                        0.0,
-                    ),
-                    Vec3::ZERO,
-                ),
-                None,
-            )),
-            Shape::Quad {
-                corner,
-                edge_u,
-                edge_v,
-                material,
-            } => bounded.push((prim(PRIM_QUAD, *material, *corner, *edge_u, *edge_v), None)),
-            Shape::Plane {
-                point,
-                normal,
-                material,
-            } => planes.push(prim(PRIM_PLANE, *material, *point, *normal, Vec3::ZERO)),
-            Shape::Mesh { mesh, material } => {
-                triangle_count += mesh.triangles.len();
-                for t in &mesh.triangles {
-                    let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-                    let normals = mesh.normals.as_ref().map(|n| {
-                        let [na, nb, nc] = t.map(|i| n[i as usize]);
-                        GpuNormals {
-                            n: [na.x, na.y, na.z, nb.x, nb.y, nb.z, nc.x, nc.y, nc.z],
-                        }
-                    });
-                    bounded.push((prim(PRIM_TRIANGLE, *material, a, b, c), normals));
-                }
-            }
-        }
-    }
-    // Area lights are surfaces too: a one-sided emitting quad with a material of its own.
-    let mut lights = Vec::new();
-    for light in &scene.lights {
-        lights.push(match *light {
-            Light::Point {
-                position,
-                intensity,
-            } => GpuLight {
-                p0: position.to_array(),
-                kind: LIGHT_POINT,
-                color: intensity.to_array(),
-                prim: NONE,
-                ..Default::default()
-            },
-            Light::Directional {
-                direction,
-                irradiance,
-            } => GpuLight {
-                p0: (-direction).to_array(),
-                kind: LIGHT_DIRECTIONAL,
-                color: irradiance.to_array(),
-                prim: NONE,
-                ..Default::default()
-            },
-            Light::Area {
-                corner,
-                edge_u,
-                edge_v,
-                radiance,
-                samples,
-            } => {
-                materials.push(GpuMaterial {
-                    model: MODEL_EMITTER,
-                    emission: radiance.to_array(),
-                    ..Default::default()
-                });
-                let material = materials.len() as u32 - 1;
-                bounded.push((prim(PRIM_QUAD, material, corner, edge_u, edge_v), None));
-                GpuLight {
-                    p0: corner.to_array(),
-                    kind: LIGHT_AREA,
-                    p1: edge_u.to_array(),
-                    samples,
-                    p2: edge_v.to_array(),
-                    // Pre-reorder index for now; remapped after the BVH build below.
-                    prim: bounded.len() as u32 - 1,
-                    color: radiance.to_array(),
-                    strata_columns: strata_columns(samples),
-                }
-            }
-        });
-    }
-
+/// Builds the BVH over `bounded` (each with its vertex normals, if any), puts the primitives in
+/// BVH order, and appends `planes`.
+pub fn build_geometry(
+    bounded: Vec<(GpuPrimitive, Option<GpuNormals>)>,
+    planes: Vec<GpuPrimitive>,
+) -> Geometry {
     let aabbs: Vec<Aabb> = bounded.iter().map(|(p, _)| primitive_bounds(p)).collect();
     // The GPU's traversal stack bounds the depth (see `build`).
     let (mut bvh, build_time) = build_bvh(&aabbs, BVH_STACK_SIZE as usize);
@@ -220,11 +83,6 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         }
         prims.push(p);
     }
-    for light in &mut lights {
-        if light.prim != NONE {
-            light.prim = new_position[light.prim as usize];
-        }
-    }
     let plane_start = prims.len() as u32;
     prims.extend(&planes);
 
@@ -242,68 +100,17 @@ pub fn flatten(scene: &Scene) -> FlatScene {
     let traversal_iterations = expected_traversal_iterations(&bvh.nodes) + planes.len() as f32;
     // obvhs sizes its CPU traversal stack from this field.
     bvh.max_depth = bvh.max_depth.max(bvh_depth + 1);
-    let render = &scene.render;
-    let camera = &scene.camera;
-    let lens_sampler = (!camera.is_pinhole()).then_some(camera.lens_sampler);
-    let table = SampleTable::build(
-        render.spp,
-        render.seed,
-        render.pixel_sampler,
-        lens_sampler,
-        camera.aperture_blades,
-        camera.aperture_rotation_deg,
-    );
-    let frame = GpuFrame {
-        width: render.width,
-        height: render.height,
-        spp: render.spp,
-        max_depth: render.max_depth,
-        seed: render.seed,
-        pixel_sampler: render.pixel_sampler.code(),
-        light_count: lights.len() as u32,
-        node_count: nodes.len() as u32,
-        plane_start,
-        plane_count: planes.len() as u32,
-        traversal_cap: 2 * nodes.len() as u32 + 64,
-        pixel_strata_columns: strata_columns(render.spp),
-        lens_sampler: camera.lens_sampler.code(),
-        lens_strata_columns: strata_columns(render.spp),
-        pixel_table_offset: table.pixel_offset,
-        lens_table_offset: table.lens_offset,
-        background: render.background.to_array(),
-        light_samples_per_vertex: lights
-            .iter()
-            .filter(|l| l.kind == LIGHT_AREA)
-            .map(|l| l.samples)
-            .sum(),
-        ambient: render.ambient.to_array(),
-        ..Default::default()
-    };
-    FlatScene {
+    Geometry {
         bvh,
         nodes,
         prims,
         normals,
-        materials,
-        lights,
-        camera: camera.to_gpu(table.aperture_offset),
-        frame,
-        sample_table: table.points,
+        plane_start,
+        plane_count: planes.len() as u32,
+        new_index: new_position,
         bvh_depth,
         traversal_iterations,
-        triangle_count,
         build_time,
-    }
-}
-
-fn prim(kind: u32, material: u32, p0: Vec3, p1: Vec3, p2: Vec3) -> GpuPrimitive {
-    GpuPrimitive {
-        p0: p0.to_array(),
-        kind,
-        p1: p1.to_array(),
-        material,
-        p2: p2.to_array(),
-        normals: NONE,
     }
 }
 

@@ -2,7 +2,7 @@
 //! then the unbounded planes by brute force.
 //! Twin: `wgsl/traverse.wgsl`, which mirrors obvhs's `Bvh2::ray_traverse_dynamic` node order.
 
-use super::FlatScene;
+use super::Primitives;
 use super::intersect::{Hit, RayQuery, intersect_primitive};
 use crate::layout::{FEATURE_PLANES, NONE, T_FAR, has};
 
@@ -11,7 +11,7 @@ use crate::layout::{FEATURE_PLANES, NONE, T_FAR, has};
 /// `F` is the scene's `layout::FEATURE_*` set: without `FEATURE_PLANES` the plane loop is
 /// compiled out.
 pub fn closest_hit<const F: u32>(
-    scene: &FlatScene,
+    geometry: Primitives<'_>,
     ray: &RayQuery,
     skip: u32,
     t_max: f32,
@@ -22,15 +22,15 @@ pub fn closest_hit<const F: u32>(
         b2: 0.0,
     };
     let mut best_prim = NONE;
-    if !scene.bvh.nodes.is_empty() {
+    if !geometry.bvh.nodes.is_empty() {
         let mut record = obvhs::ray::RayHit::none();
-        scene
+        geometry
             .bvh
             .ray_traverse(ray.to_obvhs(t_max), &mut record, |r, id| {
                 if id as u32 == skip {
                     return f32::INFINITY;
                 }
-                let hit = intersect_primitive::<F>(ray, &scene.prims[id], r.tmax);
+                let hit = intersect_primitive::<F>(ray, &geometry.prims[id], r.tmax);
                 if hit.t < r.tmax {
                     best = hit;
                     best_prim = id as u32;
@@ -41,16 +41,16 @@ pub fn closest_hit<const F: u32>(
             });
     }
     let plane_count = if has(F, FEATURE_PLANES) {
-        scene.frame.plane_count
+        geometry.plane_count
     } else {
         0
     };
-    let planes = scene.frame.plane_start..scene.frame.plane_start + plane_count;
+    let planes = geometry.plane_start..geometry.plane_start + plane_count;
     for id in planes {
         if id == skip {
             continue;
         }
-        let hit = intersect_primitive::<F>(ray, &scene.prims[id as usize], best.t);
+        let hit = intersect_primitive::<F>(ray, &geometry.prims[id as usize], best.t);
         if hit.t < best.t {
             best = hit;
             best_prim = id;
@@ -61,30 +61,32 @@ pub fn closest_hit<const F: u32>(
 
 /// Whether anything but `skip_a` and `skip_b` lies along `ray` before `t_max`.
 pub fn occluded<const F: u32>(
-    scene: &FlatScene,
+    geometry: Primitives<'_>,
     ray: &RayQuery,
     skip_a: u32,
     skip_b: u32,
     t_max: f32,
 ) -> bool {
-    if !scene.bvh.nodes.is_empty() {
-        let missed = scene.bvh.ray_traverse_miss(ray.to_obvhs(t_max), |r, id| {
-            if id as u32 == skip_a || id as u32 == skip_b {
-                return f32::INFINITY;
-            }
-            intersect_primitive::<F>(ray, &scene.prims[id], r.tmax).t
-        });
+    if !geometry.bvh.nodes.is_empty() {
+        let missed = geometry
+            .bvh
+            .ray_traverse_miss(ray.to_obvhs(t_max), |r, id| {
+                if id as u32 == skip_a || id as u32 == skip_b {
+                    return f32::INFINITY;
+                }
+                intersect_primitive::<F>(ray, &geometry.prims[id], r.tmax).t
+            });
         if !missed {
             return true;
         }
     }
     let plane_count = if has(F, FEATURE_PLANES) {
-        scene.frame.plane_count
+        geometry.plane_count
     } else {
         0
     };
-    let planes = scene.frame.plane_start..scene.frame.plane_start + plane_count;
+    let planes = geometry.plane_start..geometry.plane_start + plane_count;
     planes
         .filter(|&id| id != skip_a && id != skip_b)
-        .any(|id| intersect_primitive::<F>(ray, &scene.prims[id as usize], t_max).t < T_FAR)
+        .any(|id| intersect_primitive::<F>(ray, &geometry.prims[id as usize], t_max).t < T_FAR)
 }

@@ -8,11 +8,11 @@ use std::sync::atomic::AtomicBool;
 use serde::Serialize;
 
 use super::Spread;
-use crate::accel::{FlatScene, flatten};
 use crate::cpu::CpuRenderer;
 use crate::error::Result;
 use crate::gpu::{GpuContext, GpuRenderer};
 use crate::layout::FEATURES_ALL;
+use crate::pack::{FlatScene, flatten};
 use crate::render::{RenderOutput, render};
 use crate::scene::Scene;
 

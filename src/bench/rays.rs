@@ -17,12 +17,12 @@ use serde::Serialize;
 use super::Spread;
 use crate::accel::intersect::RayQuery;
 use crate::accel::traverse::{closest_hit, occluded};
-use crate::accel::{FlatScene, flatten};
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
 use crate::gpu::trace::GpuTracer;
 use crate::layout::{FEATURES_ALL, NONE, T_FAR};
 use crate::math::rng::Rng;
+use crate::pack::{FlatScene, flatten};
 use crate::scene::Scene;
 
 /// A pinhole camera as other ray tracers take it.
@@ -160,10 +160,12 @@ pub fn trace_cpu(scene: &FlatScene, rays: &RaySet, query: Query) -> Vec<f32> {
         .map(|i| {
             let ray = RayQuery::new(rays.origins[i], rays.directions[i]);
             match query {
-                Query::ClosestHit => closest_hit::<FEATURES_ALL>(scene, &ray, NONE, T_FAR)
-                    .map_or(T_FAR, |(_, hit)| hit.t),
+                Query::ClosestHit => {
+                    closest_hit::<FEATURES_ALL>(scene.primitives(), &ray, NONE, T_FAR)
+                        .map_or(T_FAR, |(_, hit)| hit.t)
+                }
                 Query::AnyHit => {
-                    if occluded::<FEATURES_ALL>(scene, &ray, NONE, NONE, T_FAR) {
+                    if occluded::<FEATURES_ALL>(scene.primitives(), &ray, NONE, NONE, T_FAR) {
                         0.0
                     } else {
                         T_FAR

@@ -6,9 +6,9 @@ use std::sync::atomic::AtomicBool;
 
 use serde::Serialize;
 
-use crate::accel::flatten;
 use crate::cpu::CpuRenderer;
 use crate::error::Result;
+use crate::pack::flatten;
 use crate::render::{RenderOutput, render};
 use crate::scene::Scene;
 

@@ -12,9 +12,9 @@ use std::time::Duration;
 
 use super::kernels::{self, Pipeline};
 use super::{GpuContext, wgpu_error_text};
-use crate::accel::FlatScene;
 use crate::error::{Error, Result};
 use crate::layout::{BVH_STACK_SIZE, GpuPass, STATUS_WORDS, WORKGROUP_SIZE};
+use crate::pack::FlatScene;
 use crate::render::{Backend, DispatchStatus, RayBudgets, plan_passes};
 
 /// A buffer copied back to the host after a submission: the map is requested when the batch

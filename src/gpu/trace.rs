@@ -8,12 +8,12 @@ use std::time::{Duration, Instant};
 
 use super::GpuContext;
 use super::kernels::{self, Pipeline};
-use crate::accel::FlatScene;
 use crate::bench::rays::{Query, RaySet};
 use crate::error::{Error, Result};
 use crate::layout::{
     GpuPass, GpuRay, LOOP_CHECK_ITERATIONS, STATUS_WORDS, T_FAR, TRACE_WORKGROUP_SIZE,
 };
+use crate::pack::FlatScene;
 use crate::render::{DispatchStatus, describe_status_flags};
 
 /// Rays per chunk: 64 MiB of rays, half of lavapipe's largest binding, and

@@ -4,9 +4,9 @@
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
-use chambre::accel::{FlatScene, flatten};
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::{GpuContext, GpuRenderer};
+use chambre::pack::{FlatScene, flatten};
 use chambre::render::{Image, render};
 use chambre::scene::Scene;
 
