@@ -5,7 +5,8 @@ mod common;
 
 use std::process::Command;
 
-fn run_bench(args: &[&str], json: &std::path::Path) -> serde_json::Value {
+/// Runs `chambre bench ARGS --json JSON`; checks the exit and that the table has `header`.
+fn run_bench(args: &[&str], json: &std::path::Path, header: &str) -> serde_json::Value {
     let output = Command::new(env!("CARGO_BIN_EXE_chambre"))
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .args(["bench"])
@@ -17,7 +18,7 @@ fn run_bench(args: &[&str], json: &std::path::Path) -> serde_json::Value {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{stderr}");
     let table = String::from_utf8_lossy(&output.stdout);
-    assert!(table.contains("| rays | query | backend |"), "{table}");
+    assert!(table.contains(header), "{table}");
     serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap()
 }
 
@@ -51,6 +52,7 @@ fn bench_rays_reports_the_same_checksum_on_every_backend() {
             "cpu,gpu",
         ],
         &json,
+        "| rays | query | backend |",
     );
     let machine = &report["machine"];
     assert!(machine["cpu_threads"].as_u64().unwrap() >= 1);
@@ -94,4 +96,48 @@ fn bench_rays_reports_the_same_checksum_on_every_backend() {
             assert!(a > 0.0);
         }
     }
+}
+
+#[test]
+fn bench_scale_measures_each_size_and_plots_them() {
+    drop(common::gpu_context());
+    let dir = std::env::temp_dir().join(format!("chambre-scale-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let plot = dir.join("scale.svg");
+    let report = run_bench(
+        &[
+            "scale",
+            "--mesh",
+            "scenes/meshes/bunny-npm-lowres.obj",
+            "--prefixes",
+            "100,1000",
+            "--copies",
+            "2",
+            "--size",
+            "32",
+            "--runs",
+            "1",
+            "--plot",
+            plot.to_str().unwrap(),
+        ],
+        &dir.join("scale.json"),
+        "| triangles | build ms |",
+    );
+    let results = report["report"]["results"].as_array().unwrap();
+    let triangles: Vec<u64> = results
+        .iter()
+        .map(|r| r["triangles"].as_u64().unwrap())
+        .collect();
+    assert_eq!(triangles, [100, 1000, 2 * 3674]);
+    for r in results {
+        assert!(r["cpu_mrays_per_s"]["median"].as_f64().unwrap() > 0.0);
+        assert!(
+            r["gpu_mrays_per_s"]["median"].as_f64().unwrap() > 0.0,
+            "{r}"
+        );
+        assert!(r["bvh_nodes"].as_u64().unwrap() >= 1);
+        assert!(r["scene_bytes"].as_u64().unwrap() >= 48 * r["triangles"].as_u64().unwrap());
+    }
+    let svg = std::fs::read_to_string(&plot).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("closest-hit throughput"));
 }

@@ -18,5 +18,9 @@ chambre=./target/release/chambre
     echo
     "$chambre" bench build --runs "$runs" --json bench/build.json
     echo
+    "$chambre" bench scale --runs "$runs" --json bench/scale.json --plot bench/scale.svg
+    echo
     "$chambre" bench samplers --json bench/samplers.json
 } | tee bench/results.md
+# The plot BENCHMARKS.md shows.
+cp bench/scale.svg docs/images/scale.svg

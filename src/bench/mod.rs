@@ -7,6 +7,7 @@
 //! - [`frame`]: the sample scenes on each backend, and the GPU kernel specialised to the scene
 //!   against the general one.
 //! - [`samplers`]: the lens sample patterns' error against samples and time.
+//! - [`scale`]: the same rays on meshes from a thousand to ten million triangles.
 //!
 //! Timings are medians (with min and max) of several runs after a warm-up, measured side by side
 //! in one process: machines here are noisy, so only ratios within one run are compared.
@@ -15,6 +16,7 @@ pub mod build;
 pub mod frame;
 pub mod rays;
 pub mod samplers;
+pub mod scale;
 
 use std::path::PathBuf;
 
@@ -36,6 +38,35 @@ pub enum BenchCommand {
     Frame(FrameArgs),
     /// The lens sample patterns' RMSE against a converged reference, by sample count.
     Samplers(SamplersArgs),
+    /// The same camera rays on meshes from a thousand to ten million triangles: build time,
+    /// Mrays/s and memory, with a log-log plot.
+    Scale(ScaleArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct ScaleArgs {
+    /// Mesh whose prefixes and copies make the sizes.
+    #[arg(long, default_value = "scenes/meshes/dragon_vrip.obj.gz")]
+    pub mesh: PathBuf,
+    /// Triangle counts taken from the mesh (larger than the mesh: the whole mesh).
+    #[arg(long, value_delimiter = ',', default_values_t = scale::PREFIXES)]
+    pub prefixes: Vec<usize>,
+    /// Copies of the whole mesh side by side.
+    #[arg(long, value_delimiter = ',', default_values_t = scale::COPIES)]
+    pub copies: Vec<usize>,
+    /// Image size of the camera rays (one per pixel; the rays benchmark's camera).
+    #[arg(long, default_value_t = 512)]
+    pub size: u32,
+    #[arg(long, default_value_t = 3)]
+    pub runs: u32,
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::Gpu])]
+    pub backends: Vec<Backend>,
+    /// Also write the report as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Write the log-log plot (SVG) here.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -172,6 +203,32 @@ pub fn run(command: &BenchCommand) -> Result<String> {
             };
             let gpu = args.backends.contains(&Backend::Gpu);
             let report = frame::run(&scenes, gpu, args.runs)?;
+            finish(
+                command_line,
+                machine,
+                report.to_markdown(),
+                &report,
+                &args.json,
+            )
+        }
+        BenchCommand::Scale(args) => {
+            let camera = Pinhole {
+                width: args.size,
+                height: args.size,
+                ..Pinhole::DRAGON
+            };
+            let gpu = args.backends.contains(&Backend::Gpu);
+            let report = scale::run(
+                &args.mesh,
+                &camera,
+                &args.prefixes,
+                &args.copies,
+                args.runs,
+                gpu,
+            )?;
+            if let Some(path) = &args.plot {
+                report.plot_svg(path)?;
+            }
             finish(
                 command_line,
                 machine,

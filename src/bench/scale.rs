@@ -1,0 +1,301 @@
+//! The scale benchmark: the same camera rays on meshes from a thousand to ten million
+//! triangles, so users see how build time, throughput and memory grow with the scene.
+//!
+//! Below the full mesh, the sizes are prefixes of its triangle list (spatially coherent pieces of
+//! it); above, copies of it on a grid beside the first, which the camera keeps looking at.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use plotters::prelude::*;
+use serde::Serialize;
+
+use super::Spread;
+use super::rays::{Checksum, Pinhole, Query, coherent_rays, trace_cpu};
+use crate::error::{Error, Result};
+use crate::gpu::GpuContext;
+use crate::gpu::trace::GpuTracer;
+use crate::layout::{GpuBvhNode, GpuNormals, GpuPrimitive};
+use crate::pack::{FlatScene, flatten};
+use crate::scene::mesh::{TriangleMesh, load_mesh};
+use crate::scene::{Scene, Shape};
+
+/// Triangle counts measured by default: prefixes of the mesh, then 4 and 12 copies of it.
+pub const PREFIXES: [usize; 6] = [1_000, 4_000, 16_000, 64_000, 256_000, 1 << 40];
+pub const COPIES: [usize; 2] = [4, 12];
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ScaleResult {
+    pub triangles: usize,
+    pub build_ms: f64,
+    pub bvh_nodes: usize,
+    /// Bytes of the arrays a traversal reads (nodes and primitives, normals included).
+    pub scene_bytes: usize,
+    /// The process's peak resident memory so far (Linux `VmHWM`), where the system says.
+    pub peak_rss_bytes: Option<u64>,
+    pub cpu_mrays_per_s: Spread,
+    /// `None` with the reason in `gpu_refused` when the GPU does not take the scene.
+    pub gpu_mrays_per_s: Option<Spread>,
+    pub gpu_refused: Option<String>,
+    pub checksum: Checksum,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ScaleReport {
+    pub mesh: String,
+    pub camera: Pinhole,
+    pub rays: usize,
+    pub results: Vec<ScaleResult>,
+}
+
+/// A scene of `meshes` and nothing else, for the renderer's own build and traversal.
+fn meshes_scene(meshes: Vec<TriangleMesh>) -> Result<FlatScene> {
+    let text = "[render]\nwidth = 1\nheight = 1\n[camera]\nposition = [0.0, 0.0, 1.0]\n\
+                look_at = [0.0, 0.0, 0.0]\nfilm = [24.0, 24.0]\n[[materials]]\nname = \"m\"\n\
+                model = \"lambert\"\n";
+    let mut scene = Scene::from_str(Path::new("scale.toml"), text, &[])?;
+    scene.shapes = meshes
+        .into_iter()
+        .map(|mesh| Shape::Mesh { mesh, material: 0 })
+        .collect();
+    Ok(flatten(&scene))
+}
+
+/// The first `n` triangles of `mesh`.
+fn prefix(mesh: &TriangleMesh, n: usize) -> TriangleMesh {
+    TriangleMesh {
+        positions: mesh.positions.clone(),
+        normals: None,
+        triangles: mesh.triangles[..n.min(mesh.triangles.len())].to_vec(),
+        dropped_degenerate: 0,
+    }
+}
+
+/// `count` copies of `mesh` on a grid in x and z, one mesh width apart, the first in place.
+fn copies(mesh: &TriangleMesh, count: usize) -> Vec<TriangleMesh> {
+    let lo = mesh.positions.iter().fold(Vec3::MAX, |a, &p| a.min(p));
+    let hi = mesh.positions.iter().fold(Vec3::MIN, |a, &p| a.max(p));
+    let step = 1.1 * (hi - lo);
+    let columns = (count as f64).sqrt().ceil() as usize;
+    (0..count)
+        .map(|i| {
+            let offset = Vec3::new(
+                (i % columns) as f32 * step.x,
+                0.0,
+                -((i / columns) as f32) * step.z,
+            );
+            TriangleMesh {
+                positions: mesh.positions.iter().map(|&p| p + offset).collect(),
+                normals: None,
+                triangles: mesh.triangles.clone(),
+                dropped_degenerate: 0,
+            }
+        })
+        .collect()
+}
+
+fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+fn mrays(runs: u32, rays: usize, mut trace: impl FnMut() -> Result<Duration>) -> Result<Spread> {
+    trace()?;
+    let samples: Vec<f64> = (0..runs.max(1))
+        .map(|_| trace().map(|t| rays as f64 / t.as_secs_f64() / 1e6))
+        .collect::<Result<_>>()?;
+    Ok(Spread::of(&samples))
+}
+
+fn measure(
+    meshes: Vec<TriangleMesh>,
+    camera: &Pinhole,
+    runs: u32,
+    gpu: bool,
+) -> Result<ScaleResult> {
+    let scene = meshes_scene(meshes)?;
+    let rays = coherent_rays(camera, 1, 1);
+    let checksum = Checksum::of(&trace_cpu(&scene, &rays, Query::ClosestHit));
+    let cpu_mrays_per_s = mrays(runs, rays.len(), || {
+        let start = Instant::now();
+        trace_cpu(&scene, &rays, Query::ClosestHit);
+        Ok(start.elapsed())
+    })?;
+    let (mut gpu_mrays_per_s, mut gpu_refused) = (None, None);
+    if gpu {
+        match GpuContext::new().and_then(|c| GpuTracer::new(c, &scene, &rays)) {
+            Ok(tracer) => {
+                gpu_mrays_per_s = Some(mrays(runs, rays.len(), || tracer.trace(Query::ClosestHit))?)
+            }
+            Err(e) => gpu_refused = Some(e.to_string()),
+        }
+    }
+    Ok(ScaleResult {
+        triangles: scene.triangle_count,
+        build_ms: scene.build_time.as_secs_f64() * 1e3,
+        bvh_nodes: scene.nodes.len(),
+        scene_bytes: scene.nodes.len() * size_of::<GpuBvhNode>()
+            + scene.prims.len() * size_of::<GpuPrimitive>()
+            + scene.normals.len() * size_of::<GpuNormals>(),
+        peak_rss_bytes: peak_rss_bytes(),
+        cpu_mrays_per_s,
+        gpu_mrays_per_s,
+        gpu_refused,
+        checksum,
+    })
+}
+
+/// Measures every prefix and copy count of `mesh` (smallest first, so the peak memory column
+/// grows with the scene) with `camera`'s rays, one frame.
+pub fn run(
+    mesh: &Path,
+    camera: &Pinhole,
+    prefixes: &[usize],
+    copy_counts: &[usize],
+    runs: u32,
+    gpu: bool,
+) -> Result<ScaleReport> {
+    let full = load_mesh(mesh).map_err(|message| Error::Mesh {
+        path: mesh.to_path_buf(),
+        message,
+    })?;
+    let mut results = Vec::new();
+    for &n in prefixes {
+        results.push(measure(vec![prefix(&full, n)], camera, runs, gpu)?);
+    }
+    for &count in copy_counts {
+        results.push(measure(copies(&full, count), camera, runs, gpu)?);
+    }
+    Ok(ScaleReport {
+        mesh: mesh.display().to_string(),
+        camera: *camera,
+        rays: camera.width as usize * camera.height as usize,
+        results,
+    })
+}
+
+impl ScaleReport {
+    pub fn to_markdown(&self) -> String {
+        let mut out = format!(
+            "scale: {} (prefixes of its triangles, then copies beside it), {} coherent \
+             closest-hit rays of the camera, BVH preset medium; Mrays/s median of the runs\n\n",
+            self.mesh, self.rays
+        );
+        out += "| triangles | build ms | BVH nodes | scene MiB | peak RSS MiB | CPU Mrays/s | GPU Mrays/s | hits |\n";
+        out += "|---|---|---|---|---|---|---|---|\n";
+        let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+        for r in &self.results {
+            let gpu = match (&r.gpu_mrays_per_s, &r.gpu_refused) {
+                (Some(s), _) => format!("{:.2}", s.median),
+                (None, Some(_)) => "refused (binding limit)".into(),
+                (None, None) => "-".into(),
+            };
+            out += &format!(
+                "| {} | {:.1} | {} | {:.1} | {} | {:.2} | {gpu} | {} |\n",
+                r.triangles,
+                r.build_ms,
+                r.bvh_nodes,
+                mib(r.scene_bytes as u64),
+                r.peak_rss_bytes
+                    .map_or("-".into(), |b| format!("{:.0}", mib(b))),
+                r.cpu_mrays_per_s.median,
+                r.checksum.hits
+            );
+        }
+        out
+    }
+
+    /// A log-log plot: build time and Mrays/s against triangles.
+    pub fn plot_svg(&self, path: &Path) -> Result<()> {
+        let fail = |e: &dyn std::fmt::Display| Error::Output {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        };
+        let root = SVGBackend::new(path, (1000, 420)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(&e))?;
+        let (left, right) = root.split_horizontally(500);
+        let triangles: Vec<f64> = self.results.iter().map(|r| r.triangles as f64).collect();
+        let x_range = (triangles[0] * 0.7)..(triangles[triangles.len() - 1] * 1.4);
+        let build: Vec<(f64, f64)> = self
+            .results
+            .iter()
+            .map(|r| (r.triangles as f64, r.build_ms.max(1e-3)))
+            .collect();
+        let cpu: Vec<(f64, f64)> = self
+            .results
+            .iter()
+            .map(|r| (r.triangles as f64, r.cpu_mrays_per_s.median))
+            .collect();
+        let gpu: Vec<(f64, f64)> = self
+            .results
+            .iter()
+            .filter_map(|r| Some((r.triangles as f64, r.gpu_mrays_per_s?.median)))
+            .collect();
+        draw_panel(
+            &left,
+            "BVH build time",
+            "ms",
+            &[("build (medium preset)", &build, BLUE)],
+            x_range.clone(),
+        )
+        .map_err(|e| fail(&e))?;
+        draw_panel(
+            &right,
+            "closest-hit throughput",
+            "Mrays/s",
+            &[("CPU path", &cpu, BLUE), ("GPU path", &gpu, RED)],
+            x_range,
+        )
+        .map_err(|e| fail(&e))?;
+        root.present().map_err(|e| fail(&e))
+    }
+}
+
+type Series<'a> = (&'a str, &'a [(f64, f64)], RGBColor);
+
+/// One log-log panel of `series` against triangles.
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    unit: &str,
+    series: &[Series],
+    x_range: std::ops::Range<f64>,
+) -> std::result::Result<(), String> {
+    let values = series.iter().flat_map(|(_, s, _)| s.iter().map(|p| p.1));
+    let (lo, hi) = values.fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(55)
+        .build_cartesian_2d(x_range.log_scale(), (lo * 0.7..hi * 1.4).log_scale())
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("triangles")
+        .y_desc(unit)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    for &(name, points, color) in series {
+        if points.is_empty() {
+            continue;
+        }
+        chart
+            .draw_series(LineSeries::new(points.iter().copied(), color))
+            .map_err(|e| e.to_string())?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
+        chart
+            .draw_series(points.iter().map(|&p| Circle::new(p, 3, color.filled())))
+            .map_err(|e| e.to_string())?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(|e| e.to_string())
+}
