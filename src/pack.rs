@@ -129,6 +129,10 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             Shape::Mesh { mesh, material } => {
                 triangle_count += mesh.triangles.len();
                 for t in &mesh.triangles {
+                    // Vertices in the order the watertight test relies on.
+                    let order =
+                        intersect::lexicographic_order(t.map(|i| mesh.positions[i as usize]));
+                    let t = order.map(|k| t[k]);
                     let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
                     let normals = mesh.normals.as_ref().map(|n| {
                         let [na, nb, nc] = t.map(|i| n[i as usize]);

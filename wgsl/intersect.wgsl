@@ -58,17 +58,6 @@ fn ray_query_new(origin: vec3<f32>, direction: vec3<f32>) -> RayQuery {
         vec3<f32>(-direction[kx] / dz, -direction[ky] / dz, 1.0 / dz));
 }
 
-fn lexicographic_less(a: vec3<f32>, b: vec3<f32>) -> bool {
-    return a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z < b.z)));
-}
-
-fn edge_function(p: vec2<f32>, q: vec2<f32>, vp: vec3<f32>, vq: vec3<f32>) -> f32 {
-    if (lexicographic_less(vq, vp)) {
-        return -(q.x * p.y - q.y * p.x);
-    }
-    return p.x * q.y - p.y * q.x;
-}
-
 fn intersect_triangle(ray: RayQuery, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>, t_max: f32) -> Hit {
     // Translate to the ray origin, permute so z is the dominant axis, shear onto +z.
     let a = v0 - ray.origin;
@@ -78,9 +67,11 @@ fn intersect_triangle(ray: RayQuery, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>
     let p0 = vec2<f32>(a[ray.kx] + s.x * a[ray.kz], a[ray.ky] + s.y * a[ray.kz]);
     let p1 = vec2<f32>(b[ray.kx] + s.x * b[ray.kz], b[ray.ky] + s.y * b[ray.kz]);
     let p2 = vec2<f32>(c[ray.kx] + s.x * c[ray.kz], c[ray.ky] + s.y * c[ray.kz]);
-    let e0 = edge_function(p1, p2, v1, v2);
-    let e1 = edge_function(p2, p0, v2, v0);
-    let e2 = edge_function(p0, p1, v0, v1);
+    // Each edge from its lexicographically smaller vertex: the vertices are stored in that
+    // order (see lexicographic_order in the Rust twin), so shared edges round alike.
+    let e0 = p1.x * p2.y - p1.y * p2.x;
+    let e1 = -(p0.x * p2.y - p0.y * p2.x);
+    let e2 = p0.x * p1.y - p0.y * p1.x;
     if ((e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0)) {
         return miss();
     }

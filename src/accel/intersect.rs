@@ -111,21 +111,23 @@ const MISS: Hit = Hit {
     b2: 0.0,
 };
 
-fn lexicographic_less(a: Vec3, b: Vec3) -> bool {
-    a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z < b.z)))
+/// The order of a triangle's vertices that `intersect_triangle` needs for watertightness:
+/// lexicographic in (x, y, z). Stored so (by `pack`), every edge's function is evaluated from
+/// its smaller vertex in both triangles that share it, with the same rounding, and the test
+/// needs no comparison per ray.
+pub fn lexicographic_order(v: [Vec3; 3]) -> [usize; 3] {
+    let mut order = [0, 1, 2];
+    order.sort_by(|&i, &j| {
+        let (p, q) = (v[i], v[j]);
+        p.x.total_cmp(&q.x)
+            .then(p.y.total_cmp(&q.y))
+            .then(p.z.total_cmp(&q.z))
+    });
+    order
 }
 
-/// 2-D cross product of the sheared vertices `p`, `q` of 3-D vertices `vp`, `vq`, always
-/// evaluated with the lexicographically smaller vertex first, so that a shared edge gets the
-/// same rounding in both of its triangles.
-fn edge_function(p: [f32; 2], q: [f32; 2], vp: Vec3, vq: Vec3) -> f32 {
-    if lexicographic_less(vq, vp) {
-        -(q[0] * p[1] - q[1] * p[0])
-    } else {
-        p[0] * q[1] - p[1] * q[0]
-    }
-}
-
+/// The watertight test of Woop, Benthin and Wald, for vertices in `lexicographic_order`
+/// (any order gives a correct test; that order makes shared edges watertight).
 pub fn intersect_triangle(ray: &RayQuery, v0: Vec3, v1: Vec3, v2: Vec3, t_max: f32) -> Hit {
     // Translate to the ray origin, permute so z is the dominant axis, shear onto +z.
     let a = v0 - ray.origin;
@@ -136,9 +138,12 @@ pub fn intersect_triangle(ray: &RayQuery, v0: Vec3, v1: Vec3, v2: Vec3, t_max: f
     let p0 = [a[kx] + s.x * a[kz], a[ky] + s.y * a[kz]];
     let p1 = [b[kx] + s.x * b[kz], b[ky] + s.y * b[kz]];
     let p2 = [c[kx] + s.x * c[kz], c[ky] + s.y * c[kz]];
-    let e0 = edge_function(p1, p2, v1, v2);
-    let e1 = edge_function(p2, p0, v2, v0);
-    let e2 = edge_function(p0, p1, v0, v1);
+    // 2-D cross products of the sheared vertices, each edge from its lexicographically smaller
+    // vertex (v0 < v1 < v2, see `lexicographic_order`): a shared edge rounds alike in both of
+    // its triangles, so no ray slips between them.
+    let e0 = p1[0] * p2[1] - p1[1] * p2[0];
+    let e1 = -(p0[0] * p2[1] - p0[1] * p2[0]);
+    let e2 = p0[0] * p1[1] - p0[1] * p1[0];
     if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0) {
         return MISS;
     }
