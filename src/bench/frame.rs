@@ -17,7 +17,8 @@ use crate::render::{RenderOutput, render};
 use crate::scene::Scene;
 
 /// The sample scenes, at their own resolution and spp.
-pub const SCENES: [&str; 10] = [
+pub const SCENES: [&str; 11] = [
+    "dragon",
     "cornell_direct",
     "spheres",
     "bunny",
