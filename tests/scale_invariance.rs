@@ -137,13 +137,15 @@ const SCALES: [f64; 6] = [1e-6, 1e-4, 1e-2, 1e2, 1e4, 1e6];
 const SCALE_MAX_RELATIVE_L1: f64 = 2e-6;
 const SCALE_MIN_WITHIN_1E3: f64 = 0.999;
 
-#[test]
-fn cpu_renders_do_not_depend_on_the_scene_scale() {
-    let reference = common::render_cpu(&flat(&scaled_scene(1.0, 0.0)));
+/// Every scale of `SCALES` renders like scale 1 on the path `render` stands for.
+fn assert_scale_invariant(path: &str, render: impl Fn(&FlatScene) -> Option<Image>) {
+    let Some(reference) = render(&flat(&scaled_scene(1.0, 0.0))) else {
+        return;
+    };
     for scale in SCALES {
-        let image = common::render_cpu(&flat(&scaled_scene(scale, 0.0)));
+        let image = render(&flat(&scaled_scene(scale, 0.0))).unwrap();
         assert_close(
-            &format!("CPU, scale {scale:e}"),
+            &format!("{path}, scale {scale:e}"),
             &reference,
             &image,
             SCALE_MAX_RELATIVE_L1,
@@ -154,21 +156,13 @@ fn cpu_renders_do_not_depend_on_the_scene_scale() {
 }
 
 #[test]
+fn cpu_renders_do_not_depend_on_the_scene_scale() {
+    assert_scale_invariant("CPU", |scene| Some(common::render_cpu(scene)));
+}
+
+#[test]
 fn gpu_renders_do_not_depend_on_the_scene_scale() {
-    let Some(reference) = common::render_gpu(&flat(&scaled_scene(1.0, 0.0))) else {
-        return;
-    };
-    for scale in SCALES {
-        let image = common::render_gpu(&flat(&scaled_scene(scale, 0.0))).unwrap();
-        assert_close(
-            &format!("GPU, scale {scale:e}"),
-            &reference,
-            &image,
-            SCALE_MAX_RELATIVE_L1,
-            1e-3,
-            SCALE_MIN_WITHIN_1E3,
-        );
-    }
+    assert_scale_invariant("GPU", common::render_gpu);
 }
 
 /// Ground spheres of radius 1e6 to 1e9 against the plane y = 0: the curvature is below 1e-5

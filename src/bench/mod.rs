@@ -43,6 +43,29 @@ pub enum BenchCommand {
     Scale(ScaleArgs),
 }
 
+/// Where a report goes besides the table on stdout.
+#[derive(Debug, clap::Args)]
+pub struct Output {
+    /// Also write the report as JSON here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+/// The backends a benchmark measures side by side.
+#[derive(Debug, clap::Args)]
+pub struct Backends {
+    /// Backends to measure, side by side (`bench frame` always measures the CPU, the reference
+    /// of its ratios).
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::Gpu])]
+    pub backends: Vec<Backend>,
+}
+
+impl Backends {
+    pub fn gpu(&self) -> bool {
+        self.backends.contains(&Backend::Gpu)
+    }
+}
+
 #[derive(Debug, clap::Args)]
 pub struct ScaleArgs {
     /// Mesh whose prefixes and copies make the sizes.
@@ -59,11 +82,10 @@ pub struct ScaleArgs {
     pub size: u32,
     #[arg(long, default_value_t = 3)]
     pub runs: u32,
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::Gpu])]
-    pub backends: Vec<Backend>,
-    /// Also write the report as JSON here.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub backends: Backends,
+    #[command(flatten)]
+    pub output: Output,
     /// Write the log-log plot (SVG) here.
     #[arg(long)]
     pub plot: Option<PathBuf>,
@@ -74,9 +96,8 @@ pub struct SamplersArgs {
     /// Samples per pixel of the reference image.
     #[arg(long, default_value_t = 4096)]
     pub reference_spp: u32,
-    /// Also write the report as JSON here.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub output: Output,
 }
 
 #[derive(Debug, clap::Args)]
@@ -87,9 +108,8 @@ pub struct BuildArgs {
     /// Timed runs after one warm-up.
     #[arg(long, default_value_t = 5)]
     pub runs: u32,
-    /// Also write the report as JSON here.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub output: Output,
 }
 
 #[derive(Debug, clap::Args)]
@@ -100,12 +120,10 @@ pub struct FrameArgs {
     /// Timed runs after one warm-up, interleaved across backends.
     #[arg(long, default_value_t = 3)]
     pub runs: u32,
-    /// Backends to measure, side by side (gpu measures the specialised and the general kernel).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::Gpu])]
-    pub backends: Vec<Backend>,
-    /// Also write the report as JSON here.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub backends: Backends,
+    #[command(flatten)]
+    pub output: Output,
 }
 
 #[derive(Debug, clap::Args)]
@@ -140,12 +158,10 @@ pub struct RaysArgs {
     pub runs: u32,
     #[arg(long, default_value_t = 1)]
     pub seed: u32,
-    /// Backends to measure, side by side.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::Gpu])]
-    pub backends: Vec<Backend>,
-    /// Also write the report as JSON here.
-    #[arg(long)]
-    pub json: Option<PathBuf>,
+    #[command(flatten)]
+    pub backends: Backends,
+    #[command(flatten)]
+    pub output: Output,
 }
 
 /// A benchmark's report with where it ran, as written to JSON.
@@ -176,13 +192,13 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 runs: args.runs,
                 seed: args.seed,
             };
-            let report = rays::run(&config, &args.backends)?;
+            let report = rays::run(&config, &args.backends.backends)?;
             finish(
                 command_line,
                 machine,
                 report.to_markdown(),
                 &report,
-                &args.json,
+                &args.output.json,
             )
         }
         BenchCommand::Build(args) => {
@@ -192,7 +208,7 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 machine,
                 report.to_markdown(),
                 &report,
-                &args.json,
+                &args.output.json,
             )
         }
         BenchCommand::Frame(args) => {
@@ -201,14 +217,14 @@ pub fn run(command: &BenchCommand) -> Result<String> {
             } else {
                 args.scenes.clone()
             };
-            let gpu = args.backends.contains(&Backend::Gpu);
+            let gpu = args.backends.gpu();
             let report = frame::run(&scenes, gpu, args.runs)?;
             finish(
                 command_line,
                 machine,
                 report.to_markdown(),
                 &report,
-                &args.json,
+                &args.output.json,
             )
         }
         BenchCommand::Scale(args) => {
@@ -217,7 +233,7 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 height: args.size,
                 ..Pinhole::DRAGON
             };
-            let gpu = args.backends.contains(&Backend::Gpu);
+            let gpu = args.backends.gpu();
             let report = scale::run(
                 &args.mesh,
                 &camera,
@@ -234,7 +250,7 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 machine,
                 report.to_markdown(),
                 &report,
-                &args.json,
+                &args.output.json,
             )
         }
         BenchCommand::Samplers(args) => {
@@ -244,7 +260,7 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 machine,
                 report.to_markdown(),
                 &report,
-                &args.json,
+                &args.output.json,
             )
         }
     }
