@@ -425,20 +425,40 @@ fn render_stats(output: &RenderOutput, flat: &FlatScene, features: u32) -> Strin
     )
 }
 
-/// The GPU renderer the choice asks for. `auto` takes the CPU, with a notice, whenever the GPU
-/// refuses: no adapter, a BVH deeper than the kernel's stack, a buffer over a binding limit.
+/// The GPU renderer the choice asks for. `auto` takes the CPU, with a notice, when the only
+/// adapter is a CPU implementation of the API (chambre's own CPU path is 2.5-5x faster than
+/// lavapipe: BENCHMARKS.md), and whenever the GPU refuses: no adapter, a buffer over a binding
+/// limit.
 fn gpu_renderer(choice: BackendChoice, flat: &FlatScene) -> Result<Option<GpuRenderer>> {
-    let start = || GpuContext::new().and_then(|context| GpuRenderer::new(context, flat));
     match choice {
         BackendChoice::Cpu => Ok(None),
-        BackendChoice::Gpu => start().map(Some),
-        BackendChoice::Auto => match start() {
-            Ok(renderer) => Ok(Some(renderer)),
-            Err(e) => {
-                note!("notice: {e}; rendering on the CPU");
-                Ok(None)
+        BackendChoice::Gpu => GpuContext::new()
+            .and_then(|context| GpuRenderer::new(context, flat))
+            .map(Some),
+        BackendChoice::Auto => {
+            let context = match GpuContext::new() {
+                Ok(context) if context.is_cpu_adapter => {
+                    note!(
+                        "notice: the only GPU adapter, {}, runs on the CPU; chambre's CPU path is \
+                         faster here, so it renders (--backend gpu uses the adapter)",
+                        context.adapter_name
+                    );
+                    return Ok(None);
+                }
+                Ok(context) => context,
+                Err(e) => {
+                    note!("notice: {e}; rendering on the CPU");
+                    return Ok(None);
+                }
+            };
+            match GpuRenderer::new(context, flat) {
+                Ok(renderer) => Ok(Some(renderer)),
+                Err(e) => {
+                    note!("notice: {e}; rendering on the CPU");
+                    Ok(None)
+                }
             }
-        },
+        }
     }
 }
 

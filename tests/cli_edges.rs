@@ -48,8 +48,16 @@ fn stderr_of(output: &Output) -> String {
 
 /// A 48x32 CPU render of the sample scene into `out`, with extra arguments.
 fn small_render(out: &Path, extra: &[&str]) -> Output {
+    small_render_with(out, "cpu", extra)
+}
+
+fn small_render_on(out: &Path, backend: &str) -> Output {
+    small_render_with(out, backend, &[])
+}
+
+fn small_render_with(out: &Path, backend: &str, extra: &[&str]) -> Output {
     chambre()
-        .args(["render", "scenes/spheres.toml", "--backend", "cpu"])
+        .args(["render", "scenes/spheres.toml", "--backend", backend])
         .args(["--width", "48", "--height", "32", "--spp", "2", "-o"])
         .arg(out)
         .args(extra)
@@ -318,6 +326,7 @@ fn auto_backend_falls_back_to_the_cpu_when_the_gpu_refuses_the_scene() {
     let Some(context) = common::gpu_context() else {
         return;
     };
+    let cpu_adapter = context.is_cpu_adapter;
     // An accumulation buffer (16 bytes a pixel) one row over the adapter's binding limit.
     let limit = context.device.limits().max_storage_buffer_binding_size;
     let width = 4096u64;
@@ -361,8 +370,14 @@ fn auto_backend_falls_back_to_the_cpu_when_the_gpu_refuses_the_scene() {
         .filter(|l| l.starts_with("notice:"))
         .collect();
     assert_eq!(notices.len(), 1, "{message}");
-    assert!(notices[0].contains("max_storage_buffer_binding_size"));
-    assert!(notices[0].ends_with("rendering on the CPU"));
+    // On lavapipe `auto` prefers the CPU path before it asks the adapter for anything; on a
+    // real GPU it is the refusal that sends the render to the CPU.
+    if cpu_adapter {
+        assert!(notices[0].contains("runs on the CPU"), "{message}");
+    } else {
+        assert!(notices[0].contains("max_storage_buffer_binding_size"));
+        assert!(notices[0].ends_with("rendering on the CPU"));
+    }
     assert!(message.contains("on CPU"));
     let written = image::open(&target).unwrap().into_rgb8();
     assert_eq!(
@@ -509,5 +524,34 @@ fn stats_report_rays_time_dispatches_bvh_and_features() {
     assert!(
         dispatches >= batches && batches >= 1,
         "{dispatches} {batches}"
+    );
+}
+
+/// `--backend auto` renders on the GPU when it is a real one, and on chambre's faster CPU path
+/// when the only adapter is a CPU implementation of the API (lavapipe), saying why.
+#[test]
+fn auto_backend_prefers_the_cpu_path_to_a_cpu_adapter() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let target = scratch_dir("auto-cpu").join("spheres.png");
+    let output = small_render_on(&target, "auto");
+    let message = stderr_of(&output);
+    assert!(output.status.success(), "{message}");
+    if context.is_cpu_adapter {
+        assert!(
+            message.contains("runs on the CPU; chambre's CPU path is faster"),
+            "{message}"
+        );
+        assert!(message.contains("on CPU: "), "{message}");
+    } else {
+        assert!(message.contains("on GPU: "), "{message}");
+    }
+    // `--backend gpu` still uses the adapter, whatever it is.
+    let forced = small_render_on(&target, "gpu");
+    assert!(
+        stderr_of(&forced).contains("on GPU: "),
+        "{}",
+        stderr_of(&forced)
     );
 }

@@ -83,6 +83,8 @@ pub struct GpuContext {
     pub adapter_description: String,
     /// The adapter's name alone (e.g. "llvmpipe (LLVM 15.0.6, 256 bits)").
     pub adapter_name: String,
+    /// The adapter is a CPU implementation of the API (lavapipe/llvmpipe, SwiftShader).
+    pub is_cpu_adapter: bool,
     /// Errors wgpu reported outside an error scope; checked after every dispatch.
     uncaptured: Arc<Mutex<Vec<String>>>,
 }
@@ -122,6 +124,7 @@ impl GpuContext {
             queue,
             adapter_description: describe_adapter(&adapter),
             adapter_name: adapter.get_info().name,
+            is_cpu_adapter: adapter.get_info().device_type == wgpu::DeviceType::Cpu,
             uncaptured,
         })
     }
