@@ -536,3 +536,30 @@ fn a_bad_face_names_the_mesh_file_and_the_face() {
         "face.obj: malformed OBJ at line 5",
     );
 }
+
+#[test]
+fn crease_angle_belongs_to_meshes_and_lies_in_0_to_180() {
+    expect_error(
+        "radius = 1.0",
+        "radius = 1.0\ncrease_angle = 30.0",
+        16,
+        "shapes[0].crease_angle",
+        "does not apply to a sphere",
+    );
+    let dir = std::env::temp_dir().join(format!("chambre-crease-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let mesh_scene = BASE.replacen(
+        "type = \"sphere\"\ncenter = [0.0, 1.0, 0.0]\nradius = 1.0",
+        "type = \"mesh\"\nfile = \"tri.obj\"\ncrease_angle = 200.0",
+        1,
+    );
+    let error = Scene::from_str(&dir.join("scene.toml"), &mesh_scene, &[])
+        .err()
+        .expect("a crease of 200 degrees")
+        .to_string();
+    assert!(
+        error.contains("shapes[0].crease_angle") && error.contains("[0, 180]"),
+        "{error}"
+    );
+}

@@ -210,3 +210,121 @@ fn a_ply_header_claiming_more_elements_than_its_bytes_is_refused() {
         );
     }
 }
+
+/// A UV sphere of `rings` x `segments` quads (split in triangles), radius 1 at the origin.
+fn uv_sphere(rings: u32, segments: u32) -> chambre::scene::TriangleMesh {
+    use glam::Vec3;
+    let mut positions = vec![Vec3::Y, -Vec3::Y];
+    for r in 1..rings {
+        let theta = std::f32::consts::PI * r as f32 / rings as f32;
+        for s in 0..segments {
+            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
+            positions.push(Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            ));
+        }
+    }
+    let ring = |r: u32, s: u32| 2 + (r - 1) * segments + s % segments;
+    let mut triangles = Vec::new();
+    for s in 0..segments {
+        triangles.push([0, ring(1, s + 1), ring(1, s)]);
+        triangles.push([1, ring(rings - 1, s), ring(rings - 1, s + 1)]);
+        for r in 1..rings - 1 {
+            let (a, b, c, d) = (
+                ring(r, s),
+                ring(r, s + 1),
+                ring(r + 1, s),
+                ring(r + 1, s + 1),
+            );
+            triangles.push([a, b, d]);
+            triangles.push([a, d, c]);
+        }
+    }
+    chambre::scene::TriangleMesh {
+        positions,
+        normals: None,
+        triangles,
+        dropped_degenerate: 0,
+    }
+}
+
+/// A mesh without normals asked to render smooth gets angle-weighted vertex normals: on a
+/// sphere (no edge sharper than the crease) they point along the radius.
+#[test]
+fn computed_normals_of_a_sphere_are_radial() {
+    let mut mesh = uv_sphere(24, 48);
+    let vertices = mesh.positions.len();
+    chambre::scene::mesh::compute_vertex_normals(&mut mesh, 30.0);
+    assert_eq!(
+        mesh.positions.len(),
+        vertices,
+        "no vertex is split on a smooth surface"
+    );
+    let normals = mesh.normals.as_ref().unwrap();
+    let worst = mesh
+        .positions
+        .iter()
+        .zip(normals)
+        .map(|(p, n)| p.normalize().angle_between(*n).to_degrees())
+        .fold(0.0f32, f32::max);
+    assert!(
+        worst < 0.5,
+        "worst normal is {worst} degrees off the radius"
+    );
+}
+
+/// A cube keeps its edges: with a 30 degree crease every corner takes its own face's normal
+/// (each vertex split in three); with 180 degrees the corners average their faces.
+#[test]
+fn a_crease_angle_keeps_sharp_edges_sharp() {
+    use glam::Vec3;
+    let cube = || {
+        let positions: Vec<Vec3> = (0..8)
+            .map(|i| Vec3::new((i & 1) as f32, (i >> 1 & 1) as f32, (i >> 2 & 1) as f32))
+            .collect();
+        // Two triangles per face, outward winding.
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let triangles = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        chambre::scene::TriangleMesh {
+            positions,
+            normals: None,
+            triangles,
+            dropped_degenerate: 0,
+        }
+    };
+    let mut sharp = cube();
+    chambre::scene::mesh::compute_vertex_normals(&mut sharp, 30.0);
+    assert_eq!(sharp.positions.len(), 24);
+    let normals = sharp.normals.as_ref().unwrap();
+    for t in &sharp.triangles {
+        let [a, b, c] = t.map(|i| sharp.positions[i as usize]);
+        let face = (b - a).cross(c - a).normalize();
+        for &i in t {
+            assert!((normals[i as usize] - face).length() < 1e-6);
+        }
+    }
+    let mut soft = cube();
+    chambre::scene::mesh::compute_vertex_normals(&mut soft, 180.0);
+    assert_eq!(soft.positions.len(), 8);
+    for (p, n) in soft.positions.iter().zip(soft.normals.as_ref().unwrap()) {
+        // Each corner of the cube averages three face normals (angles of 90, 90 and 2 x 45
+        // degrees), so it points away from the centre on every axis.
+        let outward = (*p - Vec3::splat(0.5)).signum();
+        assert!(
+            n.x * outward.x > 0.3 && n.y * outward.y > 0.3 && n.z * outward.z > 0.3,
+            "{n}"
+        );
+    }
+}

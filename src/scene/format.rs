@@ -251,6 +251,8 @@ pub struct ShapeEntry {
     pub rotate: Option<Vec3>,
     pub scale: Option<Scale>,
     pub smooth: Option<bool>,
+    /// degrees: with `smooth` and no normals in the file, edges sharper than this stay sharp
+    pub crease_angle: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

@@ -378,6 +378,66 @@ fn check_mesh(mut mesh: TriangleMesh) -> Result<TriangleMesh, String> {
     Ok(mesh)
 }
 
+/// Vertex normals for a mesh whose file has none: each triangle corner gets the average of the
+/// normals of the triangles around its vertex that lie within `crease_deg` of its own triangle,
+/// each weighted by its angle at the vertex (Thürmer and Wüthrich's angle weighting, which does
+/// not depend on how the surface is triangulated). Edges sharper than the crease stay sharp:
+/// corners of one vertex that end with different normals get their own copy of the vertex, so
+/// the mesh stays indexed per vertex.
+pub fn compute_vertex_normals(mesh: &mut TriangleMesh, crease_deg: f32) {
+    let positions = &mesh.positions;
+    let corners = |t: &[u32; 3]| t.map(|i| positions[i as usize]);
+    let face_normals: Vec<Vec3> = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = corners(t);
+            (b - a).cross(c - a).normalize_or_zero()
+        })
+        .collect();
+    // The angle of triangle `t` at its corner `k`.
+    let corner_angle = |t: &[u32; 3], k: usize| {
+        let p = corners(t);
+        let (e1, e2) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+        e1.angle_between(e2)
+    };
+    let mut incident: Vec<Vec<(u32, f32)>> = vec![Vec::new(); positions.len()];
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        for k in 0..3 {
+            incident[t[k] as usize].push((f as u32, corner_angle(t, k)));
+        }
+    }
+    let cos_crease = crease_deg.to_radians().cos();
+    let mut new_positions = Vec::with_capacity(positions.len());
+    let mut normals = Vec::with_capacity(positions.len());
+    let mut index = std::collections::HashMap::new();
+    let mut triangles = Vec::with_capacity(mesh.triangles.len());
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        let own = face_normals[f];
+        let corner_normal = |v: u32| {
+            let sum: Vec3 = incident[v as usize]
+                .iter()
+                .filter(|(g, _)| face_normals[*g as usize].dot(own) >= cos_crease)
+                .map(|&(g, angle)| angle * face_normals[g as usize])
+                .sum();
+            sum.try_normalize().unwrap_or(own)
+        };
+        triangles.push(t.map(|v| {
+            let n = corner_normal(v);
+            *index
+                .entry((v, n.to_array().map(f32::to_bits)))
+                .or_insert_with(|| {
+                    new_positions.push(positions[v as usize]);
+                    normals.push(n);
+                    new_positions.len() as u32 - 1
+                })
+        }));
+    }
+    mesh.positions = new_positions;
+    mesh.normals = Some(normals);
+    mesh.triangles = triangles;
+}
+
 /// Applies scale, then rotation about x, then y, then z (degrees), then translation.
 pub fn transform_mesh(mesh: &mut TriangleMesh, scale: Vec3, rotate_deg: Vec3, translate: Vec3) {
     let rotation = Mat3::from_rotation_z(rotate_deg.z.to_radians())

@@ -10,7 +10,7 @@ use super::format::{
     Exact, LightType, MaterialModel, Pair, SamplerName, Scale, SceneFile, ShapeType, Vec3 as F3,
 };
 use super::load::ParsedScene;
-use super::mesh::{load_mesh, transform_mesh};
+use super::mesh::{compute_vertex_normals, load_mesh, transform_mesh};
 use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
 use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, Movements};
@@ -27,6 +27,8 @@ pub const MAX_DEPTH: i64 = 1024;
 pub const MAX_LIGHT_SAMPLES: i64 = 4096;
 /// Film and lens rotations lie strictly inside +-90 degrees (at 90 a standard is edge-on).
 pub const MAX_MOVEMENT_DEG: f64 = 90.0;
+/// Edges sharper than this stay sharp when vertex normals are computed (Blender's default).
+pub const DEFAULT_CREASE_ANGLE_DEG: f64 = 30.0;
 /// Largest radiometric value (intensity, irradiance, radiance, background, ambient): the sum of
 /// 2^20 samples, each through up to 1025 path vertices with BRDF values up to 1.6e3 (Phong at
 /// shininess 1e4), stays below 2e32, far inside f32's 3.4e38. See `docs/scene-format.md`.
@@ -573,6 +575,7 @@ fn validate_shapes(
             ("rotate", s.rotate.is_some()),
             ("scale", s.scale.is_some()),
             ("smooth", s.smooth.is_some()),
+            ("crease_angle", s.crease_angle.is_some()),
         ];
         let shape = match s.kind {
             ShapeType::Sphere => {
@@ -658,6 +661,19 @@ fn validate_shapes(
                     rotate.as_vec3(),
                     translate.as_vec3(),
                 );
+                let crease = check.finite(
+                    &at("crease_angle"),
+                    s.crease_angle.unwrap_or(DEFAULT_CREASE_ANGLE_DEG),
+                )?;
+                if !(0.0..=180.0).contains(&crease) {
+                    return Err(check.err(
+                        &at("crease_angle"),
+                        format!("must lie in [0, 180] degrees, got {}", num(crease)),
+                    ));
+                }
+                if s.smooth.unwrap_or(true) && mesh.normals.is_none() {
+                    compute_vertex_normals(&mut mesh, crease as f32);
+                }
                 if let Some((v, p)) = mesh
                     .positions
                     .iter()
