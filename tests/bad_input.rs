@@ -555,8 +555,7 @@ fn crease_angle_belongs_to_meshes_and_lies_in_0_to_180() {
         1,
     );
     let error = Scene::from_str(&dir.join("scene.toml"), &mesh_scene, &[])
-        .err()
-        .expect("a crease of 200 degrees")
+        .expect_err("a crease of 200 degrees")
         .to_string();
     assert!(
         error.contains("shapes[0].crease_angle") && error.contains("[0, 180]"),
