@@ -10,7 +10,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use anyhow::{Context, bail};
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use chambre::camera::Focus;
 use chambre::camera::report::camera_report;
@@ -36,38 +36,11 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene to an image (.png: sRGB 8-bit; .exr: linear float).
-    Render {
-        scene: PathBuf,
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Samples per pixel (overrides render.spp).
-        #[arg(long)]
-        spp: Option<u32>,
-        #[arg(long)]
-        width: Option<u32>,
-        #[arg(long)]
-        height: Option<u32>,
-        #[arg(long)]
-        seed: Option<u32>,
-        #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
-        backend: BackendChoice,
-        /// Pixel sample pattern (overrides render.pixel_sampler).
-        #[arg(long, value_enum)]
-        pixel_sampler: Option<SamplerChoice>,
-        /// Lens sample pattern (overrides camera.lens_sampler).
-        #[arg(long, value_enum)]
-        lens_sampler: Option<SamplerChoice>,
-        /// Override any scene field, e.g. --set camera.f_number=2.8 (also -D).
-        #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
-        set: Vec<String>,
-        /// Print statistics: rays, wall, kernel and host time, dispatches and batches, the BVH,
-        /// and the features the code was specialised to.
-        #[arg(long)]
-        stats: bool,
-    },
+    Render(RenderArgs),
     /// Print what the camera does: field of view, plane of sharp focus, hinge and Scheimpflug
     /// lines, depth of field, and the equivalent raster projection matrix.
     Camera {
+        /// Scene file (TOML; see docs/scene-format.md).
         scene: PathBuf,
         /// Circle of confusion in mm for the depth of field (default: film diagonal / 1500).
         #[arg(long)]
@@ -75,12 +48,15 @@ enum Command {
         /// Far clipping distance of the raster projection, in scene units; beyond the near plane.
         #[arg(long, default_value_t = 1000.0)]
         far: f64,
+        /// Override any scene field, e.g. --set camera.lens_tilt=5 (also -D).
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
     /// Parse and validate a scene without rendering.
     Check {
+        /// Scene file (TOML; see docs/scene-format.md).
         scene: PathBuf,
+        /// Override any scene field, e.g. --set render.spp=64 (also -D).
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
@@ -89,6 +65,111 @@ enum Command {
     /// Measure: the figures of BENCHMARKS.md, as a table and optionally JSON.
     #[command(subcommand)]
     Bench(chambre::bench::BenchCommand),
+}
+
+/// `eprintln!` that cannot panic: when stderr is closed (`chambre render ... 2>&1 | head -c1`)
+/// there is nowhere left to report to, and a render must still write its image.
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Scene file (TOML; see docs/scene-format.md).
+    scene: PathBuf,
+    /// Image to write: .png (sRGB, 8 bits, clamped) or .exr (linear floats).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Samples per pixel (overrides render.spp).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Image width in pixels (overrides render.width); given alone, the height follows the
+    /// film's aspect.
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels (overrides render.height); given alone, the width follows the
+    /// film's aspect.
+    #[arg(long)]
+    height: Option<u32>,
+    /// Seed of every random number of the render (overrides render.seed).
+    #[arg(long)]
+    seed: Option<u32>,
+    /// Where to render.
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    backend: BackendChoice,
+    /// Worker threads of the CPU path (default: one per core).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Pixel sample pattern (overrides render.pixel_sampler).
+    #[arg(long, value_enum)]
+    pixel_sampler: Option<SamplerChoice>,
+    /// Lens sample pattern (overrides camera.lens_sampler).
+    #[arg(long, value_enum)]
+    lens_sampler: Option<SamplerChoice>,
+    /// Override any scene field, e.g. --set camera.f_number=2.8 (also -D).
+    #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
+    set: Vec<String>,
+    /// Print statistics: rays, wall, kernel and host time, dispatches and batches, the BVH,
+    /// and the features the code was specialised to.
+    #[arg(long)]
+    stats: bool,
+}
+
+impl RenderArgs {
+    /// The scene overrides the flags stand for, `--set` last. A width or height given alone
+    /// gets its partner from the film's aspect, with a note saying so.
+    fn overrides(&self) -> Result<Vec<String>> {
+        let mut overrides = Vec::new();
+        let (width, height) = self.image_size()?;
+        let fields = [
+            ("render.spp", self.spp),
+            ("render.width", width),
+            ("render.height", height),
+            ("render.seed", self.seed),
+        ];
+        for (key, value) in fields {
+            if let Some(v) = value {
+                overrides.push(format!("{key}={v}"));
+            }
+        }
+        let samplers = [
+            ("render.pixel_sampler", self.pixel_sampler),
+            ("camera.lens_sampler", self.lens_sampler),
+        ];
+        for (key, value) in samplers {
+            if let Some(v) = value {
+                overrides.push(format!("{key}={}", v.name()));
+            }
+        }
+        overrides.extend(self.set.iter().cloned());
+        Ok(overrides)
+    }
+
+    /// `--width` and `--height` as given, or one of them with the other from the film's aspect.
+    fn image_size(&self) -> Result<(Option<u32>, Option<u32>)> {
+        let (width, height) = (self.width, self.height);
+        if width.is_some() == height.is_some() {
+            return Ok((width, height));
+        }
+        let film = load(&self.scene, &self.set)?.camera.film_mm;
+        let aspect = film[0] / film[1];
+        let fit = |v: f64| (v.round() as u32).max(1);
+        let size = match (width, height) {
+            (Some(w), _) => (w, fit(w as f64 / aspect)),
+            (_, Some(h)) => (fit(h as f64 * aspect), h),
+            _ => unreachable!("exactly one side is given"),
+        };
+        note!(
+            "note: {}x{} pixels keep the film's {} x {} mm aspect",
+            size.0,
+            size.1,
+            film[0],
+            film[1]
+        );
+        Ok((Some(size.0), Some(size.1)))
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -114,60 +195,18 @@ impl SamplerChoice {
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum BackendChoice {
-    /// The GPU when it accepts the scene (lavapipe included), else the CPU, with a notice.
+    /// A real GPU when it accepts the scene, else the CPU path, with a notice.
     Auto,
+    /// The GPU adapter, whatever it is (lavapipe included); a refusal is an error.
     Gpu,
+    /// chambre's CPU path.
     Cpu,
-}
-
-/// `eprintln!` that cannot panic: when stderr is closed (`chambre render ... 2>&1 | head -c1`)
-/// there is nowhere left to report to, and a render must still write its image.
-macro_rules! note {
-    ($($arg:tt)*) => {{
-        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
-    }};
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render {
-            scene,
-            output,
-            spp,
-            width,
-            height,
-            seed,
-            backend,
-            pixel_sampler,
-            lens_sampler,
-            set,
-            stats,
-        } => {
-            let mut overrides = Vec::new();
-            let fields = [
-                ("render.spp", spp),
-                ("render.width", width),
-                ("render.height", height),
-                ("render.seed", seed),
-            ];
-            for (key, value) in fields {
-                if let Some(v) = value {
-                    overrides.push(format!("{key}={v}"));
-                }
-            }
-            let samplers = [
-                ("render.pixel_sampler", pixel_sampler),
-                ("camera.lens_sampler", lens_sampler),
-            ];
-            for (key, value) in samplers {
-                if let Some(v) = value {
-                    overrides.push(format!("{key}={}", v.name()));
-                }
-            }
-            overrides.extend(set);
-            run_render(&scene, &output, backend, &overrides, stats)
-        }
+        Command::Render(args) => run_render(&args),
         Command::Check { scene, set } => run_check(&scene, &set),
         Command::Bench(command) => run_bench(&command),
         Command::Camera {
@@ -342,14 +381,18 @@ fn progress_reporter() -> Box<dyn Progress> {
     }
 }
 
-fn run_render(
-    path: &Path,
-    output_path: &Path,
-    choice: BackendChoice,
-    overrides: &[String],
-    stats: bool,
-) -> anyhow::Result<ExitCode> {
-    let scene = load(path, overrides)?;
+fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
+    if let Some(threads) = args.threads {
+        if threads == 0 {
+            bail!("--threads must be at least 1");
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build_global()
+            .context("starting the CPU path's threads")?;
+    }
+    let (path, output_path, choice, stats) = (&args.scene, &args.output, args.backend, args.stats);
+    let scene = load(path, &args.overrides()?)?;
     // Before any render time is spent: a path that cannot take the image fails now.
     let target = OutputTarget::prepare(output_path)?;
     let flat = flatten(&scene);
@@ -372,7 +415,11 @@ fn run_render(
         }
         None => {
             let mut renderer = CpuRenderer::new(&flat).with_cancel(&cancel);
-            let name = format!("CPU: {} threads", rayon::current_num_threads());
+            let threads = rayon::current_num_threads();
+            let name = format!(
+                "CPU: {threads} thread{}",
+                if threads == 1 { "" } else { "s" }
+            );
             let features = renderer.features();
             (
                 render(&flat, &mut renderer, progress.as_mut(), &cancel)?,

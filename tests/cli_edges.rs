@@ -555,3 +555,47 @@ fn auto_backend_prefers_the_cpu_path_to_a_cpu_adapter() {
         stderr_of(&forced)
     );
 }
+
+/// `--width` alone takes its height from the film's aspect (and says so), `--height` alone
+/// its width; `--threads` sets the CPU path's threads, and 0 is refused.
+#[test]
+fn one_image_side_keeps_the_film_aspect_and_threads_are_chosen() {
+    let dir = scratch_dir("size");
+    let render = |extra: &[&str], name: &str| {
+        let target = dir.join(name);
+        let output = chambre()
+            .args([
+                "render",
+                "scenes/spheres.toml",
+                "--backend",
+                "cpu",
+                "--spp",
+                "1",
+                "-o",
+            ])
+            .arg(&target)
+            .args(extra)
+            .output()
+            .unwrap();
+        (output, target)
+    };
+    // spheres.toml: a 36 x 24 mm film.
+    let (output, target) = render(&["--width", "200", "--threads", "1"], "w.png");
+    let message = stderr_of(&output);
+    assert!(output.status.success(), "{message}");
+    assert!(
+        message.contains("200x133 pixels keep the film's 36 x 24 mm aspect"),
+        "{message}"
+    );
+    assert!(
+        message.contains("on CPU: 1 thread\n") || message.ends_with("on CPU: 1 thread"),
+        "{message}"
+    );
+    assert_eq!(image::image_dimensions(&target).unwrap(), (200, 133));
+    let (output, target) = render(&["--height", "77"], "h.png");
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    assert_eq!(image::image_dimensions(&target).unwrap(), (116, 77));
+    let (output, _) = render(&["--threads", "0"], "t.png");
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stderr_of(&output).contains("--threads must be at least 1"));
+}

@@ -258,7 +258,10 @@ fn validate_camera(
     ];
     let film_aspect = film[0] / film[1];
     let image_aspect = render.width as f64 / render.height as f64;
-    if (film_aspect / image_aspect - 1.0).abs() > 1e-3 {
+    // Whole pixels cannot always match the film exactly: allow the aspect a side's rounding
+    // to the nearest pixel gives (or 0.1%, whichever is larger).
+    let rounding = 0.5 / render.width.min(render.height) as f64;
+    if (film_aspect / image_aspect - 1.0).abs() > rounding.max(1e-3) {
         return Err(check.err(
             "camera.film",
             format!(
