@@ -35,6 +35,7 @@ pub mod layout;
 pub mod math;
 pub mod output;
 pub mod pack;
+pub mod provenance;
 pub mod render;
 pub mod sampler;
 pub mod scene;

@@ -16,7 +16,7 @@ use chambre::camera::Focus;
 use chambre::camera::report::camera_report;
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::{GpuContext, GpuRenderer, describe_adapters};
-use chambre::output::{ImageFormat, OutputTarget};
+use chambre::output::{Display, ImageFormat, OutputTarget, ToneMap};
 use chambre::pack::{FlatScene, flatten};
 use chambre::render::{Progress, RenderOutput, describe_status_flags, render};
 use chambre::scene::Scene;
@@ -115,6 +115,22 @@ struct RenderArgs {
     /// and the features the code was specialised to.
     #[arg(long)]
     stats: bool,
+    /// Exposure of an 8-bit image in stops: linear values are scaled by 2^EV before tone
+    /// mapping (float formats keep the radiance as rendered).
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        allow_negative_numbers = true,
+        value_name = "EV"
+    )]
+    exposure: f32,
+    /// How an 8-bit image maps radiance to [0, 1].
+    #[arg(long, value_enum, default_value_t = ToneMap::Clamp)]
+    tonemap: ToneMap,
+    /// Also write OUT.json: the command, scene hash, seed, samples reached, backend and
+    /// timings, to reproduce the image.
+    #[arg(long)]
+    sidecar: bool,
 }
 
 impl RenderArgs {
@@ -392,9 +408,23 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
             .context("starting the CPU path's threads")?;
     }
     let (path, output_path, choice, stats) = (&args.scene, &args.output, args.backend, args.stats);
-    let scene = load(path, &args.overrides()?)?;
+    if !args.exposure.is_finite() {
+        bail!(
+            "--exposure must be a finite number of stops, got {}",
+            args.exposure
+        );
+    }
+    let overrides = args.overrides()?;
+    let scene = load(path, &overrides)?;
     // Before any render time is spent: a path that cannot take the image fails now.
-    let target = OutputTarget::prepare(output_path)?;
+    let target = OutputTarget::prepare(output_path)?.with_display(Display {
+        exposure_ev: args.exposure,
+        tone_map: args.tonemap,
+    });
+    let sidecar_path = args.sidecar.then(|| sidecar_path(output_path));
+    if let Some(sidecar) = &sidecar_path {
+        OutputTarget::prepare_beside(sidecar)?;
+    }
     let flat = flatten(&scene);
     let cancel = Arc::new(AtomicBool::new(false));
     let flag = cancel.clone();
@@ -431,7 +461,59 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     if stats {
         note!("{}", render_stats(&output, &flat, features));
     }
-    finish(output, &target, &backend_name)
+    let sidecar = sidecar_path.map(|sidecar_path| {
+        let record = sidecar_record(args, &scene, &overrides, &output, &backend_name);
+        (sidecar_path, record)
+    });
+    let written = output.max_samples_per_pixel > 0;
+    let code = finish(output, &target, &backend_name)?;
+    if let Some((sidecar_path, record)) = sidecar.filter(|_| written) {
+        let text = serde_json::to_string_pretty(&record).context("encoding the sidecar")?;
+        OutputTarget::write_beside(&sidecar_path, (text + "\n").as_bytes())?;
+    }
+    Ok(code)
+}
+
+/// `OUT.json` beside `OUT` (the image's own extension kept, so `a.png` and `a.exr` do not
+/// share one).
+fn sidecar_path(output: &Path) -> PathBuf {
+    let mut name = output.as_os_str().to_owned();
+    name.push(".json");
+    PathBuf::from(name)
+}
+
+/// What `--sidecar` records of a render.
+fn sidecar_record(
+    args: &RenderArgs,
+    scene: &Scene,
+    overrides: &[String],
+    output: &RenderOutput,
+    backend: &str,
+) -> chambre::provenance::Sidecar {
+    use chambre::provenance::{Sidecar, fnv1a64, utc_date};
+    let scene_bytes = std::fs::read(&args.scene).unwrap_or_default();
+    Sidecar {
+        chambre_version: env!("CARGO_PKG_VERSION"),
+        date_utc: utc_date(),
+        command: std::env::args().collect(),
+        scene: args.scene.display().to_string(),
+        scene_hash: format!("{:016x}", fnv1a64(&scene_bytes)),
+        overrides: overrides.to_vec(),
+        seed: scene.render.seed,
+        width: output.image.width,
+        height: output.image.height,
+        spp_requested: scene.render.spp,
+        spp_min: output.samples_per_pixel,
+        spp_max: output.max_samples_per_pixel,
+        backend: backend.to_string(),
+        wall_seconds: output.elapsed.as_secs_f64(),
+        kernel_seconds: output.kernel_time.map(|k| k.as_secs_f64()),
+        rays: output.rays,
+        status: match &output.stopped {
+            None => "complete".into(),
+            Some(e) => e.to_string(),
+        },
+    }
 }
 
 /// `--stats`: where the time and the rays went.
@@ -542,6 +624,7 @@ fn finish(output: RenderOutput, target: &OutputTarget, backend: &str) -> anyhow:
             (false, _) => "",
             (true, ImageFormat::Png) => "; written as magenta in the PNG",
             (true, ImageFormat::Exr) => "; kept as inf/NaN in the EXR",
+            (true, ImageFormat::Pfm) => "; kept as inf/NaN in the PFM",
         };
         note!("error: {non_finite} pixels are not finite numbers{shown}");
         failed = true;

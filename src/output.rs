@@ -1,4 +1,5 @@
-//! Writes an [`Image`]: PNG (sRGB-encoded, clamped) or OpenEXR (linear floats), by extension.
+//! Writes an [`Image`] by extension: PNG (tone-mapped, sRGB-encoded, 8 bits), OpenEXR or PFM
+//! (linear floats).
 //!
 //! The target is checked before a render starts ([`OutputTarget::prepare`]), so a path that
 //! cannot take the image costs no render time. The image is then written atomically
@@ -36,10 +37,55 @@ pub fn srgb_encode(linear: f32) -> u8 {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
-    /// sRGB 8-bit; non-finite pixels become [`NON_FINITE_PNG`].
+    /// sRGB 8-bit after exposure and tone mapping; non-finite pixels become [`NON_FINITE_PNG`].
     Png,
     /// Linear 32-bit floats; non-finite values are kept as they are.
     Exr,
+    /// Portable Float Map: linear 32-bit floats, little-endian, bottom row first (pbrt and
+    /// Mitsuba read and write it); non-finite values are kept.
+    Pfm,
+}
+
+impl ImageFormat {
+    /// Whether the format stores linear radiance as floats (exposure and tone mapping do not
+    /// apply to it).
+    pub fn is_linear(self) -> bool {
+        !matches!(self, ImageFormat::Png)
+    }
+}
+
+/// How linear radiance becomes a displayable value in [0, 1] for an 8-bit image, after the
+/// exposure scale `2^EV`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum ToneMap {
+    /// Values above 1 clip to white.
+    #[default]
+    Clamp,
+    /// x / (1 + x) per channel (Reinhard et al. 2002, the simple global operator).
+    Reinhard,
+    /// Narkowicz's fit of the ACES filmic curve: (x (2.51 x + 0.03)) / (x (2.43 x + 0.59) + 0.14).
+    Aces,
+}
+
+impl ToneMap {
+    /// The display value in [0, 1] of linear value `x` (after exposure).
+    pub fn apply(self, x: f32) -> f32 {
+        let x = x.max(0.0);
+        match self {
+            ToneMap::Clamp => x.min(1.0),
+            ToneMap::Reinhard => x / (1.0 + x),
+            ToneMap::Aces => {
+                ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+            }
+        }
+    }
+}
+
+/// What turns linear radiance into an 8-bit image: the exposure in stops and the tone map.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Display {
+    pub exposure_ev: f32,
+    pub tone_map: ToneMap,
 }
 
 /// A checked place to write the image: a new path or an existing regular file, with a known
@@ -51,6 +97,7 @@ pub struct OutputTarget {
     /// The file actually replaced: `path`, or what it links to, so a symbolic link survives.
     file: PathBuf,
     format: ImageFormat,
+    display: Display,
 }
 
 impl OutputTarget {
@@ -70,6 +117,7 @@ impl OutputTarget {
             path: path.to_path_buf(),
             file,
             format,
+            display: Display::default(),
         })
     }
 
@@ -88,8 +136,37 @@ impl OutputTarget {
             path: self.path.clone(),
             message,
         };
-        let bytes = encode(image, self.format).map_err(fail)?;
+        let bytes = encode(image, self.format, self.display).map_err(fail)?;
         replace_atomically(&self.file, &bytes).map_err(fail)
+    }
+
+    /// How an 8-bit format shows the linear image (ignored by the float formats).
+    pub fn with_display(mut self, display: Display) -> Self {
+        self.display = display;
+        self
+    }
+
+    /// Checks, before a render, that `path` (e.g. a JSON sidecar) can be written as the image
+    /// can: a regular file or a new name, in a directory that accepts a new file.
+    pub fn prepare_beside(path: &Path) -> Result<()> {
+        let fail = |message: String| Error::Output {
+            path: path.to_path_buf(),
+            message,
+        };
+        let file = resolve_target(path).map_err(fail)?;
+        check_directory(directory_of(&file)).map_err(fail)
+    }
+
+    /// Writes `bytes` (e.g. a JSON sidecar) to `path` atomically, like the image.
+    pub fn write_beside(path: &Path, bytes: &[u8]) -> Result<()> {
+        let file = resolve_target(path).map_err(|message| Error::Output {
+            path: path.to_path_buf(),
+            message,
+        })?;
+        replace_atomically(&file, bytes).map_err(|message| Error::Output {
+            path: path.to_path_buf(),
+            message,
+        })
     }
 }
 
@@ -101,10 +178,11 @@ fn format_of(path: &Path) -> std::result::Result<ImageFormat, String> {
     match extension.as_deref() {
         Some("png") => Ok(ImageFormat::Png),
         Some("exr") => Ok(ImageFormat::Exr),
+        Some("pfm") => Ok(ImageFormat::Pfm),
         Some(other) => Err(format!(
-            "unknown image format `.{other}` (use .png or .exr)"
+            "unknown image format `.{other}` (use .png, .exr or .pfm)"
         )),
-        None => Err("no file extension to choose the format (use .png or .exr)".into()),
+        None => Err("no file extension to choose the format (use .png, .exr or .pfm)".into()),
     }
 }
 
@@ -154,16 +232,21 @@ fn check_directory(dir: &Path) -> std::result::Result<(), String> {
         .map_err(|e| format!("cannot create a file in {}: {e}", dir.display()))
 }
 
-fn encode(image: &Image, format: ImageFormat) -> std::result::Result<Vec<u8>, String> {
+fn encode(
+    image: &Image,
+    format: ImageFormat,
+    display: Display,
+) -> std::result::Result<Vec<u8>, String> {
     let (w, h) = (image.width, image.height);
     let mut bytes = Vec::new();
     let encoded = match format {
         ImageFormat::Png => PngEncoder::new(&mut bytes).write_image(
-            &png_pixels(image),
+            &png_pixels(image, display),
             w,
             h,
             ExtendedColorType::Rgb8,
         ),
+        ImageFormat::Pfm => return Ok(pfm_bytes(image)),
         ImageFormat::Exr => OpenExrEncoder::new(Cursor::new(&mut bytes)).write_image(
             bytemuck::cast_slice(&image.pixels),
             w,
@@ -175,9 +258,26 @@ fn encode(image: &Image, format: ImageFormat) -> std::result::Result<Vec<u8>, St
     Ok(bytes)
 }
 
-/// sRGB bytes of every pixel, a row per task: on a 16384^2 image the conversion, not the
-/// compression, is what keeps an interrupted render waiting.
-fn png_pixels(image: &Image) -> Vec<u8> {
+/// A Portable Float Map: "PF", the size, a negative scale (little-endian), then RGB floats
+/// with the bottom row first.
+fn pfm_bytes(image: &Image) -> Vec<u8> {
+    let width = image.width as usize;
+    let mut bytes = format!("PF\n{} {}\n-1.0\n", image.width, image.height).into_bytes();
+    for row in image.pixels.chunks(width).rev() {
+        for p in row {
+            for c in p.to_array() {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+    bytes
+}
+
+/// sRGB bytes of every pixel after exposure and tone mapping, a row per task: on a 16384^2
+/// image the conversion, not the compression, is what keeps an interrupted render waiting.
+fn png_pixels(image: &Image, display: Display) -> Vec<u8> {
+    let scale = display.exposure_ev.exp2();
+    let show = |v: f32| srgb_encode(display.tone_map.apply(v * scale));
     let width = image.width as usize;
     let mut bytes = vec![0u8; image.pixels.len() * 3];
     bytes
@@ -186,7 +286,7 @@ fn png_pixels(image: &Image) -> Vec<u8> {
         .for_each(|(out, row)| {
             for (rgb, p) in out.chunks_exact_mut(3).zip(row) {
                 let encoded = if p.is_finite() {
-                    [srgb_encode(p.x), srgb_encode(p.y), srgb_encode(p.z)]
+                    [show(p.x), show(p.y), show(p.z)]
                 } else {
                     NON_FINITE_PNG
                 };
@@ -251,6 +351,95 @@ impl Drop for TempFile {
     fn drop(&mut self) {
         if !self.renamed {
             let _ = std::fs::remove_file(&self.path);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tone_maps_take_their_defining_values() {
+        assert_eq!(ToneMap::Clamp.apply(2.0), 1.0);
+        assert_eq!(ToneMap::Clamp.apply(0.25), 0.25);
+        assert_eq!(ToneMap::Reinhard.apply(1.0), 0.5);
+        assert_eq!(ToneMap::Reinhard.apply(3.0), 0.75);
+        assert_eq!(ToneMap::Aces.apply(0.0), 0.0);
+        // Narkowicz's fit saturates at 1 near x = 11 and is monotonic below.
+        assert_eq!(ToneMap::Aces.apply(100.0), 1.0);
+        let samples: Vec<f32> = (0..200)
+            .map(|i| ToneMap::Aces.apply(i as f32 * 0.05))
+            .collect();
+        assert!(samples.windows(2).all(|w| w[1] >= w[0]));
+        for map in [ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces] {
+            assert_eq!(map.apply(-1.0), 0.0, "{map:?}");
+        }
+    }
+
+    #[test]
+    fn a_pfm_holds_the_floats_bottom_row_first() {
+        let image = Image {
+            width: 2,
+            height: 2,
+            pixels: vec![
+                glam::Vec3::new(1.0, 2.0, 3.0),
+                glam::Vec3::new(4.0, 5.0, 6.0),
+                glam::Vec3::new(7.0, 8.0, f32::INFINITY),
+                glam::Vec3::new(-0.5, 0.0, 1e-30),
+            ],
+        };
+        let bytes = pfm_bytes(&image);
+        let header = b"PF\n2 2\n-1.0\n";
+        assert_eq!(&bytes[..header.len()], header);
+        let floats: Vec<f32> = bytes[header.len()..]
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        assert_eq!(
+            floats,
+            [
+                7.0,
+                8.0,
+                f32::INFINITY,
+                -0.5,
+                0.0,
+                1e-30,
+                1.0,
+                2.0,
+                3.0,
+                4.0,
+                5.0,
+                6.0
+            ]
+        );
+    }
+
+    #[test]
+    fn one_stop_of_exposure_doubles_the_radiance_shown() {
+        let image = Image {
+            width: 3,
+            height: 1,
+            pixels: vec![
+                glam::Vec3::splat(0.05),
+                glam::Vec3::splat(0.2),
+                glam::Vec3::splat(0.9),
+            ],
+        };
+        let doubled = Image {
+            pixels: image.pixels.iter().map(|p| *p * 2.0).collect(),
+            ..image.clone()
+        };
+        for tone_map in [ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces] {
+            let display = |exposure_ev| Display {
+                exposure_ev,
+                tone_map,
+            };
+            assert_eq!(
+                png_pixels(&image, display(1.0)),
+                png_pixels(&doubled, display(0.0)),
+                "{tone_map:?}"
+            );
         }
     }
 }

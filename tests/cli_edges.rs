@@ -74,7 +74,7 @@ fn an_output_path_that_cannot_take_the_image_fails_before_the_render() {
     let cases = [
         ("missing/out.png", "directory"),
         ("file.png/out.png", "is not a directory"),
-        ("out.pfm", "unknown image format `.pfm`"),
+        ("out.ppm", "unknown image format `.ppm`"),
         ("out.bmp", "unknown image format `.bmp`"),
         ("out", "no file extension"),
         ("full.png", "not a regular file"),
@@ -598,4 +598,58 @@ fn one_image_side_keeps_the_film_aspect_and_threads_are_chosen() {
     let (output, _) = render(&["--threads", "0"], "t.png");
     assert_eq!(output.status.code(), Some(1));
     assert!(stderr_of(&output).contains("--threads must be at least 1"));
+}
+
+/// `--sidecar` writes OUT.json beside the image with what reproduces it; `.pfm` writes the same
+/// floats as `.exr`.
+#[test]
+fn a_sidecar_records_the_render_and_pfm_keeps_the_floats() {
+    let dir = scratch_dir("sidecar");
+    let exr = dir.join("s.exr");
+    let output = small_render(&exr, &["--sidecar", "--seed", "9"]);
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    let record: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s.exr.json")).unwrap()).unwrap();
+    assert_eq!(record["seed"], 9);
+    assert_eq!(
+        (record["width"].as_u64(), record["height"].as_u64()),
+        (Some(48), Some(32))
+    );
+    assert_eq!(
+        (record["spp_min"].as_u64(), record["spp_max"].as_u64()),
+        (Some(2), Some(2))
+    );
+    assert_eq!(record["status"], "complete");
+    assert!(record["rays"].as_u64().unwrap() > 0);
+    let scene = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/spheres.toml"));
+    assert_eq!(
+        record["scene_hash"],
+        format!("{:016x}", chambre::provenance::fnv1a64(&scene.unwrap()))
+    );
+    assert!(
+        record["overrides"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|o| o == "render.seed=9")
+    );
+    // The same render as a PFM: the EXR's floats, bottom row first.
+    let pfm = dir.join("s.pfm");
+    let output = small_render(&pfm, &["--seed", "9"]);
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    assert!(!dir.join("s.pfm.json").exists(), "no sidecar unless asked");
+    let bytes = std::fs::read(&pfm).unwrap();
+    let header = b"PF\n48 32\n-1.0\n";
+    assert_eq!(&bytes[..header.len()], header);
+    let floats: Vec<f32> = bytes[header.len()..]
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes(b.try_into().unwrap()))
+        .collect();
+    let exr = image::open(&exr).unwrap().into_rgb32f();
+    for y in 0..32u32 {
+        for x in 0..48u32 {
+            let i = (((31 - y) * 48 + x) * 3) as usize;
+            assert_eq!(&floats[i..i + 3], &exr.get_pixel(x, y).0, "pixel {x},{y}");
+        }
+    }
 }

@@ -344,40 +344,13 @@ impl Machine {
     pub fn here() -> Machine {
         Machine {
             chambre_version: env!("CARGO_PKG_VERSION").to_string(),
-            date_utc: utc_date(),
+            date_utc: crate::provenance::utc_date(),
             cpu_threads: rayon::current_num_threads(),
             adapter: crate::gpu::GpuContext::new()
                 .map(|c| c.adapter_description)
                 .unwrap_or_else(|e| format!("none ({e})")),
         }
     }
-}
-
-/// Today's date (UTC) as YYYY-MM-DD, from the system clock.
-fn utc_date() -> String {
-    let seconds = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
-    civil_date(seconds)
-}
-
-/// The UTC calendar date of a Unix time (H. Hinnant's civil-from-days).
-fn civil_date(unix_seconds: u64) -> String {
-    let days = (unix_seconds / 86_400) as i64 + 719_468;
-    let era = days.div_euclid(146_097);
-    let day_of_era = days.rem_euclid(146_097);
-    let year_of_era =
-        (day_of_era - day_of_era / 1460 + day_of_era / 36_524 - day_of_era / 146_096) / 365;
-    let day_of_year = day_of_era - (365 * year_of_era + year_of_era / 4 - year_of_era / 100);
-    let month_index = (5 * day_of_year + 2) / 153;
-    let day = day_of_year - (153 * month_index + 2) / 5 + 1;
-    let month = if month_index < 10 {
-        month_index + 3
-    } else {
-        month_index - 9
-    };
-    let year = year_of_era + era * 400 + i64::from(month <= 2);
-    format!("{year:04}-{month:02}-{day:02}")
 }
 
 #[cfg(test)]
@@ -388,12 +361,5 @@ mod tests {
     fn spread_is_the_median_min_and_max() {
         let s = Spread::of(&[3.0, 1.0, 2.0, 10.0, 4.0]);
         assert_eq!((s.median, s.min, s.max), (3.0, 1.0, 10.0));
-    }
-
-    #[test]
-    fn unix_times_become_their_calendar_dates() {
-        assert_eq!(civil_date(0), "1970-01-01");
-        assert_eq!(civil_date(951_782_400), "2000-02-29");
-        assert_eq!(civil_date(1_795_392_000 + 86_399), "2026-11-23");
     }
 }
