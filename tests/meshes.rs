@@ -328,3 +328,42 @@ fn a_crease_angle_keeps_sharp_edges_sharp() {
         );
     }
 }
+
+/// A PLY of triangle strips (a `tristrips` element, -1 restarting a strip) loads like faces:
+/// a 2 x 1 grid of quads as one strip, and as two strips joined by a restart, both give four
+/// triangles of the same winding covering the grid's area.
+#[test]
+fn ply_triangle_strips_load_like_faces() {
+    for (name, strip) in [
+        ("strip.ply", vec![0, 3, 1, 4, 2, 5]),
+        ("restart.ply", vec![0, 3, 1, 4, -1, 1, 4, 2, 5]),
+    ] {
+        let mut text = String::from("ply\nformat ascii 1.0\nelement vertex 6\n");
+        text += "property float x\nproperty float y\nproperty float z\n";
+        text += "element tristrips 1\nproperty list int int vertex_indices\nend_header\n";
+        for (x, y) in [(0, 0), (1, 0), (2, 0), (0, 1), (1, 1), (2, 1)] {
+            text += &format!("{x} {y} 0\n");
+        }
+        text += &format!(
+            "{} {}\n",
+            strip.len(),
+            strip
+                .iter()
+                .map(|i| i.to_string())
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+        let path = scratch(name);
+        std::fs::write(&path, text).unwrap();
+        let mesh = load_mesh(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(mesh.triangles.len(), 4, "{name}");
+        let mut area = 0.0;
+        for t in &mesh.triangles {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            assert!(n.z < 0.0, "{name}: {t:?} is wound the other way");
+            area += 0.5 * n.length();
+        }
+        assert!((area - 2.0).abs() < 1e-6, "{name}: area {area}");
+    }
+}

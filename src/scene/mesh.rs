@@ -2,7 +2,7 @@
 //!
 //! OBJ goes through `tobj` (quads and n-gons fan-triangulated, negative indices, several objects
 //! and groups, with or without normals); PLY through `ply-rs-bw` (ASCII and binary of either byte
-//! order; properties other than positions, normals and faces are ignored).
+//! order; faces and triangle strips; other properties are ignored).
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
@@ -265,33 +265,64 @@ fn read_ply(reader: &mut GuardedReader, available: u64) -> Result<TriangleMesh, 
     if normals.len() == mesh.positions.len() && !normals.is_empty() {
         mesh.normals = Some(normals);
     }
+    let count = mesh.positions.len() as i64;
     let faces = payload.get("face").map(Vec::as_slice).unwrap_or_default();
     for (f, face) in faces.iter().enumerate() {
-        let indices: Vec<i64> = match face
-            .get("vertex_indices")
-            .or_else(|| face.get("vertex_index"))
-        {
-            Some(Property::ListInt(l)) => l.iter().map(|&i| i as i64).collect(),
-            Some(Property::ListUInt(l)) => l.iter().map(|&i| i as i64).collect(),
-            Some(Property::ListShort(l)) => l.iter().map(|&i| i as i64).collect(),
-            Some(Property::ListUShort(l)) => l.iter().map(|&i| i as i64).collect(),
-            Some(Property::ListChar(l)) => l.iter().map(|&i| i as i64).collect(),
-            Some(Property::ListUChar(l)) => l.iter().map(|&i| i as i64).collect(),
-            _ => return Err(format!("PLY face {f} has no integer vertex_indices list")),
-        };
-        let count = mesh.positions.len() as i64;
-        if let Some(bad) = indices.iter().find(|&&i| i < 0 || i >= count) {
-            return Err(format!(
-                "PLY face {f} has vertex index {bad}, out of range (0..{count})"
-            ));
-        }
+        let indices = integer_list(face, &["vertex_indices", "vertex_index"])
+            .ok_or_else(|| format!("PLY face {f} has no integer vertex_indices list"))?;
+        check_indices(&indices, count, || format!("PLY face {f}"))?;
         // Fan-triangulate polygons, as tobj does for OBJ.
         for k in 1..indices.len().saturating_sub(1) {
             mesh.triangles
                 .push([indices[0] as u32, indices[k] as u32, indices[k + 1] as u32]);
         }
     }
+    // Triangle strips (scanners and some exporters write them): each new index makes a
+    // triangle with the two before it, every other one reversed to keep the winding; -1
+    // restarts the strip.
+    let strips = payload
+        .get("tristrips")
+        .map(Vec::as_slice)
+        .unwrap_or_default();
+    for (s, strip) in strips.iter().enumerate() {
+        let indices = integer_list(strip, &["vertex_indices", "vertex_index"])
+            .ok_or_else(|| format!("PLY tristrips {s} has no integer vertex_indices list"))?;
+        let vertices: Vec<i64> = indices.iter().copied().filter(|&i| i != -1).collect();
+        check_indices(&vertices, count, || format!("PLY tristrips {s}"))?;
+        for run in indices.split(|&i| i == -1) {
+            for k in 2..run.len() {
+                let (a, b, c) = (run[k - 2] as u32, run[k - 1] as u32, run[k] as u32);
+                mesh.triangles
+                    .push(if k % 2 == 0 { [a, b, c] } else { [b, a, c] });
+            }
+        }
+    }
     Ok(mesh)
+}
+
+/// The first of `keys` that is an integer list property of `element`, widened to i64.
+fn integer_list(element: &DefaultElement, keys: &[&str]) -> Option<Vec<i64>> {
+    let property = keys.iter().find_map(|k| element.get(*k))?;
+    Some(match property {
+        Property::ListInt(l) => l.iter().map(|&i| i as i64).collect(),
+        Property::ListUInt(l) => l.iter().map(|&i| i as i64).collect(),
+        Property::ListShort(l) => l.iter().map(|&i| i as i64).collect(),
+        Property::ListUShort(l) => l.iter().map(|&i| i as i64).collect(),
+        Property::ListChar(l) => l.iter().map(|&i| i as i64).collect(),
+        Property::ListUChar(l) => l.iter().map(|&i| i as i64).collect(),
+        _ => return None,
+    })
+}
+
+/// Every index must name a vertex; `what` names the element for the message.
+fn check_indices(indices: &[i64], count: i64, what: impl Fn() -> String) -> Result<(), String> {
+    match indices.iter().find(|&&i| i < 0 || i >= count) {
+        Some(bad) => Err(format!(
+            "{} has vertex index {bad}, out of range (0..{count})",
+            what()
+        )),
+        None => Ok(()),
+    }
 }
 
 /// The header's element counts against the bytes that follow it, before the parser reads them:
