@@ -653,3 +653,41 @@ fn a_sidecar_records_the_render_and_pfm_keeps_the_floats() {
         }
     }
 }
+
+/// `--quick` renders a quarter of each side at a sixteenth of the samples of whatever the
+/// scene and the other flags ask.
+#[test]
+fn quick_renders_a_smaller_cheaper_preview() {
+    let dir = scratch_dir("quick");
+    let run = |extra: &[&str], name: &str| {
+        let target = dir.join(name);
+        let output = chambre()
+            .args([
+                "render",
+                "scenes/spheres.toml",
+                "--backend",
+                "cpu",
+                "--quick",
+                "-o",
+            ])
+            .arg(&target)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(output.status.success(), "{}", stderr_of(&output));
+        (
+            stderr_of(&output),
+            image::image_dimensions(&target).unwrap(),
+        )
+    };
+    // spheres.toml: 480x320 at 16 spp.
+    let (message, size) = run(&[], "a.png");
+    assert_eq!(size, (120, 80));
+    assert!(
+        message.contains("--quick renders 120x80 at 1 spp"),
+        "{message}"
+    );
+    let (message, size) = run(&["--spp", "64", "--width", "200"], "b.png");
+    assert_eq!(size, (50, 33));
+    assert!(message.contains("at 4 spp"), "{message}");
+}
