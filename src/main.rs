@@ -135,6 +135,10 @@ struct RenderArgs {
     /// the other flags).
     #[arg(long)]
     quick: bool,
+    /// Render only this window of the image, as fractions in [0, 1] (pbrt's crop window;
+    /// overrides render.crop); the image written is the window.
+    #[arg(long, value_delimiter = ',', value_name = "X0,X1,Y0,Y1")]
+    crop: Option<Vec<f64>>,
 }
 
 impl RenderArgs {
@@ -166,6 +170,10 @@ impl RenderArgs {
             if let Some(v) = value {
                 overrides.push(format!("{key}={}", v.name()));
             }
+        }
+        if let Some(window) = &self.crop {
+            let values: Vec<String> = window.iter().map(|v| v.to_string()).collect();
+            overrides.push(format!("render.crop=[{}]", values.join(", ")));
         }
         overrides.extend(self.set.iter().cloned());
         Ok(overrides)

@@ -33,6 +33,8 @@ pub struct FlatScene {
     pub traversal_iterations: f32,
     pub triangle_count: usize,
     pub build_time: Duration,
+    /// The pixels to render: columns `crop[0]..crop[1]`, rows `crop[2]..crop[3]`.
+    pub crop: [u32; 4],
 }
 
 impl FlatScene {
@@ -256,6 +258,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         traversal_iterations: geometry.traversal_iterations,
         triangle_count,
         build_time: geometry.build_time,
+        crop: render.crop,
     }
 }
 

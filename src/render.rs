@@ -181,6 +181,8 @@ pub struct RenderPlan {
     pub light_windows: Vec<(u32, u32)>,
     /// `(first row, rows)` of each band.
     pub bands: Vec<(u32, u32)>,
+    /// The columns every band covers: `first_column .. first_column + width`.
+    pub first_column: u32,
     pub width: u32,
     /// Upper bound on the rays one dispatch traces.
     pub rays_per_dispatch: u64,
@@ -203,7 +205,7 @@ impl RenderPlan {
         for &(tile_y, tile_height) in &self.bands {
             for (i, &(light_sample_start, light_sample_count)) in windows.iter().enumerate() {
                 dispatches.push(GpuPass {
-                    tile_x: 0,
+                    tile_x: self.first_column,
                     tile_y,
                     tile_width: self.width,
                     tile_height,
@@ -274,18 +276,21 @@ pub fn plan_passes(scene: &FlatScene, budgets: &RayBudgets) -> RenderPlan {
     } else {
         bound.per_sample()
     };
-    let rays_per_row = frame.width as u64 * per_pass as u64 * rays_per_sample_and_window;
-    let rows = (budgets.per_dispatch / rays_per_row).clamp(1, frame.height as u64) as u32;
+    let [x0, x1, y0, y1] = scene.crop;
+    let (width, height) = (x1 - x0, y1 - y0);
+    let rays_per_row = width as u64 * per_pass as u64 * rays_per_sample_and_window;
+    let rows = (budgets.per_dispatch / rays_per_row).clamp(1, height as u64) as u32;
     let rays_per_dispatch = rows as u64 * rays_per_row;
     RenderPlan {
         passes: (0..spp.div_ceil(per_pass))
             .map(|i| (i * per_pass, per_pass.min(spp - i * per_pass)))
             .collect(),
         light_windows,
-        bands: (0..frame.height.div_ceil(rows))
-            .map(|i| (i * rows, rows.min(frame.height - i * rows)))
+        bands: (0..height.div_ceil(rows))
+            .map(|i| (y0 + i * rows, rows.min(height - i * rows)))
             .collect(),
-        width: frame.width,
+        first_column: x0,
+        width,
         rays_per_dispatch,
         dispatches_per_batch: (budgets.per_batch / rays_per_dispatch).max(1) as usize,
     }
@@ -415,8 +420,10 @@ pub fn render_with_budgets(
             break;
         }
     }
-    let accumulation = backend.accumulation()?;
-    output.image = Image::from_accumulation(frame.width, frame.height, &accumulation);
+    // The crop window's pixels alone (the whole image unless `render.crop` narrows it).
+    let accumulation = crop_rows(backend.accumulation()?, frame.width, scene.crop);
+    let [x0, x1, y0, y1] = scene.crop;
+    output.image = Image::from_accumulation(x1 - x0, y1 - y0, &accumulation);
     if output.stopped.is_some() {
         // Pixels of an unfinished pass carry more samples than the rest; the image stays a
         // per-pixel mean, so it is still correct, only less converged in places.
@@ -430,6 +437,21 @@ pub fn render_with_budgets(
     output.kernel_time = backend.kernel_time();
     output.elapsed = start.elapsed();
     Ok(output)
+}
+
+/// The pixels of `crop` (columns `crop[0]..crop[1]`, rows `crop[2]..crop[3]`) of an image
+/// `width` pixels wide, row by row.
+fn crop_rows(pixels: Vec<[f32; 4]>, width: u32, crop: [u32; 4]) -> Vec<[f32; 4]> {
+    let [x0, x1, y0, y1] = crop.map(|c| c as usize);
+    if (x0, y0) == (0, 0) && x1 == width as usize && pixels.len() == x1 * y1 {
+        return pixels;
+    }
+    pixels
+        .chunks(width as usize)
+        .skip(y0)
+        .take(y1 - y0)
+        .flat_map(|row| row[x0..x1].iter().copied())
+        .collect()
 }
 
 /// A one-line explanation of kernel status flags.

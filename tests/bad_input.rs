@@ -562,3 +562,20 @@ fn crease_angle_belongs_to_meshes_and_lies_in_0_to_180() {
         "{error}"
     );
 }
+
+#[test]
+fn a_crop_window_must_hold_a_pixel_within_the_image() {
+    for (window, says) in [
+        ("[0.5, 0.5, 0.0, 1.0]", "holds no pixel"),
+        ("[0.0, 1.2, 0.0, 1.0]", "lies in [0, 1]"),
+        ("[0.8, 0.2, 0.0, 1.0]", "holds no pixel"),
+    ] {
+        expect_error(
+            "height = 48",
+            &format!("height = 48\ncrop = {window}"),
+            4,
+            "render.crop",
+            says,
+        );
+    }
+}

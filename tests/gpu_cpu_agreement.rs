@@ -217,3 +217,32 @@ fn extreme_movements_agree_without_nan() {
         check("scenes/thin_lens.toml", &[&small[..], extra].concat());
     }
 }
+
+/// A crop window renders exactly the pixels the full image has there (same random numbers,
+/// keyed by the pixel's place in the full image), on the CPU; the GPU agrees with it.
+#[test]
+fn a_crop_window_renders_the_full_images_pixels_there() {
+    let size = ["render.width=96", "render.height=64", "render.spp=3"];
+    let full = common::render_cpu(&chambre::pack::flatten(&common::load(
+        "scenes/spheres.toml",
+        &size,
+    )));
+    let cropped_scene = chambre::pack::flatten(&common::load(
+        "scenes/spheres.toml",
+        &[&size[..], &["render.crop=[0.25, 0.6, 0.5, 1.0]"]].concat(),
+    ));
+    // pbrt's rounding: columns ceil(96 * 0.25) = 24 .. ceil(96 * 0.6) = 58, rows 32 .. 64.
+    assert_eq!(cropped_scene.crop, [24, 58, 32, 64]);
+    let cropped = common::render_cpu(&cropped_scene);
+    assert_eq!((cropped.width, cropped.height), (34, 32));
+    for y in 0..32 {
+        for x in 0..34 {
+            assert_eq!(cropped.get(x, y), full.get(24 + x, 32 + y), "pixel {x},{y}");
+        }
+    }
+    let Some(gpu) = common::render_gpu(&cropped_scene) else {
+        return;
+    };
+    let (within, mean_abs) = common::agreement(&cropped, &gpu, 1e-3);
+    assert!(within >= 0.995 && mean_abs < 1e-4, "{within} {mean_abs}");
+}

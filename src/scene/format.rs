@@ -101,6 +101,8 @@ pub struct RenderSection {
     pub background: Vec3,
     #[serde(default)]
     pub ambient: Vec3,
+    /// [x0, x1, y0, y1] in [0, 1]: render only this window of the image (pbrt's crop window)
+    pub crop: Option<Exact<f64, 4>>,
 }
 
 fn default_spp() -> i64 {

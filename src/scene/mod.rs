@@ -41,6 +41,9 @@ pub struct RenderSettings {
     pub pixel_sampler: SamplerName,
     pub background: Vec3,
     pub ambient: Vec3,
+    /// Pixels rendered: columns `crop[0]..crop[1]`, rows `crop[2]..crop[3]` (the whole image
+    /// unless `render.crop` narrows it).
+    pub crop: [u32; 4],
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -220,9 +220,12 @@ fn check_sampler_spp(check: &Checker, field: &str, sampler: SamplerName, spp: i6
 fn validate_render(check: &Checker, file: &SceneFile) -> Result<RenderSettings> {
     let r = &file.render;
     check_sampler_spp(check, "render.pixel_sampler", r.pixel_sampler, r.spp)?;
+    let width = check.integer("render.width", r.width, 1, MAX_IMAGE_SIDE)?;
+    let height = check.integer("render.height", r.height, 1, MAX_IMAGE_SIDE)?;
     Ok(RenderSettings {
-        width: check.integer("render.width", r.width, 1, MAX_IMAGE_SIDE)?,
-        height: check.integer("render.height", r.height, 1, MAX_IMAGE_SIDE)?,
+        width,
+        height,
+        crop: crop_window(check, r.crop.as_ref().map(|c| c.0), width, height)?,
         spp: check.integer("render.spp", r.spp, 1, MAX_SPP)?,
         max_depth: check.integer("render.max_depth", r.max_depth, 0, MAX_DEPTH)?,
         seed: check.integer("render.seed", r.seed, 0, u32::MAX as i64)?,
@@ -230,6 +233,47 @@ fn validate_render(check: &Checker, file: &SceneFile) -> Result<RenderSettings> 
         background: check.radiometric("render.background", r.background)?,
         ambient: check.radiometric("render.ambient", r.ambient)?,
     })
+}
+
+/// pbrt's crop window: fractions [x0, x1, y0, y1] of the image, to pixel bounds by rounding
+/// up (`ceil(width * x0) .. ceil(width * x1)`), which must hold at least one pixel.
+fn crop_window(
+    check: &Checker,
+    crop: Option<[f64; 4]>,
+    width: u32,
+    height: u32,
+) -> Result<[u32; 4]> {
+    let Some(window) = crop else {
+        return Ok([0, width, 0, height]);
+    };
+    for (i, v) in window.iter().enumerate() {
+        let v = check.finite(&format!("render.crop[{i}]"), *v)?;
+        if !(0.0..=1.0).contains(&v) {
+            return Err(check.err(
+                &format!("render.crop[{i}]"),
+                format!("a crop window bound lies in [0, 1], got {}", num(v)),
+            ));
+        }
+    }
+    let [x0, x1, y0, y1] = window;
+    let to_pixels = |f: f64, side: u32| (f * side as f64).ceil() as u32;
+    let bounds = [
+        to_pixels(x0, width),
+        to_pixels(x1, width),
+        to_pixels(y0, height),
+        to_pixels(y1, height),
+    ];
+    if bounds[0] >= bounds[1] || bounds[2] >= bounds[3] {
+        return Err(check.err(
+            "render.crop",
+            format!(
+                "[{}] holds no pixel of the {width}x{height} image ([x0, x1, y0, y1] with \
+                 x0 < x1 and y0 < y1)",
+                nums(&window)
+            ),
+        ));
+    }
+    Ok(bounds)
 }
 
 fn validate_camera(
