@@ -99,7 +99,7 @@ pub const STATUS_PERMUTE_CAP: u32 = 4;
 pub const STATUS_LOOP_LIMIT: u32 = 8;
 /// Trip count of the loop-limit check (`GpuPass::loop_check`); any value above 1 works.
 pub const LOOP_CHECK_ITERATIONS: u32 = 2;
-/// Slots of the status buffer (array<atomic<u32>, STATUS_WORDS>).
+/// Slots of the status buffer (`array<atomic<u32>, STATUS_WORDS>`).
 pub const STATUS_FLAGS: u32 = 0;
 pub const STATUS_RAYS: u32 = 1;
 pub const STATUS_TRUNCATED: u32 = 2;
