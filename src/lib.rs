@@ -41,3 +41,30 @@ pub mod sampler;
 pub mod scene;
 
 pub use error::{Error, Result};
+
+/// Renders `scene` on the best backend, as `chambre render --backend auto` does: a real GPU
+/// when there is one and it accepts the scene, else the CPU path (which is faster than a CPU
+/// implementation of the GPU API such as lavapipe). Returns the output and the backend used.
+pub fn render_best(scene: &scene::Scene) -> Result<(render::RenderOutput, String)> {
+    use std::sync::atomic::AtomicBool;
+    let flat = pack::flatten(scene);
+    let cancel = AtomicBool::new(false);
+    let gpu = gpu::GpuContext::new()
+        .ok()
+        .filter(|context| !context.is_cpu_adapter)
+        .and_then(|context| gpu::GpuRenderer::new(context, &flat).ok());
+    match gpu {
+        Some(mut renderer) => {
+            let name = format!("GPU: {}", renderer.adapter_description());
+            Ok((
+                render::render(&flat, &mut renderer, &mut |_, _| {}, &cancel)?,
+                name,
+            ))
+        }
+        None => {
+            let mut renderer = cpu::CpuRenderer::new(&flat);
+            let output = render::render(&flat, &mut renderer, &mut |_, _| {}, &cancel)?;
+            Ok((output, "CPU".to_string()))
+        }
+    }
+}

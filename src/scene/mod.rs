@@ -4,6 +4,7 @@
 //! resolved, every mesh loaded and transformed. Kernels never see unvalidated data, because WGSL
 //! has no error channel and may assume NaN and infinity never occur.
 
+pub mod builder;
 pub mod format;
 mod load;
 pub mod mesh;
@@ -15,6 +16,7 @@ use glam::Vec3;
 
 pub use crate::camera::CameraSpec;
 pub use crate::sampler::SamplerName;
+pub use builder::SceneBuilder;
 pub use load::parse_override;
 pub use mesh::TriangleMesh;
 
