@@ -42,9 +42,10 @@ pub enum Error {
         cause: std::io::Error,
     },
 
-    /// A mesh file named outside a scene (`chambre bench --mesh`) could not be read.
+    /// A file named on the command line, outside a scene, is unusable: a mesh for
+    /// `chambre bench`, a shard manifest for `chambre merge`.
     #[error("{path}: {message}")]
-    Mesh { path: PathBuf, message: String },
+    File { path: PathBuf, message: String },
 
     /// A command-line override `--set key=value` is malformed.
     #[error("--set {key}: {message}")]

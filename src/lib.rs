@@ -39,6 +39,7 @@ pub mod provenance;
 pub mod render;
 pub mod sampler;
 pub mod scene;
+pub mod shard;
 
 pub use error::{Error, Result};
 

@@ -20,6 +20,7 @@ use chambre::output::{Display, ImageFormat, OutputTarget, ToneMap};
 use chambre::pack::{FlatScene, flatten};
 use chambre::render::{Progress, RenderOutput, describe_status_flags, render};
 use chambre::scene::Scene;
+use chambre::shard::{Manifest, Shard};
 use chambre::{Error, Result};
 
 #[derive(Parser)]
@@ -62,6 +63,16 @@ enum Command {
     },
     /// List the GPU adapters found and their relevant limits.
     Info,
+    /// Put the shards of a render (`render --shard I/N`) back together, bit-identical to one
+    /// render of the whole image.
+    Merge {
+        /// Every shard's manifest (`*.shard-I-of-N.json`).
+        #[arg(required = true)]
+        manifests: Vec<PathBuf>,
+        /// The image to write (.png, .exr or .pfm).
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Measure: the figures of BENCHMARKS.md, as a table and optionally JSON.
     #[command(subcommand)]
     Bench(chambre::bench::BenchCommand),
@@ -139,6 +150,11 @@ struct RenderArgs {
     /// overrides render.crop); the image written is the window.
     #[arg(long, value_delimiter = ',', value_name = "X0,X1,Y0,Y1")]
     crop: Option<Vec<f64>>,
+    /// Render shard I of N (a band of rows) for `chambre merge`: writes OUT's stem with
+    /// `.shard-I-of-N.exr` and `.json`. `auto/N` takes I from JOB_COMPLETION_INDEX,
+    /// SLURM_ARRAY_TASK_ID or AWS_BATCH_JOB_ARRAY_INDEX.
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
 }
 
 impl RenderArgs {
@@ -270,6 +286,7 @@ fn main() -> ExitCode {
             set,
         } => run_camera(&scene, coc, far, &set),
         Command::Info => run_info(),
+        Command::Merge { manifests, output } => run_merge(&manifests, &output),
     };
     match result {
         Ok(code) => code,
@@ -453,15 +470,32 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         );
     }
     let overrides = args.overrides()?;
-    let scene = load(path, &overrides)?;
+    let mut scene = load(path, &overrides)?;
+    let shard = args
+        .shard
+        .as_deref()
+        .map(Shard::parse)
+        .transpose()
+        .map_err(|e| anyhow::anyhow!("--shard {e}"))?;
+    let shard_paths = shard.map(|s| s.paths(output_path));
+    let full_crop = scene.render.crop;
+    if let Some(shard) = shard {
+        scene.render.crop = shard.rows(full_crop);
+    }
+    let output_path = shard_paths
+        .as_ref()
+        .map_or(output_path.as_path(), |(image, _)| image);
     // Before any render time is spent: a path that cannot take the image fails now.
     let target = OutputTarget::prepare(output_path)?.with_display(Display {
         exposure_ev: args.exposure,
         tone_map: args.tonemap,
     });
     let sidecar_path = args.sidecar.then(|| sidecar_path(output_path));
-    if let Some(sidecar) = &sidecar_path {
-        OutputTarget::prepare_beside(sidecar)?;
+    for beside in sidecar_path
+        .iter()
+        .chain(shard_paths.as_ref().map(|(_, m)| m))
+    {
+        OutputTarget::prepare_beside(beside)?;
     }
     let flat = flatten(&scene);
     let cancel = Arc::new(AtomicBool::new(false));
@@ -504,12 +538,66 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         (sidecar_path, record)
     });
     let written = output.max_samples_per_pixel > 0;
+    let manifest = match (shard, &shard_paths) {
+        (Some(shard), Some((image, _))) => Some(shard_manifest(
+            shard, args, &scene, full_crop, image, &overrides, &output,
+        )),
+        _ => None,
+    };
     let code = finish(output, &target, &backend_name)?;
+    if let (Some(manifest), Some((_, manifest_path)), true) = (manifest, &shard_paths, written) {
+        let text = serde_json::to_string_pretty(&manifest).context("encoding the manifest")?;
+        OutputTarget::write_beside(manifest_path, (text + "\n").as_bytes())?;
+    }
     if let Some((sidecar_path, record)) = sidecar.filter(|_| written) {
         let text = serde_json::to_string_pretty(&record).context("encoding the sidecar")?;
         OutputTarget::write_beside(&sidecar_path, (text + "\n").as_bytes())?;
     }
     Ok(code)
+}
+
+/// What a shard's manifest says of its band.
+fn shard_manifest(
+    shard: Shard,
+    args: &RenderArgs,
+    scene: &Scene,
+    full_crop: [u32; 4],
+    image: &Path,
+    overrides: &[String],
+    output: &RenderOutput,
+) -> Manifest {
+    let mut identity = std::fs::read(&args.scene).unwrap_or_default();
+    for o in overrides {
+        identity.extend_from_slice(o.as_bytes());
+    }
+    let [x0, x1, _, _] = full_crop;
+    Manifest {
+        shard,
+        width: scene.render.width,
+        height: scene.render.height,
+        band: [x0, x1, scene.render.crop[2], scene.render.crop[3]],
+        image: image
+            .file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into_owned()),
+        render_hash: format!("{:016x}", chambre::provenance::fnv1a64(&identity)),
+        spp_min: output.samples_per_pixel,
+        spp_max: output.max_samples_per_pixel,
+    }
+}
+
+/// `chambre merge`: the shards' bands stacked into one image, written atomically.
+fn run_merge(manifests: &[PathBuf], output: &Path) -> anyhow::Result<ExitCode> {
+    let target = OutputTarget::prepare(output)?;
+    let image = chambre::shard::merge(manifests)?;
+    target.write(&image)?;
+    note!(
+        "{}: {}x{} from {} shards",
+        output.display(),
+        image.width,
+        image.height,
+        manifests.len()
+    );
+    Ok(ExitCode::SUCCESS)
 }
 
 /// `OUT.json` beside `OUT` (the image's own extension kept, so `a.png` and `a.exr` do not

@@ -691,3 +691,65 @@ fn quick_renders_a_smaller_cheaper_preview() {
     assert_eq!(size, (50, 33));
     assert!(message.contains("at 4 spp"), "{message}");
 }
+
+/// Three shards merged are the single render, bit for bit; a missing or foreign shard is an
+/// error naming its manifest; `auto/N` takes the index from the batch engine's variable.
+#[test]
+fn shards_merge_into_the_single_render_bit_for_bit() {
+    let dir = scratch_dir("shards");
+    let full = dir.join("full.exr");
+    assert!(small_render(&full, &[]).status.success());
+    let render_shard = |shard: &str, env: Option<(&str, &str)>| {
+        let mut command = chambre();
+        command
+            .args(["render", "scenes/spheres.toml", "--backend", "cpu"])
+            .args([
+                "--width", "48", "--height", "32", "--spp", "2", "--shard", shard, "-o",
+            ])
+            .arg(dir.join("out.exr"));
+        for name in chambre::shard::INDEX_VARIABLES {
+            command.env_remove(name);
+        }
+        if let Some((name, value)) = env {
+            command.env(name, value);
+        }
+        let output = command.output().unwrap();
+        assert!(output.status.success(), "{}", stderr_of(&output));
+    };
+    render_shard("0/3", None);
+    render_shard("auto/3", Some(("SLURM_ARRAY_TASK_ID", "1")));
+    render_shard("auto/3", Some(("JOB_COMPLETION_INDEX", "2")));
+    let manifests: Vec<PathBuf> = (0..3)
+        .map(|i| dir.join(format!("out.shard-{i}-of-3.json")))
+        .collect();
+    let merged = dir.join("merged.exr");
+    let output = chambre()
+        .arg("merge")
+        .args(&manifests)
+        .arg("-o")
+        .arg(&merged)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    let read = |path: &PathBuf| image::open(path).unwrap().into_rgb32f();
+    let (a, b) = (read(&full), read(&merged));
+    assert_eq!(a.dimensions(), b.dimensions());
+    assert!(
+        a.as_raw()
+            .iter()
+            .zip(b.as_raw())
+            .all(|(x, y)| x.to_bits() == y.to_bits()),
+        "the merged image differs from the single render"
+    );
+    // Two of three shards: refused, naming a manifest.
+    let output = chambre()
+        .arg("merge")
+        .args(&manifests[..2])
+        .arg("-o")
+        .arg(dir.join("partial.exr"))
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stderr_of(&output).contains("2 manifests given for a render of 3 shards"));
+    assert!(!dir.join("partial.exr").exists());
+}

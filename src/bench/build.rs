@@ -36,7 +36,7 @@ pub struct BuildReport {
 
 /// The boxes of a mesh's triangles.
 pub fn triangle_boxes(mesh: &Path) -> Result<Vec<Aabb>> {
-    let mesh = load_mesh(mesh).map_err(|message| Error::Mesh {
+    let mesh = load_mesh(mesh).map_err(|message| Error::File {
         path: mesh.to_path_buf(),
         message,
     })?;

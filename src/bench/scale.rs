@@ -158,7 +158,7 @@ pub fn run(
     runs: u32,
     gpu: bool,
 ) -> Result<ScaleReport> {
-    let full = load_mesh(mesh).map_err(|message| Error::Mesh {
+    let full = load_mesh(mesh).map_err(|message| Error::File {
         path: mesh.to_path_buf(),
         message,
     })?;
