@@ -19,6 +19,8 @@
 //! | BVH traversal        | `accel/traverse.rs` (obvhs) | `wgsl/traverse.wgsl`   |
 //! | shading, shadows, mirrors | `integrator.rs`        | `wgsl/integrator.wgsl` |
 //! | pixel loop           | `cpu.rs`                    | `wgsl/render.wgsl`     |
+//! | status and loop caps | `render.rs`                 | `wgsl/status.wgsl`     |
+//! | ray queries (bench)  | `bench/rays.rs`             | `wgsl/trace.wgsl`      |
 //! | bindings             | `gpu/kernels.rs` (table)    | `wgsl/bindings.wgsl`   |
 //!
 //! Kernels are listed in `gpu/kernels.rs` (modules, entry point, bindings) and built by its one
