@@ -47,6 +47,16 @@ fn stderr_of(output: &Output) -> String {
 }
 
 /// A 48x32 CPU render of the sample scene into `out`, with extra arguments.
+/// `chambre render scenes/spheres.toml --backend cpu -o OUT EXTRA...` at the scene's size.
+fn render_spheres_on_cpu(out: &Path, extra: &[&str]) -> Output {
+    chambre()
+        .args(["render", "scenes/spheres.toml", "--backend", "cpu", "-o"])
+        .arg(out)
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
 fn small_render(out: &Path, extra: &[&str]) -> Output {
     small_render_with(out, "cpu", extra)
 }
@@ -563,21 +573,10 @@ fn one_image_side_keeps_the_film_aspect_and_threads_are_chosen() {
     let dir = scratch_dir("size");
     let render = |extra: &[&str], name: &str| {
         let target = dir.join(name);
-        let output = chambre()
-            .args([
-                "render",
-                "scenes/spheres.toml",
-                "--backend",
-                "cpu",
-                "--spp",
-                "1",
-                "-o",
-            ])
-            .arg(&target)
-            .args(extra)
-            .output()
-            .unwrap();
-        (output, target)
+        (
+            render_spheres_on_cpu(&target, &[&["--spp", "1"], extra].concat()),
+            target,
+        )
     };
     // spheres.toml: a 36 x 24 mm film.
     let (output, target) = render(&["--width", "200", "--threads", "1"], "w.png");
@@ -661,19 +660,7 @@ fn quick_renders_a_smaller_cheaper_preview() {
     let dir = scratch_dir("quick");
     let run = |extra: &[&str], name: &str| {
         let target = dir.join(name);
-        let output = chambre()
-            .args([
-                "render",
-                "scenes/spheres.toml",
-                "--backend",
-                "cpu",
-                "--quick",
-                "-o",
-            ])
-            .arg(&target)
-            .args(extra)
-            .output()
-            .unwrap();
+        let output = render_spheres_on_cpu(&target, &[&["--quick"], extra].concat());
         assert!(output.status.success(), "{}", stderr_of(&output));
         (
             stderr_of(&output),
