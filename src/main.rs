@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -18,7 +19,9 @@ use chambre::cpu::CpuRenderer;
 use chambre::gpu::{GpuContext, GpuRenderer, describe_adapters};
 use chambre::output::{Display, ImageFormat, OutputTarget, ToneMap};
 use chambre::pack::{FlatScene, flatten};
-use chambre::render::{Progress, RenderOutput, describe_status_flags, render};
+use chambre::render::{
+    Backend, Progress, RenderOutput, describe_status_flags, render, render_until,
+};
 use chambre::scene::Scene;
 use chambre::shard::{Manifest, Shard};
 use chambre::{Error, Result};
@@ -150,6 +153,11 @@ struct RenderArgs {
     /// overrides render.crop); the image written is the window.
     #[arg(long, value_delimiter = ',', value_name = "X0,X1,Y0,Y1")]
     crop: Option<Vec<f64>>,
+    /// Stop after this many seconds (the batches in flight finish) and write the image with
+    /// the samples each pixel received: a time instead of a sample count (`--spp` is then the
+    /// most taken).
+    #[arg(long, value_name = "SECONDS")]
+    time_budget: Option<f64>,
     /// Render shard I of N (a band of rows) for `chambre merge`: writes OUT's stem with
     /// `.shard-I-of-N.exr` and `.json`. `auto/N` takes I from JOB_COMPLETION_INDEX,
     /// SLURM_ARRAY_TASK_ID or AWS_BATCH_JOB_ARRAY_INDEX.
@@ -505,15 +513,23 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
         .context("installing the SIGINT/SIGTERM/SIGHUP handler")?;
     let mut progress = progress_reporter();
+    // With a time budget the render stops, successfully, at the deadline.
+    let deadline = match args.time_budget {
+        Some(seconds) if !(seconds.is_finite() && seconds > 0.0) => {
+            bail!("--time-budget must be a positive number of seconds, got {seconds}")
+        }
+        Some(seconds) => Some(Instant::now() + Duration::from_secs_f64(seconds)),
+        None => None,
+    };
+    let run = |backend: &mut dyn Backend, progress: &mut dyn Progress| match deadline {
+        Some(deadline) => render_until(&flat, backend, progress, &cancel, deadline),
+        None => render(&flat, backend, progress, &cancel),
+    };
     let (output, backend_name, features) = match gpu_renderer(choice, &flat)? {
         Some(mut renderer) => {
             let name = format!("GPU: {}", renderer.adapter_description());
             let features = renderer.features();
-            (
-                render(&flat, &mut renderer, progress.as_mut(), &cancel)?,
-                name,
-                features,
-            )
+            (run(&mut renderer, progress.as_mut())?, name, features)
         }
         None => {
             let mut renderer = CpuRenderer::new(&flat).with_cancel(&cancel);
@@ -523,11 +539,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
                 if threads == 1 { "" } else { "s" }
             );
             let features = renderer.features();
-            (
-                render(&flat, &mut renderer, progress.as_mut(), &cancel)?,
-                name,
-                features,
-            )
+            (run(&mut renderer, progress.as_mut())?, name, features)
         }
     };
     if stats {
@@ -737,6 +749,13 @@ fn finish(output: RenderOutput, target: &OutputTarget, backend: &str) -> anyhow:
         output.rays_per_second() / 1e6,
         output.rays
     );
+    if output.deadline_reached {
+        note!(
+            "note: the time budget was spent after {:.2} s: {} per pixel",
+            output.elapsed.as_secs_f64(),
+            describe_samples(&output)
+        );
+    }
     if output.truncated_paths > 0 {
         note!(
             "note: {} mirror paths were cut off at max_depth",

@@ -163,6 +163,8 @@ pub struct RenderOutput {
     pub status_flags: u32,
     /// Why the render stopped early, if it did; `image` then holds the samples taken so far.
     pub stopped: Option<Error>,
+    /// The render stopped, as asked, at its deadline (`render_until`); not an error.
+    pub deadline_reached: bool,
 }
 
 impl RenderOutput {
@@ -324,12 +326,43 @@ pub fn render(
     render_with_budgets(scene, backend, progress, cancel, &RayBudgets::DEFAULT)
 }
 
+/// [`render`] that stops, successfully, once `deadline` has passed: no batch is queued after
+/// it, the batches in flight finish, and the image holds every finished sample
+/// (`RenderOutput::deadline_reached`).
+pub fn render_until(
+    scene: &FlatScene,
+    backend: &mut dyn Backend,
+    progress: &mut dyn Progress,
+    cancel: &AtomicBool,
+    deadline: Instant,
+) -> Result<RenderOutput> {
+    drive(
+        scene,
+        backend,
+        progress,
+        cancel,
+        Some(deadline),
+        &RayBudgets::DEFAULT,
+    )
+}
+
 /// [`render`] with chosen budgets (tests use small ones to split small renders).
 pub fn render_with_budgets(
     scene: &FlatScene,
     backend: &mut dyn Backend,
     progress: &mut dyn Progress,
     cancel: &AtomicBool,
+    budgets: &RayBudgets,
+) -> Result<RenderOutput> {
+    drive(scene, backend, progress, cancel, None, budgets)
+}
+
+fn drive(
+    scene: &FlatScene,
+    backend: &mut dyn Backend,
+    progress: &mut dyn Progress,
+    cancel: &AtomicBool,
+    deadline: Option<Instant>,
     budgets: &RayBudgets,
 ) -> Result<RenderOutput> {
     let frame = &scene.frame;
@@ -352,6 +385,7 @@ pub fn render_with_budgets(
         truncated_paths: 0,
         status_flags: 0,
         stopped: None,
+        deadline_reached: false,
     };
     // Batches are made pass by pass as they are submitted: a 2^20-spp render has millions.
     let batches = (0..plan.passes.len()).flat_map(|pass| {
@@ -409,6 +443,10 @@ pub fn render_with_budgets(
             });
             break;
         }
+        if deadline.is_some_and(|d| Instant::now() >= d) {
+            output.deadline_reached = true;
+            break;
+        }
         if let Err(e) = backend.submit(&dispatches) {
             output.stopped = Some(e);
             break;
@@ -424,7 +462,7 @@ pub fn render_with_budgets(
     let accumulation = crop_rows(backend.accumulation()?, frame.width, scene.crop);
     let [x0, x1, y0, y1] = scene.crop;
     output.image = Image::from_accumulation(x1 - x0, y1 - y0, &accumulation);
-    if output.stopped.is_some() {
+    if output.stopped.is_some() || output.deadline_reached {
         // Pixels of an unfinished pass carry more samples than the rest; the image stays a
         // per-pixel mean, so it is still correct, only less converged in places.
         let counts = || accumulation.iter().map(|a| a[3] as u32);

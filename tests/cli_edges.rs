@@ -740,3 +740,30 @@ fn shards_merge_into_the_single_render_bit_for_bit() {
     assert!(stderr_of(&output).contains("2 manifests given for a render of 3 shards"));
     assert!(!dir.join("partial.exr").exists());
 }
+
+/// `--time-budget` stops a render that would take hours once the time is spent, successfully,
+/// with an image of the samples taken and a note saying how many; a budget longer than the
+/// render changes nothing.
+#[test]
+fn a_time_budget_stops_the_render_and_keeps_its_samples() {
+    let dir = scratch_dir("budget");
+    let target = dir.join("budget.exr");
+    let started = std::time::Instant::now();
+    let output = render_spheres_on_cpu(&target, &["--spp", "1000000", "--time-budget", "1.5"]);
+    let took = started.elapsed().as_secs_f64();
+    let message = stderr_of(&output);
+    assert!(output.status.success(), "{message}");
+    assert!(took < 30.0, "a 1.5 s budget took {took} s");
+    assert!(
+        message.contains("note: the time budget was spent"),
+        "{message}"
+    );
+    let image = image::open(&target).unwrap().into_rgb32f();
+    assert_eq!(image.dimensions(), (480, 320));
+    assert!(image.pixels().filter(|p| p.0[0] > 0.0).count() > 480 * 320 / 2);
+    let output = small_render(&dir.join("short.exr"), &["--time-budget", "600"]);
+    let message = stderr_of(&output);
+    assert!(output.status.success(), "{message}");
+    assert!(!message.contains("time budget"), "{message}");
+    assert!(message.contains(", 2 spp in "), "{message}");
+}
