@@ -191,14 +191,16 @@ fn direct_light<const F: u32>(
     let mut sample_offset = 0;
     for light in &scene.lights[..scene.frame.light_count as usize] {
         let color = Vec3::from(light.color);
-        if has(F, FEATURE_AREA_LIGHTS) && light.kind == LIGHT_AREA {
-            // Stratified points on the parallelogram; each sample draws its numbers first so
-            // both paths consume the same dimensions whatever the visibility.
+        if has(F, FEATURE_AREA_LIGHTS) && light.is_area() {
+            // Stratified points on the parallelogram (folded onto the triangle of a triangle
+            // light); each sample draws its numbers first so both paths consume the same
+            // dimensions whatever the visibility.
             let corner = Vec3::from(light.p0);
             let (edge_u, edge_v) = (Vec3::from(light.p1), Vec3::from(light.p2));
             let cross = edge_u.cross(edge_v);
-            let area = cross.length();
-            let light_normal = cross / area;
+            let triangle = light.kind == LIGHT_TRIANGLE;
+            let area = if triangle { 0.5 } else { 1.0 } * cross.length();
+            let light_normal = cross.normalize();
             let samples = window.clip(light.samples);
             rng.seek(light_dimension(
                 &scene.frame,
@@ -209,7 +211,10 @@ fn direct_light<const F: u32>(
             sample_offset += light.samples;
             let mut sum = Vec3::ZERO;
             for k in samples {
-                let u = stratified_2d(k, light.samples, light.strata_columns, rng.next_2d());
+                let mut u = stratified_2d(k, light.samples, light.strata_columns, rng.next_2d());
+                if triangle && u[0] + u[1] > 1.0 {
+                    u = [1.0 - u[0], 1.0 - u[1]];
+                }
                 let to_light = corner + u[0] * edge_u + u[1] * edge_v - surface.position;
                 let distance = to_light.length();
                 let wi = to_light / distance;

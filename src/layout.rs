@@ -36,6 +36,9 @@ pub const MODEL_EMITTER: u32 = 3;
 pub const LIGHT_POINT: u32 = 0;
 pub const LIGHT_DIRECTIONAL: u32 = 1;
 pub const LIGHT_AREA: u32 = 2;
+/// An emitting triangle (an OBJ face with `Ke`): `p0` a vertex, `p1` and `p2` the edges to
+/// the others; sampled by folding the unit square onto the triangle.
+pub const LIGHT_TRIANGLE: u32 = 3;
 
 /// Sample patterns (`GpuFrame::pixel_sampler`, `GpuFrame::lens_sampler`); see `src/sampler.rs`.
 pub const SAMPLER_RANDOM: u32 = 0;
@@ -283,6 +286,13 @@ pub struct GpuRay {
     pub _pad0: u32,
 }
 
+impl GpuLight {
+    /// An area light, parallelogram or triangle: sampled with `samples` shadow rays.
+    pub fn is_area(&self) -> bool {
+        self.kind == LIGHT_AREA || self.kind == LIGHT_TRIANGLE
+    }
+}
+
 const _: () = assert!(size_of::<GpuRay>() == 32);
 const _: () = assert!(size_of::<GpuBvhNode>() == 32);
 const _: () = assert!(size_of::<GpuPrimitive>() == 48);
@@ -311,6 +321,7 @@ pub fn wgsl_prelude() -> String {
         ("LIGHT_POINT", LIGHT_POINT),
         ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
         ("LIGHT_AREA", LIGHT_AREA),
+        ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),
         ("SAMPLER_RANDOM", SAMPLER_RANDOM),
         ("SAMPLER_STRATIFIED", SAMPLER_STRATIFIED),
         ("SAMPLER_POISSON", SAMPLER_POISSON),

@@ -65,11 +65,11 @@ impl FlatScene {
             FEATURE_MIRRORS,
         );
         add(
-            self.lights.iter().any(|l| l.kind == LIGHT_AREA),
+            self.lights.iter().any(GpuLight::is_area),
             FEATURE_AREA_LIGHTS,
         );
         add(
-            self.lights.iter().any(|l| l.kind != LIGHT_AREA),
+            self.lights.iter().any(|l| !l.is_area()),
             FEATURE_PUNCTUAL_LIGHTS,
         );
         add(
@@ -87,13 +87,21 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         .iter()
         .map(|m| GpuMaterial {
             diffuse: m.diffuse.to_array(),
-            model: m.model,
+            // A material with emission (an OBJ `.mtl`'s `Ke`) is an emitter, lit by nothing.
+            model: if m.emission.max_element() > 0.0 {
+                MODEL_EMITTER
+            } else {
+                m.model
+            },
             specular: m.specular.to_array(),
             shininess: m.shininess,
             mirror: m.mirror.to_array(),
+            emission: m.emission.to_array(),
             ..Default::default()
         })
         .collect();
+    // Emitting triangles, each a light of one shadow-ray sample per hit.
+    let mut triangle_lights = Vec::new();
     let mut bounded: Vec<(GpuPrimitive, Option<GpuNormals>)> = Vec::new();
     let mut planes = Vec::new();
     let mut triangle_count = 0;
@@ -130,10 +138,18 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             } => planes.push(prim(PRIM_PLANE, *material, *point, *normal, Vec3::ZERO)),
             Shape::Mesh { mesh, material } => {
                 triangle_count += mesh.triangles.len();
-                for t in &mesh.triangles {
-                    // Vertices in the order the watertight test relies on.
-                    let order =
-                        intersect::lexicographic_order(t.map(|i| mesh.positions[i as usize]));
+                for (f, t) in mesh.triangles.iter().enumerate() {
+                    let material = mesh.face_materials.get(f).copied().unwrap_or(*material);
+                    let emission = scene.materials[material as usize].emission;
+                    let emitting = emission.max_element() > 0.0;
+                    // Vertices in the order the watertight test relies on; an emitter keeps
+                    // its winding, which says which side it shines from.
+                    let order = match emitting {
+                        true => [0, 1, 2],
+                        false => {
+                            intersect::lexicographic_order(t.map(|i| mesh.positions[i as usize]))
+                        }
+                    };
                     let t = order.map(|k| t[k]);
                     let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
                     let normals = mesh.normals.as_ref().map(|n| {
@@ -142,7 +158,20 @@ pub fn flatten(scene: &Scene) -> FlatScene {
                             n: [na.x, na.y, na.z, nb.x, nb.y, nb.z, nc.x, nc.y, nc.z],
                         }
                     });
-                    bounded.push((prim(PRIM_TRIANGLE, *material, a, b, c), normals));
+                    bounded.push((prim(PRIM_TRIANGLE, material, a, b, c), normals));
+                    if emitting {
+                        triangle_lights.push(GpuLight {
+                            p0: a.to_array(),
+                            kind: LIGHT_TRIANGLE,
+                            p1: (b - a).to_array(),
+                            samples: 1,
+                            p2: (c - a).to_array(),
+                            // Pre-reorder index for now; remapped after the BVH build below.
+                            prim: bounded.len() as u32 - 1,
+                            color: emission.to_array(),
+                            strata_columns: 1,
+                        });
+                    }
                 }
             }
         }
@@ -200,6 +229,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         });
     }
 
+    lights.extend(triangle_lights);
     let geometry = build_geometry(bounded, planes);
     // The area lights' quads, now in BVH order.
     for light in &mut lights {
@@ -238,7 +268,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         background: render.background.to_array(),
         light_samples_per_vertex: lights
             .iter()
-            .filter(|l| l.kind == LIGHT_AREA)
+            .filter(|l| l.is_area())
             .map(|l| l.samples)
             .sum(),
         ambient: render.ambient.to_array(),

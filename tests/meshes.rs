@@ -246,7 +246,7 @@ fn uv_sphere(rings: u32, segments: u32) -> chambre::scene::TriangleMesh {
         positions,
         normals: None,
         triangles,
-        dropped_degenerate: 0,
+        ..Default::default()
     }
 }
 
@@ -301,7 +301,7 @@ fn a_crease_angle_keeps_sharp_edges_sharp() {
             positions,
             normals: None,
             triangles,
-            dropped_degenerate: 0,
+            ..Default::default()
         }
     };
     let mut sharp = cube();

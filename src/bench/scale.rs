@@ -68,7 +68,7 @@ fn prefix(mesh: &TriangleMesh, n: usize) -> TriangleMesh {
         positions: mesh.positions.clone(),
         normals: None,
         triangles: mesh.triangles[..n.min(mesh.triangles.len())].to_vec(),
-        dropped_degenerate: 0,
+        ..TriangleMesh::default()
     }
 }
 
@@ -89,7 +89,7 @@ fn copies(mesh: &TriangleMesh, count: usize) -> Vec<TriangleMesh> {
                 positions: mesh.positions.iter().map(|&p| p + offset).collect(),
                 normals: None,
                 triangles: mesh.triangles.clone(),
-                dropped_degenerate: 0,
+                ..TriangleMesh::default()
             }
         })
         .collect()

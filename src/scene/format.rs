@@ -236,7 +236,8 @@ impl<'de> Visitor<'de> for ScaleVisitor {
 pub struct ShapeEntry {
     #[serde(rename = "type")]
     pub kind: ShapeType,
-    pub material: String,
+    /// Required, except on a mesh whose file brings its own materials (OBJ `.mtl`).
+    pub material: Option<String>,
     // sphere
     pub center: Option<Vec3>,
     pub radius: Option<f64>,

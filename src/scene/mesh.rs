@@ -27,6 +27,51 @@ pub struct TriangleMesh {
     pub triangles: Vec<[u32; 3]>,
     /// Zero-area triangles dropped on load (they can never be hit).
     pub dropped_degenerate: usize,
+    /// The materials of the OBJ's `.mtl` files, as the file gives them.
+    pub materials: Vec<MeshMaterial>,
+    /// Per triangle, its index in `materials`, or `NO_MATERIAL`; empty when the file names no
+    /// material.
+    pub face_materials: Vec<u32>,
+}
+
+/// A triangle whose file gives it no material.
+pub const NO_MATERIAL: u32 = u32::MAX;
+
+/// A material of an OBJ `.mtl` file, mapped to chambre's models (see `docs/scene-format.md`):
+/// `Kd` is the diffuse reflectance, `Ks` and `Ns` a Blinn-Phong lobe, `illum` 3 or 5 a mirror
+/// of reflectance `Ks` (1 where `Ks` is absent), `Ke` an emitter.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MeshMaterial {
+    pub name: String,
+    pub diffuse: Vec3,
+    pub specular: Vec3,
+    pub shininess: f32,
+    pub mirror: Vec3,
+    pub emission: Vec3,
+}
+
+impl MeshMaterial {
+    fn from_mtl(m: &tobj::Material) -> MeshMaterial {
+        let rgb = |v: Option<[f32; 3]>| v.map_or(Vec3::ZERO, Vec3::from);
+        let specular = rgb(m.specular);
+        let mirror = matches!(m.illumination_model, Some(3 | 5));
+        MeshMaterial {
+            name: m.name.clone(),
+            diffuse: rgb(m.diffuse).clamp(Vec3::ZERO, Vec3::ONE),
+            specular: if mirror {
+                Vec3::ZERO
+            } else {
+                specular.clamp(Vec3::ZERO, Vec3::ONE)
+            },
+            shininess: m.shininess.unwrap_or(0.0).clamp(0.0, 1.0e4),
+            mirror: match (mirror, m.specular) {
+                (true, Some(ks)) => Vec3::from(ks).clamp(Vec3::ZERO, Vec3::ONE),
+                (true, None) => Vec3::ONE,
+                (false, _) => Vec3::ZERO,
+            },
+            emission: rgb(m.emissive).max(Vec3::ZERO),
+        }
+    }
 }
 
 /// Reads a mesh; the error is a sentence that starts with the file's path.
@@ -51,7 +96,7 @@ fn read_mesh(path: &Path) -> Result<TriangleMesh, String> {
     };
     let mut reader = GuardedReader::new(source, MAX_MESH_BYTES, MAX_LINE_BYTES);
     let mesh = if inner_name.ends_with(".obj") {
-        read_obj(&mut reader)?
+        read_obj(&mut reader, path.parent().unwrap_or(Path::new(".")))?
     } else if inner_name.ends_with(".ply") {
         read_ply(&mut reader, available)?
     } else {
@@ -164,16 +209,23 @@ impl BufRead for GuardedReader {
     }
 }
 
-fn read_obj(reader: &mut GuardedReader) -> Result<TriangleMesh, String> {
+fn read_obj(reader: &mut GuardedReader, directory: &Path) -> Result<TriangleMesh, String> {
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
         ..Default::default()
     };
-    // Materials are chambre's own, so `mtllib` files are not read.
-    let (models, _) = tobj::load_obj_buf(reader, &options, |_| Ok(Default::default()))
-        .map_err(|e| reader.explain(obj_error_message(e, reader.current_line())))?;
-    let mut mesh = TriangleMesh::default();
+    // `mtllib` files are read beside the OBJ.
+    let (models, materials) = tobj::load_obj_buf(reader, &options, |name| {
+        tobj::load_mtl(directory.join(name))
+    })
+    .map_err(|e| reader.explain(obj_error_message(e, reader.current_line())))?;
+    let materials = materials.map_err(|e| format!("its material library: {e}"))?;
+    let mut mesh = TriangleMesh {
+        materials: materials.iter().map(MeshMaterial::from_mtl).collect(),
+        ..TriangleMesh::default()
+    };
+    let has_materials = models.iter().any(|m| m.mesh.material_id.is_some());
     let all_have_normals = models
         .iter()
         .all(|m| m.mesh.normals.len() == m.mesh.positions.len());
@@ -198,6 +250,10 @@ fn read_obj(reader: &mut GuardedReader) -> Result<TriangleMesh, String> {
                 .chunks_exact(3)
                 .map(|t| [base + t[0], base + t[1], base + t[2]]),
         );
+        if has_materials {
+            let id = m.material_id.map_or(NO_MATERIAL, |i| i as u32);
+            mesh.face_materials.resize(mesh.triangles.len(), id);
+        }
     }
     if all_have_normals && !normals.is_empty() {
         mesh.normals = Some(normals);
@@ -394,10 +450,21 @@ fn check_mesh(mut mesh: TriangleMesh) -> Result<TriangleMesh, String> {
     }
     let before = mesh.triangles.len();
     let positions = &mesh.positions;
-    mesh.triangles.retain(|t| {
-        let [a, b, c] = t.map(|i| positions[i as usize]);
-        (b - a).cross(c - a) != Vec3::ZERO
-    });
+    let keep: Vec<bool> = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            (b - a).cross(c - a) != Vec3::ZERO
+        })
+        .collect();
+    let mut kept = keep.iter();
+    mesh.triangles.retain(|_| *kept.next().unwrap_or(&false));
+    if !mesh.face_materials.is_empty() {
+        let mut kept = keep.iter();
+        mesh.face_materials
+            .retain(|_| *kept.next().unwrap_or(&false));
+    }
     mesh.dropped_degenerate = before - mesh.triangles.len();
     if mesh.triangles.is_empty() {
         return Err(if before == 0 {

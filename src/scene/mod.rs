@@ -57,6 +57,8 @@ pub struct Material {
     pub specular: Vec3,
     pub shininess: f32,
     pub mirror: Vec3,
+    /// Radiance of an emitting surface (an OBJ `.mtl`'s `Ke`); zero for scene materials.
+    pub emission: Vec3,
 }
 
 /// A shape; `material` indexes [`Scene::materials`].

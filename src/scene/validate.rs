@@ -191,7 +191,8 @@ pub fn validate(parsed: ParsedScene) -> Result<Scene> {
     let render = validate_render(&check, file)?;
     let camera = validate_camera(&check, file, &render, meters_per_unit)?;
     let materials = validate_materials(&check, file)?;
-    let shapes = validate_shapes(&check, file, &materials)?;
+    let mut materials = materials;
+    let shapes = validate_shapes(&check, file, &mut materials)?;
     let lights = validate_lights(&check, file)?;
     Ok(Scene {
         source: parsed.path.clone(),
@@ -578,6 +579,7 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
             specular,
             shininess: shininess as f32,
             mirror: check.reflectance(&at("mirror"), m.mirror.unwrap_or(default_mirror))?,
+            emission: Vec3::ZERO,
         });
     }
     Ok(materials)
@@ -586,7 +588,7 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
 fn validate_shapes(
     check: &Checker,
     file: &SceneFile,
-    materials: &[Material],
+    materials: &mut Vec<Material>,
 ) -> Result<Vec<Shape>> {
     let scene_dir = check
         .parsed
@@ -597,15 +599,16 @@ fn validate_shapes(
     for (i, s) in file.shapes.iter().enumerate() {
         let prefix = format!("shapes[{i}]");
         let at = |f: &str| format!("{prefix}.{f}");
-        let material = materials
-            .iter()
-            .position(|m| m.name == s.material)
-            .ok_or_else(|| {
-                check.err(
-                    &at("material"),
-                    format!("unknown material `{}`", s.material),
-                )
-            })? as u32;
+        let material =
+            match &s.material {
+                Some(name) => Some(materials.iter().position(|m| &m.name == name).ok_or_else(
+                    || check.err(&at("material"), format!("unknown material `{name}`")),
+                )? as u32),
+                None => None,
+            };
+        let required = |kind: &str| {
+            material.ok_or_else(|| check.err(&at("material"), format!("is required for a {kind}")))
+        };
         let sphere_fields = [
             ("center", s.center.is_some()),
             ("radius", s.radius.is_some()),
@@ -645,7 +648,7 @@ fn validate_shapes(
                 Shape::Sphere {
                     center: center.as_vec3(),
                     radius: radius as f32,
-                    material,
+                    material: required("sphere")?,
                 }
             }
             ShapeType::Quad => {
@@ -660,7 +663,7 @@ fn validate_shapes(
                     corner,
                     edge_u,
                     edge_v,
-                    material,
+                    material: required("quad")?,
                 }
             }
             ShapeType::Plane => {
@@ -678,7 +681,7 @@ fn validate_shapes(
                 Shape::Plane {
                     point: point.as_vec3(),
                     normal: normal.normalize().as_vec3(),
-                    material,
+                    material: required("plane")?,
                 }
             }
             ShapeType::Mesh => {
@@ -737,6 +740,16 @@ fn validate_shapes(
                         ),
                     ));
                 }
+                let material = match material {
+                    // A scene material overrides the file's.
+                    Some(m) => {
+                        mesh.face_materials.clear();
+                        m
+                    }
+                    None => {
+                        adopt_mesh_materials(check, &at("material"), &path, &mut mesh, materials)?
+                    }
+                };
                 Shape::Mesh { mesh, material }
             }
         };
@@ -748,6 +761,57 @@ fn validate_shapes(
 /// NaN compares false, so finiteness is tested first and explicitly.
 fn within_coordinate_limit(p: Vec3) -> bool {
     p.is_finite() && p.abs().max_element() as f64 <= MAX_COORDINATE
+}
+
+/// A mesh that brings its own materials (OBJ `.mtl`) without a scene material: its materials
+/// join the scene's, named `file:material`, and each face takes its own. Every face must have
+/// one. Returns the material of the first face (the shape's, for messages).
+fn adopt_mesh_materials(
+    check: &Checker,
+    field: &str,
+    path: &std::path::Path,
+    mesh: &mut super::mesh::TriangleMesh,
+    materials: &mut Vec<Material>,
+) -> Result<u32> {
+    use super::mesh::NO_MATERIAL;
+    if mesh.face_materials.is_empty() || mesh.face_materials.contains(&NO_MATERIAL) {
+        return Err(check.err(
+            field,
+            format!(
+                "is required: {} gives {} faces no material of its own",
+                path.display(),
+                if mesh.face_materials.is_empty() {
+                    "its"
+                } else {
+                    "some of its"
+                }
+            ),
+        ));
+    }
+    let first = materials.len() as u32;
+    let file = path
+        .file_name()
+        .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+    for m in &mesh.materials {
+        let lobe = m.specular.max_element() > 0.0;
+        materials.push(Material {
+            name: format!("{file}:{}", m.name),
+            model: if lobe {
+                layout::MODEL_BLINN_PHONG
+            } else {
+                layout::MODEL_LAMBERT
+            },
+            diffuse: m.diffuse,
+            specular: m.specular,
+            shininess: m.shininess,
+            mirror: m.mirror,
+            emission: m.emission,
+        });
+    }
+    for id in &mut mesh.face_materials {
+        *id += first;
+    }
+    Ok(mesh.face_materials[0])
 }
 
 /// Corner and two non-parallel, non-zero edges of a quad or an area light.
