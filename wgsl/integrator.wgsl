@@ -114,11 +114,13 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
     var sample_offset = 0u;
     for (var l = 0u; l < frame.light_count; l += 1u) {
         let light = lights[l];
-        if (FEATURE_AREA_LIGHTS && light.kind == LIGHT_AREA) {
-            // Stratified points on the parallelogram; numbers are drawn before any test.
+        if (FEATURE_AREA_LIGHTS && (light.kind == LIGHT_AREA || light.kind == LIGHT_TRIANGLE)) {
+            // Stratified points on the parallelogram (folded onto the triangle of a triangle
+            // light); numbers are drawn before any test.
             let c = cross(light.p1, light.p2);
-            let area = length(c);
-            let light_normal = c / area;
+            let triangle = light.kind == LIGHT_TRIANGLE;
+            let area = select(1.0, 0.5, triangle) * length(c);
+            let light_normal = normalize(c);
             let first_sample = min(window.start, light.samples);
             // A saturating end: start + count may exceed u32 (the whole-light window).
             let end_sample = min(window.start + min(window.count, light.samples), light.samples);
@@ -126,7 +128,10 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
             sample_offset += light.samples;
             var sum = vec3<f32>(0.0);
             for (var k = first_sample; k < end_sample; k += 1u) {
-                let u = stratified_2d(k, light.samples, light.strata_columns, rng_next_2d(rng));
+                var u = stratified_2d(k, light.samples, light.strata_columns, rng_next_2d(rng));
+                if (triangle && u.x + u.y > 1.0) {
+                    u = vec2<f32>(1.0) - u;
+                }
                 let to_light = light.p0 + u.x * light.p1 + u.y * light.p2 - surface.position;
                 let distance = length(to_light);
                 let wi = to_light / distance;
