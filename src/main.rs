@@ -153,6 +153,10 @@ struct RenderArgs {
     /// overrides render.crop); the image written is the window.
     #[arg(long, value_delimiter = ',', value_name = "X0,X1,Y0,Y1")]
     crop: Option<Vec<f64>>,
+    /// Also write the samples each pixel received as an image (.exr or .pfm: the count in
+    /// every channel), to see where they went.
+    #[arg(long, value_name = "FILE")]
+    sample_counts: Option<PathBuf>,
     /// Stop after this many seconds (the batches in flight finish) and write the image with
     /// the samples each pixel received: a time instead of a sample count (`--spp` is then the
     /// most taken).
@@ -498,6 +502,19 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         exposure_ev: args.exposure,
         tone_map: args.tonemap,
     });
+    let counts_target = match &args.sample_counts {
+        Some(path) => {
+            let target = OutputTarget::prepare(path)?;
+            if !target.format().is_linear() {
+                bail!(
+                    "--sample-counts {}: use .exr or .pfm (counts are not colours)",
+                    path.display()
+                );
+            }
+            Some(target)
+        }
+        None => None,
+    };
     let sidecar_path = args.sidecar.then(|| sidecar_path(output_path));
     for beside in sidecar_path
         .iter()
@@ -550,6 +567,14 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         (sidecar_path, record)
     });
     let written = output.max_samples_per_pixel > 0;
+    if let Some(target) = &counts_target {
+        let (w, h) = (output.image.width, output.image.height);
+        target.write(&chambre::render::Image::of_counts(
+            w,
+            h,
+            &output.sample_counts,
+        ))?;
+    }
     let manifest = match (shard, &shard_paths) {
         (Some(shard), Some((image, _))) => Some(shard_manifest(
             shard, args, &scene, full_crop, image, &overrides, &output,

@@ -126,6 +126,15 @@ impl Image {
         self.pixels[(y * self.width + x) as usize]
     }
 
+    /// A grey image of `counts` (samples per pixel), to see where samples went.
+    pub fn of_counts(width: u32, height: u32, counts: &[u32]) -> Image {
+        Image {
+            width,
+            height,
+            pixels: counts.iter().map(|&n| Vec3::splat(n as f32)).collect(),
+        }
+    }
+
     pub fn non_finite_count(&self) -> usize {
         self.pixels.iter().filter(|p| !p.is_finite()).count()
     }
@@ -165,6 +174,8 @@ pub struct RenderOutput {
     pub stopped: Option<Error>,
     /// The render stopped, as asked, at its deadline (`render_until`); not an error.
     pub deadline_reached: bool,
+    /// Samples each pixel of `image` received, row by row.
+    pub sample_counts: Vec<u32>,
 }
 
 impl RenderOutput {
@@ -385,6 +396,7 @@ fn drive(
         status_flags: 0,
         stopped: None,
         deadline_reached: false,
+        sample_counts: Vec::new(),
     };
     // Batches are made pass by pass as they are submitted: a 2^20-spp render has millions.
     let batches = (0..plan.passes.len()).flat_map(|pass| {
@@ -461,6 +473,7 @@ fn drive(
     let accumulation = crop_rows(backend.accumulation()?, frame.width, scene.crop);
     let [x0, x1, y0, y1] = scene.crop;
     output.image = Image::from_accumulation(x1 - x0, y1 - y0, &accumulation);
+    output.sample_counts = accumulation.iter().map(|a| a[3] as u32).collect();
     if output.stopped.is_some() || output.deadline_reached {
         // Pixels of an unfinished pass carry more samples than the rest; the image stays a
         // per-pixel mean, so it is still correct, only less converged in places.

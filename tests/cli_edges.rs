@@ -767,3 +767,40 @@ fn a_time_budget_stops_the_render_and_keeps_its_samples() {
     assert!(!message.contains("time budget"), "{message}");
     assert!(message.contains(", 2 spp in "), "{message}");
 }
+
+/// `--sample-counts` writes the samples each pixel received: the requested spp everywhere on a
+/// finished render, fewer (and the same as the message's range) on one stopped by its budget;
+/// an 8-bit format is refused before the render.
+#[test]
+fn sample_counts_show_where_the_samples_went() {
+    let dir = scratch_dir("counts");
+    let counts = dir.join("counts.exr");
+    let output = small_render(
+        &dir.join("image.exr"),
+        &["--sample-counts", counts.to_str().unwrap()],
+    );
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    let read = |path: &PathBuf| image::open(path).unwrap().into_rgb32f();
+    let image = read(&counts);
+    assert_eq!(image.dimensions(), (48, 32));
+    assert!(image.pixels().all(|p| p.0 == [2.0; 3]), "2 spp everywhere");
+    let budget = dir.join("budget.exr");
+    let output = render_spheres_on_cpu(
+        &dir.join("budget-image.exr"),
+        &[
+            "--spp",
+            "1000000",
+            "--time-budget",
+            "0.5",
+            "--sample-counts",
+            budget.to_str().unwrap(),
+        ],
+    );
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    let counts: Vec<f32> = read(&budget).pixels().map(|p| p.0[0]).collect();
+    let max = counts.iter().copied().fold(0.0, f32::max);
+    assert!(max > 0.0 && max < 1_000_000.0, "{max}");
+    let output = small_render(&dir.join("x.exr"), &["--sample-counts", "counts.png"]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(stderr_of(&output).contains("use .exr or .pfm"));
+}
