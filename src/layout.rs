@@ -3,7 +3,7 @@
 //! The CPU reference renders from the very same flattened arrays the GPU reads (pbrt's and
 //! Mitsuba's "one scene, two traversals"), so a parity test compares two implementations of the
 //! same scene, not two scenes. Each struct has a WGSL twin of the same name and field names in
-//! `wgsl/types.wgsl`; `tests/wgsl_layout.rs` checks sizes and offsets with naga, and the constants
+//! `wgsl/types.wgsl`; `tests/wgsl.rs` checks sizes and offsets with naga, and the constants
 //! below are emitted into every composed kernel by [`wgsl_prelude`], never written twice.
 
 use bytemuck::{Pod, Zeroable};

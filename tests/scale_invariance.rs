@@ -90,8 +90,11 @@ fn ground_scene(radius: Option<f64>) -> String {
 }
 
 fn flat(text: &str) -> FlatScene {
-    // Named inside scenes/ so that the bunny's relative path resolves.
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/scale.toml");
+    // A name in scenes/ (no file has it: the text is in memory) so that the bunny's relative
+    // path resolves.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join("in_memory");
     flatten(&Scene::from_str(&path, text, &[]).unwrap_or_else(|e| panic!("{e}")))
 }
 

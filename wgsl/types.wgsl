@@ -1,4 +1,4 @@
-// Struct twins of src/layout.rs: same names, same field names (checked by tests/wgsl_layout.rs).
+// Struct twins of src/layout.rs: same names, same field names (checked by tests/wgsl.rs).
 
 struct GpuBvhNode {
     min: vec3<f32>,

@@ -163,6 +163,39 @@ impl GpuContext {
             }))
     }
 
+    /// The BVH nodes and primitives every traversal kernel reads, each refused with its size
+    /// when it is over the binding limit.
+    pub(crate) fn geometry_buffers(
+        &self,
+        scene: &crate::pack::FlatScene,
+    ) -> Result<(wgpu::Buffer, wgpu::Buffer)> {
+        let nodes = self.storage_buffer(
+            &format!("the scene's {} BVH nodes", scene.nodes.len()),
+            bytemuck::cast_slice(&scene.nodes),
+        )?;
+        let prims = self.storage_buffer(
+            &format!(
+                "the scene's {} primitives ({} triangles)",
+                scene.prims.len(),
+                scene.triangle_count
+            ),
+            bytemuck::cast_slice(&scene.prims),
+        )?;
+        Ok((nodes, prims))
+    }
+
+    /// The status words a kernel reports through (`layout::STATUS_*`), readable back.
+    pub(crate) fn status_buffer(&self) -> wgpu::Buffer {
+        self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("status"),
+            size: crate::layout::STATUS_WORDS as u64 * 4,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
     fn take_uncaptured(&self) -> Result<()> {
         let errors = std::mem::take(&mut *self.uncaptured.lock().expect("error sink poisoned"));
         match errors.is_empty() {

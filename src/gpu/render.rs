@@ -13,7 +13,7 @@ use std::time::Duration;
 use super::kernels::{self, Pipeline};
 use super::{GpuContext, wgpu_error_text};
 use crate::error::{Error, Result};
-use crate::layout::{BVH_STACK_SIZE, GpuPass, STATUS_WORDS, WORKGROUP_SIZE};
+use crate::layout::{BVH_STACK_SIZE, GpuPass, WORKGROUP_SIZE};
 use crate::pack::FlatScene;
 use crate::render::{Backend, DispatchStatus, RayBudgets, plan_passes};
 
@@ -167,18 +167,7 @@ fn upload_scene(
 ) -> Result<Vec<(&'static str, wgpu::Buffer)>> {
     let uniform = |label: &str, bytes: &[u8]| context.uniform_buffer(label, bytes);
     let storage = |label: &str, bytes: &[u8]| context.storage_buffer(label, bytes);
-    let nodes = storage(
-        &format!("the scene's {} BVH nodes", scene.nodes.len()),
-        bytemuck::cast_slice(&scene.nodes),
-    )?;
-    let prims = storage(
-        &format!(
-            "the scene's {} primitives ({} triangles)",
-            scene.prims.len(),
-            scene.triangle_count
-        ),
-        bytemuck::cast_slice(&scene.prims),
-    )?;
+    let (nodes, prims) = context.geometry_buffers(scene)?;
     let normals = storage(
         &format!(
             "the vertex normals of {} smooth triangles",
@@ -241,12 +230,7 @@ impl Backend for GpuRenderer {
                 .copy_from_slice(bytemuck::bytes_of(pass));
         }
         let passes = context.uniform_buffer("passes", &pass_bytes);
-        let status = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("status"),
-            size: STATUS_WORDS as u64 * 4,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
+        let status = context.status_buffer();
         let mut buffers: Vec<(&str, &wgpu::Buffer)> =
             self.scene_buffers.iter().map(|(n, b)| (*n, b)).collect();
         buffers.push(("pass_info", &passes));

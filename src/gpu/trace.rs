@@ -10,9 +10,7 @@ use super::GpuContext;
 use super::kernels::{self, Pipeline};
 use crate::bench::rays::{Query, RaySet};
 use crate::error::{Error, Result};
-use crate::layout::{
-    GpuPass, GpuRay, LOOP_CHECK_ITERATIONS, STATUS_WORDS, T_FAR, TRACE_WORKGROUP_SIZE,
-};
+use crate::layout::{GpuPass, GpuRay, LOOP_CHECK_ITERATIONS, T_FAR, TRACE_WORKGROUP_SIZE};
 use crate::pack::FlatScene;
 use crate::render::{DispatchStatus, describe_status_flags};
 
@@ -44,22 +42,8 @@ impl GpuTracer {
         let closest = kernels::build_pipeline(device, &kernels::TRACE_CLOSEST, features);
         let any = kernels::build_pipeline(device, &kernels::TRACE_ANY, features);
         let frame = context.uniform_buffer("frame", bytemuck::bytes_of(&scene.frame));
-        let nodes = context.storage_buffer(
-            &format!("the scene's {} BVH nodes", scene.nodes.len()),
-            bytemuck::cast_slice(&scene.nodes),
-        )?;
-        let prims = context.storage_buffer(
-            &format!("the scene's {} primitives", scene.prims.len()),
-            bytemuck::cast_slice(&scene.prims),
-        )?;
-        let status = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("status"),
-            size: STATUS_WORDS as u64 * 4,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let (nodes, prims) = context.geometry_buffers(scene)?;
+        let status = context.status_buffer();
         let mut chunks = Vec::new();
         for start in (0..rays.len()).step_by(RAYS_PER_CHUNK) {
             let end = (start + RAYS_PER_CHUNK).min(rays.len());

@@ -117,122 +117,127 @@ impl SceneBuilder {
         self
     }
 
-    pub fn lambert(mut self, name: &str, diffuse: [f64; 3]) -> Self {
-        self.materials.push(entry(&[
+    pub fn lambert(self, name: &str, diffuse: [f64; 3]) -> Self {
+        self.add_materials(&[
             ("name", name.into()),
             ("model", "lambert".into()),
             ("diffuse", vec3(diffuse)),
-        ]));
-        self
+        ])
     }
 
     pub fn blinn_phong(
-        mut self,
+        self,
         name: &str,
         diffuse: [f64; 3],
         specular: [f64; 3],
         shininess: f64,
     ) -> Self {
-        self.materials.push(entry(&[
+        self.add_materials(&[
             ("name", name.into()),
             ("model", "blinn_phong".into()),
             ("diffuse", vec3(diffuse)),
             ("specular", vec3(specular)),
             ("shininess", shininess.into()),
-        ]));
-        self
+        ])
     }
 
-    pub fn mirror(mut self, name: &str, reflectance: [f64; 3]) -> Self {
-        self.materials.push(entry(&[
+    pub fn mirror(self, name: &str, reflectance: [f64; 3]) -> Self {
+        self.add_materials(&[
             ("name", name.into()),
             ("model", "mirror".into()),
             ("mirror", vec3(reflectance)),
-        ]));
-        self
+        ])
     }
 
-    pub fn sphere(mut self, center: [f64; 3], radius: f64, material: &str) -> Self {
-        self.shapes.push(entry(&[
+    pub fn sphere(self, center: [f64; 3], radius: f64, material: &str) -> Self {
+        self.add_shapes(&[
             ("type", "sphere".into()),
             ("center", vec3(center)),
             ("radius", radius.into()),
             ("material", material.into()),
-        ]));
-        self
+        ])
     }
 
     pub fn quad(
-        mut self,
+        self,
         corner: [f64; 3],
         edge_u: [f64; 3],
         edge_v: [f64; 3],
         material: &str,
     ) -> Self {
-        self.shapes.push(entry(&[
+        self.add_shapes(&[
             ("type", "quad".into()),
             ("corner", vec3(corner)),
             ("edge_u", vec3(edge_u)),
             ("edge_v", vec3(edge_v)),
             ("material", material.into()),
-        ]));
-        self
+        ])
     }
 
-    pub fn plane(mut self, point: [f64; 3], normal: [f64; 3], material: &str) -> Self {
-        self.shapes.push(entry(&[
+    pub fn plane(self, point: [f64; 3], normal: [f64; 3], material: &str) -> Self {
+        self.add_shapes(&[
             ("type", "plane".into()),
             ("point", vec3(point)),
             ("normal", vec3(normal)),
             ("material", material.into()),
-        ]));
-        self
+        ])
     }
 
     /// A mesh file (OBJ or PLY, `.gz` too), relative to the working directory.
-    pub fn mesh(mut self, file: &str, material: &str) -> Self {
-        self.shapes.push(entry(&[
+    pub fn mesh(self, file: &str, material: &str) -> Self {
+        self.add_shapes(&[
             ("type", "mesh".into()),
             ("file", file.into()),
             ("material", material.into()),
-        ]));
-        self
+        ])
     }
 
-    pub fn point_light(mut self, position: [f64; 3], intensity: [f64; 3]) -> Self {
-        self.lights.push(entry(&[
+    pub fn point_light(self, position: [f64; 3], intensity: [f64; 3]) -> Self {
+        self.add_lights(&[
             ("type", "point".into()),
             ("position", vec3(position)),
             ("intensity", vec3(intensity)),
-        ]));
-        self
+        ])
     }
 
-    pub fn directional_light(mut self, direction: [f64; 3], irradiance: [f64; 3]) -> Self {
-        self.lights.push(entry(&[
+    pub fn directional_light(self, direction: [f64; 3], irradiance: [f64; 3]) -> Self {
+        self.add_lights(&[
             ("type", "directional".into()),
             ("direction", vec3(direction)),
             ("irradiance", vec3(irradiance)),
-        ]));
-        self
+        ])
     }
 
     pub fn area_light(
-        mut self,
+        self,
         corner: [f64; 3],
         edge_u: [f64; 3],
         edge_v: [f64; 3],
         radiance: [f64; 3],
         samples: u32,
     ) -> Self {
-        self.lights.push(entry(&[
+        self.add_lights(&[
             ("type", "area".into()),
             ("corner", vec3(corner)),
             ("edge_u", vec3(edge_u)),
             ("edge_v", vec3(edge_v)),
             ("radiance", vec3(radiance)),
             ("samples", Value::Integer(samples as i64)),
-        ]));
+        ])
+    }
+
+    fn add_materials(mut self, fields: &[(&str, Value)]) -> Self {
+        self.materials.push(entry(fields));
+        self
+    }
+
+    fn add_shapes(mut self, fields: &[(&str, Value)]) -> Self {
+        self.shapes.push(entry(fields));
+        self
+    }
+
+    fn add_lights(mut self, fields: &[(&str, Value)]) -> Self {
+        self.lights.push(entry(fields));
         self
     }
 
