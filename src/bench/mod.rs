@@ -66,10 +66,13 @@ impl Backends {
     }
 }
 
+/// The benchmarks' default mesh: 871k triangles, large enough to fill a GPU.
+const DRAGON_MESH: &str = "scenes/meshes/dragon_vrip.obj.gz";
+
 #[derive(Debug, clap::Args)]
 pub struct ScaleArgs {
     /// Mesh whose prefixes and copies make the sizes.
-    #[arg(long, default_value = "scenes/meshes/dragon_vrip.obj.gz")]
+    #[arg(long, default_value = DRAGON_MESH)]
     pub mesh: PathBuf,
     /// Triangle counts taken from the mesh (larger than the mesh: the whole mesh).
     #[arg(long, value_delimiter = ',', default_values_t = scale::PREFIXES)]
@@ -103,7 +106,7 @@ pub struct SamplersArgs {
 #[derive(Debug, clap::Args)]
 pub struct BuildArgs {
     /// Mesh file (OBJ or PLY, optionally .gz).
-    #[arg(long, default_value = "scenes/meshes/dragon_vrip.obj.gz")]
+    #[arg(long, default_value = DRAGON_MESH)]
     pub mesh: PathBuf,
     /// Timed runs after one warm-up.
     #[arg(long, default_value_t = 5)]
@@ -129,7 +132,7 @@ pub struct FrameArgs {
 #[derive(Debug, clap::Args)]
 pub struct RaysArgs {
     /// Mesh file (OBJ or PLY, optionally .gz).
-    #[arg(long, default_value = "scenes/meshes/dragon_vrip.obj.gz")]
+    #[arg(long, default_value = DRAGON_MESH)]
     pub mesh: PathBuf,
     /// Camera position.
     #[arg(long, num_args = 3, value_names = ["X", "Y", "Z"], allow_negative_numbers = true,
