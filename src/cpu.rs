@@ -12,7 +12,7 @@ use crate::error::Result;
 use crate::integrator::{LightWindow, SampleStats, trace_sample};
 use crate::layout::{FEATURES_ALL, GpuPass};
 use crate::pack::FlatScene;
-use crate::render::{Backend, DispatchStatus};
+use crate::render::{Backend, DispatchStatus, RayBudgets};
 
 pub struct CpuRenderer<'a> {
     scene: &'a FlatScene,
@@ -25,6 +25,7 @@ pub struct CpuRenderer<'a> {
     /// The integrator instance for the scene's features (`layout::FEATURE_*`).
     trace: TraceSample,
     features: u32,
+    budgets: RayBudgets,
 }
 
 /// `integrator::trace_sample` for one feature set.
@@ -59,6 +60,7 @@ impl<'a> CpuRenderer<'a> {
             finished: VecDeque::new(),
             trace: TRACE_SAMPLE[scene.features() as usize],
             features: scene.features(),
+            budgets: RayBudgets::DEFAULT,
         }
     }
 
@@ -74,6 +76,13 @@ impl<'a> CpuRenderer<'a> {
         self.trace = TRACE_SAMPLE[(features & FEATURES_ALL) as usize];
         self.features = features;
         Ok(self)
+    }
+
+    /// Plans renders with `budgets` instead of [`RayBudgets::DEFAULT`] (tests split small
+    /// renders with small ones).
+    pub fn with_budgets(mut self, budgets: RayBudgets) -> Self {
+        self.budgets = budgets;
+        self
     }
 
     /// The `layout::FEATURE_*` bits the integrator was compiled for.
@@ -155,6 +164,10 @@ impl<'a> CpuRenderer<'a> {
 }
 
 impl Backend for CpuRenderer<'_> {
+    fn budgets(&self) -> RayBudgets {
+        self.budgets
+    }
+
     fn submit(&mut self, dispatches: &[GpuPass]) -> Result<()> {
         let mut status = DispatchStatus::default();
         for pass in dispatches {

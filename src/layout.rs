@@ -14,6 +14,9 @@ pub const WORKGROUP_SIZE: u32 = 8;
 pub const TRACE_WORKGROUP_SIZE: u32 = 64;
 /// Depth of the per-invocation BVH traversal stack. Deeper BVHs are refused before upload.
 pub const BVH_STACK_SIZE: u32 = 64;
+/// Node groups on the CWBVH traversal stack: one per level at most (`accel::cwbvh::build`
+/// checks the tree's depth against it).
+pub const CWBVH_STACK_SIZE: u32 = 32;
 /// Finite stand-in for an unbounded ray: WGSL may assume infinities never occur.
 pub const T_FAR: f32 = 1.0e30;
 /// Marks "no primitive" / "no normals" in index fields.
@@ -118,6 +121,26 @@ pub struct GpuBvhNode {
     pub prim_count: u32,
     pub max: [f32; 3],
     pub first_index: u32,
+}
+
+/// A node of the compressed wide BVH (CWBVH, Ylitie et al. 2017): obvhs's `CwBvhNode`, its
+/// bytes read as little-endian words. Eight children, each box quantised to 8 bits per plane on
+/// the grid `p + q * 2^(e - 127)`; `child_meta` holds each child's byte (leaf: primitive offset and
+/// unary count; inner: 24 + slot), `e_imask` the three exponents and the inner-child mask.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCwNode {
+    pub p: [f32; 3],
+    pub e_imask: u32,
+    pub child_base: u32,
+    pub prim_base: u32,
+    pub child_meta: [u32; 2],
+    pub q_lo_x: [u32; 2],
+    pub q_hi_x: [u32; 2],
+    pub q_lo_y: [u32; 2],
+    pub q_hi_y: [u32; 2],
+    pub q_lo_z: [u32; 2],
+    pub q_hi_z: [u32; 2],
 }
 
 /// One primitive. Triangle: `p0, p1, p2` are its vertices, `normals` indexes `GpuNormals` or is
@@ -295,6 +318,7 @@ impl GpuLight {
 
 const _: () = assert!(size_of::<GpuRay>() == 32);
 const _: () = assert!(size_of::<GpuBvhNode>() == 32);
+const _: () = assert!(size_of::<GpuCwNode>() == 80);
 const _: () = assert!(size_of::<GpuPrimitive>() == 48);
 const _: () = assert!(size_of::<GpuNormals>() == 36);
 const _: () = assert!(size_of::<GpuMaterial>() == 64);
@@ -309,6 +333,7 @@ pub fn wgsl_prelude() -> String {
         ("WORKGROUP_SIZE", WORKGROUP_SIZE),
         ("TRACE_WORKGROUP_SIZE", TRACE_WORKGROUP_SIZE),
         ("BVH_STACK_SIZE", BVH_STACK_SIZE),
+        ("CWBVH_STACK_SIZE", CWBVH_STACK_SIZE),
         ("NONE", NONE),
         ("PRIM_TRIANGLE", PRIM_TRIANGLE),
         ("PRIM_SPHERE", PRIM_SPHERE),

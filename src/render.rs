@@ -28,7 +28,8 @@ use crate::layout::{
 };
 use crate::pack::FlatScene;
 
-/// Upper bounds on the rays traced by one invocation, one dispatch and one batch.
+/// Upper bounds on the rays traced by one invocation, one dispatch and one batch, and the
+/// invocations a dispatch should have.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RayBudgets {
     /// Rays per invocation and dispatch, at most. Fewer when the BVH makes rays expensive:
@@ -44,15 +45,38 @@ pub struct RayBudgets {
     /// One submission: a few seconds on lavapipe, milliseconds on a real GPU, where the
     /// batches in flight keep it busy; a Ctrl-C waits for at most the batches in flight.
     pub per_batch: u64,
+    /// Invocations (pixels of a band) a dispatch should have where the image has as many:
+    /// fewer samples per invocation buy them. A real GPU needs hundreds of thousands of
+    /// threads in flight; a CPU adapter runs a few and pays per invocation.
+    pub min_invocations_per_dispatch: u64,
 }
 
 impl RayBudgets {
+    /// The budgets of CPU-type adapters (lavapipe) and of the CPU path.
     pub const DEFAULT: RayBudgets = RayBudgets {
         per_invocation: 64,
         loop_iterations_per_invocation: 16384.0,
         per_dispatch: 1 << 22,
         per_batch: 1 << 24,
+        min_invocations_per_dispatch: 0,
     };
+
+    /// Real GPUs: a dispatch over a megapixel image has a million invocations rather than half
+    /// as many with twice the samples each. On an H100, 1.3x faster on the 1024^2 dragon and
+    /// the same on images too small to fill it (BENCHMARKS.md, "Dispatch shape").
+    pub const REAL_GPU: RayBudgets = RayBudgets {
+        min_invocations_per_dispatch: 1 << 20,
+        ..RayBudgets::DEFAULT
+    };
+
+    /// The budgets for an adapter.
+    pub fn for_adapter(is_cpu_adapter: bool) -> RayBudgets {
+        if is_cpu_adapter {
+            RayBudgets::DEFAULT
+        } else {
+            RayBudgets::REAL_GPU
+        }
+    }
 }
 /// Batches queued on the device at once: the next is queued while the last is read back.
 pub const BATCHES_IN_FLIGHT: usize = 2;
@@ -89,6 +113,10 @@ pub trait Backend {
     /// Device time spent in the kernels of finished batches, where the device measures it.
     fn kernel_time(&self) -> Option<Duration> {
         None
+    }
+    /// The budgets renders on this backend are planned with.
+    fn budgets(&self) -> RayBudgets {
+        RayBudgets::DEFAULT
     }
 }
 
@@ -276,8 +304,15 @@ pub fn plan_passes(scene: &FlatScene, budgets: &RayBudgets) -> RenderPlan {
     let bound = RayBound::of(scene);
     // The loop itself, the light loop's iteration, and the expected traversal.
     let iterations_per_ray = 2.0 + scene.traversal_iterations as f64;
+    let [x0, x1, y0, y1] = scene.crop;
+    let (width, height) = (x1 - x0, y1 - y0);
+    let pixels = width as u64 * height as u64;
+    // Enough invocations per dispatch: no more rays each than the dispatch budget shared by
+    // `min_invocations_per_dispatch` of them (or by every pixel of a smaller image).
+    let invocations = budgets.min_invocations_per_dispatch.min(pixels).max(1);
     let rays_per_invocation = ((budgets.loop_iterations_per_invocation / iterations_per_ray)
         as u64)
+        .min(budgets.per_dispatch / invocations)
         .clamp(1, budgets.per_invocation);
     let per_pass = (rays_per_invocation / bound.per_sample()).clamp(1, spp as u64) as u32;
     let light_windows = light_windows(scene, bound, rays_per_invocation);
@@ -288,8 +323,6 @@ pub fn plan_passes(scene: &FlatScene, budgets: &RayBudgets) -> RenderPlan {
     } else {
         bound.per_sample()
     };
-    let [x0, x1, y0, y1] = scene.crop;
-    let (width, height) = (x1 - x0, y1 - y0);
     let rays_per_row = width as u64 * per_pass as u64 * rays_per_sample_and_window;
     let rows = (budgets.per_dispatch / rays_per_row).clamp(1, height as u64) as u32;
     let rays_per_dispatch = rows as u64 * rays_per_row;
@@ -325,7 +358,7 @@ fn light_windows(scene: &FlatScene, bound: RayBound, per_invocation: u64) -> Vec
         .collect()
 }
 
-/// Renders `scene` on `backend` with the default budgets. `cancel` is polled before each
+/// Renders `scene` on `backend` with the backend's budgets. `cancel` is polled before each
 /// batch; the batches already queued finish (at most [`BATCHES_IN_FLIGHT`]).
 pub fn render(
     scene: &FlatScene,
@@ -333,7 +366,7 @@ pub fn render(
     progress: &mut dyn Progress,
     cancel: &AtomicBool,
 ) -> Result<RenderOutput> {
-    render_with_budgets(scene, backend, progress, cancel, &RayBudgets::DEFAULT)
+    drive(scene, backend, progress, cancel, None)
 }
 
 /// [`render`] that stops, successfully, once `deadline` has passed: no batch is queued after
@@ -346,25 +379,7 @@ pub fn render_until(
     cancel: &AtomicBool,
     deadline: Instant,
 ) -> Result<RenderOutput> {
-    drive(
-        scene,
-        backend,
-        progress,
-        cancel,
-        Some(deadline),
-        &RayBudgets::DEFAULT,
-    )
-}
-
-/// [`render`] with chosen budgets (tests use small ones to split small renders).
-pub fn render_with_budgets(
-    scene: &FlatScene,
-    backend: &mut dyn Backend,
-    progress: &mut dyn Progress,
-    cancel: &AtomicBool,
-    budgets: &RayBudgets,
-) -> Result<RenderOutput> {
-    drive(scene, backend, progress, cancel, None, budgets)
+    drive(scene, backend, progress, cancel, Some(deadline))
 }
 
 fn drive(
@@ -373,11 +388,10 @@ fn drive(
     progress: &mut dyn Progress,
     cancel: &AtomicBool,
     deadline: Option<Instant>,
-    budgets: &RayBudgets,
 ) -> Result<RenderOutput> {
     let frame = &scene.frame;
     let start = Instant::now();
-    let plan = plan_passes(scene, budgets);
+    let plan = plan_passes(scene, &backend.budgets());
     let mut output = RenderOutput {
         image: Image {
             width: frame.width,

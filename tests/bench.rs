@@ -61,8 +61,18 @@ fn bench_rays_reports_the_same_checksum_on_every_backend() {
     let body = &report["report"];
     assert_eq!(body["triangles"].as_u64(), Some(3674));
     assert!(body["bvh_build_ms"].as_f64().unwrap() > 0.0);
+    assert!(body["cwbvh_build_ms"].as_f64().unwrap() > 0.0);
+    let (bvh2_nodes, cwbvh_nodes) = (
+        body["bvh2_nodes"].as_u64().unwrap(),
+        body["cwbvh_nodes"].as_u64().unwrap(),
+    );
+    assert!(0 < cwbvh_nodes && cwbvh_nodes < bvh2_nodes);
     let results = body["results"].as_array().unwrap();
-    assert_eq!(results.len(), 8, "2 sets x 2 queries x 2 backends");
+    assert_eq!(
+        results.len(),
+        16,
+        "2 sets x 2 queries x 2 backends x 2 BVH layouts"
+    );
     for r in results {
         assert_eq!(r["rays"].as_u64(), Some(48 * 32 * 2));
         let m = &r["mrays_per_s"];
@@ -74,22 +84,23 @@ fn bench_rays_reports_the_same_checksum_on_every_backend() {
         assert!(0.0 < min && min <= median && median <= max, "{m}");
         let hits = r["checksum"]["hits"].as_u64().unwrap();
         assert!(hits > 0 && hits < 48 * 32 * 2, "{r}");
-        // The same set and query traced by the other backend found the same hits.
-        let twin = results
-            .iter()
-            .find(|o| {
-                o["set"] == r["set"] && o["query"] == r["query"] && o["backend"] != r["backend"]
-            })
-            .unwrap();
-        assert_eq!(
-            twin["checksum"]["hits"], r["checksum"]["hits"],
-            "{r} vs {twin}"
-        );
-        let (a, b) = (
-            r["checksum"]["sum_t"].as_f64().unwrap(),
-            twin["checksum"]["sum_t"].as_f64().unwrap(),
-        );
-        assert!((a - b).abs() <= 1e-5 * a.abs(), "{a} vs {b}");
+        // The same set and query traced by the other backends and BVH layouts found the same
+        // hits.
+        let twins = results.iter().filter(|o| {
+            o["set"] == r["set"]
+                && o["query"] == r["query"]
+                && (o["backend"] != r["backend"] || o["bvh"] != r["bvh"])
+        });
+        assert_eq!(twins.clone().count(), 3);
+        let a = r["checksum"]["sum_t"].as_f64().unwrap();
+        for twin in twins {
+            assert_eq!(
+                twin["checksum"]["hits"], r["checksum"]["hits"],
+                "{r} vs {twin}"
+            );
+            let b = twin["checksum"]["sum_t"].as_f64().unwrap();
+            assert!((a - b).abs() <= 1e-5 * a.abs(), "{a} vs {b}");
+        }
         if r["query"] == "any_hit" {
             assert_eq!(a, 0.0);
         } else {

@@ -15,7 +15,7 @@ use chambre::cpu::CpuRenderer;
 use chambre::layout::GpuPass;
 use chambre::output::{NON_FINITE_PNG, OutputTarget};
 use chambre::pack::flatten;
-use chambre::render::{Backend, Image, RayBudgets, render, render_with_budgets};
+use chambre::render::{Backend, Image, RayBudgets, render};
 
 mod common;
 
@@ -215,13 +215,14 @@ fn a_render_stopped_between_batches_reports_the_samples_each_pixel_holds() {
     let plan = chambre::render::plan_passes(&flat, &budgets);
     assert_eq!((plan.passes.len(), plan.bands.len()), (1, 16));
     let cancel = AtomicBool::new(false);
-    let mut cpu = CpuRenderer::new(&flat).with_cancel(&cancel);
-    let output = render_with_budgets(
+    let mut cpu = CpuRenderer::new(&flat)
+        .with_cancel(&cancel)
+        .with_budgets(budgets);
+    let output = render(
         &flat,
         &mut cpu,
         &mut |done, _| cancel.store(done == 1, Ordering::Relaxed),
         &cancel,
-        &budgets,
     )
     .unwrap();
     assert!(output.stopped.is_some());

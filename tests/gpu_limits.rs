@@ -166,77 +166,15 @@ material = "mirror"
     }
 }
 
-/// Writes `name` (an OBJ) and a scene rendering it under a directional light into a scratch
-/// directory; returns the scene path.
-fn deep_mesh_scene(name: &str, obj: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("chambre-deep-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join(format!("{name}.obj")), obj).unwrap();
-    let scene = dir.join(format!("{name}.toml"));
-    std::fs::write(
-        &scene,
-        format!(
-            r#"[render]
-width = 24
-height = 24
-spp = 1
-[camera]
-position = [0.5, 0.2, 3.0]
-look_at = [0.5, 0.0, 0.0]
-film = [24.0, 24.0]
-[[materials]]
-name = "white"
-model = "lambert"
-[[shapes]]
-type = "mesh"
-file = "{name}.obj"
-material = "white"
-smooth = false
-[[lights]]
-type = "directional"
-direction = [0.3, -0.2, -1.0]
-irradiance = [1.0, 1.0, 1.0]
-"#
-        ),
-    )
-    .unwrap();
-    scene
-}
-
-/// A fan disc of 3,000 triangles around one vertex.
-fn fan_disc() -> String {
-    let n = 3000;
-    let mut obj = String::from("v 0 0 0\n");
-    for i in 0..n {
-        let a = std::f64::consts::TAU * i as f64 / n as f64;
-        obj += &format!("v {} {} 0\n", a.cos(), a.sin());
-    }
-    for i in 0..n {
-        obj += &format!("f 1 {} {}\n", 2 + i, 2 + (i + 1) % n);
-    }
-    obj
-}
-
-/// 400 nested triangles from the origin, each 2% longer than the last and a little behind it.
-fn nested_slivers() -> String {
-    let mut obj = String::new();
-    for i in 0..400 {
-        let l = 1.02f64.powi(i);
-        let z = -1e-3 * i as f64;
-        obj += &format!("v 0 0 {z}\nv {l} 0 {z}\nv {l} {} {z}\n", l * 0.3);
-    }
-    for i in 0..400 {
-        obj += &format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3);
-    }
-    obj
-}
-
 /// PLOC builds these 82 and 393 levels deep, beyond the GPU's 64-entry traversal stack, which
 /// once made the GPU refuse them; the depth-bounded build makes both paths render them.
 #[test]
 fn meshes_with_deep_bvhs_render_on_the_gpu_and_agree() {
-    for (name, obj) in [("fan", fan_disc()), ("slivers", nested_slivers())] {
-        let scene = chambre::scene::Scene::load(&deep_mesh_scene(name, &obj), &[]).unwrap();
+    for (name, obj) in [
+        ("fan", common::fan_disc()),
+        ("slivers", common::nested_slivers()),
+    ] {
+        let scene = chambre::scene::Scene::load(&common::deep_mesh_scene(name, &obj), &[]).unwrap();
         let chambre::scene::Shape::Mesh { mesh, .. } = &scene.shapes[0] else {
             unreachable!()
         };
@@ -305,4 +243,42 @@ fn a_scene_over_the_binding_limit_is_refused_with_its_size_the_limit_and_the_fla
         }
         Ok(_) => assert!(needed <= limit, "accepted an image over the limit"),
     }
+}
+
+/// A real GPU's budgets give a megapixel image a million invocations per dispatch (fewer
+/// samples each), a small image the same plan as a CPU adapter's, and both plans the same
+/// image up to rounding: a pass sums its samples before adding them to the accumulation.
+#[test]
+fn real_gpu_budgets_fill_a_dispatch_and_change_no_pixel() {
+    let megapixel = flatten(&common::load(
+        "scenes/area_light.toml",
+        &["render.width=1024", "render.height=1024", "render.spp=8"],
+    ));
+    let plan = plan_passes(&megapixel, &RayBudgets::REAL_GPU);
+    let invocations =
+        |plan: &chambre::render::RenderPlan| plan.bands[0].1 as u64 * plan.width as u64;
+    assert!(invocations(&plan) >= 1 << 20, "{plan:?}");
+    let lavapipe = plan_passes(&megapixel, &RayBudgets::DEFAULT);
+    assert!(invocations(&lavapipe) < 1 << 20);
+    let samples = |plan: &chambre::render::RenderPlan| plan.passes.iter().map(|p| p.1).sum::<u32>();
+    assert_eq!((samples(&plan), samples(&lavapipe)), (8, 8));
+
+    let small = flatten(&common::load("scenes/area_light.toml", &[]));
+    assert_eq!(
+        plan_passes(&small, &RayBudgets::REAL_GPU),
+        plan_passes(&small, &RayBudgets::DEFAULT)
+    );
+
+    let scene = flatten(&common::load(
+        "scenes/spheres.toml",
+        &["render.width=480", "render.height=320", "render.spp=4"],
+    ));
+    let real = plan_passes(&scene, &RayBudgets::REAL_GPU);
+    assert!(real.passes.len() > plan_passes(&scene, &RayBudgets::DEFAULT).passes.len());
+    let mut cpu = chambre::cpu::CpuRenderer::new(&scene).with_budgets(RayBudgets::REAL_GPU);
+    let split = render(&scene, &mut cpu, &mut |_, _| {}, &AtomicBool::new(false))
+        .unwrap()
+        .image;
+    let (within, mean_abs) = common::agreement(&common::render_cpu(&scene), &split, 1e-5);
+    assert!(within >= 0.999 && mean_abs < 1e-6, "{within} {mean_abs:e}");
 }

@@ -202,6 +202,22 @@ fn shared_structs_have_identical_layouts() {
     );
     layout!(
         module,
+        GpuCwNode {
+            p,
+            e_imask,
+            child_base,
+            prim_base,
+            child_meta,
+            q_lo_x,
+            q_hi_x,
+            q_lo_y,
+            q_hi_y,
+            q_lo_z,
+            q_hi_z
+        }
+    );
+    layout!(
+        module,
         GpuPrimitive {
             p0,
             kind,

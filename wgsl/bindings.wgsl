@@ -18,3 +18,6 @@
 // The ray benchmark's rays and per-ray results (wgsl/trace.wgsl).
 @group(0) @binding(11) var<storage, read> rays: array<GpuRay>;
 @group(0) @binding(12) var<storage, read_write> distances: array<f32>;
+// The compressed wide BVH (wgsl/traverse_cwbvh.wgsl); its leaves index `prims`, which then holds
+// the primitives in the CWBVH's order.
+@group(0) @binding(13) var<storage, read> cw_nodes: array<GpuCwNode>;

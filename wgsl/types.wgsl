@@ -7,6 +7,20 @@ struct GpuBvhNode {
     first_index: u32,
 }
 
+struct GpuCwNode {
+    p: vec3<f32>,
+    e_imask: u32,
+    child_base: u32,
+    prim_base: u32,
+    child_meta: vec2<u32>,
+    q_lo_x: vec2<u32>,
+    q_hi_x: vec2<u32>,
+    q_lo_y: vec2<u32>,
+    q_hi_y: vec2<u32>,
+    q_lo_z: vec2<u32>,
+    q_hi_z: vec2<u32>,
+}
+
 struct GpuPrimitive {
     p0: vec3<f32>,
     kind: u32,

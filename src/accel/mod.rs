@@ -8,6 +8,7 @@
 //! the kernels read.
 
 pub mod build;
+pub mod cwbvh;
 pub mod intersect;
 pub mod traverse;
 

@@ -13,7 +13,7 @@ use crate::error::Result;
 use crate::gpu::{GpuContext, GpuRenderer};
 use crate::layout::FEATURES_ALL;
 use crate::pack::{FlatScene, flatten};
-use crate::render::{RenderOutput, render};
+use crate::render::{RayBudgets, RenderOutput, render};
 use crate::scene::Scene;
 
 /// The sample scenes, at their own resolution and spp.
@@ -35,8 +35,8 @@ pub const SCENES: [&str; 11] = [
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameRun {
     /// `cpu` or `gpu` (code specialised to the scene's features), `cpu-general` or
-    /// `gpu-general` (every feature).
-    pub backend: &'static str,
+    /// `gpu-general` (every feature), `gpu-rpiN` (specialised, at most N rays per invocation).
+    pub backend: String,
     pub frame_ms: Spread,
     /// GPU kernel time from timestamp queries, where the adapter has them.
     pub kernel_ms: Option<Spread>,
@@ -64,65 +64,101 @@ pub struct FrameReport {
 /// How one run renders: the backend and the feature set its code was built for.
 #[derive(Clone, Copy)]
 enum Way {
-    Cpu { features: u32 },
-    Gpu { features: u32 },
+    Cpu {
+        features: u32,
+    },
+    Gpu {
+        features: u32,
+        /// Budgets other than the adapter's.
+        budgets: Option<RayBudgets>,
+    },
 }
 
-fn render_once(scene: &FlatScene, way: Way) -> Result<RenderOutput> {
+fn render_once(scene: &FlatScene, way: Way, gpu: Option<&GpuContext>) -> Result<RenderOutput> {
     let cancel = AtomicBool::new(false);
     match way {
         Way::Cpu { features } => {
             let mut renderer = CpuRenderer::new(scene).with_features(features)?;
             render(scene, &mut renderer, &mut |_, _| {}, &cancel)
         }
-        Way::Gpu { features } => {
-            let mut renderer = GpuRenderer::with_features(GpuContext::new()?, scene, features)?;
+        Way::Gpu { features, budgets } => {
+            let context = gpu
+                .expect("a GPU way is only planned with a GPU context")
+                .clone();
+            let budgets =
+                budgets.unwrap_or_else(|| RayBudgets::for_adapter(context.is_cpu_adapter));
+            let mut renderer = GpuRenderer::with_budgets(context, scene, features, budgets)?;
             render(scene, &mut renderer, &mut |_, _| {}, &cancel)
         }
     }
 }
 
 /// Renders each scene of `scenes` (names in `scenes/`) with each backend of `backends`
-/// interleaved run by run, after one warm-up run each.
-pub fn run(scenes: &[String], gpu: bool, runs: u32) -> Result<FrameReport> {
+/// interleaved run by run, after one warm-up run each; on the GPU too when `gpu` is given, and
+/// there once more for each of `rays_per_invocation` (dispatch shapes: the budgets' largest
+/// number of rays one invocation traces).
+pub fn run(
+    scenes: &[String],
+    gpu: Option<&GpuContext>,
+    rays_per_invocation: &[u64],
+    runs: u32,
+) -> Result<FrameReport> {
     let mut results = Vec::new();
     for name in scenes {
         let scene = Scene::load(Path::new(&format!("scenes/{name}.toml")), &[])?;
         let flat = flatten(&scene);
-        let mut ways = vec![
+        let mut ways: Vec<(String, Way)> = vec![
             (
-                "cpu",
+                "cpu".into(),
                 Way::Cpu {
                     features: flat.features(),
                 },
             ),
             (
-                "cpu-general",
+                "cpu-general".into(),
                 Way::Cpu {
                     features: FEATURES_ALL,
                 },
             ),
         ];
-        if gpu {
+        if let Some(context) = gpu {
+            let adapters = RayBudgets::for_adapter(context.is_cpu_adapter);
             ways.push((
-                "gpu",
+                "gpu".into(),
                 Way::Gpu {
                     features: flat.features(),
+                    budgets: None,
                 },
             ));
             ways.push((
-                "gpu-general",
+                "gpu-general".into(),
                 Way::Gpu {
                     features: FEATURES_ALL,
+                    budgets: None,
                 },
             ));
+            for &n in rays_per_invocation {
+                // A fixed shape: N rays per invocation whatever the image size.
+                let budgets = RayBudgets {
+                    per_invocation: n,
+                    min_invocations_per_dispatch: 0,
+                    ..adapters
+                };
+                ways.push((
+                    format!("gpu-rpi{n}"),
+                    Way::Gpu {
+                        features: flat.features(),
+                        budgets: Some(budgets),
+                    },
+                ));
+            }
         }
         let mut frame_ms = vec![Vec::new(); ways.len()];
         let mut kernel_ms = vec![Vec::new(); ways.len()];
         let mut rays = 0;
         for run in 0..=runs.max(1) {
             for (i, &(_, way)) in ways.iter().enumerate() {
-                let output = render_once(&flat, way)?;
+                let output = render_once(&flat, way, gpu)?;
                 if let Some(e) = output.stopped {
                     return Err(e);
                 }
@@ -138,10 +174,10 @@ pub fn run(scenes: &[String], gpu: bool, runs: u32) -> Result<FrameReport> {
         let runs = ways
             .iter()
             .enumerate()
-            .map(|(i, &(backend, _))| {
+            .map(|(i, (backend, _))| {
                 let frame = Spread::of(&frame_ms[i]);
                 FrameRun {
-                    backend,
+                    backend: backend.clone(),
                     frame_ms: frame,
                     kernel_ms: (!kernel_ms[i].is_empty()).then(|| Spread::of(&kernel_ms[i])),
                     mrays_per_s: rays as f64 / frame.median / 1e3,
@@ -200,7 +236,7 @@ impl FrameReport {
                         .map_or("-".into(), |k| format!("{:.1}", k.median)),
                     x.mrays_per_s,
                     ratio(cpu),
-                    ratio(general_of(x.backend)),
+                    ratio(general_of(&x.backend)),
                 );
             }
         }

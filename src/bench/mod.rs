@@ -23,7 +23,8 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use rays::{Backend, Pinhole, RaysConfig};
+use crate::gpu::GpuContext;
+use rays::{Backend, Bvh, Pinhole, RaysConfig};
 
 /// `chambre bench` and its parts.
 #[derive(Debug, clap::Subcommand)]
@@ -123,6 +124,10 @@ pub struct FrameArgs {
     /// Timed runs after one warm-up, interleaved across backends.
     #[arg(long, default_value_t = 3)]
     pub runs: u32,
+    /// Also render on the GPU with at most N rays per invocation whatever the image size, for
+    /// each N given: the dispatch shapes behind `RayBudgets::for_adapter`.
+    #[arg(long, value_delimiter = ',')]
+    pub gpu_rays_per_invocation: Vec<u64>,
     #[command(flatten)]
     pub backends: Backends,
     #[command(flatten)]
@@ -161,6 +166,9 @@ pub struct RaysArgs {
     pub runs: u32,
     #[arg(long, default_value_t = 1)]
     pub seed: u32,
+    /// Acceleration structures to traverse, side by side.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh])]
+    pub bvh: Vec<Bvh>,
     #[command(flatten)]
     pub backends: Backends,
     #[command(flatten)]
@@ -178,7 +186,9 @@ pub struct Report<'a, T: Serialize> {
 /// Runs `command`; returns the Markdown report and writes the JSON one if asked.
 pub fn run(command: &BenchCommand) -> Result<String> {
     let command_line = std::env::args().collect::<Vec<_>>().join(" ");
-    let machine = Machine::here();
+    // One device for the whole benchmark: every GPU run shares it.
+    let context = GpuContext::new();
+    let machine = Machine::here(&context);
     match command {
         BenchCommand::Rays(args) => {
             let config = RaysConfig {
@@ -194,8 +204,10 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 frames: args.frames,
                 runs: args.runs,
                 seed: args.seed,
+                bvhs: args.bvh.clone(),
             };
-            let report = rays::run(&config, &args.backends.backends)?;
+            let gpu = args.backends.gpu().then(|| usable(&context)).transpose()?;
+            let report = rays::run(&config, &args.backends.backends, gpu)?;
             finish(
                 command_line,
                 machine,
@@ -220,8 +232,8 @@ pub fn run(command: &BenchCommand) -> Result<String> {
             } else {
                 args.scenes.clone()
             };
-            let gpu = args.backends.gpu();
-            let report = frame::run(&scenes, gpu, args.runs)?;
+            let gpu = args.backends.gpu().then(|| usable(&context)).transpose()?;
+            let report = frame::run(&scenes, gpu, &args.gpu_rays_per_invocation, args.runs)?;
             finish(
                 command_line,
                 machine,
@@ -236,7 +248,8 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 height: args.size,
                 ..Pinhole::DRAGON
             };
-            let gpu = args.backends.gpu();
+            // A GPU that refuses is recorded per size, not an error.
+            let gpu = args.backends.gpu().then_some(&context);
             let report = scale::run(
                 &args.mesh,
                 &camera,
@@ -289,6 +302,15 @@ fn finish<T: Serialize>(
         )?;
     }
     Ok(text)
+}
+
+/// The benchmark's GPU context, or why there is none (a benchmark asked to measure the GPU
+/// fails without one).
+fn usable(context: &Result<GpuContext>) -> Result<&GpuContext> {
+    context.as_ref().map_err(|e| match e {
+        Error::NoAdapter(why) => Error::NoAdapter(why.clone()),
+        other => Error::NoAdapter(other.to_string()),
+    })
 }
 
 fn vec3(v: &[f32]) -> [f32; 3] {
@@ -344,14 +366,15 @@ impl Machine {
         )
     }
 
-    pub fn here() -> Machine {
+    pub fn here(gpu: &Result<GpuContext>) -> Machine {
         Machine {
             chambre_version: env!("CARGO_PKG_VERSION").to_string(),
             date_utc: crate::provenance::utc_date(),
             cpu_threads: rayon::current_num_threads(),
-            adapter: crate::gpu::GpuContext::new()
-                .map(|c| c.adapter_description)
-                .unwrap_or_else(|e| format!("none ({e})")),
+            adapter: match gpu {
+                Ok(c) => c.adapter_description.clone(),
+                Err(e) => format!("none ({e})"),
+            },
         }
     }
 }

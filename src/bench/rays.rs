@@ -15,6 +15,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::Spread;
+use crate::accel::cwbvh::{self, CwGeometry};
 use crate::accel::intersect::RayQuery;
 use crate::accel::traverse::{closest_hit, occluded};
 use crate::error::{Error, Result};
@@ -58,6 +59,17 @@ pub struct RaysConfig {
     /// Timed runs after one warm-up.
     pub runs: u32,
     pub seed: u32,
+    /// The acceleration structures traversed, side by side.
+    pub bvhs: Vec<Bvh>,
+}
+
+/// The acceleration structure rays traverse: the renderer's BVH2, or the compressed wide BVH
+/// made from it (`accel::cwbvh`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Bvh {
+    Bvh2,
+    Cwbvh,
 }
 
 /// Rays as structure of arrays.
@@ -152,13 +164,33 @@ impl Checksum {
     }
 }
 
-/// Per ray: the closest-hit distance (`T_FAR` on a miss), or 0 / `T_FAR` for occluded / free.
-pub fn trace_cpu(scene: &FlatScene, rays: &RaySet, query: Query) -> Vec<f32> {
+/// Per ray: the closest-hit distance (`T_FAR` on a miss), or 0 / `T_FAR` for occluded / free;
+/// through `cwbvh` when given, else the scene's BVH2.
+pub fn trace_cpu(
+    scene: &FlatScene,
+    cwbvh: Option<&CwGeometry>,
+    rays: &RaySet,
+    query: Query,
+) -> Vec<f32> {
     (0..rays.len())
         .into_par_iter()
         .with_min_len(1024)
         .map(|i| {
             let ray = RayQuery::new(rays.origins[i], rays.directions[i]);
+            if let Some(cw) = cwbvh {
+                return match query {
+                    Query::ClosestHit => {
+                        cwbvh::closest_hit(cw, &ray, T_FAR).map_or(T_FAR, |(_, hit)| hit.t)
+                    }
+                    Query::AnyHit => {
+                        if cwbvh::occluded(cw, &ray, T_FAR) {
+                            0.0
+                        } else {
+                            T_FAR
+                        }
+                    }
+                };
+            }
             match query {
                 Query::ClosestHit => {
                     closest_hit::<FEATURES_ALL>(scene.primitives(), &ray, NONE, T_FAR)
@@ -182,6 +214,7 @@ pub struct RaysResult {
     pub set: &'static str,
     pub query: Query,
     pub backend: String,
+    pub bvh: Bvh,
     pub rays: usize,
     pub mrays_per_s: Spread,
     pub checksum: Checksum,
@@ -193,6 +226,10 @@ pub struct RaysReport {
     pub config: RaysConfig,
     pub triangles: usize,
     pub bvh_build_ms: f64,
+    /// The CWBVH's conversion from the BVH2, after it.
+    pub cwbvh_build_ms: f64,
+    pub bvh2_nodes: usize,
+    pub cwbvh_nodes: usize,
     pub results: Vec<RaysResult>,
 }
 
@@ -227,9 +264,14 @@ pub enum Backend {
     Gpu,
 }
 
-/// Mrays/s of `runs` timed runs after one warm-up, each run's time given by `trace`.
+/// Mrays/s of `runs` timed runs after a warm-up of at least `WARM_UP`, each run's time given
+/// by `trace`.
 fn measure(runs: u32, rays: usize, mut trace: impl FnMut() -> Result<Duration>) -> Result<Spread> {
+    let warm_up = Instant::now();
     trace()?;
+    while warm_up.elapsed() < WARM_UP {
+        trace()?;
+    }
     let mut mrays = Vec::new();
     for _ in 0..runs.max(1) {
         mrays.push(rays as f64 / trace()?.as_secs_f64() / 1e6);
@@ -237,17 +279,22 @@ fn measure(runs: u32, rays: usize, mut trace: impl FnMut() -> Result<Duration>) 
     Ok(Spread::of(&mrays))
 }
 
+/// An idle GPU runs at a fraction of its clock: an H100 timed after one 7 ms warm-up run gave
+/// 226 Mrays/s in its first timed run and 1226 in its last.
+const WARM_UP: Duration = Duration::from_millis(300);
+
 /// Traces `rays` with `query` on the CPU path, `runs` times after a warm-up.
 fn measure_cpu(
     scene: &FlatScene,
+    cwbvh: Option<&CwGeometry>,
     rays: &RaySet,
     query: Query,
     runs: u32,
 ) -> Result<(Spread, Checksum)> {
-    let checksum = Checksum::of(&trace_cpu(scene, rays, query));
+    let checksum = Checksum::of(&trace_cpu(scene, cwbvh, rays, query));
     let spread = measure(runs, rays.len(), || {
         let start = Instant::now();
-        trace_cpu(scene, rays, query);
+        trace_cpu(scene, cwbvh, rays, query);
         Ok(start.elapsed())
     })?;
     Ok((spread, checksum))
@@ -264,38 +311,52 @@ fn measure_gpu(
     Ok((spread, Checksum::of(&tracer.distances()?)))
 }
 
-/// Traces both ray sets with both queries on each of `backends`.
-pub fn run(config: &RaysConfig, backends: &[Backend]) -> Result<RaysReport> {
+/// Traces both ray sets with both queries on each of `backends` (`gpu` is the context of
+/// [`Backend::Gpu`]).
+pub fn run(
+    config: &RaysConfig,
+    backends: &[Backend],
+    gpu: Option<&GpuContext>,
+) -> Result<RaysReport> {
     let scene = mesh_scene(&config.mesh)?;
+    let start = Instant::now();
+    let cw = cwbvh::build(scene.primitives()).map_err(Error::Gpu)?;
+    let cwbvh_build_ms = start.elapsed().as_secs_f64() * 1e3;
     let coherent = coherent_rays(&config.camera, config.frames, config.seed);
     let (lo, hi) = bounds(&scene);
     let incoherent = incoherent_rays(lo, hi, coherent.len(), config.seed);
     let mut results = Vec::new();
     for (set, rays) in [("coherent", &coherent), ("incoherent", &incoherent)] {
         for &backend in backends {
-            let (name, tracer) = match backend {
-                Backend::Cpu => (
-                    format!("cpu ({} threads)", rayon::current_num_threads()),
-                    None,
-                ),
-                Backend::Gpu => {
-                    let tracer = GpuTracer::new(GpuContext::new()?, &scene, rays)?;
-                    (format!("gpu ({})", tracer.adapter_name()), Some(tracer))
-                }
-            };
-            for query in [Query::ClosestHit, Query::AnyHit] {
-                let (mrays_per_s, checksum) = match &tracer {
-                    None => measure_cpu(&scene, rays, query, config.runs)?,
-                    Some(tracer) => measure_gpu(tracer, rays, query, config.runs)?,
+            for &bvh in &config.bvhs {
+                let cwbvh = (bvh == Bvh::Cwbvh).then_some(&cw);
+                let (name, tracer) = match backend {
+                    Backend::Cpu => (
+                        format!("cpu ({} threads)", rayon::current_num_threads()),
+                        None,
+                    ),
+                    Backend::Gpu => {
+                        let context =
+                            gpu.expect("the GPU backend is only asked for with a context");
+                        let tracer = GpuTracer::new(context.clone(), &scene, cwbvh, rays)?;
+                        (format!("gpu ({})", tracer.adapter_name()), Some(tracer))
+                    }
                 };
-                results.push(RaysResult {
-                    set,
-                    query,
-                    backend: name.clone(),
-                    rays: rays.len(),
-                    mrays_per_s,
-                    checksum,
-                });
+                for query in [Query::ClosestHit, Query::AnyHit] {
+                    let (mrays_per_s, checksum) = match &tracer {
+                        None => measure_cpu(&scene, cwbvh, rays, query, config.runs)?,
+                        Some(tracer) => measure_gpu(tracer, rays, query, config.runs)?,
+                    };
+                    results.push(RaysResult {
+                        set,
+                        query,
+                        backend: name.clone(),
+                        bvh,
+                        rays: rays.len(),
+                        mrays_per_s,
+                        checksum,
+                    });
+                }
             }
         }
     }
@@ -303,6 +364,9 @@ pub fn run(config: &RaysConfig, backends: &[Backend]) -> Result<RaysReport> {
         config: config.clone(),
         triangles: scene.triangle_count,
         bvh_build_ms: scene.build_time.as_secs_f64() * 1e3,
+        cwbvh_build_ms,
+        cwbvh_nodes: cw.nodes.len(),
+        bvh2_nodes: scene.nodes.len(),
         results,
     })
 }
@@ -313,12 +377,16 @@ impl RaysReport {
         let c = &self.config;
         let cam = &c.camera;
         let mut out = format!(
-            "rays: {} ({} triangles, BVH built in {:.0} ms); camera {:?} -> {:?}, up {:?}, \
+            "rays: {} ({} triangles, BVH2 of {} nodes built in {:.0} ms, CWBVH of {} nodes \
+             converted from it in {:.0} ms); camera {:?} -> {:?}, up {:?}, \
              vertical fov {} deg, {}x{}, {} frames ({} rays per set), seed {}; median of {} \
              runs after a warm-up\n\n",
             c.mesh.display(),
             self.triangles,
+            self.bvh2_nodes,
             self.bvh_build_ms,
+            self.cwbvh_nodes,
+            self.cwbvh_build_ms,
             cam.position,
             cam.look_at,
             cam.up,
@@ -330,15 +398,19 @@ impl RaysReport {
             c.seed,
             c.runs
         );
-        out += "| rays | query | backend | Mrays/s median | min | max | hits | sum of t |\n";
-        out += "|---|---|---|---|---|---|---|---|\n";
+        out += "| rays | query | backend | BVH | Mrays/s median | min | max | hits | sum of t |\n";
+        out += "|---|---|---|---|---|---|---|---|---|\n";
         for r in &self.results {
             let query = match r.query {
                 Query::ClosestHit => "closest",
                 Query::AnyHit => "any",
             };
+            let bvh = match r.bvh {
+                Bvh::Bvh2 => "BVH2",
+                Bvh::Cwbvh => "CWBVH",
+            };
             out += &format!(
-                "| {} | {query} | {} | {:.2} | {:.2} | {:.2} | {} | {:.6e} |\n",
+                "| {} | {query} | {} | {bvh} | {:.2} | {:.2} | {:.2} | {} | {:.6e} |\n",
                 r.set,
                 r.backend,
                 r.mrays_per_s.median,

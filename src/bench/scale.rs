@@ -114,19 +114,19 @@ fn measure(
     meshes: Vec<TriangleMesh>,
     camera: &Pinhole,
     runs: u32,
-    gpu: bool,
+    gpu: Option<&Result<GpuContext>>,
 ) -> Result<ScaleResult> {
     let scene = meshes_scene(meshes)?;
     let rays = coherent_rays(camera, 1, 1);
-    let checksum = Checksum::of(&trace_cpu(&scene, &rays, Query::ClosestHit));
+    let checksum = Checksum::of(&trace_cpu(&scene, None, &rays, Query::ClosestHit));
     let cpu_mrays_per_s = mrays(runs, rays.len(), || {
         let start = Instant::now();
-        trace_cpu(&scene, &rays, Query::ClosestHit);
+        trace_cpu(&scene, None, &rays, Query::ClosestHit);
         Ok(start.elapsed())
     })?;
     let (mut gpu_mrays_per_s, mut gpu_refused) = (None, None);
-    if gpu {
-        match GpuContext::new().and_then(|c| GpuTracer::new(c, &scene, &rays)) {
+    if let Some(context) = gpu {
+        match super::usable(context).and_then(|c| GpuTracer::new(c.clone(), &scene, None, &rays)) {
             Ok(tracer) => {
                 gpu_mrays_per_s = Some(mrays(runs, rays.len(), || tracer.trace(Query::ClosestHit))?)
             }
@@ -156,7 +156,7 @@ pub fn run(
     prefixes: &[usize],
     copy_counts: &[usize],
     runs: u32,
-    gpu: bool,
+    gpu: Option<&Result<GpuContext>>,
 ) -> Result<ScaleReport> {
     let full = load_mesh(mesh).map_err(|message| Error::File {
         path: mesh.to_path_buf(),

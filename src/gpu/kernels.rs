@@ -40,7 +40,7 @@ const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
 }
 
 /// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
-pub const BINDINGS: [Binding; 13] = [
+pub const BINDINGS: [Binding; 14] = [
     binding(0, "camera", Access::Uniform),
     binding(1, "frame", Access::Uniform),
     // One GpuPass per dispatch of a batch, each at its own dynamic offset.
@@ -58,6 +58,7 @@ pub const BINDINGS: [Binding; 13] = [
     binding(10, "sample_table", Access::StorageRead),
     binding(11, "rays", Access::StorageRead),
     binding(12, "distances", Access::StorageReadWrite),
+    binding(13, "cw_nodes", Access::StorageRead),
 ];
 
 /// The bindings of the render kernel (at most eight storage buffers: WebGPU's baseline).
@@ -86,8 +87,19 @@ const TRACE_BINDINGS: [Binding; 7] = [
     BINDINGS[12],
 ];
 
+/// The bindings of the ray-query kernels over the compressed wide BVH.
+const TRACE_CW_BINDINGS: [Binding; 7] = [
+    BINDINGS[1],
+    BINDINGS[2],
+    BINDINGS[4],
+    BINDINGS[9],
+    BINDINGS[11],
+    BINDINGS[12],
+    BINDINGS[13],
+];
+
 /// (file name, source) of every WGSL module a kernel may compose.
-pub const MODULES: [(&str, &str); 12] = [
+pub const MODULES: [(&str, &str); 13] = [
     ("types.wgsl", include_str!("../../wgsl/types.wgsl")),
     ("bindings.wgsl", include_str!("../../wgsl/bindings.wgsl")),
     ("status.wgsl", include_str!("../../wgsl/status.wgsl")),
@@ -96,6 +108,10 @@ pub const MODULES: [(&str, &str); 12] = [
     ("camera.wgsl", include_str!("../../wgsl/camera.wgsl")),
     ("intersect.wgsl", include_str!("../../wgsl/intersect.wgsl")),
     ("traverse.wgsl", include_str!("../../wgsl/traverse.wgsl")),
+    (
+        "traverse_cwbvh.wgsl",
+        include_str!("../../wgsl/traverse_cwbvh.wgsl"),
+    ),
     ("sampler.wgsl", include_str!("../../wgsl/sampler.wgsl")),
     (
         "integrator.wgsl",
@@ -141,6 +157,7 @@ const TRACE_MODULES: &[&str] = &[
     "status.wgsl",
     "intersect.wgsl",
     "traverse.wgsl",
+    "traverse_cwbvh.wgsl",
     "trace.wgsl",
 ];
 
@@ -160,8 +177,30 @@ pub const TRACE_ANY: Kernel = Kernel {
     bindings: &TRACE_BINDINGS,
 };
 
+/// Closest hit of each ray of a buffer through the compressed wide BVH (the ray benchmark).
+pub const TRACE_CLOSEST_CW: Kernel = Kernel {
+    name: "trace_closest_cw",
+    modules: TRACE_MODULES,
+    entry_point: "trace_closest_cw",
+    bindings: &TRACE_CW_BINDINGS,
+};
+
+/// Any hit of each ray of a buffer through the compressed wide BVH (the ray benchmark).
+pub const TRACE_ANY_CW: Kernel = Kernel {
+    name: "trace_any_cw",
+    modules: TRACE_MODULES,
+    entry_point: "trace_any_cw",
+    bindings: &TRACE_CW_BINDINGS,
+};
+
 /// Every kernel chambre builds.
-pub const KERNELS: [&Kernel; 3] = [&RENDER, &TRACE_CLOSEST, &TRACE_ANY];
+pub const KERNELS: [&Kernel; 5] = [
+    &RENDER,
+    &TRACE_CLOSEST,
+    &TRACE_ANY,
+    &TRACE_CLOSEST_CW,
+    &TRACE_ANY_CW,
+];
 
 /// The complete source of `kernel`, with a marker comment where each module starts.
 pub fn kernel_source(kernel: &Kernel) -> String {

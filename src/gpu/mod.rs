@@ -76,7 +76,10 @@ fn wgpu_error_text(e: &wgpu::Error) -> String {
     }
 }
 
-/// A device ready to run chambre's kernels.
+/// A device ready to run chambre's kernels. Clones share the device: a process makes one and
+/// hands clones to its renderers (with NVIDIA's driver 580, a benchmark that made a device per
+/// render stopped finding any adapter partway through, and each device costs milliseconds).
+#[derive(Clone)]
 pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -180,6 +183,23 @@ impl GpuContext {
                 scene.triangle_count
             ),
             bytemuck::cast_slice(&scene.prims),
+        )?;
+        Ok((nodes, prims))
+    }
+
+    /// The compressed wide BVH's nodes and the primitives in its order, refused like
+    /// [`GpuContext::geometry_buffers`].
+    pub(crate) fn cwbvh_buffers(
+        &self,
+        cw: &crate::accel::cwbvh::CwGeometry,
+    ) -> Result<(wgpu::Buffer, wgpu::Buffer)> {
+        let nodes = self.storage_buffer(
+            &format!("the scene's {} CWBVH nodes", cw.nodes.len()),
+            bytemuck::cast_slice(&cw.nodes),
+        )?;
+        let prims = self.storage_buffer(
+            &format!("the scene's {} primitives", cw.prims.len()),
+            bytemuck::cast_slice(&cw.prims),
         )?;
         Ok((nodes, prims))
     }

@@ -89,6 +89,9 @@ pub struct GpuRenderer {
     pass_stride: u64,
     in_flight: VecDeque<Batch>,
     kernel_time: Option<Duration>,
+    /// Chosen with the adapter ([`RayBudgets::for_adapter`]); the accumulation's scratch half
+    /// exists when they split passes into light windows.
+    budgets: RayBudgets,
 }
 
 impl GpuRenderer {
@@ -104,6 +107,18 @@ impl GpuRenderer {
         scene: &FlatScene,
         features: u32,
     ) -> Result<GpuRenderer> {
+        let budgets = RayBudgets::for_adapter(context.is_cpu_adapter);
+        GpuRenderer::with_budgets(context, scene, features, budgets)
+    }
+
+    /// Like [`GpuRenderer::with_features`], planning renders with `budgets` (`bench frame`
+    /// measures dispatch shapes with it).
+    pub fn with_budgets(
+        context: GpuContext,
+        scene: &FlatScene,
+        features: u32,
+        budgets: RayBudgets,
+    ) -> Result<GpuRenderer> {
         let missing = scene.features() & !features;
         if missing != 0 {
             return Err(Error::Gpu(format!(
@@ -118,7 +133,7 @@ impl GpuRenderer {
         }
         let device = &context.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let scene_buffers = upload_scene(&context, scene)?;
+        let scene_buffers = upload_scene(&context, scene, &budgets)?;
         let pixel_count = scene.frame.width as usize * scene.frame.height as usize;
         let pipeline = kernels::build_pipeline(device, &kernels::RENDER, features);
         if let Some(e) = pollster::block_on(scope.pop()) {
@@ -138,6 +153,7 @@ impl GpuRenderer {
             pixel_count,
             pass_stride,
             in_flight: VecDeque::new(),
+            budgets,
         })
     }
 
@@ -164,6 +180,7 @@ impl GpuRenderer {
 fn upload_scene(
     context: &GpuContext,
     scene: &FlatScene,
+    budgets: &RayBudgets,
 ) -> Result<Vec<(&'static str, wgpu::Buffer)>> {
     let uniform = |label: &str, bytes: &[u8]| context.uniform_buffer(label, bytes);
     let storage = |label: &str, bytes: &[u8]| context.storage_buffer(label, bytes);
@@ -178,7 +195,7 @@ fn upload_scene(
     let pixel_count = scene.frame.width as u64 * scene.frame.height as u64;
     // A pass split into light windows keeps its partial sums in a second half (scratch)
     // until it commits (see render.wgsl).
-    let split_passes = plan_passes(scene, &RayBudgets::DEFAULT).light_windows.len() > 1;
+    let split_passes = plan_passes(scene, budgets).light_windows.len() > 1;
     let accumulation_size = pixel_count * 16 * if split_passes { 2 } else { 1 };
     let limit = context.device.limits().max_storage_buffer_binding_size;
     if accumulation_size > limit {
@@ -220,6 +237,10 @@ fn upload_scene(
 }
 
 impl Backend for GpuRenderer {
+    fn budgets(&self) -> RayBudgets {
+        self.budgets
+    }
+
     fn submit(&mut self, dispatches: &[GpuPass]) -> Result<()> {
         let context = &self.context;
         let device = &context.device;

@@ -1,5 +1,6 @@
 //! Ray queries on the GPU for the ray benchmark: a buffer of rays in, a distance per ray out,
-//! through the `trace_closest` and `trace_any` kernels of the registry.
+//! through the `trace_closest` and `trace_any` kernels of the registry (BVH2), or their
+//! `_cw` twins over the compressed wide BVH.
 //!
 //! Rays are uploaded once, in chunks that each fit one storage binding, and every chunk's
 //! dispatch goes into one submission: the timed part is the device's work and one wait.
@@ -8,6 +9,7 @@ use std::time::{Duration, Instant};
 
 use super::GpuContext;
 use super::kernels::{self, Pipeline};
+use crate::accel::cwbvh::CwGeometry;
 use crate::bench::rays::{Query, RaySet};
 use crate::error::{Error, Result};
 use crate::layout::{GpuPass, GpuRay, LOOP_CHECK_ITERATIONS, T_FAR, TRACE_WORKGROUP_SIZE};
@@ -35,14 +37,28 @@ pub struct GpuTracer {
 }
 
 impl GpuTracer {
-    pub fn new(context: GpuContext, scene: &FlatScene, rays: &RaySet) -> Result<GpuTracer> {
+    /// Uploads `scene` and `rays`; the rays traverse the scene's BVH2, or `cwbvh` (made from
+    /// it) when given.
+    pub fn new(
+        context: GpuContext,
+        scene: &FlatScene,
+        cwbvh: Option<&CwGeometry>,
+        rays: &RaySet,
+    ) -> Result<GpuTracer> {
         let device = &context.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let features = scene.features();
-        let closest = kernels::build_pipeline(device, &kernels::TRACE_CLOSEST, features);
-        let any = kernels::build_pipeline(device, &kernels::TRACE_ANY, features);
+        let (closest_kernel, any_kernel) = match cwbvh {
+            None => (&kernels::TRACE_CLOSEST, &kernels::TRACE_ANY),
+            Some(_) => (&kernels::TRACE_CLOSEST_CW, &kernels::TRACE_ANY_CW),
+        };
+        let closest = kernels::build_pipeline(device, closest_kernel, features);
+        let any = kernels::build_pipeline(device, any_kernel, features);
         let frame = context.uniform_buffer("frame", bytemuck::bytes_of(&scene.frame));
-        let (nodes, prims) = context.geometry_buffers(scene)?;
+        let (nodes, prims) = match cwbvh {
+            None => context.geometry_buffers(scene)?,
+            Some(cw) => context.cwbvh_buffers(cw)?,
+        };
         let status = context.status_buffer();
         let mut chunks = Vec::new();
         for start in (0..rays.len()).step_by(RAYS_PER_CHUNK) {
@@ -72,6 +88,7 @@ impl GpuTracer {
                 ("frame", &frame),
                 ("pass_info", &pass_info),
                 ("nodes", &nodes),
+                ("cw_nodes", &nodes),
                 ("prims", &prims),
                 ("status", &status),
                 ("rays", &ray_buffer),

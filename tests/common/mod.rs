@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 use std::path::Path;
+use std::sync::OnceLock;
 use std::sync::atomic::AtomicBool;
 
 use chambre::cpu::CpuRenderer;
@@ -10,12 +11,14 @@ use chambre::pack::{FlatScene, flatten};
 use chambre::render::{Image, render};
 use chambre::scene::Scene;
 
-/// A GPU context, or a test failure. GPU tests never skip silently: without an adapter they
-/// fail, unless CHAMBRE_SKIP_GPU=1 is set by hand (and CHAMBRE_REQUIRE_GPU=1, which the test
-/// script sets, forbids even that).
+/// The test binary's GPU context (one device shared by its tests, as an application would:
+/// NVIDIA's driver hung when 16 tests each made their own at once), or a test failure. GPU
+/// tests never skip silently: without an adapter they fail, unless CHAMBRE_SKIP_GPU=1 is set by
+/// hand (and CHAMBRE_REQUIRE_GPU=1, which the test script sets, forbids even that).
 pub fn gpu_context() -> Option<GpuContext> {
-    match GpuContext::new() {
-        Ok(context) => Some(context),
+    static CONTEXT: OnceLock<Result<GpuContext, String>> = OnceLock::new();
+    match CONTEXT.get_or_init(|| GpuContext::new().map_err(|e| e.to_string())) {
+        Ok(context) => Some(context.clone()),
         Err(e) => {
             let required = std::env::var("CHAMBRE_REQUIRE_GPU").is_ok_and(|v| v == "1");
             let skip = std::env::var("CHAMBRE_SKIP_GPU").is_ok_and(|v| v == "1");
@@ -86,4 +89,69 @@ pub fn agreement(a: &Image, b: &Image, relative: f32) -> (f64, f64) {
     }
     let n = a.pixels.len() as f64;
     (within as f64 / n, sum_abs / n)
+}
+
+/// Writes `name` (an OBJ) and a scene rendering it under a directional light into a scratch
+/// directory; returns the scene path.
+pub fn deep_mesh_scene(name: &str, obj: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("chambre-deep-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join(format!("{name}.obj")), obj).unwrap();
+    let scene = dir.join(format!("{name}.toml"));
+    std::fs::write(
+        &scene,
+        format!(
+            r#"[render]
+width = 24
+height = 24
+spp = 1
+[camera]
+position = [0.5, 0.2, 3.0]
+look_at = [0.5, 0.0, 0.0]
+film = [24.0, 24.0]
+[[materials]]
+name = "white"
+model = "lambert"
+[[shapes]]
+type = "mesh"
+file = "{name}.obj"
+material = "white"
+smooth = false
+[[lights]]
+type = "directional"
+direction = [0.3, -0.2, -1.0]
+irradiance = [1.0, 1.0, 1.0]
+"#
+        ),
+    )
+    .unwrap();
+    scene
+}
+
+/// A fan disc of 3,000 triangles around one vertex.
+pub fn fan_disc() -> String {
+    let n = 3000;
+    let mut obj = String::from("v 0 0 0\n");
+    for i in 0..n {
+        let a = std::f64::consts::TAU * i as f64 / n as f64;
+        obj += &format!("v {} {} 0\n", a.cos(), a.sin());
+    }
+    for i in 0..n {
+        obj += &format!("f 1 {} {}\n", 2 + i, 2 + (i + 1) % n);
+    }
+    obj
+}
+
+/// 400 nested triangles from the origin, each 2% longer than the last and a little behind it.
+pub fn nested_slivers() -> String {
+    let mut obj = String::new();
+    for i in 0..400 {
+        let l = 1.02f64.powi(i);
+        let z = -1e-3 * i as f64;
+        obj += &format!("v 0 0 {z}\nv {l} 0 {z}\nv {l} {} {z}\n", l * 0.3);
+    }
+    for i in 0..400 {
+        obj += &format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3);
+    }
+    obj
 }

@@ -1,0 +1,243 @@
+//! The compressed wide BVH (CWBVH: eight children per 80-byte node, child boxes quantised to
+//! 8 bits per plane; Ylitie, Karras and Laine, HPG 2017), made by obvhs from a BVH2 of the
+//! scene's primitives, and its closest-hit and any-hit traversal. The GPU reads 80 bytes per visited node instead of
+//! the BVH2's 64 for two children, and visits a third as many nodes.
+//! Twin: `wgsl/traverse_cwbvh.wgsl`, the same traversal step by step.
+//!
+//! Child boxes are dequantised (`p + q * 2^e`, exact for the product, one rounding for the sum)
+//! and tested with the BVH2's slab test, `intersect::intersect_box`: the BVH2's boxes were
+//! widened by 16 ULPs before obvhs quantised them outward, which covers the one rounding.
+
+use glam::Vec3;
+use obvhs::BvhBuildParams;
+use obvhs::aabb::Aabb;
+
+use super::build::build_bvh_with;
+use super::intersect::{Hit, RayQuery, intersect_box, intersect_primitive};
+use super::{Primitives, primitive_bounds, widen};
+use crate::layout::{BVH_STACK_SIZE, CWBVH_STACK_SIZE, GpuCwNode, GpuPrimitive, NONE, T_FAR};
+
+/// A CWBVH and the bounded primitives in the order its leaves index them, planes after them.
+pub struct CwGeometry {
+    pub nodes: Vec<GpuCwNode>,
+    pub prims: Vec<GpuPrimitive>,
+    pub plane_start: u32,
+    pub plane_count: u32,
+}
+
+/// Builds the CWBVH of `geometry`'s bounded primitives: obvhs's converter collapses a BVH2 of
+/// one primitive per leaf (built here, with the scene BVH's preset, depth bound and widening)
+/// into nodes of up to eight children and leaves of up to three primitives, children ordered
+/// for each ray octant. Fails if the tree is deeper than the traversal stack.
+pub fn build(geometry: Primitives<'_>) -> Result<CwGeometry, String> {
+    let bounded = &geometry.prims[..geometry.plane_start as usize];
+    let aabbs: Vec<Aabb> = bounded.iter().map(primitive_bounds).collect();
+    let params = BvhBuildParams {
+        max_prims_per_leaf: 1,
+        ..BvhBuildParams::medium_build()
+    };
+    let (mut bvh, _) = build_bvh_with(&aabbs, params, BVH_STACK_SIZE as usize);
+    for node in &mut bvh.nodes {
+        widen(&mut node.aabb);
+    }
+    // `primitive_indices` of the result are positions in `bounded`.
+    let cw = obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(&bvh, 3, true, false);
+    let mut nodes: Vec<GpuCwNode> = cw.nodes.iter().map(|n| bytemuck::cast(*n)).collect();
+    if nodes.is_empty() {
+        // An empty node (no children) ends every traversal at once; the GPU needs one.
+        nodes.push(GpuCwNode::default());
+    }
+    let depth = tree_depth(&nodes);
+    if depth > CWBVH_STACK_SIZE as usize {
+        return Err(format!(
+            "the CWBVH is {depth} levels deep, more than its traversal stack of {CWBVH_STACK_SIZE}"
+        ));
+    }
+    if cw.primitive_indices.len() != geometry.plane_start as usize {
+        return Err(format!(
+            "the CWBVH holds {} primitives of {}",
+            cw.primitive_indices.len(),
+            geometry.plane_start
+        ));
+    }
+    let mut prims: Vec<GpuPrimitive> = cw
+        .primitive_indices
+        .iter()
+        .map(|&i| bounded[i as usize])
+        .collect();
+    let plane_start = prims.len() as u32;
+    let planes = geometry.plane_start..geometry.plane_start + geometry.plane_count;
+    prims.extend(planes.map(|i| geometry.prims[i as usize]));
+    Ok(CwGeometry {
+        nodes,
+        prims,
+        plane_start,
+        plane_count: geometry.plane_count,
+    })
+}
+
+/// Levels of the longest root-to-leaf path of node groups.
+fn tree_depth(nodes: &[GpuCwNode]) -> usize {
+    let mut deepest = 0;
+    let mut stack = vec![(0usize, 1usize)];
+    while let Some((index, depth)) = stack.pop() {
+        deepest = deepest.max(depth);
+        let node = &nodes[index];
+        let inner = (node.e_imask >> 24).count_ones() as usize;
+        for child in 0..inner {
+            stack.push((node.child_base as usize + child, depth + 1));
+        }
+    }
+    deepest
+}
+
+/// Byte `i` (0..8) of a pair of little-endian words.
+fn byte(words: [u32; 2], i: u32) -> u32 {
+    (words[(i / 4) as usize] >> ((i % 4) * 8)) & 0xff
+}
+
+/// obvhs's `ray_get_octant_inv4`: for each of the four bytes, 7 minus the ray's octant.
+fn octant_inv4(direction: Vec3) -> u32 {
+    let x = if direction.x < 0.0 { 0 } else { 0x0404_0404 };
+    let y = if direction.y < 0.0 { 0 } else { 0x0202_0202 };
+    let z = if direction.z < 0.0 { 0 } else { 0x0101_0101 };
+    x | y | z
+}
+
+/// The hit mask of a node's children: for an inner child hit, bit `24 + its traversal rank`
+/// (nearest first for the ray's octant); for a leaf hit, its primitives' bits (0..24) from
+/// `prim_base`. obvhs's `CwBvhNode::get_child_and_index_bits`, per child.
+fn child_hits(ray: &RayQuery, node: &GpuCwNode, oct_inv4: u32, t_max: f32) -> u32 {
+    let scale = |shift: u32| f32::from_bits(((node.e_imask >> shift) & 0xff) << 23);
+    let e = Vec3::new(scale(0), scale(8), scale(16));
+    let p = Vec3::from(node.p);
+    let mut mask = 0;
+    for child in 0..8 {
+        let meta = byte(node.child_meta, child);
+        if meta == 0 {
+            continue;
+        }
+        let q = |words: [u32; 2]| byte(words, child) as f32;
+        let lo = p + e * Vec3::new(q(node.q_lo_x), q(node.q_lo_y), q(node.q_lo_z));
+        let hi = p + e * Vec3::new(q(node.q_hi_x), q(node.q_hi_y), q(node.q_hi_z));
+        if intersect_box(ray, lo, hi, t_max) >= T_FAR {
+            continue;
+        }
+        let inner = meta & (meta << 1) & 0x10 != 0;
+        if inner {
+            let rank = (meta ^ (oct_inv4 & 0xff)) & 0x1f;
+            mask |= 1 << rank;
+        } else {
+            let count_bits = meta >> 5;
+            mask |= count_bits << (meta & 0x1f);
+        }
+    }
+    mask
+}
+
+/// The traversal, calling `leaf(id, t_max)` for each primitive of each leaf the ray reaches
+/// before the current `t_max`; `leaf` returns the new `t_max` (lower on a closer hit) or
+/// `None` to stop. Returns false if the stack overflowed (never for a tree `build` accepted).
+fn traverse(
+    nodes: &[GpuCwNode],
+    ray: &RayQuery,
+    t_max_in: f32,
+    mut leaf: impl FnMut(u32, f32) -> Option<f32>,
+) -> bool {
+    let oct_inv4 = octant_inv4(ray.direction);
+    let mut t_max = t_max_in;
+    let mut stack = [[0u32; 2]; CWBVH_STACK_SIZE as usize];
+    let mut stack_size = 0;
+    // (child_base, hit bits 24..32 | inner mask 0..8): the root as the one child of a group.
+    let mut current = [0u32, 0x8000_0000];
+    loop {
+        let mut prims = [0u32, 0];
+        if current[1] & 0xff00_0000 != 0 {
+            let hits = current[1];
+            let bit = 31 - hits.leading_zeros();
+            current[1] &= !(1 << bit);
+            if current[1] & 0xff00_0000 != 0 {
+                if stack_size == stack.len() {
+                    return false;
+                }
+                stack[stack_size] = current;
+                stack_size += 1;
+            }
+            let slot = (bit - 24) ^ (oct_inv4 & 0xff);
+            let rank_in_base = (hits & !(u32::MAX << slot)).count_ones();
+            let node = &nodes[(current[0] + rank_in_base) as usize];
+            let mask = child_hits(ray, node, oct_inv4, t_max);
+            current = [node.child_base, (mask & 0xff00_0000) | (node.e_imask >> 24)];
+            prims = [node.prim_base, mask & 0x00ff_ffff];
+        }
+        while prims[1] != 0 {
+            let bit = 31 - prims[1].leading_zeros();
+            prims[1] &= !(1 << bit);
+            match leaf(prims[0] + bit, t_max) {
+                Some(t) => t_max = t,
+                None => return true,
+            }
+        }
+        if current[1] & 0xff00_0000 == 0 {
+            if stack_size == 0 {
+                return true;
+            }
+            stack_size -= 1;
+            current = stack[stack_size];
+        }
+    }
+}
+
+/// Closest intersection along `ray` before `t_max`: (index into `geometry.prims`, hit).
+/// `crate::accel::traverse::closest_hit` over the CWBVH, every feature compiled in.
+pub fn closest_hit(geometry: &CwGeometry, ray: &RayQuery, t_max: f32) -> Option<(u32, Hit)> {
+    let mut best = Hit {
+        t: t_max,
+        b1: 0.0,
+        b2: 0.0,
+    };
+    let mut best_prim = NONE;
+    let complete = traverse(&geometry.nodes, ray, t_max, |id, t| {
+        let hit = intersect_primitive::<{ crate::layout::FEATURES_ALL }>(
+            ray,
+            &geometry.prims[id as usize],
+            t,
+        );
+        if hit.t < t {
+            best = hit;
+            best_prim = id;
+        }
+        Some(best.t)
+    });
+    assert!(complete, "build() bounds the depth by the stack");
+    let planes = geometry.plane_start..geometry.plane_start + geometry.plane_count;
+    for id in planes {
+        let hit = intersect_primitive::<{ crate::layout::FEATURES_ALL }>(
+            ray,
+            &geometry.prims[id as usize],
+            best.t,
+        );
+        if hit.t < best.t {
+            best = hit;
+            best_prim = id;
+        }
+    }
+    (best_prim != NONE).then_some((best_prim, best))
+}
+
+/// Whether anything lies along `ray` before `t_max`.
+pub fn occluded(geometry: &CwGeometry, ray: &RayQuery, t_max: f32) -> bool {
+    let mut blocked = false;
+    let complete = traverse(&geometry.nodes, ray, t_max, |id, t| {
+        let prim = &geometry.prims[id as usize];
+        blocked = intersect_primitive::<{ crate::layout::FEATURES_ALL }>(ray, prim, t).t < t;
+        (!blocked).then_some(t)
+    });
+    assert!(complete, "build() bounds the depth by the stack");
+    let planes = geometry.plane_start..geometry.plane_start + geometry.plane_count;
+    blocked
+        || planes.into_iter().any(|id| {
+            let prim = &geometry.prims[id as usize];
+            intersect_primitive::<{ crate::layout::FEATURES_ALL }>(ray, prim, t_max).t < t_max
+        })
+}
