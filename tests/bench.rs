@@ -67,6 +67,16 @@ fn bench_rays_reports_the_same_checksum_on_every_backend() {
         body["cwbvh_nodes"].as_u64().unwrap(),
     );
     assert!(0 < cwbvh_nodes && cwbvh_nodes < bvh2_nodes);
+    let cwbvh_reads = body["cwbvh_reads"].as_array().unwrap();
+    assert_eq!(cwbvh_reads.len(), 2, "one per ray set");
+    for reads in cwbvh_reads {
+        let nodes = reads["nodes_per_ray"].as_f64().unwrap();
+        let prims = reads["prims_per_ray"].as_f64().unwrap();
+        // Every ray reads the root; a hit needs a primitive test.
+        assert!(nodes >= 1.0 && prims > 0.0, "{reads}");
+        let bytes = reads["bytes_per_ray"].as_f64().unwrap();
+        assert!((bytes - (80.0 * nodes + 48.0 * prims + 36.0)).abs() < 1e-6 * bytes);
+    }
     let results = body["results"].as_array().unwrap();
     assert_eq!(
         results.len(),

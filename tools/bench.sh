@@ -2,19 +2,26 @@
 # Reproduces every figure of BENCHMARKS.md: runs each `chambre bench` part, side by side on the
 # backends found, and writes the tables (bench/results.md) and the JSON reports (bench/*.json).
 # Usage: tools/bench.sh [RUNS]   (default 3 timed runs after a warm-up for each figure)
+# CHAMBRE_BIN=path/to/chambre runs a binary built elsewhere (a GPU machine without cargo).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 runs="${1:-3}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
-cargo build --release --bin chambre
+chambre="${CHAMBRE_BIN:-./target/release/chambre}"
+if [ -z "${CHAMBRE_BIN:-}" ]; then
+    cargo build --release --bin chambre
+fi
 mkdir -p bench
-chambre=./target/release/chambre
 {
     echo "# chambre bench, $(date -u +%Y-%m-%d), $(nproc) cores, $(uname -m)"
     echo
-    "$chambre" bench frame --runs "$runs" --json bench/frame.json
+    # Beside the adapter's dispatch shape, two fixed ones (rays per invocation).
+    "$chambre" bench frame --runs "$runs" --gpu-rays-per-invocation 64,4 --json bench/frame.json
     echo
     "$chambre" bench rays --runs "$runs" --json bench/rays.json
+    echo
+    # The throughput issue's real-GPU target is stated at 1920x1080.
+    "$chambre" bench rays --width 1920 --height 1080 --runs "$runs" --json bench/rays_1080p.json
     echo
     "$chambre" bench build --runs "$runs" --json bench/build.json
     echo

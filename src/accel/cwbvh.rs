@@ -137,13 +137,15 @@ fn child_hits(ray: &RayQuery, node: &GpuCwNode, oct_inv4: u32, t_max: f32) -> u3
 
 /// The traversal, calling `leaf(id, t_max)` for each primitive of each leaf the ray reaches
 /// before the current `t_max`; `leaf` returns the new `t_max` (lower on a closer hit) or
-/// `None` to stop. Returns false if the stack overflowed (never for a tree `build` accepted).
+/// `None` to stop. Returns the nodes visited, or `None` if the stack overflowed (never for a
+/// tree `build` accepted).
 fn traverse(
     nodes: &[GpuCwNode],
     ray: &RayQuery,
     t_max_in: f32,
     mut leaf: impl FnMut(u32, f32) -> Option<f32>,
-) -> bool {
+) -> Option<u32> {
+    let mut visited = 0;
     let oct_inv4 = octant_inv4(ray.direction);
     let mut t_max = t_max_in;
     let mut stack = [[0u32; 2]; CWBVH_STACK_SIZE as usize];
@@ -158,7 +160,7 @@ fn traverse(
             current[1] &= !(1 << bit);
             if current[1] & 0xff00_0000 != 0 {
                 if stack_size == stack.len() {
-                    return false;
+                    return None;
                 }
                 stack[stack_size] = current;
                 stack_size += 1;
@@ -166,6 +168,7 @@ fn traverse(
             let slot = (bit - 24) ^ (oct_inv4 & 0xff);
             let rank_in_base = (hits & !(u32::MAX << slot)).count_ones();
             let node = &nodes[(current[0] + rank_in_base) as usize];
+            visited += 1;
             let mask = child_hits(ray, node, oct_inv4, t_max);
             current = [node.child_base, (mask & 0xff00_0000) | (node.e_imask >> 24)];
             prims = [node.prim_base, mask & 0x00ff_ffff];
@@ -175,12 +178,12 @@ fn traverse(
             prims[1] &= !(1 << bit);
             match leaf(prims[0] + bit, t_max) {
                 Some(t) => t_max = t,
-                None => return true,
+                None => return Some(visited),
             }
         }
         if current[1] & 0xff00_0000 == 0 {
             if stack_size == 0 {
-                return true;
+                return Some(visited);
             }
             stack_size -= 1;
             current = stack[stack_size];
@@ -191,13 +194,34 @@ fn traverse(
 /// Closest intersection along `ray` before `t_max`: (index into `geometry.prims`, hit).
 /// `crate::accel::traverse::closest_hit` over the CWBVH, every feature compiled in.
 pub fn closest_hit(geometry: &CwGeometry, ray: &RayQuery, t_max: f32) -> Option<(u32, Hit)> {
+    closest_hit_counted(geometry, ray, t_max).0
+}
+
+/// What one traversal reads: nodes visited and primitives tested (planes included).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counts {
+    pub nodes: u32,
+    pub prims: u32,
+}
+
+/// [`closest_hit`] and what it read (the GPU's kernel visits the same nodes in the same order).
+pub fn closest_hit_counted(
+    geometry: &CwGeometry,
+    ray: &RayQuery,
+    t_max: f32,
+) -> (Option<(u32, Hit)>, Counts) {
+    let mut counts = Counts {
+        nodes: 0,
+        prims: geometry.plane_count,
+    };
     let mut best = Hit {
         t: t_max,
         b1: 0.0,
         b2: 0.0,
     };
     let mut best_prim = NONE;
-    let complete = traverse(&geometry.nodes, ray, t_max, |id, t| {
+    let visited = traverse(&geometry.nodes, ray, t_max, |id, t| {
+        counts.prims += 1;
         let hit = intersect_primitive::<{ crate::layout::FEATURES_ALL }>(
             ray,
             &geometry.prims[id as usize],
@@ -209,7 +233,7 @@ pub fn closest_hit(geometry: &CwGeometry, ray: &RayQuery, t_max: f32) -> Option<
         }
         Some(best.t)
     });
-    assert!(complete, "build() bounds the depth by the stack");
+    counts.nodes = visited.expect("build() bounds the depth by the stack");
     let planes = geometry.plane_start..geometry.plane_start + geometry.plane_count;
     for id in planes {
         let hit = intersect_primitive::<{ crate::layout::FEATURES_ALL }>(
@@ -222,18 +246,18 @@ pub fn closest_hit(geometry: &CwGeometry, ray: &RayQuery, t_max: f32) -> Option<
             best_prim = id;
         }
     }
-    (best_prim != NONE).then_some((best_prim, best))
+    ((best_prim != NONE).then_some((best_prim, best)), counts)
 }
 
 /// Whether anything lies along `ray` before `t_max`.
 pub fn occluded(geometry: &CwGeometry, ray: &RayQuery, t_max: f32) -> bool {
     let mut blocked = false;
-    let complete = traverse(&geometry.nodes, ray, t_max, |id, t| {
+    let visited = traverse(&geometry.nodes, ray, t_max, |id, t| {
         let prim = &geometry.prims[id as usize];
         blocked = intersect_primitive::<{ crate::layout::FEATURES_ALL }>(ray, prim, t).t < t;
         (!blocked).then_some(t)
     });
-    assert!(complete, "build() bounds the depth by the stack");
+    visited.expect("build() bounds the depth by the stack");
     let planes = geometry.plane_start..geometry.plane_start + geometry.plane_count;
     blocked
         || planes.into_iter().any(|id| {

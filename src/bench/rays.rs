@@ -21,7 +21,7 @@ use crate::accel::traverse::{closest_hit, occluded};
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
 use crate::gpu::trace::GpuTracer;
-use crate::layout::{FEATURES_ALL, NONE, T_FAR};
+use crate::layout::{FEATURES_ALL, GpuCwNode, GpuPrimitive, GpuRay, NONE, T_FAR};
 use crate::math::rng::Rng;
 use crate::pack::{FlatScene, flatten};
 use crate::scene::Scene;
@@ -230,7 +230,43 @@ pub struct RaysReport {
     pub cwbvh_build_ms: f64,
     pub bvh2_nodes: usize,
     pub cwbvh_nodes: usize,
+    /// What a CWBVH closest-hit query reads, per ray set.
+    pub cwbvh_reads: Vec<Reads>,
     pub results: Vec<RaysResult>,
+}
+
+/// Mean bytes one closest-hit ray reads through the CWBVH: its nodes (80 bytes each) and
+/// primitives (48) as the CPU twin counts them (the GPU kernel visits the same), the ray (32)
+/// and its result (4). Times rays/s, the memory traffic a kernel asks of the caches and DRAM.
+#[derive(Clone, Debug, Serialize)]
+pub struct Reads {
+    pub set: &'static str,
+    pub nodes_per_ray: f64,
+    pub prims_per_ray: f64,
+    pub bytes_per_ray: f64,
+}
+
+impl Reads {
+    fn of(set: &'static str, cw: &CwGeometry, rays: &RaySet) -> Reads {
+        let (nodes, prims) = (0..rays.len())
+            .into_par_iter()
+            .map(|i| {
+                let ray = RayQuery::new(rays.origins[i], rays.directions[i]);
+                let (_, counts) = cwbvh::closest_hit_counted(cw, &ray, T_FAR);
+                (counts.nodes as u64, counts.prims as u64)
+            })
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        let n = rays.len().max(1) as f64;
+        let (nodes_per_ray, prims_per_ray) = (nodes as f64 / n, prims as f64 / n);
+        Reads {
+            set,
+            nodes_per_ray,
+            prims_per_ray,
+            bytes_per_ray: size_of::<GpuCwNode>() as f64 * nodes_per_ray
+                + size_of::<GpuPrimitive>() as f64 * prims_per_ray
+                + (size_of::<GpuRay>() + 4) as f64,
+        }
+    }
 }
 
 /// A scene holding just the mesh, so the renderer's own loading and BVH build are measured.
@@ -326,7 +362,11 @@ pub fn run(
     let (lo, hi) = bounds(&scene);
     let incoherent = incoherent_rays(lo, hi, coherent.len(), config.seed);
     let mut results = Vec::new();
+    let mut cwbvh_reads = Vec::new();
     for (set, rays) in [("coherent", &coherent), ("incoherent", &incoherent)] {
+        if config.bvhs.contains(&Bvh::Cwbvh) {
+            cwbvh_reads.push(Reads::of(set, &cw, rays));
+        }
         for &backend in backends {
             for &bvh in &config.bvhs {
                 let cwbvh = (bvh == Bvh::Cwbvh).then_some(&cw);
@@ -367,6 +407,7 @@ pub fn run(
         cwbvh_build_ms,
         cwbvh_nodes: cw.nodes.len(),
         bvh2_nodes: scene.nodes.len(),
+        cwbvh_reads,
         results,
     })
 }
@@ -398,8 +439,15 @@ impl RaysReport {
             c.seed,
             c.runs
         );
-        out += "| rays | query | backend | BVH | Mrays/s median | min | max | hits | sum of t |\n";
-        out += "|---|---|---|---|---|---|---|---|---|\n";
+        for r in &self.cwbvh_reads {
+            out += &format!(
+                "CWBVH closest hit, {} rays: {:.1} nodes and {:.1} primitives per ray, {:.0} bytes \
+                 read per ray (GB/s below: bytes per ray times rays per second)\n",
+                r.set, r.nodes_per_ray, r.prims_per_ray, r.bytes_per_ray
+            );
+        }
+        out += "\n| rays | query | backend | BVH | Mrays/s median | min | max | GB/s read | hits | sum of t |\n";
+        out += "|---|---|---|---|---|---|---|---|---|---|\n";
         for r in &self.results {
             let query = match r.query {
                 Query::ClosestHit => "closest",
@@ -409,8 +457,16 @@ impl RaysReport {
                 Bvh::Bvh2 => "BVH2",
                 Bvh::Cwbvh => "CWBVH",
             };
+            let reads = self
+                .cwbvh_reads
+                .iter()
+                .find(|x| x.set == r.set)
+                .filter(|_| r.bvh == Bvh::Cwbvh && r.query == Query::ClosestHit);
+            let gb_per_s = reads.map_or("-".into(), |x| {
+                format!("{:.0}", x.bytes_per_ray * r.mrays_per_s.median / 1e3)
+            });
             out += &format!(
-                "| {} | {query} | {} | {bvh} | {:.2} | {:.2} | {:.2} | {} | {:.6e} |\n",
+                "| {} | {query} | {} | {bvh} | {:.2} | {:.2} | {:.2} | {gb_per_s} | {} | {:.6e} |\n",
                 r.set,
                 r.backend,
                 r.mrays_per_s.median,
