@@ -16,7 +16,8 @@
 //! | pixel & lens samples | `sampler.rs`                | `wgsl/sampler.wgsl`    |
 //! | primary rays         | `camera/mod.rs`             | `wgsl/camera.wgsl`     |
 //! | intersection         | `accel/intersect.rs`        | `wgsl/intersect.wgsl`  |
-//! | BVH traversal        | `accel/traverse.rs` (obvhs) | `wgsl/traverse.wgsl`   |
+//! | BVH traversal        | `accel/traverse.rs` (obvhs BVH2) | `wgsl/traverse.wgsl` (ray queries) |
+//! | CWBVH traversal      | `accel/cwbvh.rs`            | `wgsl/traverse_cwbvh.wgsl` (the render kernel's) |
 //! | shading, shadows, mirrors | `integrator.rs`        | `wgsl/integrator.wgsl` |
 //! | pixel loop           | `cpu.rs`                    | `wgsl/render.wgsl`     |
 //! | status and loop caps | `render.rs`                 | `wgsl/status.wgsl`     |

@@ -30,6 +30,11 @@ fn rays(scene: &FlatScene, position: [f32; 3], look_at: [f32; 3]) -> Vec<(&'stat
 }
 
 fn check_agreement(name: &str, scene: &FlatScene, position: [f32; 3], look_at: [f32; 3]) {
+    let (lo, hi) = bounds(scene);
+    // The GPU may fuse multiply-adds the CPU rounds twice: distances agree to 1e-5 relative, or
+    // to 1e-7 of the scene's size for hits a few ULPs from the origin (NVIDIA's compiler, an
+    // incoherent ray starting on the fan's plane: t = 1.918055e-6 on the CPU, 1.918094e-6 there).
+    let absolute = 1e-7 * (hi - lo).max_element();
     let cw = cwbvh::build(scene.primitives()).unwrap_or_else(|e| panic!("{name}: {e}"));
     assert!(
         cw.nodes.len() < scene.nodes.len(),
@@ -60,7 +65,7 @@ fn check_agreement(name: &str, scene: &FlatScene, position: [f32; 3], look_at: [
                     "{name} {set} ray {i}: CPU {c}, GPU {g}"
                 );
                 assert!(
-                    (c - g).abs() <= 1e-5 * c.abs(),
+                    (c - g).abs() <= 1e-5 * c.abs() + absolute,
                     "{name} {set} ray {i}: CPU {c}, GPU {g}"
                 );
             }

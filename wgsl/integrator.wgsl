@@ -139,7 +139,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
                 let cos_light = -dot(light_normal, wi);
                 if (cos_surface > 0.0 && cos_light > 0.0 && dot(ng, wi) > 0.0) {
                     (*counters).rays += 1u;
-                    if (!occluded(ray_query_new(origin, wi), prim_id, light.prim, shadow_ray_length(distance))) {
+                    if (!cw_occluded(ray_query_new(origin, wi), prim_id, light.prim, shadow_ray_length(distance))) {
                         sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance);
                     }
                 }
@@ -158,7 +158,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
             let cos_surface = dot(n, wi);
             if (cos_surface > 0.0 && dot(ng, wi) > 0.0) {
                 (*counters).rays += 1u;
-                if (!occluded(ray_query_new(origin, wi), prim_id, NONE, shadow_ray_length(distance))) {
+                if (!cw_occluded(ray_query_new(origin, wi), prim_id, NONE, shadow_ray_length(distance))) {
                     total += eval_brdf(material, n, wo, wi) * light.color * (cos_surface * falloff);
                 }
             }
@@ -176,7 +176,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, window: LightWindow, rng:
     var skip = NONE;
     for (var depth = 0u; depth <= frame.max_depth; depth += 1u) {
         (*counters).rays += 1u;
-        let found = closest_hit(ray, skip, T_FAR);
+        let found = cw_closest_hit(ray, skip, T_FAR);
         if (found.prim == NONE) {
             if (first) {
                 radiance += throughput * frame.background;

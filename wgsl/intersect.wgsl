@@ -23,6 +23,12 @@ struct Hit {
     b2: f32,
 }
 
+// A hit and the primitive it is on (NONE: none).
+struct PrimHit {
+    prim: u32,
+    hit: Hit,
+}
+
 fn miss() -> Hit {
     return Hit(T_FAR, 0.0, 0.0);
 }

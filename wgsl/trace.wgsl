@@ -31,7 +31,7 @@ fn trace_closest_cw(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
     if (i < pass_info.sample_count) {
         let ray = rays[i];
-        let found = cw_closest_hit(ray_query_new(ray.origin, ray.direction), ray.t_max);
+        let found = cw_closest_hit(ray_query_new(ray.origin, ray.direction), NONE, ray.t_max);
         distances[i] = select(T_FAR, found.hit.t, found.prim != NONE);
     }
     check_loop_limit();
@@ -42,7 +42,7 @@ fn trace_any_cw(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
     if (i < pass_info.sample_count) {
         let ray = rays[i];
-        let blocked = cw_occluded(ray_query_new(ray.origin, ray.direction), ray.t_max);
+        let blocked = cw_occluded(ray_query_new(ray.origin, ray.direction), NONE, NONE, ray.t_max);
         distances[i] = select(T_FAR, 0.0, blocked);
     }
     check_loop_limit();

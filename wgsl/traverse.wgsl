@@ -3,11 +3,6 @@
 // below (nearer child first, far child pushed) is that function's.
 // Reads the bindings `nodes`, `prims` and `frame`; reports caps through status.wgsl.
 
-struct PrimHit {
-    prim: u32,
-    hit: Hit,
-}
-
 fn closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
     var best = PrimHit(NONE, Hit(t_max_in, 0.0, 0.0));
     if (frame.node_count > 0u) {

@@ -1,5 +1,6 @@
 // Closest-hit and any-hit traversal of the compressed wide BVH (eight children per node, child
-// boxes quantised to 8 bits per plane), then the unbounded planes by brute force.
+// boxes quantised to 8 bits per plane), then the unbounded planes by brute force: the render
+// kernel's traversal (the CPU path traverses the BVH2; both find the same hits).
 // Mirrors: src/accel/cwbvh.rs, step by step; the node order is obvhs's `traverse!` macro's.
 // Reads the bindings `cw_nodes`, `prims` and `frame`; reports caps through status.wgsl.
 // The eight children are tested by eight calls, each skipping an empty slot at once (one slab
@@ -83,7 +84,9 @@ fn cw_step(ray: RayQuery, oct_inv4: u32, t_max: f32, state: ptr<function, CwStat
     return true;
 }
 
-fn cw_closest_hit(ray: RayQuery, t_max_in: f32) -> PrimHit {
+// Closest intersection before `t_max_in`, ignoring primitive `skip` (the planar primitive a
+// secondary ray leaves); as traverse.wgsl's closest_hit.
+fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
     var best = PrimHit(NONE, Hit(t_max_in, 0.0, 0.0));
     let oct_inv4 = cw_octant_inv4(ray.direction);
     var stack: array<vec2<u32>, CWBVH_STACK_SIZE>;
@@ -103,9 +106,11 @@ fn cw_closest_hit(ray: RayQuery, t_max_in: f32) -> PrimHit {
             let bit = firstLeadingBit(state.prims.y);
             state.prims.y &= ~(1u << bit);
             let id = state.prims.x + bit;
-            let hit = intersect_primitive(ray, prims[id], best.hit.t);
-            if (hit.t < best.hit.t) {
-                best = PrimHit(id, hit);
+            if (id != skip) {
+                let hit = intersect_primitive(ray, prims[id], best.hit.t);
+                if (hit.t < best.hit.t) {
+                    best = PrimHit(id, hit);
+                }
             }
         }
         if ((state.current.y & 0xff000000u) == 0u) {
@@ -117,15 +122,18 @@ fn cw_closest_hit(ray: RayQuery, t_max_in: f32) -> PrimHit {
         }
     }
     for (var id = frame.plane_start; FEATURE_PLANES && id < frame.plane_start + frame.plane_count; id += 1u) {
-        let hit = intersect_primitive(ray, prims[id], best.hit.t);
-        if (hit.t < best.hit.t) {
-            best = PrimHit(id, hit);
+        if (id != skip) {
+            let hit = intersect_primitive(ray, prims[id], best.hit.t);
+            if (hit.t < best.hit.t) {
+                best = PrimHit(id, hit);
+            }
         }
     }
     return best;
 }
 
-fn cw_occluded(ray: RayQuery, t_max: f32) -> bool {
+// Whether anything but `skip_a` and `skip_b` lies along `ray` before `t_max`.
+fn cw_occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
     let oct_inv4 = cw_octant_inv4(ray.direction);
     var stack: array<vec2<u32>, CWBVH_STACK_SIZE>;
     var state = CwState(vec2<u32>(0u, 0x80000000u), vec2<u32>(0u, 0u), 0u);
@@ -143,7 +151,8 @@ fn cw_occluded(ray: RayQuery, t_max: f32) -> bool {
         while (state.prims.y != 0u) {
             let bit = firstLeadingBit(state.prims.y);
             state.prims.y &= ~(1u << bit);
-            if (intersect_primitive(ray, prims[state.prims.x + bit], t_max).t < t_max) {
+            let id = state.prims.x + bit;
+            if (id != skip_a && id != skip_b && intersect_primitive(ray, prims[id], t_max).t < t_max) {
                 return true;
             }
         }
@@ -156,7 +165,7 @@ fn cw_occluded(ray: RayQuery, t_max: f32) -> bool {
         }
     }
     for (var id = frame.plane_start; FEATURE_PLANES && id < frame.plane_start + frame.plane_count; id += 1u) {
-        if (intersect_primitive(ray, prims[id], t_max).t < t_max) {
+        if (id != skip_a && id != skip_b && intersect_primitive(ray, prims[id], t_max).t < t_max) {
             return true;
         }
     }

@@ -21,6 +21,10 @@ use crate::layout::{BVH_STACK_SIZE, CWBVH_STACK_SIZE, GpuCwNode, GpuPrimitive, N
 pub struct CwGeometry {
     pub nodes: Vec<GpuCwNode>,
     pub prims: Vec<GpuPrimitive>,
+    /// For each of `prims`, its index in the primitives it was built from.
+    pub order: Vec<u32>,
+    /// The inverse of `order`.
+    position_of: Vec<u32>,
     pub plane_start: u32,
     pub plane_count: u32,
 }
@@ -60,20 +64,34 @@ pub fn build(geometry: Primitives<'_>) -> Result<CwGeometry, String> {
             geometry.plane_start
         ));
     }
-    let mut prims: Vec<GpuPrimitive> = cw
-        .primitive_indices
-        .iter()
-        .map(|&i| bounded[i as usize])
-        .collect();
-    let plane_start = prims.len() as u32;
     let planes = geometry.plane_start..geometry.plane_start + geometry.plane_count;
-    prims.extend(planes.map(|i| geometry.prims[i as usize]));
+    let order: Vec<u32> = cw.primitive_indices.iter().copied().chain(planes).collect();
+    let prims = order.iter().map(|&i| geometry.prims[i as usize]).collect();
+    let mut position_of = vec![NONE; order.len()];
+    for (position, &i) in order.iter().enumerate() {
+        position_of[i as usize] = position as u32;
+    }
+    let plane_start = cw.primitive_indices.len() as u32;
     Ok(CwGeometry {
         nodes,
         prims,
+        order,
+        position_of,
         plane_start,
         plane_count: geometry.plane_count,
     })
+}
+
+impl CwGeometry {
+    /// The index in `prims` of primitive `index` of the primitives it was built from (`NONE`
+    /// stays `NONE`): what a light's `prim` becomes for the GPU.
+    pub fn new_index(&self, index: u32) -> u32 {
+        if index == NONE {
+            NONE
+        } else {
+            self.position_of[index as usize]
+        }
+    }
 }
 
 /// Levels of the longest root-to-leaf path of node groups.

@@ -38,6 +38,9 @@ pub struct FrameRun {
     /// `gpu-general` (every feature), `gpu-rpiN` (specialised, at most N rays per invocation).
     pub backend: String,
     pub frame_ms: Spread,
+    /// Rays traced: the same for every way but where a plan splits light samples into more
+    /// windows, each retracing its paths.
+    pub rays: u64,
     /// GPU kernel time from timestamp queries, where the adapter has them.
     pub kernel_ms: Option<Spread>,
     pub mrays_per_s: f64,
@@ -52,7 +55,6 @@ pub struct FrameResult {
     pub triangles: usize,
     /// `layout::FEATURE_*` bits of the scene (the specialised kernel's).
     pub features: u32,
-    pub rays: u64,
     pub runs: Vec<FrameRun>,
 }
 
@@ -155,14 +157,15 @@ pub fn run(
         }
         let mut frame_ms = vec![Vec::new(); ways.len()];
         let mut kernel_ms = vec![Vec::new(); ways.len()];
-        let mut rays = 0;
+        // Per way: a plan with more light windows retraces each path once per window.
+        let mut rays = vec![0; ways.len()];
         for run in 0..=runs.max(1) {
             for (i, &(_, way)) in ways.iter().enumerate() {
                 let output = render_once(&flat, way, gpu)?;
                 if let Some(e) = output.stopped {
                     return Err(e);
                 }
-                rays = output.rays;
+                rays[i] = output.rays;
                 if run > 0 {
                     frame_ms[i].push(output.elapsed.as_secs_f64() * 1e3);
                     if let Some(k) = output.kernel_time {
@@ -178,9 +181,10 @@ pub fn run(
                 let frame = Spread::of(&frame_ms[i]);
                 FrameRun {
                     backend: backend.clone(),
+                    rays: rays[i],
                     frame_ms: frame,
                     kernel_ms: (!kernel_ms[i].is_empty()).then(|| Spread::of(&kernel_ms[i])),
-                    mrays_per_s: rays as f64 / frame.median / 1e3,
+                    mrays_per_s: rays[i] as f64 / frame.median / 1e3,
                 }
             })
             .collect();
@@ -192,7 +196,6 @@ pub fn run(
             spp: f.spp,
             triangles: flat.triangle_count,
             features: flat.features(),
-            rays,
             runs,
         });
     }

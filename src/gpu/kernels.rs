@@ -66,7 +66,6 @@ const RENDER_BINDINGS: [Binding; 11] = [
     BINDINGS[0],
     BINDINGS[1],
     BINDINGS[2],
-    BINDINGS[3],
     BINDINGS[4],
     BINDINGS[5],
     BINDINGS[6],
@@ -74,6 +73,7 @@ const RENDER_BINDINGS: [Binding; 11] = [
     BINDINGS[8],
     BINDINGS[9],
     BINDINGS[10],
+    BINDINGS[13],
 ];
 
 /// The bindings of the ray-query kernels.
@@ -142,7 +142,7 @@ pub const RENDER: Kernel = Kernel {
         "sampling.wgsl",
         "camera.wgsl",
         "intersect.wgsl",
-        "traverse.wgsl",
+        "traverse_cwbvh.wgsl",
         "sampler.wgsl",
         "integrator.wgsl",
         "render.wgsl",

@@ -12,8 +12,9 @@ use std::time::Duration;
 
 use super::kernels::{self, Pipeline};
 use super::{GpuContext, wgpu_error_text};
+use crate::accel::cwbvh;
 use crate::error::{Error, Result};
-use crate::layout::{BVH_STACK_SIZE, GpuPass, WORKGROUP_SIZE};
+use crate::layout::{GpuLight, GpuPass, WORKGROUP_SIZE};
 use crate::pack::FlatScene;
 use crate::render::{Backend, DispatchStatus, RayBudgets, plan_passes};
 
@@ -125,12 +126,6 @@ impl GpuRenderer {
                 "a kernel without features {missing:#x} cannot render this scene, which uses them"
             )));
         }
-        if scene.bvh_depth > BVH_STACK_SIZE as usize {
-            return Err(Error::Gpu(format!(
-                "the BVH is {} levels deep, more than the kernel's traversal stack of {}",
-                scene.bvh_depth, BVH_STACK_SIZE
-            )));
-        }
         let device = &context.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let scene_buffers = upload_scene(&context, scene, &budgets)?;
@@ -184,7 +179,18 @@ fn upload_scene(
 ) -> Result<Vec<(&'static str, wgpu::Buffer)>> {
     let uniform = |label: &str, bytes: &[u8]| context.uniform_buffer(label, bytes);
     let storage = |label: &str, bytes: &[u8]| context.storage_buffer(label, bytes);
-    let (nodes, prims) = context.geometry_buffers(scene)?;
+    // The kernel traverses the compressed wide BVH, with the primitives in its order; a light's
+    // primitive index follows them.
+    let cw = cwbvh::build(scene.primitives()).map_err(Error::Gpu)?;
+    let (cw_nodes, prims) = context.cwbvh_buffers(&cw)?;
+    let lights: Vec<GpuLight> = scene
+        .lights
+        .iter()
+        .map(|l| GpuLight {
+            prim: cw.new_index(l.prim),
+            ..*l
+        })
+        .collect();
     let normals = storage(
         &format!(
             "the vertex normals of {} smooth triangles",
@@ -217,17 +223,14 @@ fn upload_scene(
             uniform("camera", bytemuck::bytes_of(&scene.camera)),
         ),
         ("frame", uniform("frame", bytemuck::bytes_of(&scene.frame))),
-        ("nodes", nodes),
+        ("cw_nodes", cw_nodes),
         ("prims", prims),
         ("normals", normals),
         (
             "materials",
             storage("materials", bytemuck::cast_slice(&scene.materials))?,
         ),
-        (
-            "lights",
-            storage("lights", bytemuck::cast_slice(&scene.lights))?,
-        ),
+        ("lights", storage("lights", bytemuck::cast_slice(&lights))?),
         ("accumulation", accumulation),
         (
             "sample_table",
