@@ -30,6 +30,7 @@
 pub mod accel;
 pub mod bench;
 pub mod camera;
+pub mod converge;
 pub mod cpu;
 pub mod error;
 pub mod gpu;
@@ -38,6 +39,7 @@ pub mod layout;
 pub mod math;
 pub mod output;
 pub mod pack;
+pub mod plot;
 pub mod provenance;
 pub mod render;
 pub mod sampler;

@@ -79,6 +79,10 @@ enum Command {
     /// Measure: the figures of BENCHMARKS.md, as a table and optionally JSON.
     #[command(subcommand)]
     Bench(chambre::bench::BenchCommand),
+    /// The speed–accuracy trade of a scene: error against a reference (RMSE, relative MSE,
+    /// FLIP) at 1, 2, 4, … samples per pixel for each sample pattern and backend, as a CSV and a
+    /// log-log plot with each curve's convergence slope.
+    Converge(chambre::converge::ConvergeArgs),
 }
 
 /// `eprintln!` that cannot panic: when stderr is closed (`chambre render ... 2>&1 | head -c1`)
@@ -118,10 +122,10 @@ struct RenderArgs {
     threads: Option<usize>,
     /// Pixel sample pattern (overrides render.pixel_sampler).
     #[arg(long, value_enum)]
-    pixel_sampler: Option<SamplerChoice>,
+    pixel_sampler: Option<chambre::sampler::SamplerName>,
     /// Lens sample pattern (overrides camera.lens_sampler).
     #[arg(long, value_enum)]
-    lens_sampler: Option<SamplerChoice>,
+    lens_sampler: Option<chambre::sampler::SamplerName>,
     /// Override any scene field, e.g. --set camera.f_number=2.8 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -255,27 +259,6 @@ impl RenderArgs {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum SamplerChoice {
-    Random,
-    Stratified,
-    Poisson,
-    Interleaved,
-    Sobol,
-}
-
-impl SamplerChoice {
-    fn name(self) -> &'static str {
-        match self {
-            SamplerChoice::Random => "random",
-            SamplerChoice::Stratified => "stratified",
-            SamplerChoice::Poisson => "poisson",
-            SamplerChoice::Interleaved => "interleaved",
-            SamplerChoice::Sobol => "sobol",
-        }
-    }
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum BackendChoice {
     /// A real GPU when it accepts the scene, else the CPU path, with a notice.
     Auto,
@@ -291,6 +274,7 @@ fn main() -> ExitCode {
         Command::Render(args) => run_render(&args),
         Command::Check { scene, set } => run_check(&scene, &set),
         Command::Bench(command) => run_bench(&command),
+        Command::Converge(args) => run_converge(&args),
         Command::Camera {
             scene,
             coc,
@@ -336,6 +320,26 @@ fn print(text: &str) -> anyhow::Result<()> {
 
 fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
     Scene::load(path, overrides)
+}
+
+fn run_converge(args: &chambre::converge::ConvergeArgs) -> anyhow::Result<ExitCode> {
+    use chambre::output::OutputTarget;
+    // Both outputs are checked before the first render, and written whole or not at all.
+    OutputTarget::prepare_beside(&args.csv)?;
+    if let Some(plot) = &args.plot {
+        OutputTarget::prepare_beside(plot)?;
+    }
+    let study = chambre::converge::run(args)?;
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    OutputTarget::write_beside(&args.csv, study.to_csv(&command).as_bytes())?;
+    if let Some(plot) = &args.plot {
+        let svg = study
+            .plot_svg()
+            .map_err(|e| anyhow::anyhow!("{}: {e}", plot.display()))?;
+        OutputTarget::write_beside(plot, svg.as_bytes())?;
+    }
+    print(&study.to_markdown())?;
+    Ok(ExitCode::SUCCESS)
 }
 
 fn run_bench(command: &chambre::bench::BenchCommand) -> anyhow::Result<ExitCode> {

@@ -33,7 +33,7 @@ pub const MAX_TABLE_SPP: u32 = 4096;
 pub const MAX_BLADES: u32 = 64;
 
 /// A sample pattern, as scene files and flags name it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum SamplerName {
     Random,
@@ -45,6 +45,17 @@ pub enum SamplerName {
 }
 
 impl SamplerName {
+    /// The name scene files and flags use.
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerName::Random => "random",
+            SamplerName::Stratified => "stratified",
+            SamplerName::Poisson => "poisson",
+            SamplerName::Interleaved => "interleaved",
+            SamplerName::Sobol => "sobol",
+        }
+    }
+
     /// The `SAMPLER_*` code the kernels switch on.
     pub fn code(self) -> u32 {
         match self {

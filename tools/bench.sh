@@ -28,6 +28,11 @@ mkdir -p bench
     "$chambre" bench scale --runs "$runs" --json bench/scale.json --plot bench/scale.svg
     echo
     "$chambre" bench samplers --json bench/samplers.json
+    echo
+    "$chambre" converge scenes/bokeh.toml -D render.width=120 -D render.height=80 \
+        --reference-spp 4096 --max-spp 256 --samplers random,stratified,poisson,interleaved,sobol \
+        --backends cpu,gpu --csv bench/converge_bokeh.csv --plot bench/converge_bokeh.svg
 } | tee bench/results.md
-# The plot BENCHMARKS.md shows.
+# The plots BENCHMARKS.md shows.
 cp bench/scale.svg docs/images/scale.svg
+cp bench/converge_bokeh.svg docs/images/converge_bokeh.svg

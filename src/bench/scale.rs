@@ -18,6 +18,7 @@ use crate::gpu::GpuContext;
 use crate::gpu::trace::GpuTracer;
 use crate::layout::{GpuBvhNode, GpuNormals, GpuPrimitive};
 use crate::pack::{FlatScene, flatten};
+use crate::plot::log_log_panel;
 use crate::scene::mesh::{TriangleMesh, load_mesh};
 use crate::scene::{Scene, Shape};
 
@@ -234,17 +235,19 @@ impl ScaleReport {
             .iter()
             .filter_map(|r| Some((r.triangles as f64, r.gpu_mrays_per_s?.median)))
             .collect();
-        draw_panel(
+        log_log_panel(
             &left,
             "BVH build time",
+            "triangles",
             "ms",
             &[("build (medium preset)", &build, BLUE)],
             x_range.clone(),
         )
         .map_err(|e| fail(&e))?;
-        draw_panel(
+        log_log_panel(
             &right,
             "closest-hit throughput",
+            "triangles",
             "Mrays/s",
             &[("CPU path", &cpu, BLUE), ("GPU path", &gpu, RED)],
             x_range,
@@ -252,50 +255,4 @@ impl ScaleReport {
         .map_err(|e| fail(&e))?;
         root.present().map_err(|e| fail(&e))
     }
-}
-
-type Series<'a> = (&'a str, &'a [(f64, f64)], RGBColor);
-
-/// One log-log panel of `series` against triangles.
-fn draw_panel<DB: DrawingBackend>(
-    area: &DrawingArea<DB, plotters::coord::Shift>,
-    title: &str,
-    unit: &str,
-    series: &[Series],
-    x_range: std::ops::Range<f64>,
-) -> std::result::Result<(), String> {
-    let values = series.iter().flat_map(|(_, s, _)| s.iter().map(|p| p.1));
-    let (lo, hi) = values.fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
-    let mut chart = ChartBuilder::on(area)
-        .caption(title, ("sans-serif", 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(55)
-        .build_cartesian_2d(x_range.log_scale(), (lo * 0.7..hi * 1.4).log_scale())
-        .map_err(|e| e.to_string())?;
-    chart
-        .configure_mesh()
-        .x_desc("triangles")
-        .y_desc(unit)
-        .draw()
-        .map_err(|e| e.to_string())?;
-    for &(name, points, color) in series {
-        if points.is_empty() {
-            continue;
-        }
-        chart
-            .draw_series(LineSeries::new(points.iter().copied(), color))
-            .map_err(|e| e.to_string())?
-            .label(name)
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color));
-        chart
-            .draw_series(points.iter().map(|&p| Circle::new(p, 3, color.filled())))
-            .map_err(|e| e.to_string())?;
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(|e| e.to_string())
 }

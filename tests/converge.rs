@@ -1,0 +1,90 @@
+//! `chambre converge` end to end on a small scene: a row per run, error falling with samples at
+//! Monte Carlo's rate for random patterns and faster for Sobol, both paths alike, the plot.
+
+mod common;
+
+use std::process::Command;
+
+#[test]
+fn converge_measures_the_error_of_each_pattern_and_backend() {
+    drop(common::gpu_context());
+    let dir = std::env::temp_dir().join(format!("chambre-converge-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (csv, plot) = (dir.join("c.csv"), dir.join("c.svg"));
+    let output = Command::new(env!("CARGO_BIN_EXE_chambre"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args([
+            "converge",
+            "scenes/area_light.toml",
+            "-D",
+            "render.width=32",
+        ])
+        .args([
+            "-D",
+            "render.height=32",
+            "--reference-spp",
+            "512",
+            "--max-spp",
+            "16",
+        ])
+        .args([
+            "--samplers",
+            "random,sobol",
+            "--backends",
+            "cpu,gpu",
+            "--csv",
+        ])
+        .arg(&csv)
+        .arg("--plot")
+        .arg(&plot)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("# ") && text.contains("converge scenes/area_light.toml"));
+    assert!(text.contains("adapter: ") && text.contains("reference rendered"));
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    assert_eq!(
+        lines.next(),
+        Some("backend,sampler,spp,wall_ms,kernel_ms,rays,rmse,rel_mse,flip")
+    );
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert_eq!(rows.len(), 2 * 2 * 5, "2 backends x 2 patterns x 1..16 spp");
+    let value = |row: &Vec<String>, i: usize| row[i].parse::<f64>().unwrap();
+    let curve = |backend: &str, sampler: &str| -> Vec<&Vec<String>> {
+        rows.iter()
+            .filter(|r| r[0] == backend && r[1] == sampler)
+            .collect()
+    };
+    for backend in ["cpu", "gpu"] {
+        for sampler in ["random", "sobol"] {
+            let c = curve(backend, sampler);
+            let spp: Vec<f64> = c.iter().map(|r| value(r, 2)).collect();
+            assert_eq!(spp, [1.0, 2.0, 4.0, 8.0, 16.0]);
+            let rmse: Vec<f64> = c.iter().map(|r| value(r, 6)).collect();
+            let flip: Vec<f64> = c.iter().map(|r| value(r, 8)).collect();
+            assert!(c.iter().all(|r| value(r, 5) > 0.0), "rays counted");
+            assert!(flip.iter().all(|f| (0.0..=1.0).contains(f)));
+            // 16x the samples: a quarter of the error for random patterns, less for Sobol.
+            assert!(rmse[4] < 0.4 * rmse[0], "{backend} {sampler}: {rmse:?}");
+            assert!(flip[4] < flip[0], "{backend} {sampler}: {flip:?}");
+            let points: Vec<(f64, f64)> = spp.iter().copied().zip(rmse.iter().copied()).collect();
+            let slope = chambre::converge::log_log_slope(&points);
+            if sampler == "random" {
+                assert!((-0.7..=-0.35).contains(&slope), "random slope {slope}");
+            } else {
+                assert!(slope < -0.6, "sobol slope {slope}");
+            }
+        }
+    }
+    // The same samples on both paths: the same errors.
+    for (c, g) in curve("cpu", "sobol").iter().zip(curve("gpu", "sobol")) {
+        let (a, b) = (value(c, 6), value(g, 6));
+        assert!((a - b).abs() <= 1e-3 * a, "CPU {a} GPU {b}");
+    }
+    let svg = std::fs::read_to_string(&plot).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("slope") && svg.contains("RMSE against time"));
+}
