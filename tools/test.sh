@@ -12,6 +12,15 @@ if ! ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; then
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq mesa-vulkan-drivers >/dev/null
 fi
 
+# nv-flip (FLIP in `chambre converge`) compiles NVIDIA's C++ implementation.
+if ! command -v c++ >/dev/null 2>&1; then
+    echo "== installing a C++ compiler (g++)"
+    SUDO=""
+    [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq g++ >/dev/null
+fi
+
 export CHAMBRE_REQUIRE_GPU=1
 # The loader's complaint about a missing XDG_RUNTIME_DIR on headless machines is noise.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
