@@ -25,9 +25,8 @@ use crate::accel::traverse::{closest_hit, occluded};
 use crate::camera::{film_position_mm, generate_ray};
 use crate::layout::*;
 use crate::math::rng::Rng;
-use crate::math::sampling::stratified_2d;
 use crate::pack::FlatScene;
-use crate::sampler::{PatternSource, sample_2d, sample_aperture};
+use crate::sampler::{PatternSource, light_sample_2d, sample_2d, sample_aperture};
 
 /// Counters a sample adds to (rays traced, paths cut off at `max_depth`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -202,6 +201,7 @@ fn direct_light<const F: u32>(
             let area = if triangle { 0.5 } else { 1.0 } * cross.length();
             let light_normal = cross.normalize();
             let samples = window.clip(light.samples);
+            let light_dim = light_dimension(&scene.frame, depth, sample_offset, 0);
             rng.seek(light_dimension(
                 &scene.frame,
                 depth,
@@ -211,7 +211,17 @@ fn direct_light<const F: u32>(
             sample_offset += light.samples;
             let mut sum = Vec3::ZERO;
             for k in samples {
-                let mut u = stratified_2d(k, light.samples, light.strata_columns, rng.next_2d());
+                let mut u = light_sample_2d(
+                    &scene.frame,
+                    light.samples,
+                    light.strata_columns,
+                    rng.pixel,
+                    rng.sample,
+                    k,
+                    light_dim,
+                    rng.next_2d(),
+                    &mut stats.flags,
+                );
                 if triangle && u[0] + u[1] > 1.0 {
                     u = [1.0 - u[0], 1.0 - u[1]];
                 }

@@ -105,6 +105,10 @@ pub const STATUS_PERMUTE_CAP: u32 = 4;
 pub const STATUS_LOOP_LIMIT: u32 = 8;
 /// Trip count of the loop-limit check (`GpuPass::loop_check`); any value above 1 works.
 pub const LOOP_CHECK_ITERATIONS: u32 = 2;
+/// Light samples follow the pixel pattern over all of a pixel's `spp x samples` light points
+/// while there are at most this many (`sampler::light_sample_2d`); beyond, each camera sample's
+/// light samples are stratified on their own.
+pub const MAX_LIGHT_PATTERN_POINTS: u32 = 1 << 24;
 /// Slots of the status buffer (`array<atomic<u32>, STATUS_WORDS>`).
 pub const STATUS_FLAGS: u32 = 0;
 pub const STATUS_RAYS: u32 = 1;
@@ -334,6 +338,7 @@ pub fn wgsl_prelude() -> String {
         ("TRACE_WORKGROUP_SIZE", TRACE_WORKGROUP_SIZE),
         ("BVH_STACK_SIZE", BVH_STACK_SIZE),
         ("CWBVH_STACK_SIZE", CWBVH_STACK_SIZE),
+        ("MAX_LIGHT_PATTERN_POINTS", MAX_LIGHT_PATTERN_POINTS),
         ("NONE", NONE),
         ("PRIM_TRIANGLE", PRIM_TRIANGLE),
         ("PRIM_SPHERE", PRIM_SPHERE),

@@ -435,6 +435,44 @@ pub fn sample_2d(
     }
 }
 
+/// The point of light sample `k` (of `light_samples`, stratified by `light_columns` columns) of
+/// camera sample `sample` of `pixel`, on the light whose random dimensions start at `dim`; `u`
+/// is the sample's own random pair (always drawn). Light samples follow the pixel pattern over
+/// the pixel's `spp x light_samples` points, so consecutive camera samples do not repeat each
+/// other's light points: Sobol takes point `sample * light_samples + k` of an Owen-scrambled
+/// sequence; stratified, Poisson and interleaved patterns (whose tables hold `spp` points, not
+/// `spp x light_samples`) a permuted stratum of the product grid (the pixel pattern's strata
+/// times the light's). Random patterns, and pixels with more than
+/// `MAX_LIGHT_PATTERN_POINTS` light points, stratify each camera sample's light samples alone.
+#[allow(clippy::too_many_arguments)]
+pub fn light_sample_2d(
+    frame: &GpuFrame,
+    light_samples: u32,
+    light_columns: u32,
+    pixel: u32,
+    sample: u32,
+    k: u32,
+    dim: u32,
+    u: [f32; 2],
+    flags: &mut u32,
+) -> [f32; 2] {
+    if frame.pixel_sampler == SAMPLER_RANDOM || frame.spp > MAX_LIGHT_PATTERN_POINTS / light_samples
+    {
+        return stratified_2d(k, light_samples, light_columns, u);
+    }
+    let index = sample * light_samples + k;
+    let key = pixel_hash(frame.seed, pixel, dim);
+    if frame.pixel_sampler == SAMPLER_SOBOL {
+        return sobol_owen_2d(index, key);
+    }
+    let n = frame.spp * light_samples;
+    let stratum = permute(index, n, key).unwrap_or_else(|| {
+        *flags |= STATUS_PERMUTE_CAP;
+        index
+    });
+    stratified_2d(stratum, n, frame.pixel_strata_columns * light_columns, u)
+}
+
 /// x - floor(x) for x in [0, 2), staying below 1 (a sum of two values in [0, 1) may round to 1).
 fn wrap_unit(x: f32) -> f32 {
     let w = if x >= 1.0 { x - 1.0 } else { x };

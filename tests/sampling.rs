@@ -327,3 +327,57 @@ mod patterns {
         }
     }
 }
+
+/// A pixel's light points over all its camera samples follow the pixel pattern: with 16 spp and
+/// 4 light samples, the 64 points of a stratified or Sobol pattern fill every cell of the 8x8
+/// grid exactly once (the product of the pixel's 4x4 strata and the light's 2x2; the first 64
+/// points of Owen-scrambled Sobol are a (0,6,2)-net), where independent camera samples leave
+/// cells empty.
+#[test]
+fn light_samples_are_stratified_over_the_whole_pixel() {
+    use chambre::layout::{SAMPLER_RANDOM, SAMPLER_SOBOL, SAMPLER_STRATIFIED};
+    use chambre::math::sampling::strata_columns;
+    use chambre::sampler::light_sample_2d;
+    let mut frame = chambre::layout::GpuFrame {
+        spp: 16,
+        pixel_strata_columns: strata_columns(16),
+        seed: 9,
+        ..Default::default()
+    };
+    let (light_samples, pixel, dim) = (4, 1234, 77);
+    let empty_cells = |frame: &chambre::layout::GpuFrame| {
+        let mut counts = [0u32; 64];
+        for sample in 0..16 {
+            let mut rng = Rng::new(frame.seed, pixel, sample);
+            for k in 0..light_samples {
+                let mut flags = 0;
+                let u = rng.next_2d();
+                let columns = strata_columns(light_samples);
+                let [x, y] = light_sample_2d(
+                    frame,
+                    light_samples,
+                    columns,
+                    pixel,
+                    sample,
+                    k,
+                    dim,
+                    u,
+                    &mut flags,
+                );
+                assert_eq!(flags, 0);
+                assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
+                counts[(y * 8.0) as usize * 8 + (x * 8.0) as usize] += 1;
+            }
+        }
+        counts.iter().filter(|&&c| c == 0).count()
+    };
+    for sampler in [SAMPLER_STRATIFIED, SAMPLER_SOBOL] {
+        frame.pixel_sampler = sampler;
+        assert_eq!(empty_cells(&frame), 0, "sampler {sampler}");
+    }
+    frame.pixel_sampler = SAMPLER_RANDOM;
+    assert!(
+        empty_cells(&frame) > 10,
+        "random light points leave cells empty"
+    );
+}

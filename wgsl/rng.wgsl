@@ -10,10 +10,13 @@ fn pcg_hash(v: u32) -> u32 {
 struct Rng {
     key: u32,
     dim: u32,
+    // The pixel (y * width + x) and camera sample of the stream (see the Rust twin).
+    pixel: u32,
+    sample: u32,
 }
 
 fn rng_new(seed: u32, pixel: u32, sample: u32) -> Rng {
-    return Rng(pcg_hash(pcg_hash(pcg_hash(seed) ^ pixel) ^ sample), 0u);
+    return Rng(pcg_hash(pcg_hash(pcg_hash(seed) ^ pixel) ^ sample), 0u, pixel, sample);
 }
 
 fn rng_seek(rng: ptr<function, Rng>, dim: u32) {

@@ -125,6 +125,21 @@ fn sample_2d(source: PatternSource, x: u32, y: u32, sample: u32, rng: ptr<functi
     }
 }
 
+// The point of light sample `k` of camera sample `sample` of `pixel` (see the Rust twin).
+fn light_sample_2d(light_samples: u32, light_columns: u32, pixel: u32, sample: u32, k: u32,
+                   dim: u32, u: vec2<f32>) -> vec2<f32> {
+    if (frame.pixel_sampler == SAMPLER_RANDOM || frame.spp > MAX_LIGHT_PATTERN_POINTS / light_samples) {
+        return stratified_2d(k, light_samples, light_columns, u);
+    }
+    let index = sample * light_samples + k;
+    let key = pixel_hash(frame.seed, pixel, dim);
+    if (frame.pixel_sampler == SAMPLER_SOBOL) {
+        return sobol_owen_2d(index, key);
+    }
+    let n = frame.spp * light_samples;
+    return stratified_2d(permute(index, n, key), n, frame.pixel_strata_columns * light_columns, u);
+}
+
 fn sample_aperture(u: vec2<f32>) -> vec2<f32> {
     let r = camera.lens_radius_mm;
     if (camera.aperture_blades == 0u) {

@@ -18,12 +18,21 @@ pub fn pcg_hash(v: u32) -> u32 {
 pub struct Rng {
     key: u32,
     dim: u32,
+    /// The pixel (`y * width + x`) and camera sample the stream belongs to: the sample patterns
+    /// of later dimensions (the light samples) index by them.
+    pub pixel: u32,
+    pub sample: u32,
 }
 
 impl Rng {
     pub fn new(seed: u32, pixel: u32, sample: u32) -> Self {
         let key = pcg_hash(pcg_hash(pcg_hash(seed) ^ pixel) ^ sample);
-        Rng { key, dim: 0 }
+        Rng {
+            key,
+            dim: 0,
+            pixel,
+            sample,
+        }
     }
 
     /// Continue the stream at dimension `dim` (light samples draw from computed dimensions).
