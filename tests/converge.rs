@@ -88,3 +88,28 @@ fn converge_measures_the_error_of_each_pattern_and_backend() {
     let svg = std::fs::read_to_string(&plot).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("slope") && svg.contains("RMSE against time"));
 }
+
+/// The scenes shipped to stress the trade each stress what their names say.
+#[test]
+fn the_stress_scenes_load_with_what_they_stress() {
+    use chambre::layout::{FEATURE_AREA_LIGHTS, FEATURE_LENS, FEATURE_MIRRORS};
+    let features = |name: &str| {
+        let scene = common::load(&format!("scenes/converge/{name}.toml"), &[]);
+        let flat = chambre::pack::flatten(&scene);
+        (scene, flat.features())
+    };
+    let (scene, f) = features("defocus_tilt");
+    assert!(f & FEATURE_LENS != 0 && scene.camera.aperture_blades >= 5);
+    assert!(scene.camera.f_number <= 1.4 && scene.camera.movements.lens_tilt != 0.0);
+    let (scene, f) = features("soft_shadows");
+    assert!(f & FEATURE_AREA_LIGHTS != 0 && f & FEATURE_LENS == 0);
+    assert_eq!(scene.render.spp, 64);
+    let (scene, f) = features("mirror_corridor");
+    assert!(f & FEATURE_MIRRORS != 0 && scene.render.max_depth >= 16);
+    let (scene, f) = features("checkerboard");
+    assert_eq!(
+        f & (FEATURE_LENS | FEATURE_AREA_LIGHTS | FEATURE_MIRRORS),
+        0
+    );
+    assert!(scene.triangle_count() >= 512, "the 16x16 board");
+}

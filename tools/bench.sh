@@ -32,6 +32,13 @@ mkdir -p bench
     "$chambre" converge scenes/bokeh.toml -D render.width=120 -D render.height=80 \
         --reference-spp 4096 --max-spp 256 --samplers random,stratified,poisson,interleaved,sobol \
         --backends cpu,gpu --csv bench/converge_bokeh.csv --plot bench/converge_bokeh.svg
+    # The scenes shipped to stress the trade (scenes/converge/), on the CPU path.
+    for scene in defocus_tilt soft_shadows mirror_corridor checkerboard; do
+        echo
+        echo "converge: scenes/converge/$scene.toml"
+        "$chambre" converge "scenes/converge/$scene.toml" --reference-spp 2048 --max-spp 128 \
+            --samplers random,stratified,sobol --csv "bench/converge_$scene.csv"
+    done
 } | tee bench/results.md
 # The plots BENCHMARKS.md shows.
 cp bench/scale.svg docs/images/scale.svg
