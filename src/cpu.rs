@@ -193,4 +193,8 @@ impl Backend for CpuRenderer<'_> {
     fn accumulation(&mut self) -> Result<Vec<[f32; 4]>> {
         Ok(std::mem::take(&mut self.accumulation))
     }
+
+    fn snapshot(&mut self) -> Result<Vec<[f32; 4]>> {
+        Ok(self.accumulation.clone())
+    }
 }

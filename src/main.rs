@@ -166,6 +166,10 @@ struct RenderArgs {
     /// most taken).
     #[arg(long, value_name = "SECONDS")]
     time_budget: Option<f64>,
+    /// Also write the image every SECONDS during the render (the same path, replaced whole
+    /// each time), to look at it and stop the render when it is good enough.
+    #[arg(long, value_name = "SECONDS")]
+    progressive: Option<f64>,
     /// Render shard I of N (a band of rows) for `chambre merge`: writes OUT's stem with
     /// `.shard-I-of-N.exr` and `.json`. `auto/N` takes I from JOB_COMPLETION_INDEX,
     /// SLURM_ARRAY_TASK_ID or AWS_BATCH_JOB_ARRAY_INDEX.
@@ -542,9 +546,26 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         Some(seconds) => Some(Instant::now() + Duration::from_secs_f64(seconds)),
         None => None,
     };
-    let run = |backend: &mut dyn Backend, progress: &mut dyn Progress| match deadline {
-        Some(deadline) => render_until(&flat, backend, progress, &cancel, deadline),
-        None => render(&flat, backend, progress, &cancel),
+    let every = match args.progressive {
+        Some(seconds) if !(seconds.is_finite() && seconds > 0.0) => {
+            bail!("--progressive must be a positive number of seconds, got {seconds}")
+        }
+        Some(seconds) => Some(Duration::from_secs_f64(seconds)),
+        None => None,
+    };
+    let run = |backend: &mut dyn Backend, progress: &mut dyn Progress| match (every, deadline) {
+        (Some(every), deadline) => {
+            let mut write = |image: &chambre::render::Image| target.write(image);
+            let snapshots = chambre::render::Snapshots {
+                every,
+                write: &mut write,
+            };
+            chambre::render::render_with_snapshots(
+                &flat, backend, progress, &cancel, deadline, snapshots,
+            )
+        }
+        (None, Some(deadline)) => render_until(&flat, backend, progress, &cancel, deadline),
+        (None, None) => render(&flat, backend, progress, &cancel),
     };
     let (output, backend_name, features) = match gpu_renderer(choice, &flat)? {
         Some(mut renderer) => {
@@ -778,6 +799,12 @@ fn finish(output: RenderOutput, target: &OutputTarget, backend: &str) -> anyhow:
         output.rays_per_second() / 1e6,
         output.rays
     );
+    if output.snapshots > 0 {
+        note!(
+            "note: {path} was also written {} times during the render (--progressive)",
+            output.snapshots
+        );
+    }
     if output.deadline_reached {
         note!(
             "note: the time budget was spent after {:.2} s: {} per pixel",

@@ -110,6 +110,9 @@ pub trait Backend {
     fn in_flight(&self) -> usize;
     /// The accumulation, read once at the end.
     fn accumulation(&mut self) -> Result<Vec<[f32; 4]>>;
+    /// The accumulation so far, during a render (`--progressive`): every finished sample, and
+    /// the render goes on.
+    fn snapshot(&mut self) -> Result<Vec<[f32; 4]>>;
     /// Device time spent in the kernels of finished batches, where the device measures it.
     fn kernel_time(&self) -> Option<Duration> {
         None
@@ -204,6 +207,8 @@ pub struct RenderOutput {
     pub deadline_reached: bool,
     /// Samples each pixel of `image` received, row by row.
     pub sample_counts: Vec<u32>,
+    /// Images handed to `Snapshots::write` during the render.
+    pub snapshots: u32,
 }
 
 impl RenderOutput {
@@ -366,7 +371,28 @@ pub fn render(
     progress: &mut dyn Progress,
     cancel: &AtomicBool,
 ) -> Result<RenderOutput> {
-    drive(scene, backend, progress, cancel, None)
+    drive(scene, backend, progress, cancel, None, None)
+}
+
+/// Images written during a render: `write` receives the image of every finished sample each
+/// time `every` has passed since the last (after the batch that crosses it).
+pub struct Snapshots<'a> {
+    pub every: Duration,
+    pub write: &'a mut dyn FnMut(&Image) -> Result<()>,
+}
+
+/// [`render`] (stopping, successfully, at `deadline` when given) that hands an image to
+/// `snapshots` as it goes; `RenderOutput::snapshots` counts them. A failing write stops the
+/// render with its error, keeping the samples.
+pub fn render_with_snapshots(
+    scene: &FlatScene,
+    backend: &mut dyn Backend,
+    progress: &mut dyn Progress,
+    cancel: &AtomicBool,
+    deadline: Option<Instant>,
+    snapshots: Snapshots<'_>,
+) -> Result<RenderOutput> {
+    drive(scene, backend, progress, cancel, deadline, Some(snapshots))
 }
 
 /// [`render`] that stops, successfully, once `deadline` has passed: no batch is queued after
@@ -379,7 +405,7 @@ pub fn render_until(
     cancel: &AtomicBool,
     deadline: Instant,
 ) -> Result<RenderOutput> {
-    drive(scene, backend, progress, cancel, Some(deadline))
+    drive(scene, backend, progress, cancel, Some(deadline), None)
 }
 
 fn drive(
@@ -388,9 +414,11 @@ fn drive(
     progress: &mut dyn Progress,
     cancel: &AtomicBool,
     deadline: Option<Instant>,
+    mut snapshots: Option<Snapshots<'_>>,
 ) -> Result<RenderOutput> {
     let frame = &scene.frame;
     let start = Instant::now();
+    let mut last_snapshot = start;
     let plan = plan_passes(scene, &backend.budgets());
     let mut output = RenderOutput {
         image: Image {
@@ -411,6 +439,7 @@ fn drive(
         stopped: None,
         deadline_reached: false,
         sample_counts: Vec::new(),
+        snapshots: 0,
     };
     // Batches are made pass by pass as they are submitted: a 2^20-spp render has millions.
     let batches = (0..plan.passes.len()).flat_map(|pass| {
@@ -460,6 +489,22 @@ fn drive(
         }
         if output.stopped.is_some() {
             break;
+        }
+        if let Some(snapshots) = snapshots.as_mut()
+            && last_snapshot.elapsed() >= snapshots.every
+            && output.batches > 0
+        {
+            let written = backend.snapshot().and_then(|accumulation| {
+                let accumulation = crop_rows(accumulation, frame.width, scene.crop);
+                let [x0, x1, y0, y1] = scene.crop;
+                (snapshots.write)(&Image::from_accumulation(x1 - x0, y1 - y0, &accumulation))
+            });
+            if let Err(e) = written {
+                output.stopped = Some(e);
+                break;
+            }
+            output.snapshots += 1;
+            last_snapshot = Instant::now();
         }
         if cancel.load(Ordering::Relaxed) {
             output.stopped = Some(Error::Interrupted {

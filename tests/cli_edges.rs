@@ -805,3 +805,85 @@ fn sample_counts_show_where_the_samples_went() {
     assert_eq!(output.status.code(), Some(1));
     assert!(stderr_of(&output).contains("use .exr or .pfm"));
 }
+
+/// `--progressive` writes the image during the render: the file is there, whole, before the
+/// render ends, and the final note counts the writes; a non-positive interval is refused.
+#[test]
+fn progressive_writes_the_image_during_the_render() {
+    let dir = scratch_dir("progressive");
+    let target = dir.join("progressive.exr");
+    let mut child = chambre()
+        .args(["render", "scenes/spheres.toml", "--backend", "cpu", "-o"])
+        .arg(&target)
+        .args([
+            "--spp",
+            "1000000",
+            "--time-budget",
+            "3",
+            "--progressive",
+            "0.2",
+        ])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while !target.exists() && started.elapsed() < Duration::from_secs(20) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let seen_during = child.try_wait().unwrap().is_none();
+    assert!(
+        target.exists() && seen_during,
+        "no image before the render ended"
+    );
+    let early = image::open(&target).unwrap().into_rgb32f();
+    assert_eq!(early.dimensions(), (480, 320));
+    let output = child.wait_with_output().unwrap();
+    let message = stderr_of(&output);
+    assert!(output.status.success(), "{message}");
+    let writes: u32 = message
+        .split("was also written ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{message}"));
+    assert!(writes >= 2, "{message}");
+    let output = small_render(&dir.join("refused.exr"), &["--progressive", "0"]);
+    assert!(!output.status.success());
+    assert!(stderr_of(&output).contains("--progressive must be a positive number"));
+}
+
+/// A progressive write that fails stops the render with its error and keeps the samples.
+#[test]
+fn a_failing_progressive_write_stops_the_render_with_its_error() {
+    let scene = common::load(
+        "scenes/spheres.toml",
+        &["render.width=192", "render.height=128", "render.spp=4"],
+    );
+    let flat = flatten(&scene);
+    let rays_per_row = 192 * 4 * chambre::render::RayBound::of(&flat).per_sample();
+    let budgets = RayBudgets {
+        per_dispatch: 8 * rays_per_row,
+        per_batch: 8 * rays_per_row,
+        ..RayBudgets::DEFAULT
+    };
+    let mut cpu = CpuRenderer::new(&flat).with_budgets(budgets);
+    let mut write = |_: &Image| -> chambre::error::Result<()> {
+        Err(chambre::error::Error::Gpu("disk full (a test)".into()))
+    };
+    let output = chambre::render::render_with_snapshots(
+        &flat,
+        &mut cpu,
+        &mut |_, _| {},
+        &AtomicBool::new(false),
+        None,
+        chambre::render::Snapshots {
+            every: Duration::ZERO,
+            write: &mut write,
+        },
+    )
+    .unwrap();
+    let stopped = output.stopped.map(|e| e.to_string()).unwrap_or_default();
+    assert!(stopped.contains("disk full (a test)"), "{stopped}");
+    assert_eq!(output.snapshots, 0);
+    assert!(output.max_samples_per_pixel == 4 && output.pixels_without_samples > 0);
+}

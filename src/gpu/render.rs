@@ -347,6 +347,11 @@ impl Backend for GpuRenderer {
         Ok(sums)
     }
 
+    /// The copy is queued after the batches in flight, so it holds them too.
+    fn snapshot(&mut self) -> Result<Vec<[f32; 4]>> {
+        self.accumulation()
+    }
+
     fn kernel_time(&self) -> Option<Duration> {
         self.kernel_time
     }
