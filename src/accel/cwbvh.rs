@@ -9,13 +9,13 @@
 //! widened by 16 ULPs before obvhs quantised them outward, which covers the one rounding.
 
 use glam::Vec3;
-use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
+use obvhs::bvh2::Bvh2;
+use obvhs::bvh2::node::Bvh2Node;
 
-use super::build::build_bvh_with;
 use super::intersect::{Hit, RayQuery, intersect_box, intersect_primitive};
 use super::{Primitives, primitive_bounds, widen};
-use crate::layout::{BVH_STACK_SIZE, CWBVH_STACK_SIZE, GpuCwNode, GpuPrimitive, NONE, T_FAR};
+use crate::layout::{CWBVH_STACK_SIZE, GpuCwNode, GpuPrimitive, NONE, T_FAR};
 
 /// A CWBVH and the bounded primitives in the order its leaves index them, planes after them.
 pub struct CwGeometry {
@@ -30,20 +30,14 @@ pub struct CwGeometry {
 }
 
 /// Builds the CWBVH of `geometry`'s bounded primitives: obvhs's converter collapses a BVH2 of
-/// one primitive per leaf (built here, with the scene BVH's preset, depth bound and widening)
-/// into nodes of up to eight children and leaves of up to three primitives, children ordered
-/// for each ray octant. Fails if the tree is deeper than the traversal stack.
+/// one primitive per leaf into nodes of up to eight children and leaves of up to three
+/// primitives, children ordered for each ray octant. That BVH2 is the scene's own with each
+/// leaf's primitives split into a median tree along their centroids' widest axis (a few
+/// levels: obvhs's leaves hold up to 8), not a second build. Fails if the tree is deeper than
+/// the traversal stack.
 pub fn build(geometry: Primitives<'_>) -> Result<CwGeometry, String> {
     let bounded = &geometry.prims[..geometry.plane_start as usize];
-    let aabbs: Vec<Aabb> = bounded.iter().map(primitive_bounds).collect();
-    let params = BvhBuildParams {
-        max_prims_per_leaf: 1,
-        ..BvhBuildParams::medium_build()
-    };
-    let (mut bvh, _) = build_bvh_with(&aabbs, params, BVH_STACK_SIZE as usize);
-    for node in &mut bvh.nodes {
-        widen(&mut node.aabb);
-    }
+    let bvh = single_primitive_leaves(geometry.bvh, bounded);
     // `primitive_indices` of the result are positions in `bounded`.
     let cw = obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(&bvh, 3, true, false);
     let mut nodes: Vec<GpuCwNode> = cw.nodes.iter().map(|n| bytemuck::cast(*n)).collect();
@@ -91,6 +85,76 @@ impl CwGeometry {
         } else {
             self.position_of[index as usize]
         }
+    }
+}
+
+/// `bvh` (whose leaves index `bounded` directly) with every leaf of several primitives replaced
+/// by a median tree of one-primitive leaves; `primitive_indices` of the result are positions in
+/// `bounded`.
+fn single_primitive_leaves(bvh: &Bvh2, bounded: &[GpuPrimitive]) -> Bvh2 {
+    enum Work {
+        Node(usize),
+        Slots(usize, usize),
+    }
+    let boxes: Vec<Aabb> = bounded
+        .iter()
+        .map(|p| {
+            let mut b = primitive_bounds(p);
+            widen(&mut b);
+            b
+        })
+        .collect();
+    let mut indices: Vec<u32> = (0..bounded.len() as u32).collect();
+    let mut nodes = vec![Bvh2Node::default(); bvh.nodes.len().min(1)];
+    let mut stack = vec![(Work::Node(0), 0usize)];
+    if bvh.nodes.is_empty() {
+        stack.clear();
+    }
+    while let Some((work, at)) = stack.pop() {
+        let (first, count) = match work {
+            Work::Node(i) => {
+                let node = &bvh.nodes[i];
+                if node.prim_count == 0 {
+                    let children = nodes.len();
+                    nodes.extend([Bvh2Node::default(); 2]);
+                    nodes[at] = Bvh2Node::new(node.aabb, 0, children as u32);
+                    let left = node.first_index as usize;
+                    stack.push((Work::Node(left), children));
+                    stack.push((Work::Node(left + 1), children + 1));
+                    continue;
+                }
+                (node.first_index as usize, node.prim_count as usize)
+            }
+            Work::Slots(first, count) => (first, count),
+        };
+        let slots = &mut indices[first..first + count];
+        let aabb = slots
+            .iter()
+            .fold(Aabb::empty(), |b, &i| b.union(&boxes[i as usize]));
+        if count == 1 {
+            nodes[at] = Bvh2Node::new(aabb, 1, first as u32);
+            continue;
+        }
+        let mut centroids = Aabb::empty();
+        for &i in slots.iter() {
+            centroids.extend(boxes[i as usize].center());
+        }
+        let axis = centroids.largest_axis();
+        slots.sort_by(|&a, &b| {
+            let (a, b) = (boxes[a as usize].center_axis(axis), boxes[b as usize].center_axis(axis));
+            a.total_cmp(&b)
+        });
+        let children = nodes.len();
+        nodes.extend([Bvh2Node::default(); 2]);
+        nodes[at] = Bvh2Node::new(aabb, 0, children as u32);
+        let half = count / 2;
+        stack.push((Work::Slots(first, half), children));
+        stack.push((Work::Slots(first + half, count - half), children + 1));
+    }
+    Bvh2 {
+        nodes,
+        primitive_indices: indices,
+        ..Default::default()
     }
 }
 

@@ -76,6 +76,9 @@ fn wgpu_error_text(e: &wgpu::Error) -> String {
     }
 }
 
+/// Where a `map_async` callback leaves its result.
+pub(crate) type Mapped = Arc<Mutex<Option<std::result::Result<(), wgpu::BufferAsyncError>>>>;
+
 /// A device ready to run chambre's kernels. Clones share the device: a process makes one and
 /// hands clones to its renderers (with NVIDIA's driver 580, a benchmark that made a device per
 /// render stopped finding any adapter partway through, and each device costs milliseconds).
@@ -241,6 +244,27 @@ impl GpuContext {
             .contains(wgpu::Features::TIMESTAMP_QUERY)
     }
 
+    /// Waits until the `map_async` callback that fills `mapped` has run. A poll that finds the
+    /// work done can return while another thread sharing the device (the tests do) is still
+    /// running the callbacks it collected, so the signal is awaited, not assumed.
+    pub(crate) fn await_mapping(&self, mapped: &Mapped) -> Result<()> {
+        let start = std::time::Instant::now();
+        loop {
+            match mapped.lock().expect("map signal poisoned").take() {
+                Some(Ok(())) => return Ok(()),
+                Some(Err(e)) => return Err(Error::Gpu(format!("mapping results: {e}"))),
+                None => {}
+            }
+            if start.elapsed() > DISPATCH_TIMEOUT {
+                return Err(Error::Gpu("mapping results did not complete".into()));
+            }
+            self.device
+                .poll(wgpu::PollType::Poll)
+                .map_err(|e| Error::Gpu(format!("reading back results: {e}")))?;
+            std::thread::yield_now();
+        }
+    }
+
     /// Copies `buffer` back to the host (it must have COPY_SRC usage).
     pub(crate) fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -253,7 +277,7 @@ impl GpuContext {
         encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
         self.queue.submit([encoder.finish()]);
         let slice = staging.slice(..);
-        let mapped = Arc::new(Mutex::new(None));
+        let mapped: Mapped = Arc::new(Mutex::new(None));
         let signal = mapped.clone();
         slice.map_async(wgpu::MapMode::Read, move |r| {
             *signal.lock().expect("map signal poisoned") = Some(r);
@@ -264,11 +288,7 @@ impl GpuContext {
                 timeout: Some(DISPATCH_TIMEOUT),
             })
             .map_err(|e| Error::Gpu(format!("reading back results: {e}")))?;
-        match mapped.lock().expect("map signal poisoned").take() {
-            Some(Ok(())) => {}
-            Some(Err(e)) => return Err(Error::Gpu(format!("mapping results: {e}"))),
-            None => return Err(Error::Gpu("mapping results did not complete".into())),
-        }
+        self.await_mapping(&mapped)?;
         let bytes = slice
             .get_mapped_range()
             .map_err(|e| Error::Gpu(format!("mapping results: {e}")))?

@@ -22,7 +22,7 @@ use crate::render::{Backend, DispatchStatus, RayBudgets, plan_passes};
 /// is submitted, and read when the batch is finished.
 struct Readback {
     buffer: wgpu::Buffer,
-    mapped: Arc<Mutex<Option<std::result::Result<(), wgpu::BufferAsyncError>>>>,
+    mapped: super::Mapped,
 }
 
 impl Readback {
@@ -49,12 +49,8 @@ impl Readback {
     }
 
     /// The bytes, once the device has been polled past the submission.
-    fn bytes(&self) -> Result<Vec<u8>> {
-        match self.mapped.lock().expect("map signal poisoned").take() {
-            Some(Ok(())) => {}
-            Some(Err(e)) => return Err(Error::Gpu(format!("mapping results: {e}"))),
-            None => return Err(Error::Gpu("mapping results did not complete".into())),
-        }
+    fn bytes(&self, context: &GpuContext) -> Result<Vec<u8>> {
+        context.await_mapping(&self.mapped)?;
         let bytes = self
             .buffer
             .slice(..)
@@ -326,9 +322,9 @@ impl Backend for GpuRenderer {
             return Ok(DispatchStatus::default());
         };
         self.context.wait(batch.submission)?;
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&batch.status.bytes()?);
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&batch.status.bytes(&self.context)?);
         if let (Some(readback), Some(total)) = (&batch.timestamps, &mut self.kernel_time) {
-            let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&readback.bytes()?);
+            let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&readback.bytes(&self.context)?);
             let period_ns = self.context.queue.get_timestamp_period() as f64;
             let ns = ticks[1].saturating_sub(ticks[0]) as f64 * period_ns;
             *total += Duration::from_nanos(ns as u64);
