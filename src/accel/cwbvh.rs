@@ -141,7 +141,10 @@ fn single_primitive_leaves(bvh: &Bvh2, bounded: &[GpuPrimitive]) -> Bvh2 {
         }
         let axis = centroids.largest_axis();
         slots.sort_by(|&a, &b| {
-            let (a, b) = (boxes[a as usize].center_axis(axis), boxes[b as usize].center_axis(axis));
+            let (a, b) = (
+                boxes[a as usize].center_axis(axis),
+                boxes[b as usize].center_axis(axis),
+            );
             a.total_cmp(&b)
         });
         let children = nodes.len();
