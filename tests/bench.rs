@@ -162,3 +162,48 @@ fn bench_scale_measures_each_size_and_plots_them() {
     let svg = std::fs::read_to_string(&plot).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("closest-hit throughput"));
 }
+
+/// `bench precision`: at unit scale near the origin both paths are within a few ULPs of the f64
+/// oracle; far from the origin the error grows with the offset; tiny and huge scales alone
+/// change nothing (chambre's offsets are relative).
+#[test]
+fn bench_precision_measures_f32_error_against_an_f64_oracle() {
+    drop(common::gpu_context());
+    let json = std::env::temp_dir().join(format!("chambre-precision-{}.json", std::process::id()));
+    let report = run_bench(
+        &["precision", "--size", "32", "--backends", "cpu,gpu"],
+        &json,
+        "| offset | scale | rays |",
+    );
+    let results = report["report"]["results"].as_array().unwrap();
+    assert_eq!(results.len(), 7);
+    let field = |r: &serde_json::Value, path: &str, name: &str| r[path][name].as_f64().unwrap();
+    for r in results {
+        assert!(r["oracle_hits"].as_u64().unwrap() > 50, "{r}");
+        // Both paths trace the same f32 scene and rays to the same distances.
+        for name in ["median_relative_t", "max_relative_t", "median_point_error"] {
+            let (c, g) = (field(r, "cpu", name), field(r, "gpu", name));
+            assert!(
+                (c - g).abs() <= 1e-3 * c.max(1e-12) + 1e-9,
+                "{name}: {c} {g}"
+            );
+        }
+    }
+    let median_point = |i: usize| field(&results[i], "cpu", "median_point_error");
+    // Offsets 0, 1e2, 1e4, 1e6 at unit scale.
+    assert!(field(&results[0], "cpu", "max_relative_t") < 1e-5);
+    assert_eq!(results[0]["cpu"]["hit_disagreements"].as_u64(), Some(0));
+    assert!(median_point(0) < median_point(2) && median_point(2) < median_point(3));
+    assert!(
+        median_point(3) > 1e-4,
+        "f32 at 1e6 cannot hold the mesh to 1e-4 of its size"
+    );
+    // Scales 1e-4 and 1e4 at the origin: the unit scale's error, within 2x.
+    for i in [4, 5] {
+        assert!(
+            median_point(i) < 2.0 * median_point(0) + 1e-9,
+            "{}",
+            median_point(i)
+        );
+    }
+}

@@ -29,6 +29,8 @@ mkdir -p bench
     echo
     "$chambre" bench samplers --json bench/samplers.json
     echo
+    "$chambre" bench precision --size 128 --json bench/precision.json
+    echo
     "$chambre" converge scenes/bokeh.toml -D render.width=120 -D render.height=80 \
         --reference-spp 4096 --max-spp 256 --samplers random,stratified,poisson,interleaved,sobol \
         --backends cpu,gpu --csv bench/converge_bokeh.csv --plot bench/converge_bokeh.svg

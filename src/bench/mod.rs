@@ -14,6 +14,7 @@
 
 pub mod build;
 pub mod frame;
+pub mod precision;
 pub mod rays;
 pub mod samplers;
 pub mod scale;
@@ -42,6 +43,23 @@ pub enum BenchCommand {
     /// The same camera rays on meshes from a thousand to ten million triangles: build time,
     /// Mrays/s and memory, with a log-log plot.
     Scale(ScaleArgs),
+    /// How accurate the f32 hits of both paths are against an f64 oracle, with the mesh far
+    /// from the origin, tiny and huge.
+    Precision(PrecisionArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct PrecisionArgs {
+    /// Mesh file (OBJ or PLY, optionally .gz).
+    #[arg(long, default_value = "scenes/meshes/bunny-npm-lowres.obj")]
+    pub mesh: PathBuf,
+    /// Camera rays per placement: SIZE x SIZE.
+    #[arg(long, default_value_t = 64)]
+    pub size: u32,
+    #[command(flatten)]
+    pub backends: Backends,
+    #[command(flatten)]
+    pub output: Output,
 }
 
 /// Where a report goes besides the table on stdout.
@@ -261,6 +279,17 @@ pub fn run(command: &BenchCommand) -> Result<String> {
             if let Some(path) = &args.plot {
                 report.plot_svg(path)?;
             }
+            finish(
+                command_line,
+                machine,
+                report.to_markdown(),
+                &report,
+                &args.output.json,
+            )
+        }
+        BenchCommand::Precision(args) => {
+            let gpu = args.backends.gpu().then(|| usable(&context)).transpose()?;
+            let report = precision::run(&args.mesh, &precision::PLACEMENTS, args.size, gpu)?;
             finish(
                 command_line,
                 machine,

@@ -1,0 +1,299 @@
+//! How accurate chambre's f32 hits are: the same camera rays traced by both paths in f32 and by
+//! an f64 oracle, on a mesh moved far from the origin and scaled from tiny to huge.
+//!
+//! The oracle is independent of the renderer: the mesh's vertices transformed in f64, the
+//! camera rays made in f64, and every ray tested against every triangle (Möller–Trumbore in
+//! f64). The f32 paths get the scene as a user's file would give it (`scale`, `translate`) and
+//! the f64 rays rounded to f32. So the errors below are everything a user sees: the scene's
+//! and the rays' rounding to f32 as well as the intersection arithmetic.
+
+use std::path::{Path, PathBuf};
+
+use glam::DVec3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::rays::{Query, RaySet, trace_cpu};
+use crate::accel::cwbvh;
+use crate::error::{Error, Result};
+use crate::gpu::GpuContext;
+use crate::gpu::trace::GpuTracer;
+use crate::layout::T_FAR;
+use crate::math::rng::Rng;
+use crate::pack::{FlatScene, flatten};
+use crate::scene::Scene;
+use crate::scene::mesh::load_mesh;
+
+/// One placement of the mesh: `world = scale * file + offset` (the offset along (1, 1, 1)).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Placement {
+    pub offset: f64,
+    pub scale: f64,
+}
+
+/// The default placements: far from the origin at unit scale, then tiny and huge.
+pub const PLACEMENTS: [Placement; 7] = [
+    Placement {
+        offset: 0.0,
+        scale: 1.0,
+    },
+    Placement {
+        offset: 1e2,
+        scale: 1.0,
+    },
+    Placement {
+        offset: 1e4,
+        scale: 1.0,
+    },
+    Placement {
+        offset: 1e6,
+        scale: 1.0,
+    },
+    Placement {
+        offset: 0.0,
+        scale: 1e-4,
+    },
+    Placement {
+        offset: 0.0,
+        scale: 1e4,
+    },
+    Placement {
+        offset: 1e4,
+        scale: 1e-2,
+    },
+];
+
+/// Errors of one path against the oracle.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct PathErrors {
+    /// Rays the path and the oracle disagree on hitting (silhouette rays).
+    pub hit_disagreements: usize,
+    pub median_relative_t: f64,
+    pub max_relative_t: f64,
+    /// Hit point distance from the oracle's, over the mesh's size.
+    pub median_point_error: f64,
+    pub max_point_error: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PrecisionResult {
+    pub placement: Placement,
+    pub rays: usize,
+    pub oracle_hits: usize,
+    pub cpu: PathErrors,
+    pub gpu: Option<PathErrors>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct PrecisionReport {
+    pub mesh: PathBuf,
+    pub mesh_size: f64,
+    pub results: Vec<PrecisionResult>,
+}
+
+/// The mesh in f64 world coordinates, as triangles.
+fn oracle_triangles(mesh: &Path, p: Placement) -> Result<Vec<[DVec3; 3]>> {
+    let m = load_mesh(mesh).map_err(|message| Error::File {
+        path: mesh.to_path_buf(),
+        message,
+    })?;
+    let world = |i: u32| m.positions[i as usize].as_dvec3() * p.scale + DVec3::splat(p.offset);
+    Ok(m.triangles.iter().map(|t| t.map(world)).collect())
+}
+
+/// Möller–Trumbore in f64: the distance along `d` (unit) from `o`, if the ray hits.
+fn intersect_f64(o: DVec3, d: DVec3, [a, b, c]: [DVec3; 3]) -> Option<f64> {
+    let (e1, e2) = (b - a, c - a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = o - a;
+    let u = s.dot(p) * inv;
+    let q = s.cross(e1);
+    let v = d.dot(q) * inv;
+    let t = e2.dot(q) * inv;
+    (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0).then_some(t)
+}
+
+/// The closest f64 hit of each ray, by brute force.
+fn oracle(triangles: &[[DVec3; 3]], rays: &[(DVec3, DVec3)]) -> Vec<Option<f64>> {
+    rays.par_iter()
+        .map(|&(o, d)| {
+            triangles
+                .iter()
+                .filter_map(|&t| intersect_f64(o, d, t))
+                .min_by(f64::total_cmp)
+        })
+        .collect()
+}
+
+/// Camera rays in f64: a pinhole `2.5 * size` in front of the mesh's centre (+z), 40° vertical
+/// field of view, `n x n` pixels, one jittered ray each.
+fn camera_rays(lo: DVec3, hi: DVec3, n: u32) -> Vec<(DVec3, DVec3)> {
+    let centre = (lo + hi) / 2.0;
+    let size = (hi - lo).max_element();
+    let origin = centre + DVec3::new(0.0, 0.0, 2.5 * size);
+    let half = 20f64.to_radians().tan();
+    let mut rays = Vec::with_capacity((n * n) as usize);
+    for y in 0..n {
+        for x in 0..n {
+            let [jx, jy] = Rng::new(1, y * n + x, 0).next_2d();
+            let sx = (2.0 * (x as f64 + jx as f64) / n as f64 - 1.0) * half;
+            let sy = (1.0 - 2.0 * (y as f64 + jy as f64) / n as f64) * half;
+            rays.push((origin, DVec3::new(sx, sy, -1.0).normalize()));
+        }
+    }
+    rays
+}
+
+/// The mesh placed as a scene file would place it.
+fn placed_scene(mesh: &Path, p: Placement) -> Result<FlatScene> {
+    let absolute = std::path::absolute(mesh).map_err(|e| Error::io(mesh, e))?;
+    let text = format!(
+        "[render]\nwidth = 1\nheight = 1\n[camera]\nposition = [0.0, 0.0, 1.0]\n\
+         look_at = [0.0, 0.0, 0.0]\nfilm = [24.0, 24.0]\n[[materials]]\nname = \"m\"\n\
+         model = \"lambert\"\n[[shapes]]\ntype = \"mesh\"\nfile = {}\nmaterial = \"m\"\n\
+         scale = {:e}\ntranslate = [{:e}, {:e}, {:e}]\n",
+        toml::Value::String(absolute.to_string_lossy().into_owned()),
+        p.scale,
+        p.offset,
+        p.offset,
+        p.offset
+    );
+    Ok(flatten(&Scene::from_str(
+        Path::new("precision.toml"),
+        &text,
+        &[],
+    )?))
+}
+
+fn errors(
+    distances: &[f32],
+    rays: &[(DVec3, DVec3)],
+    exact: &[Option<f64>],
+    size: f64,
+) -> PathErrors {
+    let mut relative_t = Vec::new();
+    let mut point = Vec::new();
+    let mut disagreements = 0;
+    for ((&t32, &(o, d)), &t64) in distances.iter().zip(rays).zip(exact) {
+        match (t32 < T_FAR, t64) {
+            (true, Some(t64)) => {
+                relative_t.push((t32 as f64 - t64).abs() / t64);
+                // The f32 ray as the path traced it, its hit point in f64.
+                let (o32, d32) = (o.as_vec3().as_dvec3(), d.as_vec3().as_dvec3());
+                point.push((o32 + d32 * t32 as f64 - (o + d * t64)).length() / size);
+            }
+            (false, None) => {}
+            _ => disagreements += 1,
+        }
+    }
+    let median_max = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        (
+            v.get(v.len() / 2).copied().unwrap_or(0.0),
+            v.last().copied().unwrap_or(0.0),
+        )
+    };
+    let (median_relative_t, max_relative_t) = median_max(&mut relative_t);
+    let (median_point_error, max_point_error) = median_max(&mut point);
+    PathErrors {
+        hit_disagreements: disagreements,
+        median_relative_t,
+        max_relative_t,
+        median_point_error,
+        max_point_error,
+    }
+}
+
+/// Traces `n x n` camera rays at each placement on the CPU path, on the GPU when given, and by
+/// the oracle.
+pub fn run(
+    mesh: &Path,
+    placements: &[Placement],
+    n: u32,
+    gpu: Option<&GpuContext>,
+) -> Result<PrecisionReport> {
+    let unit = oracle_triangles(mesh, PLACEMENTS[0])?;
+    let (lo, hi) = unit.iter().flatten().fold(
+        (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
+        |(lo, hi), &v| (lo.min(v), hi.max(v)),
+    );
+    let mesh_size = (hi - lo).max_element();
+    let mut results = Vec::new();
+    for &p in placements {
+        let triangles = oracle_triangles(mesh, p)?;
+        let place = |v: DVec3| v * p.scale + DVec3::splat(p.offset);
+        let rays = camera_rays(place(lo), place(hi), n);
+        let exact = oracle(&triangles, &rays);
+        let set = RaySet {
+            origins: rays.iter().map(|r| r.0.as_vec3()).collect(),
+            directions: rays.iter().map(|r| r.1.as_vec3()).collect(),
+        };
+        let scene = placed_scene(mesh, p)?;
+        let size = mesh_size * p.scale;
+        let cpu = errors(
+            &trace_cpu(&scene, None, &set, Query::ClosestHit),
+            &rays,
+            &exact,
+            size,
+        );
+        let gpu = match gpu {
+            None => None,
+            Some(context) => {
+                let cw = cwbvh::build(scene.primitives()).map_err(Error::Gpu)?;
+                let tracer = GpuTracer::new(context.clone(), &scene, Some(&cw), &set)?;
+                tracer.trace(Query::ClosestHit)?;
+                Some(errors(&tracer.distances()?, &rays, &exact, size))
+            }
+        };
+        results.push(PrecisionResult {
+            placement: p,
+            rays: rays.len(),
+            oracle_hits: exact.iter().filter(|t| t.is_some()).count(),
+            cpu,
+            gpu,
+        });
+    }
+    Ok(PrecisionReport {
+        mesh: mesh.to_path_buf(),
+        mesh_size,
+        results,
+    })
+}
+
+impl PrecisionReport {
+    pub fn to_markdown(&self) -> String {
+        let mut out = format!(
+            "precision: {} ({:.3} units across), camera rays against an f64 brute-force oracle; \
+             t error relative to the oracle's distance, hit point error relative to the mesh's \
+             size; median / max\n\n",
+            self.mesh.display(),
+            self.mesh_size
+        );
+        out += "| offset | scale | rays | oracle hits | path | hit/miss disagreements | t error | hit point error |\n";
+        out += "|---|---|---|---|---|---|---|---|\n";
+        for r in &self.results {
+            let paths = [("cpu", Some(r.cpu)), ("gpu", r.gpu)];
+            for (name, e) in paths {
+                let Some(e) = e else { continue };
+                out += &format!(
+                    "| {:e} | {:e} | {} | {} | {name} | {} | {:.1e} / {:.1e} | {:.1e} / {:.1e} |\n",
+                    r.placement.offset,
+                    r.placement.scale,
+                    r.rays,
+                    r.oracle_hits,
+                    e.hit_disagreements,
+                    e.median_relative_t,
+                    e.max_relative_t,
+                    e.median_point_error,
+                    e.max_point_error
+                );
+            }
+        }
+        out
+    }
+}
