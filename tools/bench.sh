@@ -31,6 +31,9 @@ mkdir -p bench
     echo
     "$chambre" bench precision --size 128 --json bench/precision.json
     echo
+    "$chambre" bench precision --mesh scenes/meshes/checker_light.obj --size 128 \
+        --camera-height 0.1 --json bench/precision_grazing.json
+    echo
     "$chambre" converge scenes/bokeh.toml -D render.width=120 -D render.height=80 \
         --reference-spp 4096 --max-spp 256 --samplers random,stratified,poisson,interleaved,sobol \
         --backends cpu,gpu --csv bench/converge_bokeh.csv --plot bench/converge_bokeh.svg

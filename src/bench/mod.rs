@@ -56,6 +56,10 @@ pub struct PrecisionArgs {
     /// Camera rays per placement: SIZE x SIZE.
     #[arg(long, default_value_t = 64)]
     pub size: u32,
+    /// The camera's height above the mesh's centre, in mesh sizes (it looks along -z from 2.5
+    /// sizes away): a small height over a flat mesh in the xz plane makes grazing rays.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub camera_height: f64,
     #[command(flatten)]
     pub backends: Backends,
     #[command(flatten)]
@@ -289,7 +293,13 @@ pub fn run(command: &BenchCommand) -> Result<String> {
         }
         BenchCommand::Precision(args) => {
             let gpu = args.backends.gpu().then(|| usable(&context)).transpose()?;
-            let report = precision::run(&args.mesh, &precision::PLACEMENTS, args.size, gpu)?;
+            let report = precision::run(
+                &args.mesh,
+                &precision::PLACEMENTS,
+                args.size,
+                args.camera_height,
+                gpu,
+            )?;
             finish(
                 command_line,
                 machine,

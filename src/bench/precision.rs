@@ -88,6 +88,7 @@ pub struct PrecisionResult {
 pub struct PrecisionReport {
     pub mesh: PathBuf,
     pub mesh_size: f64,
+    pub camera_height: f64,
     pub results: Vec<PrecisionResult>,
 }
 
@@ -130,12 +131,13 @@ fn oracle(triangles: &[[DVec3; 3]], rays: &[(DVec3, DVec3)]) -> Vec<Option<f64>>
         .collect()
 }
 
-/// Camera rays in f64: a pinhole `2.5 * size` in front of the mesh's centre (+z), 40° vertical
-/// field of view, `n x n` pixels, one jittered ray each.
-fn camera_rays(lo: DVec3, hi: DVec3, n: u32) -> Vec<(DVec3, DVec3)> {
+/// Camera rays in f64: a pinhole `2.5 * size` in front of the mesh's centre (+z) and `height *
+/// size` above it, looking along -z, 40° vertical field of view, `n x n` pixels, one jittered
+/// ray each.
+fn camera_rays(lo: DVec3, hi: DVec3, height: f64, n: u32) -> Vec<(DVec3, DVec3)> {
     let centre = (lo + hi) / 2.0;
     let size = (hi - lo).max_element();
-    let origin = centre + DVec3::new(0.0, 0.0, 2.5 * size);
+    let origin = centre + DVec3::new(0.0, height * size, 2.5 * size);
     let half = 20f64.to_radians().tan();
     let mut rays = Vec::with_capacity((n * n) as usize);
     for y in 0..n {
@@ -210,11 +212,13 @@ fn errors(
 }
 
 /// Traces `n x n` camera rays at each placement on the CPU path, on the GPU when given, and by
-/// the oracle.
+/// the oracle; the camera `camera_height` mesh sizes above the mesh's centre (a flat mesh seen
+/// from just above its plane makes grazing rays).
 pub fn run(
     mesh: &Path,
     placements: &[Placement],
     n: u32,
+    camera_height: f64,
     gpu: Option<&GpuContext>,
 ) -> Result<PrecisionReport> {
     let unit = oracle_triangles(mesh, PLACEMENTS[0])?;
@@ -227,7 +231,7 @@ pub fn run(
     for &p in placements {
         let triangles = oracle_triangles(mesh, p)?;
         let place = |v: DVec3| v * p.scale + DVec3::splat(p.offset);
-        let rays = camera_rays(place(lo), place(hi), n);
+        let rays = camera_rays(place(lo), place(hi), camera_height, n);
         let exact = oracle(&triangles, &rays);
         let set = RaySet {
             origins: rays.iter().map(|r| r.0.as_vec3()).collect(),
@@ -261,6 +265,7 @@ pub fn run(
     Ok(PrecisionReport {
         mesh: mesh.to_path_buf(),
         mesh_size,
+        camera_height,
         results,
     })
 }
@@ -268,11 +273,12 @@ pub fn run(
 impl PrecisionReport {
     pub fn to_markdown(&self) -> String {
         let mut out = format!(
-            "precision: {} ({:.3} units across), camera rays against an f64 brute-force oracle; \
-             t error relative to the oracle's distance, hit point error relative to the mesh's \
-             size; median / max\n\n",
+            "precision: {} ({:.3} units across), camera rays from {} mesh sizes above its \
+             centre against an f64 brute-force oracle; t error relative to the oracle's \
+             distance, hit point error relative to the mesh's size; median / max\n\n",
             self.mesh.display(),
-            self.mesh_size
+            self.mesh_size,
+            self.camera_height
         );
         out += "| offset | scale | rays | oracle hits | path | hit/miss disagreements | t error | hit point error |\n";
         out += "|---|---|---|---|---|---|---|---|\n";
