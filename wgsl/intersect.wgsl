@@ -1,6 +1,7 @@
 // Ray/primitive intersection: watertight triangles, robust spheres, quads, planes, slabs,
 // shading points with error bounds, and pbrt-v4's error-bounded origin offset.
-// Mirrors: src/accel/intersect.rs (references there).
+// Mirrors: src/accel/intersect.rs (references there); closest_plane and plane_occludes,
+// src/accel/traverse.rs. Those two read the bindings `frame` and `prims`.
 
 const MIN_DIRECTION: f32 = 1.0e-20;
 // 1 + 2*gamma(3) widened 2x for WGSL's 2.5-ULP division (see the Rust twin).
@@ -224,6 +225,30 @@ fn intersect_primitive(ray: RayQuery, prim: GpuPrimitive, t_max: f32) -> Hit {
         case PRIM_PLANE: { return intersect_plane(ray, prim.p0, prim.p1, t_max); }
         default: { return miss(); }
     }
+}
+
+// The unbounded planes (after every BVH's primitives), by brute force: the closest hit before
+// `best`'s, and whether one occludes; every traversal ends with them.
+fn closest_plane(ray: RayQuery, skip: u32, best_in: PrimHit) -> PrimHit {
+    var best = best_in;
+    for (var id = frame.plane_start; FEATURE_PLANES && id < frame.plane_start + frame.plane_count; id += 1u) {
+        if (id != skip) {
+            let hit = intersect_primitive(ray, prims[id], best.hit.t);
+            if (hit.t < best.hit.t) {
+                best = PrimHit(id, hit);
+            }
+        }
+    }
+    return best;
+}
+
+fn plane_occludes(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
+    for (var id = frame.plane_start; FEATURE_PLANES && id < frame.plane_start + frame.plane_count; id += 1u) {
+        if (id != skip_a && id != skip_b && intersect_primitive(ray, prims[id], t_max).t < t_max) {
+            return true;
+        }
+    }
+    return false;
 }
 
 fn intersect_box(ray: RayQuery, bmin: vec3<f32>, bmax: vec3<f32>, t_max: f32) -> f32 {

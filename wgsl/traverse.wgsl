@@ -70,15 +70,7 @@ fn closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
             }
         }
     }
-    for (var id = frame.plane_start; FEATURE_PLANES && id < frame.plane_start + frame.plane_count; id += 1u) {
-        if (id != skip) {
-            let hit = intersect_primitive(ray, prims[id], best.hit.t);
-            if (hit.t < best.hit.t) {
-                best = PrimHit(id, hit);
-            }
-        }
-    }
-    return best;
+    return closest_plane(ray, skip, best);
 }
 
 fn closest_in_leaf(ray: RayQuery, leaf: GpuBvhNode, skip: u32, best_in: PrimHit) -> PrimHit {
@@ -175,10 +167,5 @@ fn occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
             }
         }
     }
-    for (var id = frame.plane_start; FEATURE_PLANES && id < frame.plane_start + frame.plane_count; id += 1u) {
-        if (id != skip_a && id != skip_b && intersect_primitive(ray, prims[id], t_max).t < t_max) {
-            return true;
-        }
-    }
-    return false;
+    return plane_occludes(ray, skip_a, skip_b, t_max);
 }

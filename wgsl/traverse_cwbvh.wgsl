@@ -121,15 +121,7 @@ fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
             state.current = stack[state.stack_size];
         }
     }
-    for (var id = frame.plane_start; FEATURE_PLANES && id < frame.plane_start + frame.plane_count; id += 1u) {
-        if (id != skip) {
-            let hit = intersect_primitive(ray, prims[id], best.hit.t);
-            if (hit.t < best.hit.t) {
-                best = PrimHit(id, hit);
-            }
-        }
-    }
-    return best;
+    return closest_plane(ray, skip, best);
 }
 
 // Whether anything but `skip_a` and `skip_b` lies along `ray` before `t_max`.
@@ -164,10 +156,5 @@ fn cw_occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
             state.current = stack[state.stack_size];
         }
     }
-    for (var id = frame.plane_start; FEATURE_PLANES && id < frame.plane_start + frame.plane_count; id += 1u) {
-        if (id != skip_a && id != skip_b && intersect_primitive(ray, prims[id], t_max).t < t_max) {
-            return true;
-        }
-    }
-    return false;
+    return plane_occludes(ray, skip_a, skip_b, t_max);
 }

@@ -14,8 +14,9 @@ use obvhs::bvh2::Bvh2;
 use obvhs::bvh2::node::Bvh2Node;
 
 use super::intersect::{Hit, RayQuery, intersect_box, intersect_primitive};
+use super::traverse::{closest_plane, plane_occludes};
 use super::{Primitives, primitive_bounds, widen};
-use crate::layout::{CWBVH_STACK_SIZE, GpuCwNode, GpuPrimitive, NONE, T_FAR};
+use crate::layout::{CWBVH_STACK_SIZE, FEATURES_ALL, GpuCwNode, GpuPrimitive, NONE, T_FAR};
 
 /// A CWBVH and the bounded primitives in the order its leaves index them, planes after them.
 pub struct CwGeometry {
@@ -77,6 +78,11 @@ pub fn build(geometry: Primitives<'_>) -> Result<CwGeometry, String> {
 }
 
 impl CwGeometry {
+    /// The planes' indices in `prims`.
+    pub fn planes(&self) -> std::ops::Range<u32> {
+        self.plane_start..self.plane_start + self.plane_count
+    }
+
     /// The index in `prims` of primitive `index` of the primitives it was built from (`NONE`
     /// stays `NONE`): what a light's `prim` becomes for the GPU.
     pub fn new_index(&self, index: u32) -> u32 {
@@ -307,11 +313,7 @@ pub fn closest_hit_counted(
     let mut best_prim = NONE;
     let visited = traverse(&geometry.nodes, ray, t_max, |id, t| {
         counts.prims += 1;
-        let hit = intersect_primitive::<{ crate::layout::FEATURES_ALL }>(
-            ray,
-            &geometry.prims[id as usize],
-            t,
-        );
+        let hit = intersect_primitive::<FEATURES_ALL>(ray, &geometry.prims[id as usize], t);
         if hit.t < t {
             best = hit;
             best_prim = id;
@@ -319,18 +321,14 @@ pub fn closest_hit_counted(
         Some(best.t)
     });
     counts.nodes = visited.expect("build() bounds the depth by the stack");
-    let planes = geometry.plane_start..geometry.plane_start + geometry.plane_count;
-    for id in planes {
-        let hit = intersect_primitive::<{ crate::layout::FEATURES_ALL }>(
-            ray,
-            &geometry.prims[id as usize],
-            best.t,
-        );
-        if hit.t < best.t {
-            best = hit;
-            best_prim = id;
-        }
-    }
+    closest_plane::<FEATURES_ALL>(
+        &geometry.prims,
+        geometry.planes(),
+        ray,
+        NONE,
+        &mut best,
+        &mut best_prim,
+    );
     ((best_prim != NONE).then_some((best_prim, best)), counts)
 }
 
@@ -339,14 +337,17 @@ pub fn occluded(geometry: &CwGeometry, ray: &RayQuery, t_max: f32) -> bool {
     let mut blocked = false;
     let visited = traverse(&geometry.nodes, ray, t_max, |id, t| {
         let prim = &geometry.prims[id as usize];
-        blocked = intersect_primitive::<{ crate::layout::FEATURES_ALL }>(ray, prim, t).t < t;
+        blocked = intersect_primitive::<FEATURES_ALL>(ray, prim, t).t < t;
         (!blocked).then_some(t)
     });
     visited.expect("build() bounds the depth by the stack");
-    let planes = geometry.plane_start..geometry.plane_start + geometry.plane_count;
     blocked
-        || planes.into_iter().any(|id| {
-            let prim = &geometry.prims[id as usize];
-            intersect_primitive::<{ crate::layout::FEATURES_ALL }>(ray, prim, t_max).t < t_max
-        })
+        || plane_occludes::<FEATURES_ALL>(
+            &geometry.prims,
+            geometry.planes(),
+            ray,
+            NONE,
+            NONE,
+            t_max,
+        )
 }

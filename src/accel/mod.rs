@@ -52,6 +52,13 @@ pub struct Primitives<'a> {
     pub plane_count: u32,
 }
 
+impl Primitives<'_> {
+    /// The planes' indices in `prims`.
+    pub fn planes(&self) -> std::ops::Range<u32> {
+        self.plane_start..self.plane_start + self.plane_count
+    }
+}
+
 /// Relative widening of node boxes: 16 ULPs of the box's largest coordinate.
 const BOX_WIDENING: f32 = 16.0 * f32::EPSILON;
 

@@ -4,7 +4,7 @@
 
 use super::Primitives;
 use super::intersect::{Hit, RayQuery, intersect_primitive};
-use crate::layout::{FEATURE_PLANES, NONE, T_FAR, has};
+use crate::layout::{FEATURE_PLANES, GpuPrimitive, NONE, has};
 
 /// Closest intersection along `ray` before `t_max`, ignoring primitive `skip` (the planar
 /// primitive a secondary ray leaves, which it can never hit again). Returns (primitive, hit).
@@ -40,23 +40,51 @@ pub fn closest_hit<const F: u32>(
                 }
             });
     }
-    let plane_count = if has(F, FEATURE_PLANES) {
-        geometry.plane_count
-    } else {
-        0
-    };
-    let planes = geometry.plane_start..geometry.plane_start + plane_count;
-    for id in planes {
-        if id == skip {
-            continue;
-        }
-        let hit = intersect_primitive::<F>(ray, &geometry.prims[id as usize], best.t);
+    closest_plane::<F>(
+        geometry.prims,
+        geometry.planes(),
+        ray,
+        skip,
+        &mut best,
+        &mut best_prim,
+    );
+    (best_prim != NONE).then_some((best_prim, best))
+}
+
+/// The planes `planes` of `prims` (none without `FEATURE_PLANES`), by brute force: replaces
+/// `best` and `best_prim` with a closer hit. Every traversal ends with them.
+pub fn closest_plane<const F: u32>(
+    prims: &[GpuPrimitive],
+    planes: std::ops::Range<u32>,
+    ray: &RayQuery,
+    skip: u32,
+    best: &mut Hit,
+    best_prim: &mut u32,
+) {
+    let planes = if has(F, FEATURE_PLANES) { planes } else { 0..0 };
+    for id in planes.filter(|&id| id != skip) {
+        let hit = intersect_primitive::<F>(ray, &prims[id as usize], best.t);
         if hit.t < best.t {
-            best = hit;
-            best_prim = id;
+            *best = hit;
+            *best_prim = id;
         }
     }
-    (best_prim != NONE).then_some((best_prim, best))
+}
+
+/// Whether one of the planes `planes` of `prims` but `skip_a` and `skip_b` lies along `ray`
+/// before `t_max` (none without `FEATURE_PLANES`).
+pub fn plane_occludes<const F: u32>(
+    prims: &[GpuPrimitive],
+    planes: std::ops::Range<u32>,
+    ray: &RayQuery,
+    skip_a: u32,
+    skip_b: u32,
+    t_max: f32,
+) -> bool {
+    let planes = if has(F, FEATURE_PLANES) { planes } else { 0..0 };
+    planes
+        .filter(|&id| id != skip_a && id != skip_b)
+        .any(|id| intersect_primitive::<F>(ray, &prims[id as usize], t_max).t < t_max)
 }
 
 /// Whether anything but `skip_a` and `skip_b` lies along `ray` before `t_max`.
@@ -80,13 +108,12 @@ pub fn occluded<const F: u32>(
             return true;
         }
     }
-    let plane_count = if has(F, FEATURE_PLANES) {
-        geometry.plane_count
-    } else {
-        0
-    };
-    let planes = geometry.plane_start..geometry.plane_start + plane_count;
-    planes
-        .filter(|&id| id != skip_a && id != skip_b)
-        .any(|id| intersect_primitive::<F>(ray, &geometry.prims[id as usize], t_max).t < T_FAR)
+    plane_occludes::<F>(
+        geometry.prims,
+        geometry.planes(),
+        ray,
+        skip_a,
+        skip_b,
+        t_max,
+    )
 }
