@@ -196,11 +196,9 @@ fn sigterm_stops_a_long_render_and_keeps_its_samples() {
     signal_stops_a_long_render_and_keeps_its_samples("TERM");
 }
 
-#[test]
-fn a_render_stopped_between_batches_reports_the_samples_each_pixel_holds() {
-    // 192 x 128 pixels, one pass of 4 samples; budgets small enough that a dispatch covers 8
-    // rows and a batch one dispatch. Stop when the first batch has finished: the batches in
-    // flight by then (BATCHES_IN_FLIGHT of them) finish too, the other rows get nothing.
+/// `spheres` at 192 x 128 pixels and 4 spp in one pass, with budgets small enough that a
+/// dispatch covers 8 rows and a batch one dispatch: 16 batches.
+fn eight_row_batches() -> (chambre::pack::FlatScene, RayBudgets) {
     let scene = common::load(
         "scenes/spheres.toml",
         &["render.width=192", "render.height=128", "render.spp=4"],
@@ -212,6 +210,14 @@ fn a_render_stopped_between_batches_reports_the_samples_each_pixel_holds() {
         per_batch: 8 * rays_per_row,
         ..RayBudgets::DEFAULT
     };
+    (flat, budgets)
+}
+
+#[test]
+fn a_render_stopped_between_batches_reports_the_samples_each_pixel_holds() {
+    // Stop when the first batch has finished: the batches in flight by then
+    // (BATCHES_IN_FLIGHT of them) finish too, the other rows get nothing.
+    let (flat, budgets) = eight_row_batches();
     let plan = chambre::render::plan_passes(&flat, &budgets);
     assert_eq!((plan.passes.len(), plan.bands.len()), (1, 16));
     let cancel = AtomicBool::new(false);
@@ -855,17 +861,7 @@ fn progressive_writes_the_image_during_the_render() {
 /// A progressive write that fails stops the render with its error and keeps the samples.
 #[test]
 fn a_failing_progressive_write_stops_the_render_with_its_error() {
-    let scene = common::load(
-        "scenes/spheres.toml",
-        &["render.width=192", "render.height=128", "render.spp=4"],
-    );
-    let flat = flatten(&scene);
-    let rays_per_row = 192 * 4 * chambre::render::RayBound::of(&flat).per_sample();
-    let budgets = RayBudgets {
-        per_dispatch: 8 * rays_per_row,
-        per_batch: 8 * rays_per_row,
-        ..RayBudgets::DEFAULT
-    };
+    let (flat, budgets) = eight_row_batches();
     let mut cpu = CpuRenderer::new(&flat).with_budgets(budgets);
     let mut write = |_: &Image| -> chambre::error::Result<()> {
         Err(chambre::error::Error::Gpu("disk full (a test)".into()))
