@@ -84,6 +84,21 @@ fn cw_step(ray: RayQuery, oct_inv4: u32, t_max: f32, state: ptr<function, CwStat
     return true;
 }
 
+// Once the current group has no child left, the next from the stack; false when the stack is
+// empty too (the traversal is over).
+fn cw_next_group(state: ptr<function, CwState>,
+                 stack: ptr<function, array<vec2<u32>, CWBVH_STACK_SIZE>>) -> bool {
+    if (((*state).current.y & 0xff000000u) != 0u) {
+        return true;
+    }
+    if ((*state).stack_size == 0u) {
+        return false;
+    }
+    (*state).stack_size -= 1u;
+    (*state).current = (*stack)[(*state).stack_size];
+    return true;
+}
+
 // Closest intersection before `t_max_in`, ignoring primitive `skip` (the planar primitive a
 // secondary ray leaves); as traverse.wgsl's closest_hit.
 fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
@@ -113,12 +128,8 @@ fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
                 }
             }
         }
-        if ((state.current.y & 0xff000000u) == 0u) {
-            if (state.stack_size == 0u) {
-                break;
-            }
-            state.stack_size -= 1u;
-            state.current = stack[state.stack_size];
+        if (!cw_next_group(&state, &stack)) {
+            break;
         }
     }
     return closest_plane(ray, skip, best);
@@ -148,12 +159,8 @@ fn cw_occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
                 return true;
             }
         }
-        if ((state.current.y & 0xff000000u) == 0u) {
-            if (state.stack_size == 0u) {
-                break;
-            }
-            state.stack_size -= 1u;
-            state.current = stack[state.stack_size];
+        if (!cw_next_group(&state, &stack)) {
+            break;
         }
     }
     return plane_occludes(ray, skip_a, skip_b, t_max);
