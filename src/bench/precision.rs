@@ -90,6 +90,8 @@ pub struct PrecisionReport {
     pub mesh_size: f64,
     pub camera_height: f64,
     pub results: Vec<PrecisionResult>,
+    /// The camera's own rays at the extremes of its settings, near and far from the origin.
+    pub cameras: Vec<CameraResult>,
 }
 
 /// The mesh in f64 world coordinates, as triangles.
@@ -267,6 +269,7 @@ pub fn run(
         mesh_size,
         camera_height,
         results,
+        cameras: camera_run(&[0.0, 1e4, 1e6], 32)?,
     })
 }
 
@@ -300,6 +303,134 @@ impl PrecisionReport {
                 );
             }
         }
+        out += "\n";
+        out += &camera_markdown(&self.cameras);
         out
     }
+}
+
+/// A camera at the extremes, as scene-file `[camera]` lines (position and look_at are added).
+pub const CAMERA_CASES: [(&str, &str); 7] = [
+    (
+        "f/8",
+        "focal_length = 50.0\nf_number = 8.0\nfocus_distance = 5.0",
+    ),
+    (
+        "f/0.7",
+        "focal_length = 50.0\nf_number = 0.7\nfocus_distance = 5.0",
+    ),
+    (
+        "f/1e6",
+        "focal_length = 50.0\nf_number = 1e6\nfocus_distance = 5.0",
+    ),
+    (
+        "lens tilt 60, swing 45",
+        "focal_length = 50.0\nf_number = 2.0\nfocus_distance = 5.0\nlens_tilt = 60.0\nlens_swing = 45.0",
+    ),
+    (
+        "film tilt 60, shift 20 mm",
+        "focal_length = 90.0\nf_number = 5.6\nfocus_distance = 5.0\nfilm_tilt = 60.0\nfilm_shift = [0.0, 20.0]",
+    ),
+    (
+        "macro, focus 0.06",
+        "focal_length = 50.0\nf_number = 2.8\nfocus_distance = 0.06",
+    ),
+    (
+        "telephoto 1200 mm",
+        "focal_length = 1200.0\nf_number = 8.0\nfocus_distance = 1000.0",
+    ),
+];
+
+/// f32 camera rays against their f64 twin for one camera.
+#[derive(Clone, Debug, Serialize)]
+pub struct CameraResult {
+    pub case: String,
+    pub offset: f64,
+    pub rays: usize,
+    /// Angle between the f32 and the f64 direction, radians.
+    pub median_angle: f64,
+    pub max_angle: f64,
+    /// Distance between the f32 and the f64 origin, over the distance from the camera to its
+    /// subject (the look-at point).
+    pub max_origin_error: f64,
+}
+
+/// `1.5 n x n` rays per camera case, lens points spread over the aperture, with the camera at the
+/// origin and `offset` away along (1, 1, 1): each f32 ray (`camera::generate_ray`) against its
+/// f64 twin (`camera::generate_ray_f64`).
+pub fn camera_run(offsets: &[f64], n: u32) -> Result<Vec<CameraResult>> {
+    use crate::camera::{film_position_mm, generate_ray, generate_ray_f64};
+    use glam::{DVec2, Vec2};
+    let mut results = Vec::new();
+    for &offset in offsets {
+        for (case, fields) in CAMERA_CASES {
+            let o = offset;
+            // The film's 3:2 aspect.
+            let w = n * 3 / 2;
+            let text = format!(
+                "[render]\nwidth = {w}\nheight = {n}\n[camera]\nposition = [{:e}, {:e}, {:e}]\n\
+                 look_at = [{:e}, {:e}, {:e}]\nfilm = [36.0, 24.0]\n{fields}\n[[materials]]\n\
+                 name = \"m\"\nmodel = \"lambert\"\n[[shapes]]\ntype = \"sphere\"\n\
+                 center = [{:e}, {:e}, {:e}]\nradius = 1.0\nmaterial = \"m\"\n",
+                o,
+                o + 0.5,
+                o + 5.0,
+                o,
+                o,
+                o,
+                o,
+                o,
+                o
+            );
+            let scene = Scene::from_str(Path::new("camera.toml"), &text, &[])?;
+            let spec = &scene.camera;
+            let gpu = spec.to_gpu(0);
+            let subject = (spec.look_at - spec.position).length();
+            let radius = spec.lens_radius_mm();
+            let (mut angles, mut origins) = (Vec::new(), Vec::new());
+            for y in 0..n {
+                for x in 0..w {
+                    let [jx, jy] = Rng::new(3, y * w + x, 0).next_2d();
+                    let raster = Vec2::new(x as f32 + jx, y as f32 + jy);
+                    let film = film_position_mm(&gpu, w, n, raster);
+                    // A lens point on a ring at 0.9 of the radius, its angle from the pixel.
+                    let a = std::f64::consts::TAU * jx as f64;
+                    let lens64 = DVec2::new(a.cos(), a.sin()) * 0.9 * radius;
+                    let ray = generate_ray(&gpu, film, lens64.as_vec2());
+                    let (origin, direction) =
+                        generate_ray_f64(spec, film.as_dvec2(), lens64.as_vec2().as_dvec2());
+                    angles.push(ray.direction.as_dvec3().angle_between(direction));
+                    origins.push((ray.origin.as_dvec3() - origin).length() / subject);
+                }
+            }
+            angles.sort_by(f64::total_cmp);
+            origins.sort_by(f64::total_cmp);
+            results.push(CameraResult {
+                case: case.to_string(),
+                offset,
+                rays: angles.len(),
+                median_angle: angles[angles.len() / 2],
+                max_angle: angles[angles.len() - 1],
+                max_origin_error: origins[origins.len() - 1],
+            });
+        }
+    }
+    Ok(results)
+}
+
+/// The camera results as a Markdown table.
+pub fn camera_markdown(results: &[CameraResult]) -> String {
+    let mut out = String::from(
+        "camera rays: f32 (`generate_ray`) against f64 (`generate_ray_f64`), subject 5 units \
+         away; direction angle error in radians, origin error over the subject distance\n\n\
+         | camera | offset | rays | angle median | angle max | origin max |\n\
+         |---|---|---|---|---|---|\n",
+    );
+    for r in results {
+        out += &format!(
+            "| {} | {:e} | {} | {:.1e} | {:.1e} | {:.1e} |\n",
+            r.case, r.offset, r.rays, r.median_angle, r.max_angle, r.max_origin_error
+        );
+    }
+    out
 }

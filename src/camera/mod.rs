@@ -266,6 +266,23 @@ pub fn generate_ray(camera: &GpuCamera, film_mm: Vec2, lens_mm: Vec2) -> Ray {
     }
 }
 
+/// [`generate_ray`] in f64 from the camera's own f64 description: the same thin-lens transfer
+/// without rounding to f32 anywhere (`chambre bench precision` measures the f32 version against
+/// it). Returns (origin, unit direction) in world space.
+pub fn generate_ray_f64(camera: &CameraSpec, film_mm: DVec2, lens_mm: DVec2) -> (DVec3, DVec3) {
+    let s = camera.standards();
+    let basis = camera.basis();
+    let film_point = s.to_lens_frame(s.film_point(film_mm));
+    let slope_in = (lens_mm - film_point.truncate()) / -film_point.z;
+    let slope_out = slope_in - lens_mm / camera.focal_length_mm;
+    let direction_lens = slope_out.extend(1.0).normalize();
+    let origin_lens = lens_mm.extend(0.0) * camera.units_per_mm;
+    (
+        camera.camera_to_world(s.lens_center) + basis.to_world(s.lens * origin_lens),
+        basis.to_world(s.lens * direction_lens),
+    )
+}
+
 fn lens_to_world(camera: &GpuCamera, v: Vec3) -> Vec3 {
     v.x * Vec3::from(camera.lens_to_world_x)
         + v.y * Vec3::from(camera.lens_to_world_y)
