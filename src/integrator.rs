@@ -26,7 +26,7 @@ use crate::camera::{film_position_mm, generate_ray};
 use crate::layout::*;
 use crate::math::rng::Rng;
 use crate::pack::FlatScene;
-use crate::sampler::{PatternSource, light_sample_2d, sample_2d, sample_aperture};
+use crate::sampler::{PatternSource, light_sample_2d, pixel_hash, sample_2d, sample_aperture};
 
 /// Counters a sample adds to (rays traced, paths cut off at `max_depth`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -202,6 +202,7 @@ fn direct_light<const F: u32>(
             let light_normal = cross.normalize();
             let samples = window.clip(light.samples);
             let light_dim = light_dimension(&scene.frame, depth, sample_offset, 0);
+            let key = pixel_hash(scene.frame.seed, rng.pixel, light_dim);
             rng.seek(light_dimension(
                 &scene.frame,
                 depth,
@@ -215,10 +216,9 @@ fn direct_light<const F: u32>(
                     &scene.frame,
                     light.samples,
                     light.strata_columns,
-                    rng.pixel,
                     rng.sample,
                     k,
-                    light_dim,
+                    key,
                     rng.next_2d(),
                     &mut stats.flags,
                 );

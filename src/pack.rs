@@ -7,6 +7,7 @@ use std::time::Duration;
 use glam::Vec3;
 use obvhs::bvh2::Bvh2;
 
+use crate::accel::cwbvh::{self, CwGeometry};
 use crate::accel::{Primitives, build_geometry, intersect};
 use crate::layout::*;
 use crate::math::sampling::strata_columns;
@@ -35,9 +36,20 @@ pub struct FlatScene {
     pub build_time: Duration,
     /// The pixels to render: columns `crop[0]..crop[1]`, rows `crop[2]..crop[3]`.
     pub crop: [u32; 4],
+    /// The compressed wide BVH the GPU traverses, made on first use (CPU renders never need
+    /// it) and kept for every later GPU render or ray query of the scene.
+    cwbvh: std::sync::OnceLock<Result<CwGeometry, String>>,
 }
 
 impl FlatScene {
+    /// The scene's CWBVH (`accel::cwbvh::build`), built once; the error if the tree is refused.
+    pub fn cwbvh(&self) -> Result<&CwGeometry, String> {
+        self.cwbvh
+            .get_or_init(|| cwbvh::build(self.primitives()))
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+
     /// What a traversal reads.
     pub fn primitives(&self) -> Primitives<'_> {
         Primitives {
@@ -289,6 +301,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         triangle_count,
         build_time: geometry.build_time,
         crop: render.crop,
+        cwbvh: std::sync::OnceLock::new(),
     }
 }
 

@@ -436,8 +436,9 @@ pub fn sample_2d(
 }
 
 /// The point of light sample `k` (of `light_samples`, stratified by `light_columns` columns) of
-/// camera sample `sample` of `pixel`, on the light whose random dimensions start at `dim`; `u`
-/// is the sample's own random pair (always drawn). Light samples follow the pixel pattern over
+/// camera sample `sample`; `key` is the pixel's key for the light, `pixel_hash(seed, pixel,
+/// first dimension of the light)`, made once per light, and `u` the sample's own random pair
+/// (always drawn). Light samples follow the pixel pattern over
 /// the pixel's `spp x light_samples` points, so consecutive camera samples do not repeat each
 /// other's light points: Sobol takes point `sample * light_samples + k` of an Owen-scrambled
 /// sequence; stratified, Poisson and interleaved patterns (whose tables hold `spp` points, not
@@ -449,10 +450,9 @@ pub fn light_sample_2d(
     frame: &GpuFrame,
     light_samples: u32,
     light_columns: u32,
-    pixel: u32,
     sample: u32,
     k: u32,
-    dim: u32,
+    key: u32,
     u: [f32; 2],
     flags: &mut u32,
 ) -> [f32; 2] {
@@ -461,7 +461,6 @@ pub fn light_sample_2d(
         return stratified_2d(k, light_samples, light_columns, u);
     }
     let index = sample * light_samples + k;
-    let key = pixel_hash(frame.seed, pixel, dim);
     if frame.pixel_sampler == SAMPLER_SOBOL {
         return sobol_owen_2d(index, key);
     }

@@ -353,17 +353,9 @@ fn light_samples_are_stratified_over_the_whole_pixel() {
                 let mut flags = 0;
                 let u = rng.next_2d();
                 let columns = strata_columns(light_samples);
-                let [x, y] = light_sample_2d(
-                    frame,
-                    light_samples,
-                    columns,
-                    pixel,
-                    sample,
-                    k,
-                    dim,
-                    u,
-                    &mut flags,
-                );
+                let key = chambre::sampler::pixel_hash(frame.seed, pixel, dim);
+                let [x, y] =
+                    light_sample_2d(frame, light_samples, columns, sample, k, key, u, &mut flags);
                 assert_eq!(flags, 0);
                 assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
                 counts[(y * 8.0) as usize * 8 + (x * 8.0) as usize] += 1;

@@ -124,13 +124,13 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
             let first_sample = min(window.start, light.samples);
             // A saturating end: start + count may exceed u32 (the whole-light window).
             let end_sample = min(window.start + min(window.count, light.samples), light.samples);
-            let light_dim = light_dimension(depth, sample_offset, 0u);
+            let key = pixel_hash(frame.seed, (*rng).pixel, light_dimension(depth, sample_offset, 0u));
             rng_seek(rng, light_dimension(depth, sample_offset, first_sample));
             sample_offset += light.samples;
             var sum = vec3<f32>(0.0);
             for (var k = first_sample; k < end_sample; k += 1u) {
-                var u = light_sample_2d(light.samples, light.strata_columns, (*rng).pixel, (*rng).sample,
-                                        k, light_dim, rng_next_2d(rng));
+                var u = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
+                                        rng_next_2d(rng));
                 if (triangle && u.x + u.y > 1.0) {
                     u = vec2<f32>(1.0) - u;
                 }

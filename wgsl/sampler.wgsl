@@ -125,14 +125,14 @@ fn sample_2d(source: PatternSource, x: u32, y: u32, sample: u32, rng: ptr<functi
     }
 }
 
-// The point of light sample `k` of camera sample `sample` of `pixel` (see the Rust twin).
-fn light_sample_2d(light_samples: u32, light_columns: u32, pixel: u32, sample: u32, k: u32,
-                   dim: u32, u: vec2<f32>) -> vec2<f32> {
+// The point of light sample `k` of camera sample `sample`; `key` is the pixel's key for the
+// light, made once per light (see the Rust twin).
+fn light_sample_2d(light_samples: u32, light_columns: u32, sample: u32, k: u32, key: u32,
+                   u: vec2<f32>) -> vec2<f32> {
     if (frame.pixel_sampler == SAMPLER_RANDOM || frame.spp > MAX_LIGHT_PATTERN_POINTS / light_samples) {
         return stratified_2d(k, light_samples, light_columns, u);
     }
     let index = sample * light_samples + k;
-    let key = pixel_hash(frame.seed, pixel, dim);
     if (frame.pixel_sampler == SAMPLER_SOBOL) {
         return sobol_owen_2d(index, key);
     }

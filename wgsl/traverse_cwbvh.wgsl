@@ -99,6 +99,21 @@ fn cw_next_group(state: ptr<function, CwState>,
     return true;
 }
 
+// One loop iteration's node work, shared by both queries: the visit cap (flagged), then the
+// current group's nearest child expanded into `state.prims`. False ends the traversal.
+fn cw_advance(ray: RayQuery, oct_inv4: u32, t_max: f32, visits: u32, state: ptr<function, CwState>,
+              stack: ptr<function, array<vec2<u32>, CWBVH_STACK_SIZE>>) -> bool {
+    if (visits >= frame.traversal_cap) {
+        flag_status(STATUS_TRAVERSAL_CAP);
+        return false;
+    }
+    (*state).prims = vec2<u32>(0u, 0u);
+    if (((*state).current.y & 0xff000000u) != 0u) {
+        return cw_step(ray, oct_inv4, t_max, state, stack);
+    }
+    return true;
+}
+
 // Closest intersection before `t_max_in`, ignoring primitive `skip` (the planar primitive a
 // secondary ray leaves); as traverse.wgsl's closest_hit.
 fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
@@ -106,17 +121,7 @@ fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
     let oct_inv4 = cw_octant_inv4(ray.direction);
     var stack: array<vec2<u32>, CWBVH_STACK_SIZE>;
     var state = CwState(vec2<u32>(0u, 0x80000000u), vec2<u32>(0u, 0u), 0u);
-    for (var visits = 0u; ; visits += 1u) {
-        if (visits >= frame.traversal_cap) {
-            flag_status(STATUS_TRAVERSAL_CAP);
-            break;
-        }
-        state.prims = vec2<u32>(0u, 0u);
-        if ((state.current.y & 0xff000000u) != 0u) {
-            if (!cw_step(ray, oct_inv4, best.hit.t, &state, &stack)) {
-                break;
-            }
-        }
+    for (var visits = 0u; cw_advance(ray, oct_inv4, best.hit.t, visits, &state, &stack); visits += 1u) {
         while (state.prims.y != 0u) {
             let bit = firstLeadingBit(state.prims.y);
             state.prims.y &= ~(1u << bit);
@@ -140,17 +145,7 @@ fn cw_occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
     let oct_inv4 = cw_octant_inv4(ray.direction);
     var stack: array<vec2<u32>, CWBVH_STACK_SIZE>;
     var state = CwState(vec2<u32>(0u, 0x80000000u), vec2<u32>(0u, 0u), 0u);
-    for (var visits = 0u; ; visits += 1u) {
-        if (visits >= frame.traversal_cap) {
-            flag_status(STATUS_TRAVERSAL_CAP);
-            break;
-        }
-        state.prims = vec2<u32>(0u, 0u);
-        if ((state.current.y & 0xff000000u) != 0u) {
-            if (!cw_step(ray, oct_inv4, t_max, &state, &stack)) {
-                break;
-            }
-        }
+    for (var visits = 0u; cw_advance(ray, oct_inv4, t_max, visits, &state, &stack); visits += 1u) {
         while (state.prims.y != 0u) {
             let bit = firstLeadingBit(state.prims.y);
             state.prims.y &= ~(1u << bit);

@@ -22,9 +22,7 @@ use crate::layout::{CWBVH_STACK_SIZE, FEATURES_ALL, GpuCwNode, GpuPrimitive, NON
 pub struct CwGeometry {
     pub nodes: Vec<GpuCwNode>,
     pub prims: Vec<GpuPrimitive>,
-    /// For each of `prims`, its index in the primitives it was built from.
-    pub order: Vec<u32>,
-    /// The inverse of `order`.
+    /// For each primitive it was built from, its index in `prims`.
     position_of: Vec<u32>,
     pub plane_start: u32,
     pub plane_count: u32,
@@ -70,7 +68,6 @@ pub fn build(geometry: Primitives<'_>) -> Result<CwGeometry, String> {
     Ok(CwGeometry {
         nodes,
         prims,
-        order,
         position_of,
         plane_start,
         plane_count: geometry.plane_count,

@@ -200,8 +200,8 @@ pub struct RaysArgs {
 /// A benchmark's report with where it ran, as written to JSON.
 #[derive(Debug, Serialize)]
 pub struct Report<'a, T: Serialize> {
-    pub command: String,
-    pub machine: Machine,
+    pub command: &'a str,
+    pub machine: &'a Machine,
     pub report: &'a T,
 }
 
@@ -231,21 +231,21 @@ pub fn run(command: &BenchCommand) -> Result<String> {
             let gpu = args.backends.gpu().then(|| usable(&context)).transpose()?;
             let report = rays::run(&config, &args.backends.backends, gpu)?;
             finish(
-                command_line,
-                machine,
+                &command_line,
+                &machine,
                 report.to_markdown(),
                 &report,
-                &args.output.json,
+                &args.output,
             )
         }
         BenchCommand::Build(args) => {
             let report = build::run(&args.mesh, args.runs)?;
             finish(
-                command_line,
-                machine,
+                &command_line,
+                &machine,
                 report.to_markdown(),
                 &report,
-                &args.output.json,
+                &args.output,
             )
         }
         BenchCommand::Frame(args) => {
@@ -257,11 +257,11 @@ pub fn run(command: &BenchCommand) -> Result<String> {
             let gpu = args.backends.gpu().then(|| usable(&context)).transpose()?;
             let report = frame::run(&scenes, gpu, &args.gpu_rays_per_invocation, args.runs)?;
             finish(
-                command_line,
-                machine,
+                &command_line,
+                &machine,
                 report.to_markdown(),
                 &report,
-                &args.output.json,
+                &args.output,
             )
         }
         BenchCommand::Scale(args) => {
@@ -284,11 +284,11 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 report.plot_svg(path)?;
             }
             finish(
-                command_line,
-                machine,
+                &command_line,
+                &machine,
                 report.to_markdown(),
                 &report,
-                &args.output.json,
+                &args.output,
             )
         }
         BenchCommand::Precision(args) => {
@@ -301,21 +301,21 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 gpu,
             )?;
             finish(
-                command_line,
-                machine,
+                &command_line,
+                &machine,
                 report.to_markdown(),
                 &report,
-                &args.output.json,
+                &args.output,
             )
         }
         BenchCommand::Samplers(args) => {
             let report = samplers::run(args.reference_spp)?;
             finish(
-                command_line,
-                machine,
+                &command_line,
+                &machine,
                 report.to_markdown(),
                 &report,
-                &args.output.json,
+                &args.output,
             )
         }
     }
@@ -323,14 +323,14 @@ pub fn run(command: &BenchCommand) -> Result<String> {
 
 /// The Markdown report with its header line; the JSON one written where asked.
 fn finish<T: Serialize>(
-    command: String,
-    machine: Machine,
+    command: &str,
+    machine: &Machine,
     markdown: String,
     report: &T,
-    json: &Option<PathBuf>,
+    output: &Output,
 ) -> Result<String> {
-    let text = format!("{}\n{markdown}", machine.to_markdown(&command));
-    if let Some(path) = json {
+    let text = format!("{}\n{markdown}", machine.to_markdown(command));
+    if let Some(path) = &output.json {
         write_json(
             path,
             &Report {

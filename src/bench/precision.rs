@@ -14,7 +14,6 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::rays::{Query, RaySet, trace_cpu};
-use crate::accel::cwbvh;
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
 use crate::gpu::trace::GpuTracer;
@@ -250,8 +249,8 @@ pub fn run(
         let gpu = match gpu {
             None => None,
             Some(context) => {
-                let cw = cwbvh::build(scene.primitives()).map_err(Error::Gpu)?;
-                let tracer = GpuTracer::new(context.clone(), &scene, Some(&cw), &set)?;
+                let cw = scene.cwbvh().map_err(Error::Gpu)?;
+                let tracer = GpuTracer::new(context.clone(), &scene, Some(cw), &set)?;
                 tracer.trace(Query::ClosestHit)?;
                 Some(errors(&tracer.distances()?, &rays, &exact, size))
             }

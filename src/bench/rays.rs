@@ -356,7 +356,7 @@ pub fn run(
 ) -> Result<RaysReport> {
     let scene = mesh_scene(&config.mesh)?;
     let start = Instant::now();
-    let cw = cwbvh::build(scene.primitives()).map_err(Error::Gpu)?;
+    let cw = scene.cwbvh().map_err(Error::Gpu)?;
     let cwbvh_build_ms = start.elapsed().as_secs_f64() * 1e3;
     let coherent = coherent_rays(&config.camera, config.frames, config.seed);
     let (lo, hi) = bounds(&scene);
@@ -365,11 +365,11 @@ pub fn run(
     let mut cwbvh_reads = Vec::new();
     for (set, rays) in [("coherent", &coherent), ("incoherent", &incoherent)] {
         if config.bvhs.contains(&Bvh::Cwbvh) {
-            cwbvh_reads.push(Reads::of(set, &cw, rays));
+            cwbvh_reads.push(Reads::of(set, cw, rays));
         }
         for &backend in backends {
             for &bvh in &config.bvhs {
-                let cwbvh = (bvh == Bvh::Cwbvh).then_some(&cw);
+                let cwbvh = (bvh == Bvh::Cwbvh).then_some(cw);
                 let (name, tracer) = match backend {
                     Backend::Cpu => (
                         format!("cpu ({} threads)", rayon::current_num_threads()),

@@ -12,7 +12,6 @@ use std::time::Duration;
 
 use super::kernels::{self, Pipeline};
 use super::{GpuContext, wgpu_error_text};
-use crate::accel::cwbvh;
 use crate::error::{Error, Result};
 use crate::layout::{GpuLight, GpuPass, WORKGROUP_SIZE};
 use crate::pack::FlatScene;
@@ -177,8 +176,8 @@ fn upload_scene(
     let storage = |label: &str, bytes: &[u8]| context.storage_buffer(label, bytes);
     // The kernel traverses the compressed wide BVH, with the primitives in its order; a light's
     // primitive index follows them.
-    let cw = cwbvh::build(scene.primitives()).map_err(Error::Gpu)?;
-    let (cw_nodes, prims) = context.cwbvh_buffers(&cw)?;
+    let cw = scene.cwbvh().map_err(Error::Gpu)?;
+    let (cw_nodes, prims) = context.cwbvh_buffers(cw)?;
     let lights: Vec<GpuLight> = scene
         .lights
         .iter()
