@@ -41,6 +41,11 @@ pub struct ConvergeArgs {
     #[arg(long, value_enum, value_delimiter = ',',
           default_values_t = [SamplerName::Random, SamplerName::Stratified, SamplerName::Sobol])]
     pub samplers: Vec<SamplerName>,
+    /// Also render adaptively (`--noise-target`) at each of these targets, with --max-spp as
+    /// the most samples a pixel takes: one more curve per pattern and backend, and a table of
+    /// the time uniform sampling needs for the same RMSE.
+    #[arg(long, value_delimiter = ',', value_name = "X,Y,...")]
+    pub noise_targets: Vec<f64>,
     /// Backends to measure, side by side.
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu])]
     pub backends: Vec<Backend>,
@@ -60,7 +65,12 @@ pub struct ConvergeArgs {
 pub struct Run {
     pub backend: Backend,
     pub sampler: SamplerName,
+    /// Samples per pixel: every pixel's, or the most an adaptive render gives one.
     pub spp: u32,
+    /// The adaptive render's target; none for uniform sampling.
+    pub noise_target: Option<f64>,
+    /// Samples per pixel on average.
+    pub mean_spp: f64,
     pub wall_ms: f64,
     /// GPU kernel time, where the adapter has timestamp queries.
     pub kernel_ms: Option<f64>,
@@ -229,18 +239,27 @@ pub fn run(args: &ConvergeArgs) -> Result<Study> {
             None
         };
         for &sampler in &args.samplers {
-            for &spp in &counts {
+            let uniform = counts.iter().map(|&spp| (spp, None));
+            let adaptive = args.noise_targets.iter().map(|&t| (args.max_spp, Some(t)));
+            for (spp, noise_target) in uniform.chain(adaptive) {
                 let mut overrides = args.set.clone();
                 overrides.extend([
                     format!("render.spp={spp}"),
                     format!("render.pixel_sampler={}", sampler.name()),
                     format!("camera.lens_sampler={}", sampler.name()),
                 ]);
+                if let Some(target) = noise_target {
+                    overrides.push(format!("render.noise_target={target:?}"));
+                }
                 let output = render_once(&args.scene, &overrides, context)?;
+                let counts = &output.sample_counts;
                 runs.push(Run {
                     backend,
                     sampler,
                     spp,
+                    noise_target,
+                    mean_spp: counts.iter().map(|&n| n as f64).sum::<f64>()
+                        / counts.len().max(1) as f64,
                     wall_ms: output.elapsed.as_secs_f64() * 1e3,
                     kernel_ms: output.kernel_time.map(|t| t.as_secs_f64() * 1e3),
                     rays: output.rays,
@@ -279,14 +298,18 @@ impl Study {
             self.adapter
         );
         let _ = writeln!(out, "# {}", self.reference_note);
-        out += "backend,sampler,spp,wall_ms,kernel_ms,rays,rmse,rel_mse,flip\n";
+        out += "backend,sampler,mode,spp,mean_spp,noise_target,wall_ms,kernel_ms,rays,rmse,\
+                rel_mse,flip\n";
         for r in &self.runs {
             let _ = writeln!(
                 out,
-                "{},{},{},{:.3},{},{},{:.6e},{:.6e},{:.6e}",
+                "{},{},{},{},{:.3},{},{:.3},{},{},{:.6e},{:.6e},{:.6e}",
                 backend_name(r.backend),
                 r.sampler.name(),
+                r.curve().mode(),
                 r.spp,
+                r.mean_spp,
+                r.noise_target.map_or(String::new(), |t| format!("{t}")),
                 r.wall_ms,
                 r.kernel_ms.map_or(String::new(), |k| format!("{k:.3}")),
                 r.rays,
@@ -298,30 +321,62 @@ impl Study {
         out
     }
 
-    /// Each curve's fitted RMSE slope against samples, by (backend, sampler), in run order.
-    pub fn slopes(&self) -> Vec<(Backend, SamplerName, f64)> {
-        let mut curves: Vec<(Backend, SamplerName)> = Vec::new();
+    /// Each curve's fitted RMSE slope against (mean) samples per pixel, in run order.
+    pub fn slopes(&self) -> Vec<(Curve, f64)> {
+        let mut curves: Vec<Curve> = Vec::new();
         for r in &self.runs {
-            if !curves.contains(&(r.backend, r.sampler)) {
-                curves.push((r.backend, r.sampler));
+            if !curves.contains(&r.curve()) {
+                curves.push(r.curve());
             }
         }
         curves
             .into_iter()
-            .map(|(b, s)| (b, s, log_log_slope(&self.curve(b, s, |r| r.spp as f64))))
+            .map(|c| (c, log_log_slope(&self.curve(c, |r| r.mean_spp))))
             .collect()
     }
 
-    fn curve(
-        &self,
-        backend: Backend,
-        sampler: SamplerName,
-        x: impl Fn(&Run) -> f64,
-    ) -> Vec<(f64, f64)> {
+    /// The (x, RMSE) points of `curve`.
+    fn curve(&self, curve: Curve, x: impl Fn(&Run) -> f64) -> Vec<(f64, f64)> {
         self.runs
             .iter()
-            .filter(|r| r.backend == backend && r.sampler == sampler)
+            .filter(|r| r.curve() == curve)
             .map(|r| (x(r), r.rmse))
+            .collect()
+    }
+
+    /// For each adaptive run, the uniform runs of its backend and pattern at the same RMSE:
+    /// their wall time and FLIP, interpolated log-log between the two uniform runs around it
+    /// (none when the adaptive run's RMSE is beyond the uniform curve).
+    pub fn adaptive_gains(&self) -> Vec<AdaptiveGain<'_>> {
+        self.runs
+            .iter()
+            .filter(|r| r.noise_target.is_some())
+            .map(|run| {
+                let uniform: Vec<&Run> = self
+                    .runs
+                    .iter()
+                    .filter(|u| {
+                        u.noise_target.is_none()
+                            && (u.backend, u.sampler) == (run.backend, run.sampler)
+                    })
+                    .collect();
+                let at_same_rmse = uniform.windows(2).find_map(|pair| {
+                    let (a, b) = (pair[0], pair[1]);
+                    let (hi, lo) = (a.rmse.max(b.rmse), a.rmse.min(b.rmse));
+                    if !(lo..=hi).contains(&run.rmse) || hi <= lo {
+                        return None;
+                    }
+                    let t = (run.rmse.ln() - a.rmse.ln()) / (b.rmse.ln() - a.rmse.ln());
+                    let log_lerp = |x: f64, y: f64| (x.ln() + t * (y.ln() - x.ln())).exp();
+                    let lerp = |x: f64, y: f64| x + t * (y - x);
+                    Some((log_lerp(a.wall_ms, b.wall_ms), lerp(a.flip, b.flip)))
+                });
+                AdaptiveGain {
+                    run,
+                    uniform_wall_ms: at_same_rmse.map(|(w, _)| w),
+                    uniform_flip: at_same_rmse.map(|(_, f)| f),
+                }
+            })
             .collect()
     }
 
@@ -341,15 +396,15 @@ impl Study {
         let slopes = self.slopes();
         let labels: Vec<String> = slopes
             .iter()
-            .map(|(b, s, slope)| format!("{} {} (slope {slope:.2})", backend_name(*b), s.name()))
+            .map(|(c, slope)| format!("{} (slope {slope:.2})", c.label()))
             .collect();
         let by_spp: Vec<Vec<(f64, f64)>> = slopes
             .iter()
-            .map(|(b, s, _)| self.curve(*b, *s, |r| r.spp as f64))
+            .map(|(c, _)| self.curve(*c, |r| r.mean_spp))
             .collect();
         let by_time: Vec<Vec<(f64, f64)>> = slopes
             .iter()
-            .map(|(b, s, _)| self.curve(*b, *s, |r| r.wall_ms.max(1e-3)))
+            .map(|(c, _)| self.curve(*c, |r| r.wall_ms.max(1e-3)))
             .collect();
         let range = |curves: &[Vec<(f64, f64)>]| {
             let xs = curves.iter().flatten().map(|p| p.0);
@@ -378,31 +433,103 @@ impl Study {
         Ok(svg)
     }
 
-    /// A summary for the terminal: each curve's slope, and its last run's error and time.
+    /// A summary for the terminal: each curve's slope, and its last run's error and time; then
+    /// each adaptive run against uniform sampling at the same RMSE.
     pub fn to_markdown(&self) -> String {
         let mut out = format!("{}\n\n", self.reference_note);
-        out += "| backend | sampler | RMSE slope | spp | RMSE | relMSE | FLIP | wall ms |\n";
-        out += "|---|---|---|---|---|---|---|---|\n";
-        for (backend, sampler, slope) in self.slopes() {
+        out += "| curve | RMSE slope | spp | RMSE | relMSE | FLIP | wall ms |\n";
+        out += "|---|---|---|---|---|---|---|\n";
+        for (curve, slope) in self.slopes() {
             let last = self
                 .runs
                 .iter()
-                .rfind(|r| r.backend == backend && r.sampler == sampler)
+                .rfind(|r| r.curve() == curve)
                 .expect("a curve has runs");
             let _ = writeln!(
                 out,
-                "| {} | {} | {slope:.2} | {} | {:.4e} | {:.4e} | {:.4} | {:.1} |",
-                backend_name(backend),
-                sampler.name(),
-                last.spp,
+                "| {} | {slope:.2} | {:.1} | {:.4e} | {:.4e} | {:.4} | {:.1} |",
+                curve.label(),
+                last.mean_spp,
                 last.rmse,
                 last.rel_mse,
                 last.flip,
                 last.wall_ms
             );
         }
+        let gains = self.adaptive_gains();
+        if gains.is_empty() {
+            return out;
+        }
+        out += "\nAdaptive against uniform sampling at the same RMSE (uniform interpolated log-log \
+                between its runs):\n\n";
+        out += "| curve | noise target | mean spp | RMSE | FLIP | wall ms | uniform wall ms | \
+                time ratio | uniform FLIP |\n";
+        out += "|---|---|---|---|---|---|---|---|---|\n";
+        for gain in gains {
+            let r = gain.run;
+            let (uniform_ms, ratio, uniform_flip) = match (gain.uniform_wall_ms, gain.uniform_flip)
+            {
+                (Some(ms), Some(flip)) => (
+                    format!("{ms:.1}"),
+                    format!("{:.2}x", r.wall_ms / ms),
+                    format!("{flip:.4}"),
+                ),
+                _ => ("beyond the uniform runs".into(), "-".into(), "-".into()),
+            };
+            let _ = writeln!(
+                out,
+                "| {} | {} | {:.1} | {:.4e} | {:.4} | {:.1} | {uniform_ms} | {ratio} | \
+                 {uniform_flip} |",
+                r.curve().label(),
+                r.noise_target.unwrap_or_default(),
+                r.mean_spp,
+                r.rmse,
+                r.flip,
+                r.wall_ms,
+            );
+        }
         out
     }
+}
+
+/// One curve of a study: a backend, a pattern, uniform or adaptive sampling.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Curve {
+    pub backend: Backend,
+    pub sampler: SamplerName,
+    pub adaptive: bool,
+}
+
+impl Curve {
+    pub fn mode(&self) -> &'static str {
+        if self.adaptive { "adaptive" } else { "uniform" }
+    }
+
+    pub fn label(&self) -> String {
+        let name = format!("{} {}", backend_name(self.backend), self.sampler.name());
+        if self.adaptive {
+            name + " adaptive"
+        } else {
+            name
+        }
+    }
+}
+
+impl Run {
+    pub fn curve(&self) -> Curve {
+        Curve {
+            backend: self.backend,
+            sampler: self.sampler,
+            adaptive: self.noise_target.is_some(),
+        }
+    }
+}
+
+/// An adaptive run and what uniform sampling needs for its RMSE (`Study::adaptive_gains`).
+pub struct AdaptiveGain<'a> {
+    pub run: &'a Run,
+    pub uniform_wall_ms: Option<f64>,
+    pub uniform_flip: Option<f64>,
 }
 
 #[cfg(test)]

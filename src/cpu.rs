@@ -12,13 +12,16 @@ use crate::error::Result;
 use crate::integrator::{LightWindow, SampleStats, trace_sample};
 use crate::layout::{FEATURES_ALL, GpuPass};
 use crate::pack::FlatScene;
-use crate::render::{Backend, DispatchStatus, RayBudgets};
+use crate::render::{AccumulationLayout, Backend, DispatchStatus, RayBudgets};
 
 pub struct CpuRenderer<'a> {
     scene: &'a FlatScene,
+    /// Laid out as the GPU's (`render::AccumulationLayout`): the image's sums (two halves in an
+    /// adaptive render), then the scratch sums of a pass split into light windows, which grow
+    /// the buffer on first use.
     accumulation: Vec<[f32; 4]>,
-    /// Sums of a pass whose light windows are not all done (allocated on first use).
-    scratch: Vec<Vec3>,
+    /// The pixels a listed dispatch samples (`Backend::set_pixel_list`).
+    pixel_list: Vec<u32>,
     cancel: Option<&'a AtomicBool>,
     /// Status of each batch run and not yet collected by `finish`.
     finished: VecDeque<DispatchStatus>,
@@ -51,11 +54,11 @@ const SEGMENT: u32 = 64;
 
 impl<'a> CpuRenderer<'a> {
     pub fn new(scene: &'a FlatScene) -> Self {
-        let pixels = scene.frame.width as usize * scene.frame.height as usize;
+        let layout = AccumulationLayout::of(scene, false);
         CpuRenderer {
             scene,
-            accumulation: vec![[0.0; 4]; pixels],
-            scratch: Vec::new(),
+            accumulation: vec![[0.0; 4]; layout.len()],
+            pixel_list: Vec::new(),
             cancel: None,
             finished: VecDeque::new(),
             trace: TRACE_SAMPLE[scene.features() as usize],
@@ -99,60 +102,79 @@ impl<'a> CpuRenderer<'a> {
         self
     }
 
+    /// The layout of the image's sums (the scratch part is the passes' business).
+    fn layout(&self) -> AccumulationLayout {
+        AccumulationLayout::of(self.scene, false)
+    }
+
     fn cancelled(&self) -> bool {
         self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
     }
 
-    /// Runs one dispatch: every sample of `pass` for its rows, in parallel over row segments.
+    /// The pixel at `column` of row `row` of a dispatch's band: the image's, or the listed one
+    /// (none past the list's end). Twin of `pass_pixel` in render.wgsl.
+    fn pass_pixel(&self, pass: &GpuPass, row: u32, column: u32) -> Option<u32> {
+        if pass.listed_pixels == 0 {
+            let width = self.scene.frame.width;
+            return Some((pass.tile_y + row) * width + pass.tile_x + column);
+        }
+        let entry = (pass.tile_y + row) * pass.tile_width + column;
+        (entry < pass.listed_pixels).then(|| self.pixel_list[entry as usize])
+    }
+
+    /// Runs one dispatch: every sample of `pass` for its pixels, in parallel over row segments.
     pub fn run_dispatch(&mut self, pass: &GpuPass) -> DispatchStatus {
         let scene = self.scene;
-        let width = scene.frame.width;
         let window = LightWindow::of_pass(pass);
-        let segments: Vec<(u32, u32, u32)> = (pass.tile_y..pass.tile_y + pass.tile_height)
-            .flat_map(|y| {
-                let end = pass.tile_x + pass.tile_width;
-                (pass.tile_x..end)
+        let segments: Vec<(u32, u32, u32)> = (0..pass.tile_height)
+            .flat_map(|row| {
+                (0..pass.tile_width)
                     .step_by(SEGMENT as usize)
-                    .map(move |x| (y, x, (x + SEGMENT).min(end)))
+                    .map(move |c| (row, c, (c + SEGMENT).min(pass.tile_width)))
             })
             .collect();
-        let rendered: Vec<(u32, u32, Vec<Vec3>, SampleStats)> = segments
+        let rendered: Vec<(Vec<(u32, Vec3)>, SampleStats)> = segments
             .into_par_iter()
             .filter(|_| !self.cancelled())
-            .map(|(y, x0, x1)| {
+            .map(|(row, c0, c1)| {
                 let mut stats = SampleStats::default();
-                let sums = (x0..x1)
-                    .map(|x| {
+                let sums = (c0..c1)
+                    .map_while(|column| self.pass_pixel(pass, row, column))
+                    .map(|pixel| {
+                        let (x, y) = (pixel % scene.frame.width, pixel / scene.frame.width);
                         let mut sum = Vec3::ZERO;
                         for s in 0..pass.sample_count {
                             let sample = pass.sample_start + s;
                             sum += (self.trace)(scene, x, y, sample, window, &mut stats);
                         }
-                        sum
+                        (pixel, sum)
                     })
                     .collect();
-                (y, x0, sums, stats)
+                (sums, stats)
             })
             .collect();
-        if pass.commit == 0 && self.scratch.is_empty() {
-            self.scratch = vec![Vec3::ZERO; self.accumulation.len()];
+        let pixels = (scene.frame.width * scene.frame.height) as usize;
+        let split = pass.commit == 0 || !window.is_first();
+        let last = if split { pass.scratch_offset } else { 0 };
+        let needed = pass.accumulation_offset.max(last) as usize + pixels;
+        if self.accumulation.len() < needed {
+            self.accumulation.resize(needed, [0.0; 4]);
         }
         let mut status = DispatchStatus::default();
-        for (y, x0, sums, stats) in rendered {
-            let start = (y * width + x0) as usize;
-            for (i, mut sum) in sums.into_iter().enumerate() {
-                let pixel = start + i;
+        for (sums, stats) in rendered {
+            for (pixel, mut sum) in sums {
+                let scratch = (pass.scratch_offset + pixel) as usize;
                 if !window.is_first() {
-                    sum += self.scratch[pixel];
+                    sum += Vec3::from_slice(&self.accumulation[scratch][..3]);
                 }
                 if pass.commit != 0 {
-                    let acc = &mut self.accumulation[pixel];
+                    let acc = &mut self.accumulation[(pass.accumulation_offset + pixel) as usize];
                     let add = [sum.x, sum.y, sum.z, pass.sample_count as f32];
                     for c in 0..4 {
                         acc[c] += add[c];
                     }
                 } else {
-                    self.scratch[pixel] = sum;
+                    self.accumulation[scratch] = [sum.x, sum.y, sum.z, 0.0];
                 }
             }
             status.rays += stats.rays;
@@ -191,10 +213,22 @@ impl Backend for CpuRenderer<'_> {
     /// Moves the accumulation out (it is read once, at the end): a copy of a 16384^2 image
     /// would cost 4 GiB and seconds after a Ctrl-C.
     fn accumulation(&mut self) -> Result<Vec<[f32; 4]>> {
-        Ok(std::mem::take(&mut self.accumulation))
+        Ok(self
+            .layout()
+            .image_sums(std::mem::take(&mut self.accumulation)))
     }
 
     fn snapshot(&mut self) -> Result<Vec<[f32; 4]>> {
-        Ok(self.accumulation.clone())
+        let layout = self.layout();
+        Ok(layout.image_sums(self.accumulation[..layout.image_len()].to_vec()))
+    }
+
+    fn halves(&mut self) -> Result<Vec<[f32; 4]>> {
+        Ok(self.accumulation[..self.layout().image_len()].to_vec())
+    }
+
+    fn set_pixel_list(&mut self, pixels: &[u32]) -> Result<()> {
+        self.pixel_list = pixels.to_vec();
+        Ok(())
     }
 }

@@ -284,8 +284,17 @@ pub struct GpuPass {
     pub commit: u32,
     /// Always `LOOP_CHECK_ITERATIONS`; a uniform so no compiler can fold the check away.
     pub loop_check: u32,
+    /// 0: the invocations cover the band's pixels. Otherwise the band's rows (`tile_width`
+    /// entries each) index a list of this many pixels (adaptive sampling's unconverged ones).
+    pub listed_pixels: u32,
+    /// Where in the accumulation buffer (in pixels) the committed sums go: the first or the
+    /// second half of an adaptive render (`render::AccumulationLayout`).
+    pub accumulation_offset: u32,
+    /// Where (in pixels) the scratch sums of a pass split into light windows live.
+    pub scratch_offset: u32,
     pub _pad0: u32,
     pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 impl GpuPass {
@@ -329,7 +338,7 @@ const _: () = assert!(size_of::<GpuMaterial>() == 64);
 const _: () = assert!(size_of::<GpuLight>() == 64);
 const _: () = assert!(size_of::<GpuCamera>() == 128);
 const _: () = assert!(size_of::<GpuFrame>() == 96);
-const _: () = assert!(size_of::<GpuPass>() == 48);
+const _: () = assert!(size_of::<GpuPass>() == 64);
 
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
 pub fn wgsl_prelude() -> String {

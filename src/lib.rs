@@ -21,6 +21,7 @@
 //! | shading, shadows, mirrors | `integrator.rs`        | `wgsl/integrator.wgsl` |
 //! | pixel loop           | `cpu.rs`                    | `wgsl/render.wgsl`     |
 //! | status and loop caps | `render.rs`                 | `wgsl/status.wgsl`     |
+//! | adaptive sampling    | `adaptive.rs` (decisions on the host, for both paths) | `wgsl/render.wgsl` (pixel lists, halves) |
 //! | ray queries (bench)  | `bench/rays.rs`             | `wgsl/trace.wgsl`      |
 //! | bindings             | `gpu/kernels.rs` (table)    | `wgsl/bindings.wgsl`   |
 //!
@@ -28,6 +29,7 @@
 //! pipeline builder, specialised to the scene's features (`layout::FEATURES`).
 
 pub mod accel;
+pub mod adaptive;
 pub mod bench;
 pub mod camera;
 pub mod converge;

@@ -166,6 +166,16 @@ struct RenderArgs {
     /// most taken).
     #[arg(long, value_name = "SECONDS")]
     time_budget: Option<f64>,
+    /// Adaptive sampling: keep sampling only the pixels whose estimated error (the difference of
+    /// two half-images over the root of the intensity, as Cycles' noise threshold) is above X,
+    /// until all meet it or --spp (then the maximum) is reached (overrides render.noise_target;
+    /// e.g. 0.01).
+    #[arg(long, value_name = "X")]
+    noise_target: Option<f64>,
+    /// Samples every pixel receives before adaptive sampling's first decision (overrides
+    /// render.min_spp; default 16, or --spp when smaller).
+    #[arg(long, value_name = "N")]
+    min_spp: Option<u32>,
     /// Also write the image every SECONDS during the render (the same path, replaced whole
     /// each time), to look at it and stop the render when it is good enough.
     #[arg(long, value_name = "SECONDS")]
@@ -192,6 +202,7 @@ impl RenderArgs {
             ("render.width", width),
             ("render.height", height),
             ("render.seed", self.seed),
+            ("render.min_spp", self.min_spp),
         ];
         for (key, value) in fields {
             if let Some(v) = value {
@@ -206,6 +217,9 @@ impl RenderArgs {
             if let Some(v) = value {
                 overrides.push(format!("{key}={}", v.name()));
             }
+        }
+        if let Some(target) = self.noise_target {
+            overrides.push(format!("render.noise_target={target:?}"));
         }
         if let Some(window) = &self.crop {
             let values: Vec<String> = window.iter().map(|v| v.to_string()).collect();
@@ -804,6 +818,9 @@ fn finish(output: RenderOutput, target: &OutputTarget, backend: &str) -> anyhow:
             "note: {path} was also written {} times during the render (--progressive)",
             output.snapshots
         );
+    }
+    if let Some(adaptive) = &output.adaptive {
+        note!("{}", adaptive.summary());
     }
     if output.deadline_reached {
         note!(

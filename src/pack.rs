@@ -36,6 +36,8 @@ pub struct FlatScene {
     pub build_time: Duration,
     /// The pixels to render: columns `crop[0]..crop[1]`, rows `crop[2]..crop[3]`.
     pub crop: [u32; 4],
+    /// Adaptive sampling, when the scene asks for it (`render.noise_target`).
+    pub adaptive: Option<crate::adaptive::AdaptiveSettings>,
     /// The compressed wide BVH the GPU traverses, made on first use (CPU renders never need
     /// it) and kept for every later GPU render or ray query of the scene.
     cwbvh: std::sync::OnceLock<Result<CwGeometry, String>>,
@@ -301,6 +303,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         triangle_count,
         build_time: geometry.build_time,
         crop: render.crop,
+        adaptive: render.adaptive,
         cwbvh: std::sync::OnceLock::new(),
     }
 }

@@ -16,11 +16,13 @@
 //! buffer until the last commits), so the accumulation is a per-pixel mean after every
 //! dispatch: an interrupted or failing render keeps what it computed.
 
+use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
+use crate::adaptive::{ActivePixels, AdaptiveReport, AdaptiveSettings};
 use crate::error::{Error, Result};
 use crate::layout::{
     GpuPass, LOOP_CHECK_ITERATIONS, STATUS_FLAGS, STATUS_LOOP_LIMIT, STATUS_PERMUTE_CAP,
@@ -113,6 +115,12 @@ pub trait Backend {
     /// The accumulation so far, during a render (`--progressive`): every finished sample, and
     /// the render goes on.
     fn snapshot(&mut self) -> Result<Vec<[f32; 4]>>;
+    /// Both halves of an adaptive render's sums, first then second (`AccumulationLayout`),
+    /// with every finished sample; the render goes on.
+    fn halves(&mut self) -> Result<Vec<[f32; 4]>>;
+    /// The pixels (`y * width + x`) that dispatches with `listed_pixels` sample, from the next
+    /// batch submitted on.
+    fn set_pixel_list(&mut self, pixels: &[u32]) -> Result<()>;
     /// Device time spent in the kernels of finished batches, where the device measures it.
     fn kernel_time(&self) -> Option<Duration> {
         None
@@ -120,6 +128,68 @@ pub trait Backend {
     /// The budgets renders on this backend are planned with.
     fn budgets(&self) -> RayBudgets {
         RayBudgets::DEFAULT
+    }
+}
+
+/// How a backend's accumulation buffer is laid out, in pixel slots of `[f32; 4]`: the image's
+/// running sums (radiance, samples) as one layer, or, in an adaptive render, as two halves that
+/// take alternate passes (their difference estimates each pixel's error, `adaptive.rs`); then,
+/// when passes are split into light windows, the scratch sums of the pass in progress. Both
+/// backends use it, so the CPU path twins the kernel's indices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AccumulationLayout {
+    pub pixels: usize,
+    /// 1, or 2 in an adaptive render.
+    pub halves: usize,
+    pub scratch: bool,
+}
+
+impl AccumulationLayout {
+    pub fn of(scene: &FlatScene, scratch: bool) -> AccumulationLayout {
+        AccumulationLayout {
+            pixels: scene.frame.width as usize * scene.frame.height as usize,
+            halves: if scene.adaptive.is_some() { 2 } else { 1 },
+            scratch,
+        }
+    }
+
+    /// Slots of the image's sums (both halves).
+    pub fn image_len(&self) -> usize {
+        self.pixels * self.halves
+    }
+
+    /// Slots of the whole buffer.
+    pub fn len(&self) -> usize {
+        self.image_len() + if self.scratch { self.pixels } else { 0 }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Where half `half` (0 or 1) starts.
+    pub fn half_offset(&self, half: u32) -> u32 {
+        (half as usize * self.pixels) as u32
+    }
+
+    /// Where the scratch sums start.
+    pub fn scratch_offset(&self) -> u32 {
+        self.image_len() as u32
+    }
+
+    /// The image's sums from a buffer of this layout (or its first `image_len` slots): the
+    /// halves added.
+    pub fn image_sums(&self, mut buffer: Vec<[f32; 4]>) -> Vec<[f32; 4]> {
+        if self.halves == 2 {
+            let (first, second) = buffer.split_at_mut(self.pixels);
+            for (a, b) in first.iter_mut().zip(&second[..self.pixels]) {
+                for c in 0..4 {
+                    a[c] += b[c];
+                }
+            }
+        }
+        buffer.truncate(self.pixels);
+        buffer
     }
 }
 
@@ -209,6 +279,8 @@ pub struct RenderOutput {
     pub sample_counts: Vec<u32>,
     /// Images handed to `Snapshots::write` during the render.
     pub snapshots: u32,
+    /// What adaptive sampling achieved, in an adaptive render.
+    pub adaptive: Option<AdaptiveReport>,
 }
 
 impl RenderOutput {
@@ -234,6 +306,8 @@ pub struct RenderPlan {
     pub rays_per_dispatch: u64,
     /// Dispatches per batch: as many as fit the batch budget, at least one.
     pub dispatches_per_batch: usize,
+    /// Where the passes' sums go.
+    pub layout: AccumulationLayout,
 }
 
 impl RenderPlan {
@@ -246,12 +320,36 @@ impl RenderPlan {
     /// The dispatches of pass `pass`, in order: each band in every light window.
     pub fn dispatches(&self, pass: usize) -> Vec<GpuPass> {
         let (sample_start, sample_count) = self.passes[pass];
+        self.dispatches_of(sample_start, sample_count, 0, 0)
+    }
+
+    /// The dispatches of samples `sample_start .. sample_start + sample_count` into half `half`
+    /// of the accumulation: over the bands of the image when `listed` is 0, else over bands of
+    /// rows of the pixel list (`width` entries a row) of `listed` pixels.
+    pub fn dispatches_of(
+        &self,
+        sample_start: u32,
+        sample_count: u32,
+        half: u32,
+        listed: u32,
+    ) -> Vec<GpuPass> {
+        let list_bands;
+        let (bands, first_column) = if listed == 0 {
+            (&self.bands, self.first_column)
+        } else {
+            let rows = listed.div_ceil(self.width);
+            let per_band = self.bands[0].1;
+            list_bands = (0..rows.div_ceil(per_band))
+                .map(|i| (i * per_band, per_band.min(rows - i * per_band)))
+                .collect::<Vec<_>>();
+            (&list_bands, 0)
+        };
         let windows = &self.light_windows;
-        let mut dispatches = Vec::with_capacity(self.bands.len() * windows.len());
-        for &(tile_y, tile_height) in &self.bands {
+        let mut dispatches = Vec::with_capacity(bands.len() * windows.len());
+        for &(tile_y, tile_height) in bands {
             for (i, &(light_sample_start, light_sample_count)) in windows.iter().enumerate() {
                 dispatches.push(GpuPass {
-                    tile_x: self.first_column,
+                    tile_x: first_column,
                     tile_y,
                     tile_width: self.width,
                     tile_height,
@@ -261,6 +359,9 @@ impl RenderPlan {
                     light_sample_count,
                     commit: (i + 1 == windows.len()) as u32,
                     loop_check: LOOP_CHECK_ITERATIONS,
+                    listed_pixels: listed,
+                    accumulation_offset: self.layout.half_offset(half),
+                    scratch_offset: self.layout.scratch_offset(),
                     ..Default::default()
                 });
             }
@@ -335,7 +436,6 @@ pub fn plan_passes(scene: &FlatScene, budgets: &RayBudgets) -> RenderPlan {
         passes: (0..spp.div_ceil(per_pass))
             .map(|i| (i * per_pass, per_pass.min(spp - i * per_pass)))
             .collect(),
-        light_windows,
         bands: (0..height.div_ceil(rows))
             .map(|i| (y0 + i * rows, rows.min(height - i * rows)))
             .collect(),
@@ -343,6 +443,8 @@ pub fn plan_passes(scene: &FlatScene, budgets: &RayBudgets) -> RenderPlan {
         width,
         rays_per_dispatch,
         dispatches_per_batch: (budgets.per_batch / rays_per_dispatch).max(1) as usize,
+        layout: AccumulationLayout::of(scene, light_windows.len() > 1),
+        light_windows,
     }
 }
 
@@ -414,129 +516,77 @@ fn drive(
     progress: &mut dyn Progress,
     cancel: &AtomicBool,
     deadline: Option<Instant>,
-    mut snapshots: Option<Snapshots<'_>>,
+    snapshots: Option<Snapshots<'_>>,
 ) -> Result<RenderOutput> {
     let frame = &scene.frame;
-    let start = Instant::now();
-    let mut last_snapshot = start;
     let plan = plan_passes(scene, &backend.budgets());
-    let mut output = RenderOutput {
-        image: Image {
-            width: frame.width,
-            height: frame.height,
-            pixels: Vec::new(),
+    let mut run = Run {
+        scene,
+        progress,
+        cancel,
+        deadline,
+        snapshots,
+        start: Instant::now(),
+        last_snapshot: Instant::now(),
+        dispatches_per_batch: plan.dispatches_per_batch,
+        total: plan.batch_count() as u64,
+        finished: 0,
+        completions: VecDeque::new(),
+        output: RenderOutput {
+            image: Image {
+                width: frame.width,
+                height: frame.height,
+                pixels: Vec::new(),
+            },
+            samples_per_pixel: 0,
+            max_samples_per_pixel: 0,
+            pixels_without_samples: 0,
+            elapsed: Duration::ZERO,
+            kernel_time: None,
+            dispatches: 0,
+            batches: 0,
+            rays: 0,
+            truncated_paths: 0,
+            status_flags: 0,
+            stopped: None,
+            deadline_reached: false,
+            sample_counts: Vec::new(),
+            snapshots: 0,
+            adaptive: None,
         },
-        samples_per_pixel: 0,
-        max_samples_per_pixel: 0,
-        pixels_without_samples: 0,
-        elapsed: Duration::ZERO,
-        kernel_time: None,
-        dispatches: 0,
-        batches: 0,
-        rays: 0,
-        truncated_paths: 0,
-        status_flags: 0,
-        stopped: None,
-        deadline_reached: false,
-        sample_counts: Vec::new(),
-        snapshots: 0,
     };
-    // Batches are made pass by pass as they are submitted: a 2^20-spp render has millions.
-    let batches = (0..plan.passes.len()).flat_map(|pass| {
-        let dispatches = plan.dispatches(pass);
-        let count = dispatches.len().div_ceil(plan.dispatches_per_batch);
-        let samples = plan.passes[pass].1;
-        (0..count).map(move |i| {
-            let start = i * plan.dispatches_per_batch;
-            let end = (start + plan.dispatches_per_batch).min(dispatches.len());
-            // The samples a batch completes: its pass's, at the pass's last batch.
-            let completes = if i + 1 == count { samples } else { 0 };
-            (dispatches[start..end].to_vec(), completes)
-        })
-    });
-    let total = plan.batch_count() as u64;
-    let mut finished = 0;
-    // The samples each batch in flight completes, and its dispatches, oldest first.
-    let mut completions = std::collections::VecDeque::new();
-    let mut finish_one = |backend: &mut dyn Backend,
-                          output: &mut RenderOutput,
-                          completions: &mut std::collections::VecDeque<(u32, u64)>|
-     -> bool {
-        let (completes, dispatches) = completions.pop_front().unwrap_or_default();
-        match backend.finish() {
-            Ok(status) => {
-                output.rays += status.rays;
-                output.truncated_paths += status.truncated;
-                output.status_flags |= status.flags;
-                output.samples_per_pixel += completes;
-                output.dispatches += dispatches;
-                output.batches += 1;
-                finished += 1;
-                progress.advance(finished, total);
-                true
+    let decisions = match scene.adaptive {
+        None => {
+            // Passes are made one by one as they are submitted: a 2^20-spp render has millions.
+            for pass in 0..plan.passes.len() {
+                if !run.submit_pass(backend, &plan.dispatches(pass), plan.passes[pass].1) {
+                    break;
+                }
             }
-            Err(e) => {
-                output.stopped.get_or_insert(e);
-                false
-            }
+            0
         }
+        Some(settings) => sample_adaptively(&mut run, backend, &plan, &settings),
     };
-    for (dispatches, completes) in batches {
-        while backend.in_flight() >= BATCHES_IN_FLIGHT {
-            if !finish_one(backend, &mut output, &mut completions) {
-                break;
-            }
-        }
-        if output.stopped.is_some() {
-            break;
-        }
-        if let Some(snapshots) = snapshots.as_mut()
-            && last_snapshot.elapsed() >= snapshots.every
-            && output.batches > 0
-        {
-            let written = backend.snapshot().and_then(|accumulation| {
-                let accumulation = crop_rows(accumulation, frame.width, scene.crop);
-                let [x0, x1, y0, y1] = scene.crop;
-                (snapshots.write)(&Image::from_accumulation(x1 - x0, y1 - y0, &accumulation))
-            });
-            if let Err(e) = written {
-                output.stopped = Some(e);
-                break;
-            }
-            output.snapshots += 1;
-            last_snapshot = Instant::now();
-        }
-        if cancel.load(Ordering::Relaxed) {
-            output.stopped = Some(Error::Interrupted {
-                done: output.samples_per_pixel,
-                total: frame.spp,
-            });
-            break;
-        }
-        if deadline.is_some_and(|d| Instant::now() >= d) {
-            output.deadline_reached = true;
-            break;
-        }
-        if let Err(e) = backend.submit(&dispatches) {
-            output.stopped = Some(e);
-            break;
-        }
-        completions.push_back((completes, dispatches.len() as u64));
-    }
-    while backend.in_flight() > 0 {
-        if !finish_one(backend, &mut output, &mut completions) {
-            break;
-        }
+    run.drain(backend);
+    let mut output = run.output;
+    let [x0, x1, y0, y1] = scene.crop;
+    if let Some(settings) = &scene.adaptive {
+        let halves = backend.halves()?;
+        let errors = crate::adaptive::pixel_errors(&plan.layout, &halves);
+        let errors = crop_rows(errors, frame.width, scene.crop);
+        let counts = crop_rows(plan.layout.image_sums(halves), frame.width, scene.crop);
+        let counts: Vec<u32> = counts.iter().map(|a| a[3] as u32).collect();
+        output.adaptive = Some(AdaptiveReport::new(settings, &errors, &counts, decisions));
     }
     // The crop window's pixels alone (the whole image unless `render.crop` narrows it).
     let accumulation = crop_rows(backend.accumulation()?, frame.width, scene.crop);
-    let [x0, x1, y0, y1] = scene.crop;
     output.image = Image::from_accumulation(x1 - x0, y1 - y0, &accumulation);
     output.sample_counts = accumulation.iter().map(|a| a[3] as u32).collect();
-    if output.stopped.is_some() || output.deadline_reached {
-        // Pixels of an unfinished pass carry more samples than the rest; the image stays a
-        // per-pixel mean, so it is still correct, only less converged in places.
-        let counts = || accumulation.iter().map(|a| a[3] as u32);
+    let stopped = output.stopped.is_some() || output.deadline_reached;
+    if stopped || scene.adaptive.is_some() {
+        // Pixels of an unfinished pass, or that adaptive sampling kept going, carry more
+        // samples than the rest; the image stays a per-pixel mean, so it is still correct.
+        let counts = || output.sample_counts.iter().copied();
         output.samples_per_pixel = counts().min().unwrap_or(0);
         output.max_samples_per_pixel = counts().max().unwrap_or(0);
         output.pixels_without_samples = counts().filter(|&n| n == 0).count();
@@ -544,13 +594,202 @@ fn drive(
         output.max_samples_per_pixel = output.samples_per_pixel;
     }
     output.kernel_time = backend.kernel_time();
-    output.elapsed = start.elapsed();
+    output.elapsed = run.start.elapsed();
     Ok(output)
+}
+
+/// Adaptive sampling (`adaptive.rs`): steps of `min_spp / 2` samples alternate between the
+/// accumulation's halves, each step in passes of at most the plan's samples; once every pixel
+/// has `min_spp` samples, and then each time the samples have grown by a quarter (at least
+/// two steps), the finished passes are read back and the pixels that met the target stop.
+/// Later passes sample a list of the rest. The steps and decisions depend on sample counts
+/// alone, not on a backend's budgets, so the GPU and the CPU path decide alike. Returns the
+/// decisions made.
+fn sample_adaptively(
+    run: &mut Run<'_, '_>,
+    backend: &mut dyn Backend,
+    plan: &RenderPlan,
+    settings: &AdaptiveSettings,
+) -> u32 {
+    let scene = run.scene;
+    let frame = &scene.frame;
+    let spp = frame.spp;
+    let step = (settings.min_spp / 2).max(1);
+    let round = 2 * step;
+    let per_pass = plan.passes[0].1.min(step);
+    let batches_per_pass = plan.batch_count() as u64 / plan.passes.len() as u64;
+    run.total = spp.div_ceil(step) as u64 * step.div_ceil(per_pass) as u64 * batches_per_pass;
+    let mut active = ActivePixels::new(frame.width, frame.height, scene.crop);
+    let (mut done, mut half, mut listed, mut decisions) = (0, 0, 0, 0);
+    let mut next_decision = settings.min_spp;
+    'steps: while done < spp {
+        let count = step.min(spp - done);
+        for start in (done..done + count).step_by(per_pass as usize) {
+            let samples = per_pass.min(done + count - start);
+            let dispatches = plan.dispatches_of(start, samples, half, listed);
+            if !run.submit_pass(backend, &dispatches, samples) {
+                break 'steps;
+            }
+        }
+        done += count;
+        half ^= 1;
+        if half != 0 || done < next_decision || done >= spp {
+            continue;
+        }
+        run.drain(backend);
+        if run.output.stopped.is_some() {
+            break;
+        }
+        let halves = match backend.halves() {
+            Ok(halves) => halves,
+            Err(e) => {
+                run.output.stopped = Some(e);
+                break;
+            }
+        };
+        let errors = crate::adaptive::pixel_errors(&plan.layout, &halves);
+        let remaining = active.decide(&errors, settings.noise_target);
+        decisions += 1;
+        if remaining == 0 {
+            break;
+        }
+        let list = active.list();
+        if let Err(e) = backend.set_pixel_list(&list) {
+            run.output.stopped = Some(e);
+            break;
+        }
+        listed = list.len() as u32;
+        next_decision = done + (done / 4).div_ceil(round).max(1) * round;
+    }
+    if run.output.stopped.is_none() && !run.output.deadline_reached {
+        run.finished = run.total;
+        run.progress.advance(run.total, run.total);
+    }
+    decisions
+}
+
+/// A render in progress: what the batches in flight will complete, and the output so far.
+struct Run<'p, 's> {
+    scene: &'p FlatScene,
+    progress: &'p mut dyn Progress,
+    cancel: &'p AtomicBool,
+    deadline: Option<Instant>,
+    snapshots: Option<Snapshots<'s>>,
+    start: Instant,
+    last_snapshot: Instant,
+    dispatches_per_batch: usize,
+    /// Batches of the whole render (an upper bound for an adaptive one), for the progress.
+    total: u64,
+    finished: u64,
+    /// The samples each batch in flight completes, and its dispatches, oldest first.
+    completions: VecDeque<(u32, u64)>,
+    output: RenderOutput,
+}
+
+impl Run<'_, '_> {
+    /// Submits the dispatches of a pass of `samples` samples in batches; false once the
+    /// render stops (an error, a cancel, the deadline), which `output` then says.
+    fn submit_pass(
+        &mut self,
+        backend: &mut dyn Backend,
+        dispatches: &[GpuPass],
+        samples: u32,
+    ) -> bool {
+        let per_batch = self.dispatches_per_batch;
+        let count = dispatches.len().div_ceil(per_batch);
+        for (i, batch) in dispatches.chunks(per_batch).enumerate() {
+            // The samples a batch completes: its pass's, at the pass's last batch.
+            let completes = if i + 1 == count { samples } else { 0 };
+            if !self.submit_batch(backend, batch, completes) {
+                return false;
+            }
+        }
+        true
+    }
+
+    fn submit_batch(
+        &mut self,
+        backend: &mut dyn Backend,
+        batch: &[GpuPass],
+        completes: u32,
+    ) -> bool {
+        while backend.in_flight() >= BATCHES_IN_FLIGHT {
+            if !self.finish_one(backend) {
+                return false;
+            }
+        }
+        let frame = &self.scene.frame;
+        if let Some(snapshots) = self.snapshots.as_mut()
+            && self.last_snapshot.elapsed() >= snapshots.every
+            && self.output.batches > 0
+        {
+            let written = backend.snapshot().and_then(|accumulation| {
+                let accumulation = crop_rows(accumulation, frame.width, self.scene.crop);
+                let [x0, x1, y0, y1] = self.scene.crop;
+                (snapshots.write)(&Image::from_accumulation(x1 - x0, y1 - y0, &accumulation))
+            });
+            if let Err(e) = written {
+                self.output.stopped = Some(e);
+                return false;
+            }
+            self.output.snapshots += 1;
+            self.last_snapshot = Instant::now();
+        }
+        if self.cancel.load(Ordering::Relaxed) {
+            self.output.stopped = Some(Error::Interrupted {
+                done: self.output.samples_per_pixel,
+                total: frame.spp,
+            });
+            return false;
+        }
+        if self.deadline.is_some_and(|d| Instant::now() >= d) {
+            self.output.deadline_reached = true;
+            return false;
+        }
+        if let Err(e) = backend.submit(batch) {
+            self.output.stopped = Some(e);
+            return false;
+        }
+        self.completions.push_back((completes, batch.len() as u64));
+        true
+    }
+
+    /// Waits for the oldest batch in flight; false (and `output.stopped`) if it failed.
+    fn finish_one(&mut self, backend: &mut dyn Backend) -> bool {
+        let (completes, dispatches) = self.completions.pop_front().unwrap_or_default();
+        match backend.finish() {
+            Ok(status) => {
+                let output = &mut self.output;
+                output.rays += status.rays;
+                output.truncated_paths += status.truncated;
+                output.status_flags |= status.flags;
+                output.samples_per_pixel += completes;
+                output.dispatches += dispatches;
+                output.batches += 1;
+                self.finished += 1;
+                self.progress.advance(self.finished, self.total);
+                true
+            }
+            Err(e) => {
+                self.output.stopped.get_or_insert(e);
+                false
+            }
+        }
+    }
+
+    /// Waits for every batch in flight (until one fails).
+    fn drain(&mut self, backend: &mut dyn Backend) {
+        while backend.in_flight() > 0 {
+            if !self.finish_one(backend) {
+                break;
+            }
+        }
+    }
 }
 
 /// The pixels of `crop` (columns `crop[0]..crop[1]`, rows `crop[2]..crop[3]`) of an image
 /// `width` pixels wide, row by row.
-fn crop_rows(pixels: Vec<[f32; 4]>, width: u32, crop: [u32; 4]) -> Vec<[f32; 4]> {
+fn crop_rows<T: Copy>(pixels: Vec<T>, width: u32, crop: [u32; 4]) -> Vec<T> {
     let [x0, x1, y0, y1] = crop.map(|c| c as usize);
     if (x0, y0) == (0, 0) && x1 == width as usize && pixels.len() == x1 * y1 {
         return pixels;

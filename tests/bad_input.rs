@@ -579,3 +579,47 @@ fn a_crop_window_must_hold_a_pixel_within_the_image() {
         );
     }
 }
+
+#[test]
+fn adaptive_sampling_settings_are_checked_with_their_field() {
+    let at = |to: &str, line: usize, field: &str, says: &str| {
+        expect_error(
+            "height = 48",
+            &format!("height = 48\n{to}"),
+            line,
+            field,
+            says,
+        )
+    };
+    at(
+        "noise_target = -0.1",
+        4,
+        "render.noise_target",
+        "must be positive",
+    );
+    at(
+        "noise_target = 1e7",
+        4,
+        "render.noise_target",
+        "lies in [1e-37, 1e6]",
+    );
+    at(
+        "min_spp = 8",
+        4,
+        "render.min_spp",
+        "give render.noise_target",
+    );
+    at(
+        "noise_target = 0.01\nmin_spp = 1",
+        5,
+        "render.min_spp",
+        "2..=16",
+    );
+    // The first decision cannot come after the last sample.
+    at(
+        "spp = 8\nnoise_target = 0.01\nmin_spp = 32",
+        6,
+        "render.min_spp",
+        "2..=8",
+    );
+}

@@ -25,7 +25,9 @@ fn converge_measures_the_error_of_each_pattern_and_backend() {
             "--reference-spp",
             "512",
             "--max-spp",
-            "16",
+            "32",
+            "--noise-targets",
+            "0.2",
         ])
         .args([
             "--samplers",
@@ -47,26 +49,35 @@ fn converge_measures_the_error_of_each_pattern_and_backend() {
     let mut lines = text.lines().filter(|l| !l.starts_with('#'));
     assert_eq!(
         lines.next(),
-        Some("backend,sampler,spp,wall_ms,kernel_ms,rays,rmse,rel_mse,flip")
+        Some(
+            "backend,sampler,mode,spp,mean_spp,noise_target,wall_ms,kernel_ms,rays,rmse,rel_mse,flip"
+        )
     );
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect();
-    assert_eq!(rows.len(), 2 * 2 * 5, "2 backends x 2 patterns x 1..16 spp");
+    assert_eq!(
+        rows.len(),
+        2 * 2 * 7,
+        "2 backends x 2 patterns x (1..32 spp and one adaptive run)"
+    );
+    let (spp_column, mean_spp, rays, rmse_column, flip_column) = (3, 4, 8, 9, 11);
     let value = |row: &Vec<String>, i: usize| row[i].parse::<f64>().unwrap();
-    let curve = |backend: &str, sampler: &str| -> Vec<&Vec<String>> {
+    let curve = |backend: &str, sampler: &str, mode: &str| -> Vec<&Vec<String>> {
         rows.iter()
-            .filter(|r| r[0] == backend && r[1] == sampler)
+            .filter(|r| r[0] == backend && r[1] == sampler && r[2] == mode)
             .collect()
     };
     for backend in ["cpu", "gpu"] {
         for sampler in ["random", "sobol"] {
-            let c = curve(backend, sampler);
-            let spp: Vec<f64> = c.iter().map(|r| value(r, 2)).collect();
-            assert_eq!(spp, [1.0, 2.0, 4.0, 8.0, 16.0]);
-            let rmse: Vec<f64> = c.iter().map(|r| value(r, 6)).collect();
-            let flip: Vec<f64> = c.iter().map(|r| value(r, 8)).collect();
-            assert!(c.iter().all(|r| value(r, 5) > 0.0), "rays counted");
+            let c = curve(backend, sampler, "uniform");
+            let spp: Vec<f64> = c.iter().map(|r| value(r, spp_column)).collect();
+            assert_eq!(spp, [1.0, 2.0, 4.0, 8.0, 16.0, 32.0]);
+            let means: Vec<f64> = c.iter().map(|r| value(r, mean_spp)).collect();
+            assert_eq!(means, spp, "uniform sampling gives every pixel its samples");
+            let rmse: Vec<f64> = c.iter().map(|r| value(r, rmse_column)).collect();
+            let flip: Vec<f64> = c.iter().map(|r| value(r, flip_column)).collect();
+            assert!(c.iter().all(|r| value(r, rays) > 0.0), "rays counted");
             assert!(flip.iter().all(|f| (0.0..=1.0).contains(f)));
             // 16x the samples: a quarter of the error for random patterns, less for Sobol.
             assert!(rmse[4] < 0.4 * rmse[0], "{backend} {sampler}: {rmse:?}");
@@ -78,12 +89,28 @@ fn converge_measures_the_error_of_each_pattern_and_backend() {
             } else {
                 assert!(slope < -0.6, "sobol slope {slope}");
             }
+            // The adaptive run: from 16 (its first decision) to 32 samples a pixel, and less
+            // error than uniform sampling's at 16.
+            let adaptive = curve(backend, sampler, "adaptive");
+            assert_eq!(adaptive.len(), 1);
+            let run = adaptive[0];
+            assert_eq!((value(run, spp_column), value(run, 5)), (32.0, 0.2));
+            assert!((16.0..=32.0).contains(&value(run, mean_spp)), "{run:?}");
+            assert!(
+                value(run, rmse_column) < rmse[4],
+                "{run:?} against {rmse:?}"
+            );
         }
     }
     // The same samples on both paths: the same errors.
-    for (c, g) in curve("cpu", "sobol").iter().zip(curve("gpu", "sobol")) {
-        let (a, b) = (value(c, 6), value(g, 6));
-        assert!((a - b).abs() <= 1e-3 * a, "CPU {a} GPU {b}");
+    for mode in ["uniform", "adaptive"] {
+        for (c, g) in curve("cpu", "sobol", mode)
+            .iter()
+            .zip(curve("gpu", "sobol", mode))
+        {
+            let (a, b) = (value(c, rmse_column), value(g, rmse_column));
+            assert!((a - b).abs() <= 1e-3 * a, "{mode}: CPU {a} GPU {b}");
+        }
     }
     let svg = std::fs::read_to_string(&plot).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("slope") && svg.contains("RMSE against time"));

@@ -324,8 +324,12 @@ fn shared_structs_have_identical_layouts() {
             light_sample_count,
             commit,
             loop_check,
+            listed_pixels,
+            accumulation_offset,
+            scratch_offset,
             _pad0,
-            _pad1
+            _pad1,
+            _pad2
         }
     );
 }

@@ -21,3 +21,5 @@
 // The compressed wide BVH (wgsl/traverse_cwbvh.wgsl); its leaves index `prims`, which then holds
 // the primitives in the CWBVH's order.
 @group(0) @binding(13) var<storage, read> cw_nodes: array<GpuCwNode>;
+// The pixels an adaptive pass samples (`y * width + x`), when `pass_info.listed_pixels` is not 0.
+@group(0) @binding(14) var<storage, read> pixel_list: array<u32>;

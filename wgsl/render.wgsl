@@ -1,30 +1,48 @@
-// The render kernel: one invocation per pixel of a band of rows, a range of samples and a window of
-// light samples per dispatch. A pass's sum goes to the pixel's scratch slot (the second half of
-// the accumulation buffer, which exists only when passes are split) until the pass's last
-// light window commits it, with the sample count, to the running accumulation: the
-// accumulation is a valid per-pixel mean after every dispatch. Bindings: wgsl/bindings.wgsl.
+// The render kernel: one invocation per pixel of a band of rows (or of a band of rows of the
+// list of pixels an adaptive pass samples), a range of samples and a window of light samples
+// per dispatch. A pass's sum goes to the pixel's scratch slot (which exists only when passes are
+// split) until the pass's last light window commits it, with the sample count, to the running
+// accumulation (one of its two halves in an adaptive render): the accumulation is a valid
+// per-pixel mean after every dispatch. Layout: src/render.rs (AccumulationLayout). Bindings:
+// wgsl/bindings.wgsl.
 // Mirrors: src/cpu.rs (CpuRenderer::run_dispatch).
+
+// The pixel of invocation `id`, or NONE where the band or the list ends.
+fn pass_pixel(id: vec3<u32>) -> u32 {
+    if (id.x >= pass_info.tile_width || id.y >= pass_info.tile_height) {
+        return NONE;
+    }
+    if (pass_info.listed_pixels == 0u) {
+        return (pass_info.tile_y + id.y) * frame.width + pass_info.tile_x + id.x;
+    }
+    let entry = (pass_info.tile_y + id.y) * pass_info.tile_width + id.x;
+    if (entry >= pass_info.listed_pixels) {
+        return NONE;
+    }
+    return pixel_list[entry];
+}
 
 @compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
 fn render(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= pass_info.tile_width || id.y >= pass_info.tile_height) {
+    let pixel = pass_pixel(id);
+    if (pixel == NONE) {
         return;
     }
-    let x = pass_info.tile_x + id.x;
-    let y = pass_info.tile_y + id.y;
+    let x = pixel % frame.width;
+    let y = pixel / frame.width;
     let window = LightWindow(pass_info.light_sample_start, pass_info.light_sample_count);
     var counters = PathCounters(0u, 0u);
     var sum = vec3<f32>(0.0);
     for (var s = 0u; s < pass_info.sample_count; s += 1u) {
         sum += trace_sample(x, y, pass_info.sample_start + s, window, &counters);
     }
-    let pixel = y * frame.width + x;
-    let scratch = frame.width * frame.height + pixel;
+    let scratch = pass_info.scratch_offset + pixel;
     if (!window_is_first(window)) {
         sum += accumulation[scratch].xyz;
     }
     if (pass_info.commit != 0u) {
-        accumulation[pixel] += vec4<f32>(sum, f32(pass_info.sample_count));
+        accumulation[pass_info.accumulation_offset + pixel] +=
+            vec4<f32>(sum, f32(pass_info.sample_count));
     } else {
         accumulation[scratch] = vec4<f32>(sum, 0.0);
     }

@@ -111,8 +111,12 @@ struct GpuPass {
     light_sample_count: u32,
     commit: u32,
     loop_check: u32,
+    listed_pixels: u32,
+    accumulation_offset: u32,
+    scratch_offset: u32,
     _pad0: u32,
     _pad1: u32,
+    _pad2: u32,
 }
 
 struct GpuRay {

@@ -40,7 +40,7 @@ const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
 }
 
 /// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
-pub const BINDINGS: [Binding; 14] = [
+pub const BINDINGS: [Binding; 15] = [
     binding(0, "camera", Access::Uniform),
     binding(1, "frame", Access::Uniform),
     // One GpuPass per dispatch of a batch, each at its own dynamic offset.
@@ -59,10 +59,12 @@ pub const BINDINGS: [Binding; 14] = [
     binding(11, "rays", Access::StorageRead),
     binding(12, "distances", Access::StorageReadWrite),
     binding(13, "cw_nodes", Access::StorageRead),
+    binding(14, "pixel_list", Access::StorageRead),
 ];
 
-/// The bindings of the render kernel (at most eight storage buffers: WebGPU's baseline).
-const RENDER_BINDINGS: [Binding; 11] = [
+/// The bindings of the render kernel: nine storage buffers, one more than WebGPU's baseline
+/// (every Vulkan, Metal and D3D12 adapter allows more; `GpuRenderer` says so where one does not).
+const RENDER_BINDINGS: [Binding; 12] = [
     BINDINGS[0],
     BINDINGS[1],
     BINDINGS[2],
@@ -74,6 +76,7 @@ const RENDER_BINDINGS: [Binding; 11] = [
     BINDINGS[9],
     BINDINGS[10],
     BINDINGS[13],
+    BINDINGS[14],
 ];
 
 /// The bindings of the ray-query kernels.
@@ -129,6 +132,14 @@ pub struct Kernel {
     pub modules: &'static [&'static str],
     pub entry_point: &'static str,
     pub bindings: &'static [Binding],
+}
+
+impl Kernel {
+    /// Storage buffers the kernel binds (adapters limit them per shader stage).
+    pub fn storage_buffers(&self) -> u32 {
+        let storage = |b: &&Binding| b.access != Access::Uniform;
+        self.bindings.iter().filter(storage).count() as u32
+    }
 }
 
 /// The megakernel: camera samples to accumulated radiance, one invocation per pixel.

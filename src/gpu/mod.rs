@@ -107,6 +107,9 @@ impl GpuContext {
         let required_limits = wgpu::Limits {
             max_storage_buffer_binding_size: adapter_limits.max_storage_buffer_binding_size,
             max_buffer_size: adapter_limits.max_buffer_size,
+            // The render kernel reads nine (`kernels::RENDER`).
+            max_storage_buffers_per_shader_stage: adapter_limits
+                .max_storage_buffers_per_shader_stage,
             ..wgpu::Limits::default()
         };
         // Kernel time is measured with timestamps where the adapter offers them.

@@ -15,7 +15,7 @@ use super::{GpuContext, wgpu_error_text};
 use crate::error::{Error, Result};
 use crate::layout::{GpuLight, GpuPass, WORKGROUP_SIZE};
 use crate::pack::FlatScene;
-use crate::render::{Backend, DispatchStatus, RayBudgets, plan_passes};
+use crate::render::{AccumulationLayout, Backend, DispatchStatus, RayBudgets, plan_passes};
 
 /// A buffer copied back to the host after a submission: the map is requested when the batch
 /// is submitted, and read when the batch is finished.
@@ -79,8 +79,8 @@ pub struct GpuRenderer {
     scene_buffers: Vec<(&'static str, wgpu::Buffer)>,
     /// The `layout::FEATURE_*` bits the kernel was built with.
     features: u32,
-    /// Pixels of the image: the accumulation buffer's first half when it holds a scratch half.
-    pixel_count: usize,
+    /// Where the accumulation buffer keeps what.
+    layout: AccumulationLayout,
     /// Bytes between consecutive `GpuPass` of a batch (the dynamic-offset alignment).
     pass_stride: u64,
     in_flight: VecDeque<Batch>,
@@ -123,8 +123,16 @@ impl GpuRenderer {
         }
         let device = &context.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let scene_buffers = upload_scene(&context, scene, &budgets)?;
-        let pixel_count = scene.frame.width as usize * scene.frame.height as usize;
+        let storage_buffers = kernels::RENDER.storage_buffers();
+        let allowed = device.limits().max_storage_buffers_per_shader_stage;
+        if allowed < storage_buffers {
+            return Err(Error::Gpu(format!(
+                "the render kernel reads {storage_buffers} storage buffers; this adapter allows \
+                 {allowed} per shader stage (use --backend cpu)"
+            )));
+        }
+        let layout = plan_passes(scene, &budgets).layout;
+        let scene_buffers = upload_scene(&context, scene, &layout)?;
         let pipeline = kernels::build_pipeline(device, &kernels::RENDER, features);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
@@ -140,7 +148,7 @@ impl GpuRenderer {
             pipeline,
             scene_buffers,
             features,
-            pixel_count,
+            layout,
             pass_stride,
             in_flight: VecDeque::new(),
             budgets,
@@ -170,7 +178,7 @@ impl GpuRenderer {
 fn upload_scene(
     context: &GpuContext,
     scene: &FlatScene,
-    budgets: &RayBudgets,
+    layout: &AccumulationLayout,
 ) -> Result<Vec<(&'static str, wgpu::Buffer)>> {
     let uniform = |label: &str, bytes: &[u8]| context.uniform_buffer(label, bytes);
     let storage = |label: &str, bytes: &[u8]| context.storage_buffer(label, bytes);
@@ -193,11 +201,7 @@ fn upload_scene(
         ),
         bytemuck::cast_slice(&scene.normals),
     )?;
-    let pixel_count = scene.frame.width as u64 * scene.frame.height as u64;
-    // A pass split into light windows keeps its partial sums in a second half (scratch)
-    // until it commits (see render.wgsl).
-    let split_passes = plan_passes(scene, budgets).light_windows.len() > 1;
-    let accumulation_size = pixel_count * 16 * if split_passes { 2 } else { 1 };
+    let accumulation_size = layout.len() as u64 * 16;
     let limit = context.device.limits().max_storage_buffer_binding_size;
     if accumulation_size > limit {
         let what = format!(
@@ -231,6 +235,8 @@ fn upload_scene(
             "sample_table",
             storage("sample table", bytemuck::cast_slice(&scene.sample_table))?,
         ),
+        // Replaced by `set_pixel_list` in an adaptive render.
+        ("pixel_list", storage("pixel list", &[0; 4])?),
     ])
 }
 
@@ -336,10 +342,34 @@ impl Backend for GpuRenderer {
     }
 
     fn accumulation(&mut self) -> Result<Vec<[f32; 4]>> {
+        let halves = self.halves()?;
+        Ok(self.layout.image_sums(halves))
+    }
+
+    /// Read after the batches in flight, like the snapshot.
+    fn halves(&mut self) -> Result<Vec<[f32; 4]>> {
         let bytes = self.context.read_buffer(self.buffer("accumulation"))?;
         let mut sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
-        sums.truncate(self.pixel_count);
+        sums.truncate(self.layout.image_len());
         Ok(sums)
+    }
+
+    /// A new buffer: the batches in flight keep the one they were bound with.
+    fn set_pixel_list(&mut self, pixels: &[u32]) -> Result<()> {
+        let label = format!("the {} pixels of an adaptive pass", pixels.len());
+        let bytes: &[u8] = if pixels.is_empty() {
+            &[0; 4]
+        } else {
+            bytemuck::cast_slice(pixels)
+        };
+        let buffer = self.context.storage_buffer(&label, bytes)?;
+        let slot = self
+            .scene_buffers
+            .iter_mut()
+            .find(|(name, _)| *name == "pixel_list")
+            .expect("uploaded with the scene");
+        slot.1 = buffer;
+        Ok(())
     }
 
     /// The copy is queued after the batches in flight, so it holds them too.

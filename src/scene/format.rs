@@ -103,6 +103,11 @@ pub struct RenderSection {
     pub ambient: Vec3,
     /// [x0, x1, y0, y1] in [0, 1]: render only this window of the image (pbrt's crop window)
     pub crop: Option<Exact<f64, 4>>,
+    /// Adaptive sampling: a pixel stops once its error estimate is below this (`adaptive.rs`);
+    /// `spp` is then the maximum.
+    pub noise_target: Option<f64>,
+    /// Samples every pixel receives before adaptive sampling's first decision.
+    pub min_spp: Option<i64>,
 }
 
 fn default_spp() -> i64 {

@@ -14,6 +14,8 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
+use crate::adaptive::AdaptiveSettings;
+
 pub use crate::camera::CameraSpec;
 pub use crate::sampler::SamplerName;
 pub use builder::SceneBuilder;
@@ -46,6 +48,8 @@ pub struct RenderSettings {
     /// Pixels rendered: columns `crop[0]..crop[1]`, rows `crop[2]..crop[3]` (the whole image
     /// unless `render.crop` narrows it).
     pub crop: [u32; 4],
+    /// Adaptive sampling, when `render.noise_target` asks for it.
+    pub adaptive: Option<AdaptiveSettings>,
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -7,11 +7,13 @@
 use glam::{DVec3, Vec3};
 
 use super::format::{
-    Exact, LightType, MaterialModel, Pair, SamplerName, Scale, SceneFile, ShapeType, Vec3 as F3,
+    Exact, LightType, MaterialModel, Pair, RenderSection, SamplerName, Scale, SceneFile, ShapeType,
+    Vec3 as F3,
 };
 use super::load::ParsedScene;
 use super::mesh::{compute_vertex_normals, load_mesh, transform_mesh};
 use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
+use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
 use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, Movements};
 use crate::error::{Error, Result};
@@ -233,7 +235,38 @@ fn validate_render(check: &Checker, file: &SceneFile) -> Result<RenderSettings> 
         pixel_sampler: r.pixel_sampler,
         background: check.radiometric("render.background", r.background)?,
         ambient: check.radiometric("render.ambient", r.ambient)?,
+        adaptive: adaptive_settings(check, r)?,
     })
+}
+
+/// `render.noise_target` and `render.min_spp`: a positive target, and a first decision after at
+/// least two samples (one per half) and at most `render.spp`.
+fn adaptive_settings(check: &Checker, r: &RenderSection) -> Result<Option<AdaptiveSettings>> {
+    let Some(target) = r.noise_target else {
+        if r.min_spp.is_some() {
+            return Err(check.err(
+                "render.min_spp",
+                "applies to adaptive sampling only: give render.noise_target (--noise-target)",
+            ));
+        }
+        return Ok(None);
+    };
+    let noise_target = check.positive("render.noise_target", target)?;
+    if noise_target < f32::MIN_POSITIVE as f64 || noise_target > 1e6 {
+        return Err(check.err(
+            "render.noise_target",
+            format!("lies in [1e-37, 1e6], got {}", num(noise_target)),
+        ));
+    }
+    let spp = r.spp.clamp(1, MAX_SPP);
+    let min_spp = match r.min_spp {
+        Some(n) => check.integer("render.min_spp", n, 2, spp.max(2))?,
+        None => DEFAULT_MIN_SPP.min(spp as u32),
+    };
+    Ok(Some(AdaptiveSettings {
+        noise_target: noise_target as f32,
+        min_spp,
+    }))
 }
 
 /// pbrt's crop window: fractions [x0, x1, y0, y1] of the image, to pixel bounds by rounding
