@@ -18,7 +18,7 @@ use crate::error::{Error, Result};
 use crate::gpu::{GpuContext, GpuRenderer};
 use crate::output::srgb_encode;
 use crate::pack::flatten;
-use crate::plot::{Series, log_log_panel};
+use crate::plot::{Figure, Series, log_log_panel};
 use crate::render::{Image, RenderOutput, render};
 use crate::sampler::SamplerName;
 use crate::scene::Scene;
@@ -46,15 +46,21 @@ pub struct ConvergeArgs {
     /// the time uniform sampling needs for the same RMSE.
     #[arg(long, value_delimiter = ',', value_name = "X,Y,...")]
     pub noise_targets: Vec<f64>,
+    /// The adaptive renders' `render.min_spp` (default: the scene's, or 16).
+    #[arg(long, value_name = "N")]
+    pub min_spp: Option<u32>,
+    /// Renders of each run: its times are their medians (the images are the same).
+    #[arg(long, default_value_t = 1)]
+    pub runs: usize,
     /// Backends to measure, side by side.
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu])]
     pub backends: Vec<Backend>,
     /// The CSV to write: one row per run, the command and machine in `#` comments.
     #[arg(long, default_value = "converge.csv")]
     pub csv: PathBuf,
-    /// Also write the log-log plot (SVG) here.
+    /// Also write the log-log plot here: SVG, or PNG for a `.png` (repeat for both).
     #[arg(long)]
-    pub plot: Option<PathBuf>,
+    pub plot: Vec<PathBuf>,
     /// Override any scene field, e.g. --set render.width=200 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,
@@ -139,6 +145,12 @@ pub fn log_log_slope(points: &[(f64, f64)]) -> f64 {
     let sxy: f64 = logs.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
     let sxx: f64 = logs.iter().map(|(x, _)| (x - mx) * (x - mx)).sum();
     sxy / sxx
+}
+
+fn median(values: impl Iterator<Item = f64>) -> f64 {
+    let mut values: Vec<f64> = values.collect();
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
 }
 
 /// Renders `scene` with `overrides` on `backend` (`gpu`: its context).
@@ -250,8 +262,20 @@ pub fn run(args: &ConvergeArgs) -> Result<Study> {
                 ]);
                 if let Some(target) = noise_target {
                     overrides.push(format!("render.noise_target={target:?}"));
+                    if let Some(n) = args.min_spp {
+                        overrides.push(format!("render.min_spp={n}"));
+                    }
                 }
-                let output = render_once(&args.scene, &overrides, context)?;
+                let mut outputs = (0..args.runs.max(1))
+                    .map(|_| render_once(&args.scene, &overrides, context))
+                    .collect::<Result<Vec<_>>>()?;
+                let wall_ms = median(outputs.iter().map(|o| o.elapsed.as_secs_f64() * 1e3));
+                let kernel_ms = outputs
+                    .iter()
+                    .map(|o| o.kernel_time.map(|t| t.as_secs_f64() * 1e3))
+                    .collect::<Option<Vec<f64>>>()
+                    .map(|times| median(times.into_iter()));
+                let output = outputs.pop().expect("one render at least");
                 let counts = &output.sample_counts;
                 runs.push(Run {
                     backend,
@@ -260,8 +284,8 @@ pub fn run(args: &ConvergeArgs) -> Result<Study> {
                     noise_target,
                     mean_spp: counts.iter().map(|&n| n as f64).sum::<f64>()
                         / counts.len().max(1) as f64,
-                    wall_ms: output.elapsed.as_secs_f64() * 1e3,
-                    kernel_ms: output.kernel_time.map(|t| t.as_secs_f64() * 1e3),
+                    wall_ms,
+                    kernel_ms,
                     rays: output.rays,
                     rmse: rmse(&output.image, &reference_image),
                     rel_mse: rel_mse(&output.image, &reference_image),
@@ -360,29 +384,24 @@ impl Study {
                             && (u.backend, u.sampler) == (run.backend, run.sampler)
                     })
                     .collect();
-                let at_same_rmse = uniform.windows(2).find_map(|pair| {
-                    let (a, b) = (pair[0], pair[1]);
-                    let (hi, lo) = (a.rmse.max(b.rmse), a.rmse.min(b.rmse));
-                    if !(lo..=hi).contains(&run.rmse) || hi <= lo {
-                        return None;
-                    }
-                    let t = (run.rmse.ln() - a.rmse.ln()) / (b.rmse.ln() - a.rmse.ln());
-                    let log_lerp = |x: f64, y: f64| (x.ln() + t * (y.ln() - x.ln())).exp();
-                    let lerp = |x: f64, y: f64| x + t * (y - x);
-                    Some((log_lerp(a.wall_ms, b.wall_ms), lerp(a.flip, b.flip)))
-                });
+                let at_same_rmse = at_same_error(&uniform, run.rmse, |r| r.rmse);
+                let at_same_flip = at_same_error(&uniform, run.flip, |r| r.flip);
                 AdaptiveGain {
                     run,
                     uniform_wall_ms: at_same_rmse.map(|(w, _)| w),
                     uniform_flip: at_same_rmse.map(|(_, f)| f),
+                    uniform_wall_ms_same_flip: at_same_flip.map(|(w, _)| w),
                 }
             })
             .collect()
     }
 
     /// Two log-log panels, RMSE against samples per pixel and against wall time; one curve per
-    /// backend and sample pattern, its fitted slope in the legend. Returns the SVG text.
-    pub fn plot_svg(&self) -> std::result::Result<String, String> {
+    /// backend, sample pattern and mode, its fitted slope in the legend.
+    fn draw_panels<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), String> {
         let fail = |e: &dyn std::fmt::Display| e.to_string();
         let colours = [
             BLUE,
@@ -396,7 +415,10 @@ impl Study {
         let slopes = self.slopes();
         let labels: Vec<String> = slopes
             .iter()
-            .map(|(c, slope)| format!("{} (slope {slope:.2})", c.label()))
+            .map(|(c, slope)| match slope.is_finite() {
+                true => format!("{} (slope {slope:.2})", c.label()),
+                false => c.label(),
+            })
             .collect();
         let by_spp: Vec<Vec<(f64, f64)>> = slopes
             .iter()
@@ -411,26 +433,21 @@ impl Study {
             let (lo, hi) = xs.fold((f64::MAX, f64::MIN), |(a, b), x| (a.min(x), b.max(x)));
             (lo * 0.7)..(hi * 1.4)
         };
-        let mut svg = String::new();
-        {
-            let root = SVGBackend::with_string(&mut svg, (1100, 460)).into_drawing_area();
-            root.fill(&WHITE).map_err(|e| fail(&e))?;
-            let (left, right) = root.split_horizontally(550);
-            for (area, curves, x_desc, title) in [
-                (&left, &by_spp, "samples per pixel", "RMSE against samples"),
-                (&right, &by_time, "wall time, ms", "RMSE against time"),
-            ] {
-                let borrowed: Vec<Series> = curves
-                    .iter()
-                    .enumerate()
-                    .map(|(i, c)| (labels[i].as_str(), c.as_slice(), colours[i % colours.len()]))
-                    .collect();
-                log_log_panel(area, title, x_desc, "RMSE", &borrowed, range(curves))
-                    .map_err(|e| fail(&e))?;
-            }
-            root.present().map_err(|e| fail(&e))?;
+        root.fill(&WHITE).map_err(|e| fail(&e))?;
+        let (left, right) = root.split_horizontally(root.dim_in_pixel().0 / 2);
+        for (area, curves, x_desc, title) in [
+            (&left, &by_spp, "samples per pixel", "RMSE against samples"),
+            (&right, &by_time, "wall time, ms", "RMSE against time"),
+        ] {
+            let borrowed: Vec<Series> = curves
+                .iter()
+                .enumerate()
+                .map(|(i, c)| (labels[i].as_str(), c.as_slice(), colours[i % colours.len()]))
+                .collect();
+            log_log_panel(area, title, x_desc, "RMSE", &borrowed, range(curves))
+                .map_err(|e| fail(&e))?;
         }
-        Ok(svg)
+        Ok(())
     }
 
     /// A summary for the terminal: each curve's slope, and its last run's error and time; then
@@ -463,8 +480,8 @@ impl Study {
         out += "\nAdaptive against uniform sampling at the same RMSE (uniform interpolated log-log \
                 between its runs):\n\n";
         out += "| curve | noise target | mean spp | RMSE | FLIP | wall ms | uniform wall ms | \
-                time ratio | uniform FLIP |\n";
-        out += "|---|---|---|---|---|---|---|---|---|\n";
+                time ratio | uniform FLIP | time ratio at equal FLIP |\n";
+        out += "|---|---|---|---|---|---|---|---|---|---|\n";
         for gain in gains {
             let r = gain.run;
             let (uniform_ms, ratio, uniform_flip) = match (gain.uniform_wall_ms, gain.uniform_flip)
@@ -476,10 +493,13 @@ impl Study {
                 ),
                 _ => ("beyond the uniform runs".into(), "-".into(), "-".into()),
             };
+            let flip_ratio = gain
+                .uniform_wall_ms_same_flip
+                .map_or("-".into(), |ms| format!("{:.2}x", r.wall_ms / ms));
             let _ = writeln!(
                 out,
                 "| {} | {} | {:.1} | {:.4e} | {:.4} | {:.1} | {uniform_ms} | {ratio} | \
-                 {uniform_flip} |",
+                 {uniform_flip} | {flip_ratio} |",
                 r.curve().label(),
                 r.noise_target.unwrap_or_default(),
                 r.mean_spp,
@@ -489,6 +509,19 @@ impl Study {
             );
         }
         out
+    }
+}
+
+impl Figure for Study {
+    fn size(&self) -> (u32, u32) {
+        (1100, 460)
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), String> {
+        self.draw_panels(root)
     }
 }
 
@@ -528,8 +561,29 @@ impl Run {
 /// An adaptive run and what uniform sampling needs for its RMSE (`Study::adaptive_gains`).
 pub struct AdaptiveGain<'a> {
     pub run: &'a Run,
+    /// The uniform runs' wall time and FLIP at the adaptive run's RMSE.
     pub uniform_wall_ms: Option<f64>,
     pub uniform_flip: Option<f64>,
+    /// The uniform runs' wall time at the adaptive run's FLIP.
+    pub uniform_wall_ms_same_flip: Option<f64>,
+}
+
+/// The wall time and FLIP of the uniform runs (by increasing samples) where `error` reaches
+/// `value`: interpolated log-log between the two runs around it; none beyond them.
+fn at_same_error(uniform: &[&Run], value: f64, error: impl Fn(&Run) -> f64) -> Option<(f64, f64)> {
+    uniform.windows(2).find_map(|pair| {
+        let (a, b) = (pair[0], pair[1]);
+        let (ea, eb) = (error(a), error(b));
+        if !(ea.min(eb)..=ea.max(eb)).contains(&value) || ea == eb {
+            return None;
+        }
+        let t = (value.ln() - ea.ln()) / (eb.ln() - ea.ln());
+        let log_lerp = |x: f64, y: f64| (x.ln() + t * (y.ln() - x.ln())).exp();
+        Some((
+            log_lerp(a.wall_ms, b.wall_ms),
+            a.flip + t * (b.flip - a.flip),
+        ))
+    })
 }
 
 #[cfg(test)]

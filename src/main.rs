@@ -344,17 +344,16 @@ fn run_converge(args: &chambre::converge::ConvergeArgs) -> anyhow::Result<ExitCo
     use chambre::output::OutputTarget;
     // Both outputs are checked before the first render, and written whole or not at all.
     OutputTarget::prepare_beside(&args.csv)?;
-    if let Some(plot) = &args.plot {
+    for plot in &args.plot {
         OutputTarget::prepare_beside(plot)?;
     }
     let study = chambre::converge::run(args)?;
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     OutputTarget::write_beside(&args.csv, study.to_csv(&command).as_bytes())?;
-    if let Some(plot) = &args.plot {
-        let svg = study
-            .plot_svg()
+    for plot in &args.plot {
+        let bytes = chambre::plot::figure_bytes(&study, plot)
             .map_err(|e| anyhow::anyhow!("{}: {e}", plot.display()))?;
-        OutputTarget::write_beside(plot, svg.as_bytes())?;
+        OutputTarget::write_beside(plot, &bytes)?;
     }
     print(&study.to_markdown())?;
     Ok(ExitCode::SUCCESS)

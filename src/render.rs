@@ -598,13 +598,13 @@ fn drive(
     Ok(output)
 }
 
-/// Adaptive sampling (`adaptive.rs`): steps of `min_spp / 2` samples alternate between the
-/// accumulation's halves, each step in passes of at most the plan's samples; once every pixel
-/// has `min_spp` samples, and then each time the samples have grown by a quarter (at least
-/// two steps), the finished passes are read back and the pixels that met the target stop.
-/// Later passes sample a list of the rest. The steps and decisions depend on sample counts
-/// alone, not on a backend's budgets, so the GPU and the CPU path decide alike. Returns the
-/// decisions made.
+/// Adaptive sampling (`adaptive.rs`): steps of samples alternate between the accumulation's
+/// halves, each step in passes of at most the plan's samples. Once every pixel has `min_spp`
+/// samples (in steps of `min_spp / 2`), the finished passes are read back and the pixels that
+/// met the target stop; then rounds of two steps, each an eighth of the samples so far (a
+/// multiple of `min_spp / 2`), sample a list of the rest, a decision after each round. The
+/// steps and decisions depend on sample counts alone, not on a backend's budgets, so the GPU
+/// and the CPU path decide alike. Returns the decisions made.
 fn sample_adaptively(
     run: &mut Run<'_, '_>,
     backend: &mut dyn Backend,
@@ -614,18 +614,19 @@ fn sample_adaptively(
     let scene = run.scene;
     let frame = &scene.frame;
     let spp = frame.spp;
-    let step = (settings.min_spp / 2).max(1);
-    let round = 2 * step;
-    let per_pass = plan.passes[0].1.min(step);
+    let first_step = (settings.min_spp / 2).max(1);
+    let mut step = first_step;
+    let per_pass = plan.passes[0].1;
     let batches_per_pass = plan.batch_count() as u64 / plan.passes.len() as u64;
-    run.total = spp.div_ceil(step) as u64 * step.div_ceil(per_pass) as u64 * batches_per_pass;
+    // The uniform render's batches: an upper bound on an adaptive one's, near for small steps.
+    run.total = spp.div_ceil(per_pass.min(step)) as u64 * batches_per_pass;
     let mut active = ActivePixels::new(frame.width, frame.height, scene.crop);
     let (mut done, mut half, mut listed, mut decisions) = (0, 0, 0, 0);
     let mut next_decision = settings.min_spp;
     'steps: while done < spp {
         let count = step.min(spp - done);
-        for start in (done..done + count).step_by(per_pass as usize) {
-            let samples = per_pass.min(done + count - start);
+        for start in (done..done + count).step_by(per_pass.min(step) as usize) {
+            let samples = per_pass.min(step).min(done + count - start);
             let dispatches = plan.dispatches_of(start, samples, half, listed);
             if !run.submit_pass(backend, &dispatches, samples) {
                 break 'steps;
@@ -659,7 +660,8 @@ fn sample_adaptively(
             break;
         }
         listed = list.len() as u32;
-        next_decision = done + (done / 4).div_ceil(round).max(1) * round;
+        step = (done / 8).div_ceil(first_step).max(1) * first_step;
+        next_decision = done + 2 * step;
     }
     if run.output.stopped.is_none() && !run.output.deadline_reached {
         run.finished = run.total;

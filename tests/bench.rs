@@ -206,4 +206,27 @@ fn bench_precision_measures_f32_error_against_an_f64_oracle() {
             median_point(i)
         );
     }
+    // Pixel values: the renderer's shading (both paths) against the oracle's independent f64
+    // Lambert. Near the origin a few ULPs everywhere; far away the error grows.
+    let pixels = |i: usize, path: &str| &results[i][format!("{path}_pixels")];
+    let pixel = |i: usize, path: &str, name: &str| pixels(i, path)[name].as_f64().unwrap();
+    for path in ["cpu", "gpu"] {
+        let lit = pixels(0, path)["lit"].as_u64().unwrap();
+        assert!(lit > 50, "{path}: {lit} lit pixels");
+        let disagreements = pixels(0, path)["disagreements"].as_u64().unwrap();
+        assert!(
+            disagreements * 100 <= lit,
+            "{path}: {disagreements} of {lit}"
+        );
+        assert!(pixel(0, path, "median_relative") < 1e-5, "{path}");
+        assert!(pixel(0, path, "max_relative") < 1e-3, "{path}");
+        assert!(pixel(0, path, "median_relative") < pixel(2, path, "median_relative"));
+        assert!(pixel(2, path, "median_relative") < pixel(3, path, "median_relative"));
+        for i in [4, 5] {
+            assert!(
+                pixel(i, path, "median_relative") < 1e-5,
+                "{path}, scale {i}"
+            );
+        }
+    }
 }

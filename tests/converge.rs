@@ -39,6 +39,8 @@ fn converge_measures_the_error_of_each_pattern_and_backend() {
         .arg(&csv)
         .arg("--plot")
         .arg(&plot)
+        .arg("--plot")
+        .arg(dir.join("c.png"))
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
@@ -114,6 +116,14 @@ fn converge_measures_the_error_of_each_pattern_and_backend() {
     }
     let svg = std::fs::read_to_string(&plot).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("slope") && svg.contains("RMSE against time"));
+    // The PNG: the figure's size, a white background, and the curves' colours drawn.
+    let png = image::open(dir.join("c.png")).unwrap().into_rgb8();
+    assert_eq!(png.dimensions(), (1100, 460));
+    let count = |rgb: [u8; 3]| png.pixels().filter(|p| p.0 == rgb).count();
+    assert!(count([255, 255, 255]) > png.len() / 3 / 2, "mostly white");
+    for (name, colour) in [("blue", [0, 0, 255]), ("green", [0, 255, 0])] {
+        assert!(count(colour) > 100, "no {name} curve in the PNG");
+    }
 }
 
 /// The scenes shipped to stress the trade each stress what their names say.

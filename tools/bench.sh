@@ -44,7 +44,18 @@ mkdir -p bench
         "$chambre" converge "scenes/converge/$scene.toml" --reference-spp 2048 --max-spp 128 \
             --samplers random,stratified,sobol --csv "bench/converge_$scene.csv"
     done
+    # Adaptive against uniform sampling on the same scenes: Sobol patterns (progressive, so a
+    # pixel that stops keeps a stratified prefix), medians of 3 renders.
+    for scene in defocus_tilt soft_shadows mirror_corridor checkerboard; do
+        echo
+        echo "converge, adaptive: scenes/converge/$scene.toml"
+        "$chambre" converge "scenes/converge/$scene.toml" --reference-spp 4096 --max-spp 256 \
+            --samplers sobol --noise-targets 0.1,0.05,0.02 --runs 3 \
+            --csv "bench/converge_adaptive_$scene.csv" \
+            --plot "bench/converge_adaptive_$scene.svg"
+    done
 } | tee bench/results.md
 # The plots BENCHMARKS.md shows.
 cp bench/scale.svg docs/images/scale.svg
 cp bench/converge_bokeh.svg docs/images/converge_bokeh.svg
+cp bench/converge_adaptive_defocus_tilt.svg docs/images/converge_adaptive_defocus_tilt.svg

@@ -281,7 +281,12 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 gpu,
             )?;
             if let Some(path) = &args.plot {
-                report.plot_svg(path)?;
+                let bytes =
+                    crate::plot::figure_bytes(&report, path).map_err(|message| Error::Output {
+                        path: path.clone(),
+                        message,
+                    })?;
+                crate::output::OutputTarget::write_beside(path, &bytes)?;
             }
             finish(
                 &command_line,

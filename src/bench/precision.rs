@@ -9,17 +9,19 @@
 
 use std::path::{Path, PathBuf};
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::rays::{Query, RaySet, trace_cpu};
+use crate::camera::generate_ray_f64;
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
 use crate::gpu::trace::GpuTracer;
 use crate::layout::T_FAR;
 use crate::math::rng::Rng;
 use crate::pack::{FlatScene, flatten};
+use crate::sampler::{PatternSource, sample_2d};
 use crate::scene::Scene;
 use crate::scene::mesh::load_mesh;
 
@@ -81,6 +83,23 @@ pub struct PrecisionResult {
     pub oracle_hits: usize,
     pub cpu: PathErrors,
     pub gpu: Option<PathErrors>,
+    /// The pixel values of a render of the placement (`pixel_run`) against the oracle's.
+    pub cpu_pixels: PixelErrors,
+    pub gpu_pixels: Option<PixelErrors>,
+}
+
+/// Pixel values of one path's render against the f64 oracle's.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct PixelErrors {
+    /// Pixels lit in both renders.
+    pub lit: usize,
+    /// Pixels lit in one render and black (a miss, a shadow, a surface facing away) in the
+    /// other: silhouettes, shadow edges and terminators that rounding moves.
+    pub disagreements: usize,
+    /// Relative error of the lit pixels: median, 99th percentile, largest.
+    pub median_relative: f64,
+    pub p99_relative: f64,
+    pub max_relative: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -150,6 +169,175 @@ fn camera_rays(lo: DVec3, hi: DVec3, height: f64, n: u32) -> Vec<(DVec3, DVec3)>
         }
     }
     rays
+}
+
+/// The render whose pixels are compared with the oracle's: the mesh placed as for the rays,
+/// seen by a pinhole at the rays' camera (40° vertical field of view, `n x n` pixels, one
+/// random sample each), Lambert grey 0.8 with flat normals, lit by one point light a mesh size
+/// to the side and two above the mesh's centre (its intensity grows with the size squared,
+/// so the irradiance does not depend on the scale); no ambient, background or bounce.
+/// Returns the scene and the light's position and intensity in f64.
+fn pixel_scene(
+    mesh: &Path,
+    p: Placement,
+    lo: DVec3,
+    hi: DVec3,
+    height: f64,
+    n: u32,
+) -> Result<(Scene, DVec3, f64)> {
+    let absolute = std::path::absolute(mesh).map_err(|e| Error::io(mesh, e))?;
+    let centre = (lo + hi) / 2.0;
+    let size = (hi - lo).max_element();
+    let eye = centre + DVec3::new(0.0, height * size, 2.5 * size);
+    let light = centre + DVec3::new(size, 2.0 * size, 1.5 * size);
+    let v = |d: DVec3| format!("[{:e}, {:e}, {:e}]", d.x, d.y, d.z);
+    let text = format!(
+        "[render]\nwidth = {n}\nheight = {n}\nspp = 1\nmax_depth = 0\npixel_sampler = \"random\"\n\
+         [camera]\nposition = {}\nlook_at = {}\nvertical_fov = 40.0\nfilm = [24.0, 24.0]\n\
+         [[materials]]\nname = \"m\"\nmodel = \"lambert\"\ndiffuse = [0.8, 0.8, 0.8]\n\
+         [[shapes]]\ntype = \"mesh\"\nfile = {}\nmaterial = \"m\"\nsmooth = false\n\
+         scale = {:e}\ntranslate = [{:e}, {:e}, {:e}]\n\
+         [[lights]]\ntype = \"point\"\nposition = {}\nintensity = [{:e}, {:e}, {:e}]\n",
+        v(eye),
+        v(eye - DVec3::Z * size),
+        toml::Value::String(absolute.to_string_lossy().into_owned()),
+        p.scale,
+        p.offset,
+        p.offset,
+        p.offset,
+        v(light),
+        size * size,
+        size * size,
+        size * size,
+    );
+    let scene = Scene::from_str(Path::new("precision-pixels.toml"), &text, &[])?;
+    Ok((scene, light, size * size))
+}
+
+/// The oracle's pixel values of `scene` (as `pixel_scene` makes it), from the triangles in
+/// f64: each pixel's sample point drawn as the renderer draws it (`sampler::sample_2d`), its
+/// ray made in f64 (`camera::generate_ray_f64`), the closest hit and the shadow ray by brute
+/// force, and Lambert's `0.8 / pi * I * cos / r^2` (0 where nothing is hit or lit).
+fn oracle_pixels(
+    scene: &Scene,
+    flat: &FlatScene,
+    triangles: &[[DVec3; 3]],
+    light: DVec3,
+    intensity: f64,
+) -> Vec<f64> {
+    let frame = &flat.frame;
+    let (w, h) = (frame.width, frame.height);
+    let camera = &scene.camera;
+    (0..w * h)
+        .into_par_iter()
+        .map(|pixel| {
+            let (x, y) = (pixel % w, pixel / w);
+            let mut rng = Rng::new(frame.seed, pixel, 0);
+            let source = PatternSource::pixel(frame);
+            let mut flags = 0;
+            let jitter = sample_2d(
+                frame,
+                &flat.sample_table,
+                source,
+                x,
+                y,
+                0,
+                &mut rng,
+                &mut flags,
+            );
+            let film = DVec2::new(
+                ((x as f64 + jitter[0] as f64) / w as f64 - 0.5) * camera.film_mm[0],
+                (0.5 - (y as f64 + jitter[1] as f64) / h as f64) * camera.film_mm[1],
+            );
+            let (o, d) = generate_ray_f64(camera, film, DVec2::ZERO);
+            let closest = triangles
+                .iter()
+                .enumerate()
+                .filter_map(|(i, &t)| Some((intersect_f64(o, d, t)?, i)))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let Some((t, hit)) = closest else {
+                return 0.0;
+            };
+            let [a, b, c] = triangles[hit];
+            let p = o + d * t;
+            let mut normal = (b - a).cross(c - a).normalize();
+            if normal.dot(d) > 0.0 {
+                normal = -normal;
+            }
+            let to_light = light - p;
+            let distance = to_light.length();
+            let wi = to_light / distance;
+            let cos = normal.dot(wi);
+            let shadowed = triangles.iter().enumerate().any(|(i, &t)| {
+                i != hit
+                    && intersect_f64(p, wi, t)
+                        .is_some_and(|s| s > 1e-9 * distance && s < distance * (1.0 - 1e-9))
+            });
+            if cos <= 0.0 || shadowed {
+                return 0.0;
+            }
+            0.8 / std::f64::consts::PI * intensity * cos / (distance * distance)
+        })
+        .collect()
+}
+
+/// One path's rendered pixels against the oracle's.
+fn pixel_errors(rendered: &[glam::Vec3], exact: &[f64]) -> PixelErrors {
+    let mut relative = Vec::new();
+    let mut disagreements = 0;
+    for (value, &exact) in rendered.iter().zip(exact) {
+        match (value.x > 0.0, exact > 0.0) {
+            (true, true) => relative.push((value.x as f64 - exact).abs() / exact),
+            (false, false) => {}
+            _ => disagreements += 1,
+        }
+    }
+    relative.sort_by(f64::total_cmp);
+    let at = |q: f64| {
+        relative
+            .get(((relative.len() as f64 * q) as usize).min(relative.len().saturating_sub(1)))
+            .copied()
+            .unwrap_or(0.0)
+    };
+    PixelErrors {
+        lit: relative.len(),
+        disagreements,
+        median_relative: at(0.5),
+        p99_relative: at(0.99),
+        max_relative: relative.last().copied().unwrap_or(0.0),
+    }
+}
+
+/// The pixel values of the placement's render on the CPU path, and on the GPU when given,
+/// against the oracle's.
+fn pixel_run(
+    mesh: &Path,
+    p: Placement,
+    (lo, hi): (DVec3, DVec3),
+    height: f64,
+    n: u32,
+    gpu: Option<&GpuContext>,
+) -> Result<(PixelErrors, Option<PixelErrors>)> {
+    let (scene, light, intensity) = pixel_scene(mesh, p, lo, hi, height, n)?;
+    let flat = flatten(&scene);
+    let exact = oracle_pixels(&scene, &flat, &oracle_triangles(mesh, p)?, light, intensity);
+    let cancel = std::sync::atomic::AtomicBool::new(false);
+    let render_on = |backend: &mut dyn crate::render::Backend| -> Result<Vec<glam::Vec3>> {
+        let output = crate::render::render(&flat, backend, &mut |_, _| {}, &cancel)?;
+        match output.stopped {
+            Some(e) => Err(e),
+            None => Ok(output.image.pixels),
+        }
+    };
+    let cpu = render_on(&mut crate::cpu::CpuRenderer::new(&flat))?;
+    let gpu = match gpu {
+        None => None,
+        Some(context) => {
+            let mut renderer = crate::gpu::GpuRenderer::new(context.clone(), &flat)?;
+            Some(pixel_errors(&render_on(&mut renderer)?, &exact))
+        }
+    };
+    Ok((pixel_errors(&cpu, &exact), gpu))
 }
 
 /// The mesh placed as a scene file would place it.
@@ -246,7 +434,7 @@ pub fn run(
             &exact,
             size,
         );
-        let gpu = match gpu {
+        let gpu_hits = match gpu {
             None => None,
             Some(context) => {
                 let cw = scene.cwbvh().map_err(Error::Gpu)?;
@@ -255,12 +443,16 @@ pub fn run(
                 Some(errors(&tracer.distances()?, &rays, &exact, size))
             }
         };
+        let placed = (place(lo), place(hi));
+        let (cpu_pixels, gpu_pixels) = pixel_run(mesh, p, placed, camera_height, n, gpu)?;
         results.push(PrecisionResult {
             placement: p,
             rays: rays.len(),
             oracle_hits: exact.iter().filter(|t| t.is_some()).count(),
             cpu,
-            gpu,
+            gpu: gpu_hits,
+            cpu_pixels,
+            gpu_pixels,
         });
     }
     Ok(PrecisionReport {
@@ -299,6 +491,30 @@ impl PrecisionReport {
                     e.max_relative_t,
                     e.median_point_error,
                     e.max_point_error
+                );
+            }
+        }
+        out += &format!(
+            "\nPixel values: the placement rendered at {n}x{n}, 1 spp (Lambert, one point \
+             light, flat normals), each path's image against the f64 oracle's pixels; relative \
+             error of the pixels lit in both: median / 99th percentile / max\n\n",
+            n = (self.results.first().map_or(0, |r| r.rays) as f64).sqrt() as u32
+        );
+        out +=
+            "| offset | scale | path | lit pixels | lit/black disagreements | relative error |\n";
+        out += "|---|---|---|---|---|---|\n";
+        for r in &self.results {
+            for (name, e) in [("cpu", Some(r.cpu_pixels)), ("gpu", r.gpu_pixels)] {
+                let Some(e) = e else { continue };
+                out += &format!(
+                    "| {:e} | {:e} | {name} | {} | {} | {:.1e} / {:.1e} / {:.1e} |\n",
+                    r.placement.offset,
+                    r.placement.scale,
+                    e.lit,
+                    e.disagreements,
+                    e.median_relative,
+                    e.p99_relative,
+                    e.max_relative
                 );
             }
         }

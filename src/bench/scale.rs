@@ -18,7 +18,7 @@ use crate::gpu::GpuContext;
 use crate::gpu::trace::GpuTracer;
 use crate::layout::{GpuBvhNode, GpuNormals, GpuPrimitive};
 use crate::pack::{FlatScene, flatten};
-use crate::plot::log_log_panel;
+use crate::plot::{Figure, log_log_panel};
 use crate::scene::mesh::{TriangleMesh, load_mesh};
 use crate::scene::{Scene, Shape};
 
@@ -208,14 +208,19 @@ impl ScaleReport {
         }
         out
     }
+}
 
-    /// A log-log plot: build time and Mrays/s against triangles.
-    pub fn plot_svg(&self, path: &Path) -> Result<()> {
-        let fail = |e: &dyn std::fmt::Display| Error::Output {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        };
-        let root = SVGBackend::new(path, (1000, 420)).into_drawing_area();
+/// A log-log plot: build time and Mrays/s against triangles.
+impl Figure for ScaleReport {
+    fn size(&self) -> (u32, u32) {
+        (1000, 420)
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, plotters::coord::Shift>,
+    ) -> std::result::Result<(), String> {
+        let fail = |e: &dyn std::fmt::Display| e.to_string();
         root.fill(&WHITE).map_err(|e| fail(&e))?;
         let (left, right) = root.split_horizontally(500);
         let triangles: Vec<f64> = self.results.iter().map(|r| r.triangles as f64).collect();
@@ -242,8 +247,7 @@ impl ScaleReport {
             "ms",
             &[("build (medium preset)", &build, BLUE)],
             x_range.clone(),
-        )
-        .map_err(|e| fail(&e))?;
+        )?;
         log_log_panel(
             &right,
             "closest-hit throughput",
@@ -252,7 +256,5 @@ impl ScaleReport {
             &[("CPU path", &cpu, BLUE), ("GPU path", &gpu, RED)],
             x_range,
         )
-        .map_err(|e| fail(&e))?;
-        root.present().map_err(|e| fail(&e))
     }
 }
