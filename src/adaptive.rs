@@ -113,6 +113,7 @@ impl ActivePixels {
         self.count()
     }
 
+    /// How many pixels are still sampled.
     pub fn count(&self) -> usize {
         self.active.iter().filter(|&&a| a).count()
     }
@@ -128,12 +129,15 @@ impl ActivePixels {
 /// What an adaptive render achieved (`RenderOutput::adaptive`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct AdaptiveReport {
+    /// The target the render sampled towards (`AdaptiveSettings::noise_target`).
     pub noise_target: f32,
     /// Pixels of the crop window whose final error estimate is below the target.
     pub pixels_converged: usize,
+    /// Pixels of the crop window.
     pub pixels: usize,
     /// Mean and largest error estimate over the crop window's pixels.
     pub mean_error: f32,
+    /// Largest error estimate over the crop window's pixels (infinite while one is).
     pub max_error: f32,
     /// Mean samples per pixel: what the render spent, against `render.spp` for every pixel.
     pub mean_spp: f64,

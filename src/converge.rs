@@ -23,6 +23,8 @@ use crate::render::{Image, RenderOutput, render};
 use crate::sampler::SamplerName;
 use crate::scene::Scene;
 
+/// Measure how a scene's error against a reference falls with samples per pixel and with time,
+/// for each sample pattern and backend.
 #[derive(Debug, clap::Args)]
 pub struct ConvergeArgs {
     /// Scene file (TOML; see docs/scene-format.md).
@@ -69,7 +71,9 @@ pub struct ConvergeArgs {
 /// One render and its error against the reference.
 #[derive(Clone, Debug)]
 pub struct Run {
+    /// Where it rendered: the CPU path or the GPU.
     pub backend: Backend,
+    /// The pattern of its pixel and lens samples.
     pub sampler: SamplerName,
     /// Samples per pixel: every pixel's, or the most an adaptive render gives one.
     pub spp: u32,
@@ -77,12 +81,17 @@ pub struct Run {
     pub noise_target: Option<f64>,
     /// Samples per pixel on average.
     pub mean_spp: f64,
+    /// Wall time of the render (ms), the median over `--runs` renders.
     pub wall_ms: f64,
     /// GPU kernel time, where the adapter has timestamp queries.
     pub kernel_ms: Option<f64>,
+    /// Rays traced: camera, shadow and mirror rays.
     pub rays: u64,
+    /// Root mean square error against the reference ([`rmse`]).
     pub rmse: f64,
+    /// Relative MSE against the reference ([`rel_mse`]).
     pub rel_mse: f64,
+    /// Mean FLIP error against the reference ([`flip`]).
     pub flip: f64,
 }
 
@@ -215,11 +224,17 @@ fn reference(args: &ConvergeArgs, width: u32, height: u32, seed: u32) -> Result<
 
 /// The whole study: every run, in the order rendered.
 pub struct Study {
+    /// For each backend and pattern: the uniform runs by increasing samples, then the
+    /// adaptive ones by `--noise-targets`.
     pub runs: Vec<Run>,
+    /// Where the reference came from: its file, or how it was rendered.
     pub reference_note: String,
+    /// The GPU adapter's description, or `none` when no run used the GPU.
     pub adapter: String,
 }
 
+/// Runs the study `args` describe: the reference (read or rendered), then every run, each
+/// rendered `--runs` times.
 pub fn run(args: &ConvergeArgs) -> Result<Study> {
     let scene = Scene::load(&args.scene, &args.set)?;
     let (width, height, seed) = (scene.render.width, scene.render.height, scene.render.seed);
@@ -528,16 +543,21 @@ impl Figure for Study {
 /// One curve of a study: a backend, a pattern, uniform or adaptive sampling.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Curve {
+    /// Where its runs rendered.
     pub backend: Backend,
+    /// Its runs' sample pattern.
     pub sampler: SamplerName,
+    /// Its runs sample adaptively (`--noise-targets`), one run per target.
     pub adaptive: bool,
 }
 
 impl Curve {
+    /// `adaptive` or `uniform`, as the CSV's `mode` column writes it.
     pub fn mode(&self) -> &'static str {
         if self.adaptive { "adaptive" } else { "uniform" }
     }
 
+    /// The curve's name in legends and tables, e.g. `cpu sobol adaptive`.
     pub fn label(&self) -> String {
         let name = format!("{} {}", backend_name(self.backend), self.sampler.name());
         if self.adaptive {
@@ -549,6 +569,7 @@ impl Curve {
 }
 
 impl Run {
+    /// The curve the run belongs to.
     pub fn curve(&self) -> Curve {
         Curve {
             backend: self.backend,
@@ -560,9 +581,11 @@ impl Run {
 
 /// An adaptive run and what uniform sampling needs for its RMSE (`Study::adaptive_gains`).
 pub struct AdaptiveGain<'a> {
+    /// The adaptive run.
     pub run: &'a Run,
-    /// The uniform runs' wall time and FLIP at the adaptive run's RMSE.
+    /// The uniform runs' wall time (ms) at the adaptive run's RMSE; none beyond their range.
     pub uniform_wall_ms: Option<f64>,
+    /// The uniform runs' FLIP at the adaptive run's RMSE.
     pub uniform_flip: Option<f64>,
     /// The uniform runs' wall time at the adaptive run's FLIP.
     pub uniform_wall_ms_same_flip: Option<f64>,

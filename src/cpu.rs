@@ -9,11 +9,13 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::error::Result;
-use crate::integrator::{LightWindow, SampleStats, trace_sample};
+use crate::integrator::{FirstHit, LightWindow, SampleStats, trace_sample};
 use crate::layout::{FEATURES_ALL, GpuPass};
 use crate::pack::FlatScene;
 use crate::render::{AccumulationLayout, Backend, DispatchStatus, RayBudgets};
 
+/// The CPU path's [`Backend`]: runs each batch's dispatches on all cores as it is submitted,
+/// with the same integrator, sample patterns and accumulation layout as the GPU kernel.
 pub struct CpuRenderer<'a> {
     scene: &'a FlatScene,
     /// Laid out as the GPU's (`render::AccumulationLayout`): the image's sums (two halves in an
@@ -32,7 +34,8 @@ pub struct CpuRenderer<'a> {
 }
 
 /// `integrator::trace_sample` for one feature set.
-type TraceSample = fn(&FlatScene, u32, u32, u32, LightWindow, &mut SampleStats) -> glam::Vec3;
+type TraceSample =
+    fn(&FlatScene, u32, u32, u32, LightWindow, &mut SampleStats, &mut FirstHit) -> glam::Vec3;
 
 macro_rules! instances {
     ($($features:literal)*) => {
@@ -48,11 +51,22 @@ const TRACE_SAMPLE: [TraceSample; 64] = instances!(
 );
 const _: () = assert!(TRACE_SAMPLE.len() == FEATURES_ALL as usize + 1);
 
+/// What one dispatch adds to one pixel: radiance, and the AOVs' (normal, depth) and albedo.
+#[derive(Clone, Copy, Debug, Default)]
+struct PixelSums {
+    pixel: u32,
+    radiance: Vec3,
+    normal_depth: glam::Vec4,
+    albedo: Vec3,
+}
+
 /// Pixels of a row one work item renders: small enough to balance a band of few wide rows over
 /// the threads, large enough to amortise the scheduling.
 const SEGMENT: u32 = 64;
 
 impl<'a> CpuRenderer<'a> {
+    /// A renderer of `scene` with the integrator for its features, [`RayBudgets::DEFAULT`] and
+    /// no cancel flag.
     pub fn new(scene: &'a FlatScene) -> Self {
         let layout = AccumulationLayout::of(scene, false);
         CpuRenderer {
@@ -133,7 +147,7 @@ impl<'a> CpuRenderer<'a> {
                     .map(move |c| (row, c, (c + SEGMENT).min(pass.tile_width)))
             })
             .collect();
-        let rendered: Vec<(Vec<(u32, Vec3)>, SampleStats)> = segments
+        let rendered: Vec<(Vec<PixelSums>, SampleStats)> = segments
             .into_par_iter()
             .filter(|_| !self.cancelled())
             .map(|(row, c0, c1)| {
@@ -142,12 +156,19 @@ impl<'a> CpuRenderer<'a> {
                     .map_while(|column| self.pass_pixel(pass, row, column))
                     .map(|pixel| {
                         let (x, y) = (pixel % scene.frame.width, pixel / scene.frame.width);
-                        let mut sum = Vec3::ZERO;
+                        let mut sums = PixelSums {
+                            pixel,
+                            ..Default::default()
+                        };
                         for s in 0..pass.sample_count {
                             let sample = pass.sample_start + s;
-                            sum += (self.trace)(scene, x, y, sample, window, &mut stats);
+                            let mut hit = FirstHit::default();
+                            sums.radiance +=
+                                (self.trace)(scene, x, y, sample, window, &mut stats, &mut hit);
+                            sums.normal_depth += hit.normal.extend(hit.depth);
+                            sums.albedo += hit.albedo;
                         }
-                        (pixel, sum)
+                        sums
                     })
                     .collect();
                 (sums, stats)
@@ -156,25 +177,51 @@ impl<'a> CpuRenderer<'a> {
         let pixels = (scene.frame.width * scene.frame.height) as usize;
         let split = pass.commit == 0 || !window.is_first();
         let last = if split { pass.scratch_offset } else { 0 };
-        let needed = pass.accumulation_offset.max(last) as usize + pixels;
+        let aovs = pass.aov_offset
+            + if pass.aov_offset != 0 {
+                pixels as u32
+            } else {
+                0
+            };
+        let needed = pass.accumulation_offset.max(last).max(aovs) as usize + pixels;
         if self.accumulation.len() < needed {
             self.accumulation.resize(needed, [0.0; 4]);
         }
         let mut status = DispatchStatus::default();
+        let add = |slot: &mut [f32; 4], value: [f32; 4]| {
+            for c in 0..4 {
+                slot[c] += value[c];
+            }
+        };
         for (sums, stats) in rendered {
-            for (pixel, mut sum) in sums {
+            for PixelSums {
+                pixel,
+                mut radiance,
+                normal_depth,
+                albedo,
+            } in sums
+            {
                 let scratch = (pass.scratch_offset + pixel) as usize;
                 if !window.is_first() {
-                    sum += Vec3::from_slice(&self.accumulation[scratch][..3]);
+                    radiance += Vec3::from_slice(&self.accumulation[scratch][..3]);
                 }
                 if pass.commit != 0 {
-                    let acc = &mut self.accumulation[(pass.accumulation_offset + pixel) as usize];
-                    let add = [sum.x, sum.y, sum.z, pass.sample_count as f32];
-                    for c in 0..4 {
-                        acc[c] += add[c];
+                    let slot = (pass.accumulation_offset + pixel) as usize;
+                    let samples = pass.sample_count as f32;
+                    add(
+                        &mut self.accumulation[slot],
+                        radiance.extend(samples).into(),
+                    );
+                    // Every light window retraces the same camera paths: the committing one
+                    // adds the AOVs.
+                    if pass.aov_offset != 0 {
+                        let slot = (pass.aov_offset + pixel) as usize;
+                        add(&mut self.accumulation[slot], normal_depth.into());
+                        let slot = slot + pixels;
+                        add(&mut self.accumulation[slot], albedo.extend(0.0).into());
                     }
                 } else {
-                    self.accumulation[scratch] = [sum.x, sum.y, sum.z, 0.0];
+                    self.accumulation[scratch] = radiance.extend(0.0).into();
                 }
             }
             status.rays += stats.rays;
@@ -223,8 +270,8 @@ impl Backend for CpuRenderer<'_> {
         Ok(layout.image_sums(self.accumulation[..layout.image_len()].to_vec()))
     }
 
-    fn halves(&mut self) -> Result<Vec<[f32; 4]>> {
-        Ok(self.accumulation[..self.layout().image_len()].to_vec())
+    fn read_slots(&mut self, slots: std::ops::Range<usize>) -> Result<Vec<[f32; 4]>> {
+        Ok(self.accumulation[slots].to_vec())
     }
 
     fn set_pixel_list(&mut self, pixels: &[u32]) -> Result<()> {

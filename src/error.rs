@@ -5,9 +5,11 @@ use std::path::PathBuf;
 /// Where in a scene file a problem was found: file, 1-based line and column, and the field path.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Location {
+    /// The scene file.
     pub file: PathBuf,
     /// 1-based line, or 0 when the value came from a `--set` override.
     pub line: usize,
+    /// 1-based column (in bytes); 0 when `line` is.
     pub column: usize,
     /// Dotted field path, e.g. `shapes[2].radius`; empty for syntax errors.
     pub field: String,
@@ -27,29 +29,47 @@ impl std::fmt::Display for Location {
     }
 }
 
+/// Everything that can go wrong in the library, from scene files to the GPU.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// The scene file (or a file it names) is malformed or physically meaningless.
     #[error("{location}: {message}")]
-    Scene { location: Location, message: String },
+    Scene {
+        /// Where in the scene file.
+        location: Location,
+        /// What is wrong, as a sentence.
+        message: String,
+    },
 
     /// A file could not be read or written. The cause is part of the message and deliberately
     /// not a `source` (a field of that name would become one): `main` prints an error with its
     /// chain of sources, which would print the cause twice.
     #[error("{path}: {cause}")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// What the operating system reported.
         cause: std::io::Error,
     },
 
     /// A file named on the command line, outside a scene, is unusable: a mesh for
     /// `chambre bench`, a shard manifest for `chambre merge`.
     #[error("{path}: {message}")]
-    File { path: PathBuf, message: String },
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        message: String,
+    },
 
     /// A command-line override `--set key=value` is malformed.
     #[error("--set {key}: {message}")]
-    Override { key: String, message: String },
+    Override {
+        /// The override's key (the whole argument when it has no `=`).
+        key: String,
+        /// What is wrong with it.
+        message: String,
+    },
 
     /// No GPU adapter could be found (or the one found cannot run chambre's kernels).
     #[error("no GPU adapter: {0}")]
@@ -61,14 +81,25 @@ pub enum Error {
 
     /// Writing the output image failed.
     #[error("{path}: cannot write image: {message}")]
-    Output { path: PathBuf, message: String },
+    Output {
+        /// The image file.
+        path: PathBuf,
+        /// What the encoder or the file system reported.
+        message: String,
+    },
 
     /// The render was stopped (Ctrl-C) before all samples were taken.
     #[error("render interrupted after {done} of {total} samples per pixel")]
-    Interrupted { done: u32, total: u32 },
+    Interrupted {
+        /// Samples per pixel finished (of the least-sampled pixel).
+        done: u32,
+        /// Samples per pixel asked for.
+        total: u32,
+    },
 }
 
 impl Error {
+    /// An [`Error::Io`] about `path`.
     pub fn io(path: impl Into<PathBuf>, cause: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
@@ -77,4 +108,5 @@ impl Error {
     }
 }
 
+/// The library's `Result`, with [`Error`] by default.
 pub type Result<T, E = Error> = std::result::Result<T, E>;

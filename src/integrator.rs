@@ -31,10 +31,40 @@ use crate::sampler::{PatternSource, light_sample_2d, pixel_hash, sample_2d, samp
 /// Counters a sample adds to (rays traced, paths cut off at `max_depth`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SampleStats {
+    /// Rays traced: camera, shadow and mirror rays.
     pub rays: u64,
+    /// Paths cut off at `max_depth` while they still reflected.
     pub truncated: u64,
     /// `STATUS_*` bits raised while sampling.
     pub flags: u32,
+}
+
+/// What a camera ray's first hit shows, for the AOV layers (zero where it hits nothing): the
+/// distance along the ray, the shading normal (towards the ray), and the albedo (diffuse plus
+/// mirror reflectance, at most 1; zero on an emitter). Twin: `FirstHit` in integrator.wgsl.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FirstHit {
+    /// Distance along the camera ray, scene units.
+    pub depth: f32,
+    /// Shading normal in world space, facing the ray.
+    pub normal: Vec3,
+    /// Diffuse plus mirror reflectance, at most 1 per channel; zero on an emitter.
+    pub albedo: Vec3,
+}
+
+impl FirstHit {
+    fn of(t: f32, surface: &Surface, material: &GpuMaterial) -> FirstHit {
+        let albedo = if material.model == MODEL_EMITTER {
+            Vec3::ZERO
+        } else {
+            (Vec3::from(material.diffuse) + Vec3::from(material.mirror)).min(Vec3::ONE)
+        };
+        FirstHit {
+            depth: t,
+            normal: surface.shading_normal,
+            albedo,
+        }
+    }
 }
 
 /// A surface point as shading needs it; normals face the side the ray came from.
@@ -129,7 +159,10 @@ pub fn eval_brdf(material: &GpuMaterial, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
 /// loop iterations is split over several dispatches, each summing its window.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LightWindow {
+    /// Index of the window's first sample, in each area light's samples.
     pub start: u32,
+    /// Samples of each light in the window (`u32::MAX`: to the last); a light with fewer
+    /// stops at its own count.
     pub count: u32,
 }
 
@@ -140,6 +173,7 @@ impl LightWindow {
         count: u32::MAX,
     };
 
+    /// The window a dispatch evaluates (`GpuPass::light_sample_start`, `light_sample_count`).
     pub fn of_pass(pass: &GpuPass) -> LightWindow {
         LightWindow {
             start: pass.light_sample_start,
@@ -272,7 +306,8 @@ fn direct_light<const F: u32>(
 }
 
 /// Radiance along one path that starts with `origin`, `direction`, with the area-light samples
-/// in `window` (the path itself is deterministic: every window retraces the same rays).
+/// in `window` (the path itself is deterministic: every window retraces the same rays); what
+/// its first hit shows goes to `first_hit`.
 pub fn trace_path<const F: u32>(
     scene: &FlatScene,
     origin: Vec3,
@@ -280,6 +315,7 @@ pub fn trace_path<const F: u32>(
     window: LightWindow,
     rng: &mut Rng,
     stats: &mut SampleStats,
+    first_hit: &mut FirstHit,
 ) -> Vec3 {
     let first = window.is_first();
     let frame = &scene.frame;
@@ -298,6 +334,9 @@ pub fn trace_path<const F: u32>(
         let prim = &scene.prims[prim_id as usize];
         let material = &scene.materials[prim.material as usize];
         let surface = surface_at(scene, prim, &ray, hit);
+        if depth == 0 {
+            *first_hit = FirstHit::of(hit.t, &surface, material);
+        }
         // An area light shows its radiance from the front, is black from behind, reflects nothing.
         if material.model == MODEL_EMITTER {
             if surface.front_facing && first {
@@ -348,7 +387,8 @@ pub fn trace_path<const F: u32>(
 }
 
 /// Radiance of sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1),
-/// lens point (2-3, drawn only by a lens), then the path with the light samples in `window`.
+/// lens point (2-3, drawn only by a lens), then the path with the light samples in `window`
+/// (its first hit to `first_hit`).
 pub fn trace_sample<const F: u32>(
     scene: &FlatScene,
     x: u32,
@@ -356,6 +396,7 @@ pub fn trace_sample<const F: u32>(
     sample: u32,
     window: LightWindow,
     stats: &mut SampleStats,
+    first_hit: &mut FirstHit,
 ) -> Vec3 {
     let frame = &scene.frame;
     let camera = &scene.camera;
@@ -387,5 +428,13 @@ pub fn trace_sample<const F: u32>(
         lens = Vec2::from(sample_aperture(camera, &scene.sample_table, u));
     }
     let ray = generate_ray(camera, film, lens);
-    trace_path::<F>(scene, ray.origin, ray.direction, window, &mut rng, stats)
+    trace_path::<F>(
+        scene,
+        ray.origin,
+        ray.direction,
+        window,
+        &mut rng,
+        stats,
+        first_hit,
+    )
 }

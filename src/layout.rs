@@ -22,37 +22,53 @@ pub const T_FAR: f32 = 1.0e30;
 /// Marks "no primitive" / "no normals" in index fields.
 pub const NONE: u32 = u32::MAX;
 
-/// Primitive kinds (`GpuPrimitive::kind`).
+/// Primitive kinds (`GpuPrimitive::kind`; fields per kind on [`GpuPrimitive`]): a triangle.
 pub const PRIM_TRIANGLE: u32 = 0;
+/// A sphere.
 pub const PRIM_SPHERE: u32 = 1;
+/// A parallelogram (a quad shape, or an area light's emitting surface).
 pub const PRIM_QUAD: u32 = 2;
+/// An infinite plane, tested outside the BVH.
 pub const PRIM_PLANE: u32 = 3;
 
 /// Material models (`GpuMaterial::model`); every model also carries a perfect-mirror term.
+/// Lambert: diffuse only (BRDF diffuse / pi); the scene format's `mirror` model is Lambert too.
 pub const MODEL_LAMBERT: u32 = 0;
+/// Diffuse plus a normalised Phong lobe, ks (n + 2) / (2 pi) cos^n(alpha).
 pub const MODEL_PHONG: u32 = 1;
+/// Diffuse plus a normalised Blinn-Phong lobe, ks (n + 8) / (8 pi) cos^n(theta_h).
 pub const MODEL_BLINN_PHONG: u32 = 2;
 /// The one-sided emitting surface of an area light.
 pub const MODEL_EMITTER: u32 = 3;
 
-/// Light kinds (`GpuLight::kind`).
+/// Light kinds (`GpuLight::kind`; fields per kind on [`GpuLight`]): a point light.
 pub const LIGHT_POINT: u32 = 0;
+/// A directional light (light from infinitely far away, one direction).
 pub const LIGHT_DIRECTIONAL: u32 = 1;
+/// A one-sided parallelogram area light, sampled with `GpuLight::samples` shadow rays.
 pub const LIGHT_AREA: u32 = 2;
 /// An emitting triangle (an OBJ face with `Ke`): `p0` a vertex, `p1` and `p2` the edges to
 /// the others; sampled by folding the unit square onto the triangle.
 pub const LIGHT_TRIANGLE: u32 = 3;
 
 /// Sample patterns (`GpuFrame::pixel_sampler`, `GpuFrame::lens_sampler`); see `src/sampler.rs`.
+/// Random: independent uniform points.
 pub const SAMPLER_RANDOM: u32 = 0;
+/// Stratified: one jittered point per stratum, strata visited in a hashed per-pixel order.
 pub const SAMPLER_STRATIFIED: u32 = 1;
+/// Poisson disk: one of `POISSON_SETS` precomputed sets, shifted per pixel.
 pub const SAMPLER_POISSON: u32 = 2;
+/// Interleaved (Keller and Heidrich): a tile of precomputed jittered patterns, no per-pixel
+/// randomness.
 pub const SAMPLER_INTERLEAVED: u32 = 3;
+/// Owen-scrambled 2-D Sobol points.
 pub const SAMPLER_SOBOL: u32 = 4;
 /// Cap on the cycle-walking loop of the stratified sampler's permutation (`sampler::permute`).
 pub const PERMUTE_WALK_CAP: u32 = 64;
-/// Random dimensions of the pixel position and of the lens point.
+/// Random dimensions of the pixel position and of the lens point: the pixel position takes
+/// dimensions 0 and 1.
 pub const PIXEL_DIMENSION: u32 = 0;
+/// First random dimension of the lens point (it takes 2 and 3).
 pub const LENS_DIMENSION: u32 = 2;
 /// First random dimension of the area-light samples. Light sample `k` of the area light whose
 /// samples start at `offset`, at path vertex `depth`, draws dimensions
@@ -68,11 +84,18 @@ pub const INTERLEAVED_TILE: u32 = 3;
 /// `bool` constant of the same name (true in the general kernel); on the CPU a bit of the
 /// integrator's const generic. A variant built without a feature the scene has is wrong, so the
 /// bits are always computed from the scene (`pack::FlatScene::features`).
+///
+/// `FEATURE_LENS`: a thin lens (f_number > 0) rather than a pinhole, so lens points are sampled.
 pub const FEATURE_LENS: u32 = 1;
+/// Some material has a non-zero mirror reflectance: paths bounce.
 pub const FEATURE_MIRRORS: u32 = 2;
+/// Area lights (parallelograms or emitting triangles): shadow-ray samples per vertex.
 pub const FEATURE_AREA_LIGHTS: u32 = 4;
+/// Point or directional lights.
 pub const FEATURE_PUNCTUAL_LIGHTS: u32 = 8;
+/// Triangles (meshes) among the primitives.
 pub const FEATURE_TRIANGLES: u32 = 16;
+/// Infinite planes (tested outside the BVH).
 pub const FEATURE_PLANES: u32 = 32;
 /// Every feature: the general kernel.
 pub const FEATURES_ALL: u32 = 63;
@@ -92,8 +115,10 @@ pub const FEATURES: [(&str, u32); 6] = [
     ("FEATURE_PLANES", FEATURE_PLANES),
 ];
 
-/// Bits of the status word: a kernel loop hit its cap.
+/// Bits of the status word: a kernel loop hit its cap (a traversal took more than
+/// `GpuFrame::traversal_cap` steps).
 pub const STATUS_TRAVERSAL_CAP: u32 = 1;
+/// A BVH traversal stack (`BVH_STACK_SIZE`, `CWBVH_STACK_SIZE`) overflowed.
 pub const STATUS_STACK_OVERFLOW: u32 = 2;
 /// The stratified sampler's permutation walk hit `PERMUTE_WALK_CAP` (its sample order then
 /// repeats a stratum).
@@ -109,10 +134,14 @@ pub const LOOP_CHECK_ITERATIONS: u32 = 2;
 /// while there are at most this many (`sampler::light_sample_2d`); beyond, each camera sample's
 /// light samples are stratified on their own.
 pub const MAX_LIGHT_PATTERN_POINTS: u32 = 1 << 24;
-/// Slots of the status buffer (`array<atomic<u32>, STATUS_WORDS>`).
+/// Slots of the status buffer (`array<atomic<u32>, STATUS_WORDS>`): the `STATUS_*` bits
+/// raised, ORed together.
 pub const STATUS_FLAGS: u32 = 0;
+/// Rays traced (camera, shadow and mirror rays), summed over invocations.
 pub const STATUS_RAYS: u32 = 1;
+/// Camera samples whose path was cut off at `max_depth` while it still reflected.
 pub const STATUS_TRUNCATED: u32 = 2;
+/// Words in the status buffer.
 pub const STATUS_WORDS: u32 = 4;
 
 /// A BVH node: obvhs's `Bvh2Node` without its spare fields. Inner node: `prim_count == 0` and
@@ -121,9 +150,13 @@ pub const STATUS_WORDS: u32 = 4;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuBvhNode {
+    /// Lower corner of the node's box (scene units).
     pub min: [f32; 3],
+    /// Primitives in a leaf; 0 marks an inner node.
     pub prim_count: u32,
+    /// Upper corner of the node's box (scene units).
     pub max: [f32; 3],
+    /// Inner node: index of the first of its two children. Leaf: index of its first primitive.
     pub first_index: u32,
 }
 
@@ -134,16 +167,29 @@ pub struct GpuBvhNode {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuCwNode {
+    /// Origin of the quantisation grid (scene units).
     pub p: [f32; 3],
+    /// Bytes 0-2: the biased exponents `e` of the x, y and z grid steps; byte 3: the inner-child
+    /// mask (bit per slot).
     pub e_imask: u32,
+    /// Index of the node's first inner child; its inner children are consecutive.
     pub child_base: u32,
+    /// Index of the first primitive of the node's leaves; each leaf's offset is in its meta byte.
     pub prim_base: u32,
+    /// One byte per child slot: 0 empty; inner child: 24 + slot; leaf: primitive offset from
+    /// `prim_base` (bits 0-4) and primitive count in unary (bits 5-7).
     pub child_meta: [u32; 2],
+    /// Quantised lower x planes of the children's boxes, one byte per child.
     pub q_lo_x: [u32; 2],
+    /// Quantised upper x planes, one byte per child.
     pub q_hi_x: [u32; 2],
+    /// Quantised lower y planes, one byte per child.
     pub q_lo_y: [u32; 2],
+    /// Quantised upper y planes, one byte per child.
     pub q_hi_y: [u32; 2],
+    /// Quantised lower z planes, one byte per child.
     pub q_lo_z: [u32; 2],
+    /// Quantised upper z planes, one byte per child.
     pub q_hi_z: [u32; 2],
 }
 
@@ -154,11 +200,17 @@ pub struct GpuCwNode {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuPrimitive {
+    /// First point (per `kind`, see above), scene units.
     pub p0: [f32; 3],
+    /// A `PRIM_*` kind.
     pub kind: u32,
+    /// Second point, edge, normal or (sphere) radius data, per `kind`.
     pub p1: [f32; 3],
+    /// Index into the material array.
     pub material: u32,
+    /// Third point or second edge, per `kind`; unused by spheres and planes.
     pub p2: [f32; 3],
+    /// Triangle: index into the vertex-normal array, or `NONE` for flat shading.
     pub normals: u32,
 }
 
@@ -166,6 +218,7 @@ pub struct GpuPrimitive {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuNormals {
+    /// Unit normals at the triangle's vertices p0, p1, p2, x y z each.
     pub n: [f32; 9],
 }
 
@@ -173,13 +226,21 @@ pub struct GpuNormals {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
+    /// Diffuse reflectance in [0, 1] per channel (Lambert BRDF diffuse / pi).
     pub diffuse: [f32; 3],
+    /// A `MODEL_*` model.
     pub model: u32,
+    /// Specular reflectance ks of the Phong or Blinn-Phong lobe, in [0, 1].
     pub specular: [f32; 3],
+    /// Exponent n of the Phong or Blinn-Phong lobe, in [0, 1e4].
     pub shininess: f32,
+    /// Perfect-mirror reflectance in [0, 1] per channel; non-zero makes paths bounce.
     pub mirror: [f32; 3],
+    /// Padding to the WGSL layout.
     pub _pad0: u32,
+    /// Emitted radiance of a `MODEL_EMITTER` surface (from its front side).
     pub emission: [f32; 3],
+    /// Padding to the WGSL layout.
     pub _pad1: u32,
 }
 
@@ -189,12 +250,19 @@ pub struct GpuMaterial {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuLight {
+    /// Position, direction towards the light, or corner / vertex, per `kind`.
     pub p0: [f32; 3],
+    /// A `LIGHT_*` kind.
     pub kind: u32,
+    /// Area and triangle lights: the first edge (scene units).
     pub p1: [f32; 3],
+    /// Area and triangle lights: shadow rays per path vertex (1 for a triangle).
     pub samples: u32,
+    /// Area and triangle lights: the second edge (scene units).
     pub p2: [f32; 3],
+    /// The light's emitting primitive in the primitive array, or `NONE` (point, directional).
     pub prim: u32,
+    /// Intensity (W/sr), irradiance or radiance, per `kind`; linear RGB.
     pub color: [f32; 3],
     /// Columns of the area light's sample strata (`math::sampling::strata_columns(samples)`).
     pub strata_columns: u32,
@@ -207,27 +275,42 @@ pub struct GpuLight {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuCamera {
+    /// The lens frame's x axis (right) in world space.
     pub lens_to_world_x: [f32; 3],
+    /// Focal length (mm).
     pub focal_length_mm: f32,
+    /// The lens frame's y axis (up) in world space.
     pub lens_to_world_y: [f32; 3],
+    /// Radius of the aperture (focal length / (2 N), mm); 0 for a pinhole.
     pub lens_radius_mm: f32,
+    /// The lens frame's z axis (the optical axis) in world space.
     pub lens_to_world_z: [f32; 3],
     /// Scene units per millimetre (lens points are in mm, ray origins in scene units).
     pub units_per_mm: f32,
+    /// The lens centre in world space (scene units): the lens frame's origin.
     pub lens_center: [f32; 3],
     /// 1 / focal length (1/mm): the ray-transfer refraction term.
     pub inv_focal_length_mm: f32,
+    /// The film centre in the lens frame (mm).
     pub film_center: [f32; 3],
+    /// Film width (mm).
     pub film_width_mm: f32,
+    /// Unit direction of the film's x axis (image right) in the lens frame.
     pub film_u: [f32; 3],
+    /// Film height (mm).
     pub film_height_mm: f32,
+    /// Unit direction of the film's y axis (image up) in the lens frame.
     pub film_v: [f32; 3],
     /// 0: circular aperture; n >= 3: regular polygon whose unit-circle vertices are
     /// `sample_table[aperture_table_offset ..= aperture_table_offset + n]` (first one repeated).
     pub aperture_blades: u32,
+    /// Where the aperture polygon's vertices start in the sample table.
     pub aperture_table_offset: u32,
+    /// Padding to the WGSL layout.
     pub _pad0: u32,
+    /// Padding to the WGSL layout.
     pub _pad1: u32,
+    /// Padding to the WGSL layout.
     pub _pad2: u32,
 }
 
@@ -235,29 +318,45 @@ pub struct GpuCamera {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuFrame {
+    /// Image width in pixels (the full image, also when cropped).
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Samples per pixel (the most a pixel takes under adaptive sampling).
     pub spp: u32,
+    /// Mirror bounces allowed per path.
     pub max_depth: u32,
+    /// Seed of every random number of the render.
     pub seed: u32,
+    /// `SAMPLER_*` pattern of the pixel positions.
     pub pixel_sampler: u32,
+    /// Entries in the light array.
     pub light_count: u32,
+    /// Nodes in the BVH node array.
     pub node_count: u32,
+    /// Index of the first plane in the primitive array (the bounded primitives come first).
     pub plane_start: u32,
+    /// Planes at the end of the primitive array.
     pub plane_count: u32,
     /// Node-pair visits allowed per traversal before the kernel gives up and flags it.
     pub traversal_cap: u32,
     /// Columns of the pixel-sample strata (`math::sampling::strata_columns(spp)`).
     pub pixel_strata_columns: u32,
+    /// `SAMPLER_*` pattern of the lens points.
     pub lens_sampler: u32,
+    /// Columns of the lens-sample strata (`math::sampling::strata_columns(spp)`).
     pub lens_strata_columns: u32,
     /// Where the pixel / lens sampler's precomputed patterns start in the sample table.
     pub pixel_table_offset: u32,
+    /// Where the lens sampler's precomputed patterns start in the sample table.
     pub lens_table_offset: u32,
+    /// Radiance of rays that escape the scene.
     pub background: [f32; 3],
     /// Shadow-ray samples of all area lights at one path vertex (the sum of their `samples`).
     pub light_samples_per_vertex: u32,
+    /// Ambient radiance L_a: each hit adds diffuse * L_a.
     pub ambient: [f32; 3],
+    /// Padding to the WGSL layout.
     pub _pad2: u32,
 }
 
@@ -269,16 +368,23 @@ pub struct GpuFrame {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuPass {
+    /// First column of the band (pixels).
     pub tile_x: u32,
+    /// First row of the band (pixels), or of the pixel list's rows.
     pub tile_y: u32,
+    /// Columns of the band (pixels), or entries per row of the pixel list.
     pub tile_width: u32,
+    /// Rows of the band.
     pub tile_height: u32,
+    /// First sample index of the pass.
     pub sample_start: u32,
+    /// Samples per pixel in this pass (the ray benchmark: rays in the buffer).
     pub sample_count: u32,
     /// Light samples `light_sample_start .. light_sample_start + light_sample_count` of each
     /// area light; the window starting at 0 also adds everything else (emission, ambient,
     /// point and directional lights, background).
     pub light_sample_start: u32,
+    /// Light samples of each area light in this window.
     pub light_sample_count: u32,
     /// 1 when this window is the pass's last: the scratch sum is committed.
     pub commit: u32,
@@ -292,12 +398,17 @@ pub struct GpuPass {
     pub accumulation_offset: u32,
     /// Where (in pixels) the scratch sums of a pass split into light windows live.
     pub scratch_offset: u32,
-    pub _pad0: u32,
+    /// Where (in pixels) the AOV layers start (`render::AccumulationLayout`); 0: no AOVs.
+    pub aov_offset: u32,
+    /// Padding to the WGSL layout.
     pub _pad1: u32,
+    /// Padding to the WGSL layout.
     pub _pad2: u32,
 }
 
 impl GpuPass {
+    /// Whether this window starts at light sample 0, and so also adds everything other than
+    /// area-light samples.
     pub fn is_first_light_window(&self) -> bool {
         self.light_sample_start == 0
     }
@@ -316,9 +427,13 @@ const _: () = assert!(
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuRay {
+    /// Ray origin (scene units).
     pub origin: [f32; 3],
+    /// Farthest distance along the ray a hit counts at (`T_FAR`: unbounded).
     pub t_max: f32,
+    /// Unit direction of travel.
     pub direction: [f32; 3],
+    /// Padding to the WGSL layout.
     pub _pad0: u32,
 }
 

@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! chambre: a GPU ray tracer built around the optics of the view camera.
 //!
 //! The data flows through stages named after what they do; each WGSL stage has a Rust twin

@@ -157,6 +157,11 @@ struct RenderArgs {
     /// overrides render.crop); the image written is the window.
     #[arg(long, value_delimiter = ',', value_name = "X0,X1,Y0,Y1")]
     crop: Option<Vec<f64>>,
+    /// Also write these layers into the EXR image, as named channels: depth (depth.Z), normal
+    /// (normal.X/Y/Z), albedo (albedo.R/G/B) of each camera ray's first hit, averaged over the
+    /// pixel's samples, and samples (samples.Y), the samples each pixel received.
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "AOV,...")]
+    aov: Vec<chambre::output::Aov>,
     /// Also write the samples each pixel received as an image (.exr or .pfm: the count in
     /// every channel), to see where they went.
     #[arg(long, value_name = "FILE")]
@@ -543,7 +548,16 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     {
         OutputTarget::prepare_beside(beside)?;
     }
-    let flat = flatten(&scene);
+    if !args.aov.is_empty() {
+        if target.format() != chambre::output::ImageFormat::Exr {
+            bail!("--aov writes layers into an EXR: give -o an .exr path");
+        }
+        if shard.is_some() {
+            bail!("--aov with --shard: shards merge the image only, not its AOV layers");
+        }
+    }
+    let mut flat = flatten(&scene);
+    flat.aovs = args.aov.iter().any(|a| a.needs_first_hits());
     let cancel = Arc::new(AtomicBool::new(false));
     let flag = cancel.clone();
     // With ctrlc's `termination` feature this also catches SIGTERM and SIGHUP, what `kill` and
@@ -619,7 +633,9 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         )),
         _ => None,
     };
-    let code = finish(output, &target, &backend_name)?;
+    let channels = chambre::output::aov_channels(&output, &args.aov)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", output_path.display()))?;
+    let code = finish(output, &target, &backend_name, &channels)?;
     if let (Some(manifest), Some((_, manifest_path)), true) = (manifest, &shard_paths, written) {
         let text = serde_json::to_string_pretty(&manifest).context("encoding the manifest")?;
         OutputTarget::write_beside(manifest_path, (text + "\n").as_bytes())?;
@@ -794,11 +810,17 @@ fn gpu_renderer(choice: BackendChoice, flat: &FlatScene) -> Result<Option<GpuRen
 
 /// Writes what the render computed, reports it, and picks the exit code: 1 when anything went
 /// wrong (the image is still written), else 130 when the render was stopped by a signal.
-fn finish(output: RenderOutput, target: &OutputTarget, backend: &str) -> anyhow::Result<ExitCode> {
+/// Writes the image (with `channels`, the AOV layers, when there are any) and reports.
+fn finish(
+    output: RenderOutput,
+    target: &OutputTarget,
+    backend: &str,
+    channels: &[(String, Vec<f32>)],
+) -> anyhow::Result<ExitCode> {
     let path = target.path().display();
     let written = output.max_samples_per_pixel > 0;
     if written {
-        target.write(&output.image)?;
+        target.write_with_channels(&output.image, channels)?;
     }
     let kernel = output.kernel_time.map_or(String::new(), |k| {
         format!(" (kernels {:.2} s)", k.as_secs_f64())

@@ -18,7 +18,7 @@ use image::{ExtendedColorType, ImageEncoder};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::render::Image;
+use crate::render::{Image, RenderOutput};
 
 /// What a PNG shows for a pixel that is not a finite number: magenta stands out in any render
 /// and, unlike black or white, is not what a dark or saturated pixel would look like.
@@ -35,6 +35,7 @@ pub fn srgb_encode(linear: f32) -> u8 {
     (encoded * 255.0).round() as u8
 }
 
+/// An output file's format, from its extension (`.png`, `.exr`, `.pfm`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
     /// sRGB 8-bit after exposure and tone mapping; non-finite pixels become [`NON_FINITE_PNG`].
@@ -84,7 +85,9 @@ impl ToneMap {
 /// What turns linear radiance into an 8-bit image: the exposure in stops and the tone map.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Display {
+    /// Exposure in stops (EV): linear values are scaled by `2^exposure_ev` first.
     pub exposure_ev: f32,
+    /// Applied to each scaled channel before sRGB encoding.
     pub tone_map: ToneMap,
 }
 
@@ -121,10 +124,12 @@ impl OutputTarget {
         })
     }
 
+    /// The path as the user gave it (a symbolic link is not resolved).
     pub fn path(&self) -> &Path {
         &self.path
     }
 
+    /// The format the extension names.
     pub fn format(&self) -> ImageFormat {
         self.format
     }
@@ -137,6 +142,27 @@ impl OutputTarget {
             message,
         };
         let bytes = encode(image, self.format, self.display).map_err(fail)?;
+        replace_atomically(&self.file, &bytes).map_err(fail)
+    }
+
+    /// Like [`OutputTarget::write`], with `channels` (name, one value a pixel) beside the
+    /// image's R, G and B in the same file; EXR only (an error for another format).
+    pub fn write_with_channels(
+        &self,
+        image: &Image,
+        channels: &[(String, Vec<f32>)],
+    ) -> Result<()> {
+        let fail = |message: String| Error::Output {
+            path: self.path.clone(),
+            message,
+        };
+        if channels.is_empty() {
+            return self.write(image);
+        }
+        if self.format != ImageFormat::Exr {
+            return Err(fail("extra channels (AOVs) need an .exr image".into()));
+        }
+        let bytes = exr_with_channels(image, channels).map_err(fail)?;
         replace_atomically(&self.file, &bytes).map_err(fail)
     }
 
@@ -255,6 +281,103 @@ fn encode(
         ),
     };
     encoded.map_err(|e| format!("encoding: {e}"))?;
+    Ok(bytes)
+}
+
+/// An arbitrary output variable an EXR can carry beside the image (`chambre render --aov`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Aov {
+    /// `depth.Z`: distance along the camera ray to the first hit (0 where nothing is hit).
+    Depth,
+    /// `normal.X`, `.Y`, `.Z`: the first hit's shading normal, world space, facing the camera.
+    Normal,
+    /// `albedo.R`, `.G`, `.B`: the first hit's diffuse plus mirror reflectance.
+    Albedo,
+    /// `samples.Y`: the samples the pixel received (adaptive sampling, a stopped render).
+    Samples,
+}
+
+impl Aov {
+    /// Whether the render must sum first hits for it (`FlatScene::aovs`).
+    pub fn needs_first_hits(self) -> bool {
+        self != Aov::Samples
+    }
+}
+
+/// The named channels of `which` from a render's output, in that order; an error if one needs
+/// first hits the render did not sum (`FlatScene::aovs` unset).
+pub fn aov_channels(
+    output: &RenderOutput,
+    which: &[Aov],
+) -> std::result::Result<Vec<(String, Vec<f32>)>, String> {
+    let mut channels = Vec::new();
+    let vector = |name: &str, values: &[glam::Vec3], components: [&str; 3]| {
+        components
+            .iter()
+            .enumerate()
+            .map(|(c, suffix)| {
+                let values = values.iter().map(|v| v[c]).collect();
+                (format!("{name}.{suffix}"), values)
+            })
+            .collect::<Vec<_>>()
+    };
+    for aov in which {
+        match (aov, &output.aovs) {
+            (Aov::Samples, _) => channels.push((
+                "samples.Y".to_string(),
+                output.sample_counts.iter().map(|&n| n as f32).collect(),
+            )),
+            (Aov::Depth, Some(aovs)) => channels.push(("depth.Z".to_string(), aovs.depth.clone())),
+            (Aov::Normal, Some(aovs)) => channels.extend(vector("normal", &aovs.normal, XYZ)),
+            (Aov::Albedo, Some(aovs)) => channels.extend(vector("albedo", &aovs.albedo, RGB)),
+            (aov, None) => {
+                return Err(format!(
+                    "the render summed no first hits for the {aov:?} AOV (set FlatScene::aovs)"
+                ));
+            }
+        }
+    }
+    Ok(channels)
+}
+
+const XYZ: [&str; 3] = ["X", "Y", "Z"];
+const RGB: [&str; 3] = ["R", "G", "B"];
+
+/// An EXR of `image`'s R, G, B and `channels`, 32-bit floats, losslessly compressed.
+fn exr_with_channels(
+    image: &Image,
+    channels: &[(String, Vec<f32>)],
+) -> std::result::Result<Vec<u8>, String> {
+    use exr::prelude::{
+        AnyChannel, AnyChannels, Encoding, FlatSamples, Image as ExrImage, Layer, LayerAttributes,
+        SmallVec, WritableImage,
+    };
+    let size = (image.width as usize, image.height as usize);
+    let component = |c: usize| image.pixels.iter().map(|p| p[c]).collect::<Vec<f32>>();
+    let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        list.push(AnyChannel::new(*name, FlatSamples::F32(component(c))));
+    }
+    for (name, values) in channels {
+        if values.len() != size.0 * size.1 {
+            return Err(format!("channel {name} has {} values", values.len()));
+        }
+        list.push(AnyChannel::new(
+            name.as_str(),
+            FlatSamples::F32(values.clone()),
+        ));
+    }
+    let layer = Layer::new(
+        size,
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    let mut bytes = Vec::new();
+    ExrImage::from_layer(layer)
+        .write()
+        .to_buffered(Cursor::new(&mut bytes))
+        .map_err(|e| format!("encoding: {e}"))?;
     Ok(bytes)
 }
 

@@ -18,12 +18,19 @@ use crate::scene::{Light, Scene, Shape};
 pub struct FlatScene {
     /// obvhs BVH over `prims[..frame.plane_start]`; leaves index `prims` directly.
     pub bvh: Bvh2,
+    /// The BVH's nodes as the GPU reads them.
     pub nodes: Vec<GpuBvhNode>,
+    /// Bounded primitives in BVH order (area lights' quads among them), then the planes.
     pub prims: Vec<GpuPrimitive>,
+    /// Vertex normals of smooth triangles, indexed by `GpuPrimitive::normals`.
     pub normals: Vec<GpuNormals>,
+    /// The scene's materials, then one emitter per area light.
     pub materials: Vec<GpuMaterial>,
+    /// The scene's lights in order, then one per emitting triangle.
     pub lights: Vec<GpuLight>,
+    /// The camera as the kernels see it; its aperture polygon's vertices are in `sample_table`.
     pub camera: GpuCamera,
+    /// Per-render constants: image size, samples, depth, samplers, light sample counts.
     pub frame: GpuFrame,
     /// Precomputed sample patterns and aperture vertices (`sampler::SampleTable`).
     pub sample_table: Vec<[f32; 2]>,
@@ -32,12 +39,17 @@ pub struct FlatScene {
     /// Expected loop iterations of one traversal (`accel::build::expected_traversal_iterations`),
     /// planes included.
     pub traversal_iterations: f32,
+    /// Triangles of the scene's meshes.
     pub triangle_count: usize,
+    /// Wall-clock time of the BVH build.
     pub build_time: Duration,
     /// The pixels to render: columns `crop[0]..crop[1]`, rows `crop[2]..crop[3]`.
     pub crop: [u32; 4],
     /// Adaptive sampling, when the scene asks for it (`render.noise_target`).
     pub adaptive: Option<crate::adaptive::AdaptiveSettings>,
+    /// Whether renders also sum the first hits' depth, normal and albedo (`render::Aovs`);
+    /// an output choice (`chambre render --aov`), false unless set.
+    pub aovs: bool,
     /// The compressed wide BVH the GPU traverses, made on first use (CPU renders never need
     /// it) and kept for every later GPU render or ray query of the scene.
     cwbvh: std::sync::OnceLock<Result<CwGeometry, String>>,
@@ -95,6 +107,9 @@ impl FlatScene {
     }
 }
 
+/// Packs `scene` for the kernels: builds the BVH, turns area lights into emitting quads and
+/// emitting mesh triangles into lights, and precomputes the sample table. No AOVs
+/// (`FlatScene::aovs` false) and no CWBVH until first asked for.
 pub fn flatten(scene: &Scene) -> FlatScene {
     let mut materials: Vec<GpuMaterial> = scene
         .materials
@@ -304,6 +319,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         build_time: geometry.build_time,
         crop: render.crop,
         adaptive: render.adaptive,
+        aovs: false,
         cwbvh: std::sync::OnceLock::new(),
     }
 }

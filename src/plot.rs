@@ -14,6 +14,7 @@ const FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 pub trait Figure {
     /// Width and height, in pixels of the PNG (and units of the SVG).
     fn size(&self) -> (u32, u32);
+    /// Draws the whole figure on `root` (its background included); the error as a message.
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>;
 }
 

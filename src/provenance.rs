@@ -40,25 +40,37 @@ pub fn fnv1a64(bytes: &[u8]) -> u64 {
 /// Everything needed to reproduce a rendered image, written as JSON beside it.
 #[derive(Clone, Debug, Serialize)]
 pub struct Sidecar {
+    /// The crate version that rendered the image.
     pub chambre_version: &'static str,
+    /// Render date (UTC), YYYY-MM-DD.
     pub date_utc: String,
     /// The command line, as given.
     pub command: Vec<String>,
+    /// The scene file's path, as given.
     pub scene: String,
     /// FNV-1a 64 of the scene file's bytes, in hex.
     pub scene_hash: String,
     /// `--set` overrides and the flags that stand for them, in the order applied.
     pub overrides: Vec<String>,
+    /// `render.seed`.
     pub seed: u32,
+    /// Image width in pixels (of the crop window, when cropped).
     pub width: u32,
+    /// Image height in pixels (of the crop window, when cropped).
     pub height: u32,
+    /// `render.spp` after overrides.
     pub spp_requested: u32,
     /// Samples of the least and most sampled pixel (they differ when a render was stopped).
     pub spp_min: u32,
+    /// Samples of the most sampled pixel.
     pub spp_max: u32,
+    /// The backend that rendered: "CPU" or "GPU: " and the adapter.
     pub backend: String,
+    /// Wall-clock time of the render (s).
     pub wall_seconds: f64,
+    /// Device time in the kernels (s), where the GPU measures it.
     pub kernel_seconds: Option<f64>,
+    /// Rays traced.
     pub rays: u64,
     /// "complete", or why the render stopped.
     pub status: String,

@@ -86,12 +86,17 @@ pub const BATCHES_IN_FLIGHT: usize = 2;
 /// What the dispatches of a batch reported.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct DispatchStatus {
+    /// The `layout::STATUS_*` bits raised (kernel loop caps hit), ORed together.
     pub flags: u32,
+    /// Rays traced: camera, shadow and mirror rays.
     pub rays: u64,
+    /// Camera samples whose path was cut off at `max_depth` while it still reflected.
     pub truncated: u64,
 }
 
 impl DispatchStatus {
+    /// Reads the status buffer's words (indexed by `layout::STATUS_FLAGS`, `STATUS_RAYS`,
+    /// `STATUS_TRUNCATED`).
     pub fn from_words(words: &[u32]) -> DispatchStatus {
         DispatchStatus {
             flags: words[STATUS_FLAGS as usize],
@@ -115,9 +120,9 @@ pub trait Backend {
     /// The accumulation so far, during a render (`--progressive`): every finished sample, and
     /// the render goes on.
     fn snapshot(&mut self) -> Result<Vec<[f32; 4]>>;
-    /// Both halves of an adaptive render's sums, first then second (`AccumulationLayout`),
-    /// with every finished sample; the render goes on.
-    fn halves(&mut self) -> Result<Vec<[f32; 4]>>;
+    /// The accumulation's slots `slots` (`AccumulationLayout`), with every finished sample;
+    /// the render goes on.
+    fn read_slots(&mut self, slots: std::ops::Range<usize>) -> Result<Vec<[f32; 4]>>;
     /// The pixels (`y * width + x`) that dispatches with `listed_pixels` sample, from the next
     /// batch submitted on.
     fn set_pixel_list(&mut self, pixels: &[u32]) -> Result<()>;
@@ -134,21 +139,28 @@ pub trait Backend {
 /// How a backend's accumulation buffer is laid out, in pixel slots of `[f32; 4]`: the image's
 /// running sums (radiance, samples) as one layer, or, in an adaptive render, as two halves that
 /// take alternate passes (their difference estimates each pixel's error, `adaptive.rs`); then,
+/// when AOVs are asked for, two layers of first-hit sums, (normal, depth) and (albedo, 0); then,
 /// when passes are split into light windows, the scratch sums of the pass in progress. Both
 /// backends use it, so the CPU path twins the kernel's indices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct AccumulationLayout {
+    /// Pixels of the image (a layer's slots).
     pub pixels: usize,
     /// 1, or 2 in an adaptive render.
     pub halves: usize,
+    /// The AOV layers are there.
+    pub aovs: bool,
+    /// The scratch layer is there.
     pub scratch: bool,
 }
 
 impl AccumulationLayout {
+    /// The layout for `scene`, with a scratch layer when `scratch`.
     pub fn of(scene: &FlatScene, scratch: bool) -> AccumulationLayout {
         AccumulationLayout {
             pixels: scene.frame.width as usize * scene.frame.height as usize,
             halves: if scene.adaptive.is_some() { 2 } else { 1 },
+            aovs: scene.aovs,
             scratch,
         }
     }
@@ -158,11 +170,26 @@ impl AccumulationLayout {
         self.pixels * self.halves
     }
 
-    /// Slots of the whole buffer.
-    pub fn len(&self) -> usize {
-        self.image_len() + if self.scratch { self.pixels } else { 0 }
+    /// Where the AOV layers start; 0 (the image's place) when there are none.
+    pub fn aov_offset(&self) -> u32 {
+        if self.aovs {
+            self.image_len() as u32
+        } else {
+            0
+        }
     }
 
+    /// Slots of the AOV layers.
+    pub fn aov_len(&self) -> usize {
+        if self.aovs { 2 * self.pixels } else { 0 }
+    }
+
+    /// Slots of the whole buffer.
+    pub fn len(&self) -> usize {
+        self.image_len() + self.aov_len() + if self.scratch { self.pixels } else { 0 }
+    }
+
+    /// Whether the buffer has no slots (an image without pixels).
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -174,7 +201,7 @@ impl AccumulationLayout {
 
     /// Where the scratch sums start.
     pub fn scratch_offset(&self) -> u32 {
-        self.image_len() as u32
+        (self.image_len() + self.aov_len()) as u32
     }
 
     /// The image's sums from a buffer of this layout (or its first `image_len` slots): the
@@ -196,8 +223,11 @@ impl AccumulationLayout {
 /// Linear radiance, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
+    /// Pixels per row.
     pub width: u32,
+    /// Rows.
     pub height: u32,
+    /// Linear RGB radiance, row by row: `width * height` of them.
     pub pixels: Vec<Vec3>,
 }
 
@@ -223,6 +253,7 @@ impl Image {
         }
     }
 
+    /// The pixel at column `x`, row `y`.
     pub fn get(&self, x: u32, y: u32) -> Vec3 {
         self.pixels[(y * self.width + x) as usize]
     }
@@ -236,6 +267,7 @@ impl Image {
         }
     }
 
+    /// Pixels with a NaN or infinite channel.
     pub fn non_finite_count(&self) -> usize {
         self.pixels.iter().filter(|p| !p.is_finite()).count()
     }
@@ -243,6 +275,8 @@ impl Image {
 
 /// Progress events, for a bar or log lines.
 pub trait Progress {
+    /// `done` of the render's `total` batches have finished (`total` is an upper bound in an
+    /// adaptive render, which may end early).
     fn advance(&mut self, done: u64, total: u64);
 }
 
@@ -252,8 +286,10 @@ impl<F: FnMut(u64, u64)> Progress for F {
     }
 }
 
+/// What a render produced: the image (the crop window's pixels), its samples, and its cost.
 #[derive(Debug)]
 pub struct RenderOutput {
+    /// Per-pixel mean of the samples taken.
     pub image: Image,
     /// Samples of the least-sampled pixel: `spp` when the render completed.
     pub samples_per_pixel: u32,
@@ -261,13 +297,17 @@ pub struct RenderOutput {
     pub max_samples_per_pixel: u32,
     /// Pixels without a single sample (a render stopped before reaching them); they are 0.
     pub pixels_without_samples: usize,
+    /// Wall time of the whole render, planning and read-backs included.
     pub elapsed: Duration,
     /// Device time in the kernels (GPU timestamp queries), where the adapter offers them.
     pub kernel_time: Option<Duration>,
-    /// Dispatches and batches (submissions) finished.
+    /// Dispatches finished.
     pub dispatches: u64,
+    /// Batches (submissions) finished.
     pub batches: u64,
+    /// Rays traced: camera, shadow and mirror rays.
     pub rays: u64,
+    /// Camera samples whose path was cut off at `max_depth` while it still reflected.
     pub truncated_paths: u64,
     /// Kernel loop caps hit (`layout::STATUS_*` bits); a non-zero value is reported as an error.
     pub status_flags: u32,
@@ -281,9 +321,43 @@ pub struct RenderOutput {
     pub snapshots: u32,
     /// What adaptive sampling achieved, in an adaptive render.
     pub adaptive: Option<AdaptiveReport>,
+    /// The AOV layers, when the scene asked for them (`FlatScene::aovs`).
+    pub aovs: Option<Aovs>,
+}
+
+/// The arbitrary output variables of a render, per pixel of `image` (row by row): the means
+/// over its samples of what each camera ray's first hit showed (`integrator::FirstHit`), zero
+/// where no sample hit anything. A mean of depths across a silhouette is a blend, as in
+/// Mitsuba's AOV integrator; the normals are averaged, not renormalised, as denoisers expect.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Aovs {
+    /// Distance along the camera ray, scene units.
+    pub depth: Vec<f32>,
+    /// Shading normal in world space, facing the camera.
+    pub normal: Vec<Vec3>,
+    /// Diffuse plus mirror reflectance, at most 1; zero on emitters.
+    pub albedo: Vec<Vec3>,
+}
+
+impl Aovs {
+    /// The means from the AOV layers' sums and the image's sums (whose `w` counts samples).
+    pub fn from_sums(normal_depth: &[[f32; 4]], albedo: &[[f32; 4]], image: &[[f32; 4]]) -> Aovs {
+        let mean = |sum: f32, count: f32| if count > 0.0 { sum / count } else { 0.0 };
+        let mut aovs = Aovs::default();
+        for ((nd, a), i) in normal_depth.iter().zip(albedo).zip(image) {
+            let n = i[3];
+            aovs.depth.push(mean(nd[3], n));
+            aovs.normal
+                .push(Vec3::new(mean(nd[0], n), mean(nd[1], n), mean(nd[2], n)));
+            aovs.albedo
+                .push(Vec3::new(mean(a[0], n), mean(a[1], n), mean(a[2], n)));
+        }
+        aovs
+    }
 }
 
 impl RenderOutput {
+    /// Rays traced per second of wall time (`rays / elapsed`).
     pub fn rays_per_second(&self) -> f64 {
         self.rays as f64 / self.elapsed.as_secs_f64().max(1e-9)
     }
@@ -301,6 +375,8 @@ pub struct RenderPlan {
     pub bands: Vec<(u32, u32)>,
     /// The columns every band covers: `first_column .. first_column + width`.
     pub first_column: u32,
+    /// Columns of every band (the crop window's width); in a pass over a pixel list, the
+    /// entries of one of its rows.
     pub width: u32,
     /// Upper bound on the rays one dispatch traces.
     pub rays_per_dispatch: u64,
@@ -362,6 +438,7 @@ impl RenderPlan {
                     listed_pixels: listed,
                     accumulation_offset: self.layout.half_offset(half),
                     scratch_offset: self.layout.scratch_offset(),
+                    aov_offset: self.layout.aov_offset(),
                     ..Default::default()
                 });
             }
@@ -375,12 +452,16 @@ impl RenderPlan {
 /// one per area-light sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RayBound {
+    /// Path vertices a sample may reach: `max_depth + 1` when a material reflects, else 1.
     pub vertices: u64,
+    /// Shadow rays to point and directional lights at each vertex: one per such light.
     pub punctual_per_vertex: u64,
+    /// Shadow rays to area lights at each vertex: the sum of their `samples`.
     pub light_samples_per_vertex: u64,
 }
 
 impl RayBound {
+    /// The bound for `scene`'s materials, lights and `max_depth`.
     pub fn of(scene: &FlatScene) -> RayBound {
         let reflects = scene
             .materials
@@ -397,6 +478,7 @@ impl RayBound {
         }
     }
 
+    /// Rays one camera sample traces at most.
     pub fn per_sample(&self) -> u64 {
         self.vertices * (1 + self.punctual_per_vertex + self.light_samples_per_vertex)
     }
@@ -479,7 +561,9 @@ pub fn render(
 /// Images written during a render: `write` receives the image of every finished sample each
 /// time `every` has passed since the last (after the batch that crosses it).
 pub struct Snapshots<'a> {
+    /// Wall time between two snapshots, at least.
     pub every: Duration,
+    /// Receives each snapshot (the crop window's pixels); an error stops the render.
     pub write: &'a mut dyn FnMut(&Image) -> Result<()>,
 }
 
@@ -553,6 +637,7 @@ fn drive(
             sample_counts: Vec::new(),
             snapshots: 0,
             adaptive: None,
+            aovs: None,
         },
     };
     let decisions = match scene.adaptive {
@@ -570,8 +655,18 @@ fn drive(
     run.drain(backend);
     let mut output = run.output;
     let [x0, x1, y0, y1] = scene.crop;
+    if scene.aovs {
+        let layout = &plan.layout;
+        let offset = layout.aov_offset() as usize;
+        let sums = backend.read_slots(offset..offset + layout.aov_len())?;
+        let counts = backend.read_slots(0..layout.image_len())?;
+        let counts = crop_rows(layout.image_sums(counts), frame.width, scene.crop);
+        let (normal_depth, albedo) = sums.split_at(layout.pixels);
+        let crop = |layer: &[[f32; 4]]| crop_rows(layer.to_vec(), frame.width, scene.crop);
+        output.aovs = Some(Aovs::from_sums(&crop(normal_depth), &crop(albedo), &counts));
+    }
     if let Some(settings) = &scene.adaptive {
-        let halves = backend.halves()?;
+        let halves = backend.read_slots(0..plan.layout.image_len())?;
         let errors = crate::adaptive::pixel_errors(&plan.layout, &halves);
         let errors = crop_rows(errors, frame.width, scene.crop);
         let counts = crop_rows(plan.layout.image_sums(halves), frame.width, scene.crop);
@@ -641,7 +736,7 @@ fn sample_adaptively(
         if run.output.stopped.is_some() {
             break;
         }
-        let halves = match backend.halves() {
+        let halves = match backend.read_slots(0..plan.layout.image_len()) {
             Ok(halves) => halves,
             Err(e) => {
                 run.output.stopped = Some(e);

@@ -36,11 +36,16 @@ pub const MAX_BLADES: u32 = 64;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum SamplerName {
+    /// Independent uniform points.
     Random,
+    /// One jittered point per cell of a grid, cells in a hashed per-pixel order (the default).
     #[default]
     Stratified,
+    /// Precomputed Poisson-disk sets, one picked and shifted per pixel; spp <= `MAX_TABLE_SPP`.
     Poisson,
+    /// Keller and Heidrich's interleaved jittered patterns; spp <= `MAX_TABLE_SPP`.
     Interleaved,
+    /// Shuffled, Owen-scrambled 2-D Sobol points.
     Sobol,
 }
 
@@ -76,9 +81,14 @@ impl SamplerName {
 /// The sample table uploaded once per render: precomputed patterns and aperture vertices.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SampleTable {
+    /// Every pattern and the aperture polygon's vertices, one after the other (at least one point:
+    /// a binding cannot be empty).
     pub points: Vec<[f32; 2]>,
+    /// Where the pixel sampler's patterns start in `points`.
     pub pixel_offset: u32,
+    /// Where the lens sampler's patterns start in `points`.
     pub lens_offset: u32,
+    /// Where the aperture polygon's vertices start in `points` (0 with a circular aperture).
     pub aperture_offset: u32,
 }
 
@@ -134,7 +144,9 @@ impl SampleTable {
 /// A Poisson-disk point set on the unit torus: no two points closer than `radius`.
 #[derive(Clone, Debug)]
 pub struct PoissonSet {
+    /// The points in [0, 1)^2, in random order.
     pub points: Vec<[f32; 2]>,
+    /// The minimum toroidal distance between any two points.
     pub radius: f64,
 }
 
@@ -363,9 +375,13 @@ pub fn sobol_owen_2d(index: u32, seed: u32) -> [f32; 2] {
 /// Where a pixel's sample comes from: the sampler, its strata and its patterns.
 #[derive(Clone, Copy, Debug)]
 pub struct PatternSource {
+    /// The `SAMPLER_*` pattern.
     pub sampler: u32,
+    /// Columns of the stratified grid of `spp` cells.
     pub strata_columns: u32,
+    /// Where the pattern's precomputed points start in the sample table.
     pub table_offset: u32,
+    /// First random dimension the samples draw (`PIXEL_DIMENSION` or `LENS_DIMENSION`).
     pub dim: u32,
 }
 

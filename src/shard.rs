@@ -24,7 +24,9 @@ pub const INDEX_VARIABLES: [&str; 3] = [
 /// Shard `index` (from 0) of `count`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Shard {
+    /// This shard, 0..`count`.
     pub index: u32,
+    /// Shards the render is split into, at least 1.
     pub count: u32,
 }
 
@@ -89,9 +91,11 @@ impl Shard {
 /// What a shard wrote: enough to check and place its band.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Manifest {
+    /// Which shard wrote it.
     pub shard: Shard,
     /// The full image's size.
     pub width: u32,
+    /// The full image's height (pixels); `width` is its width.
     pub height: u32,
     /// The band: columns `band[0]..band[1]`, rows `band[2]..band[3]`.
     pub band: [u32; 4],
@@ -99,7 +103,9 @@ pub struct Manifest {
     pub image: String,
     /// FNV-1a 64 of the scene file and the overrides: shards of one render agree on it.
     pub render_hash: String,
+    /// Samples of the band's least-sampled pixel.
     pub spp_min: u32,
+    /// Samples of the band's most-sampled pixel.
     pub spp_max: u32,
 }
 

@@ -5,7 +5,7 @@ mod common;
 use std::f32::consts::PI;
 
 use chambre::camera::{film_position_mm, generate_ray};
-use chambre::integrator::{LightWindow, SampleStats, trace_path};
+use chambre::integrator::{FirstHit, LightWindow, SampleStats, trace_path};
 use chambre::layout::FEATURES_ALL;
 use chambre::math::rng::Rng;
 use chambre::pack::flatten;
@@ -16,6 +16,9 @@ fn scene(text: &str) -> Scene {
     Scene::from_str(std::path::Path::new("inline.toml"), text, &[])
         .unwrap_or_else(|e| panic!("{e}"))
 }
+
+/// The sphere's diffuse reflectance in `LAMBERT_SPHERE`.
+const ALBEDO: Vec3 = Vec3::new(0.5, 0.25, 0.125);
 
 const LAMBERT_SPHERE: &str = r#"
 [render]
@@ -59,6 +62,7 @@ fn lambert_sphere_under_point_light_matches_closed_form_on_cpu() {
         Vec3::new(-0.5, 0.2, 0.842_615),
     ] {
         let p = target.normalize();
+        let mut first_hit = FirstHit::default();
         let radiance = trace_path::<FEATURES_ALL>(
             &flat,
             origin,
@@ -66,7 +70,19 @@ fn lambert_sphere_under_point_light_matches_closed_form_on_cpu() {
             LightWindow::ALL,
             &mut Rng::new(0, 0, 0),
             &mut SampleStats::default(),
+            &mut first_hit,
         );
+        // The AOVs of the hit: its distance, the sphere's outward normal there, the albedo.
+        let depth = (p - origin).length();
+        assert!(
+            (first_hit.depth - depth).abs() < 1e-5 * depth,
+            "{first_hit:?}"
+        );
+        assert!(
+            (first_hit.normal - p).abs().max_element() < 1e-5,
+            "{first_hit:?}"
+        );
+        assert_eq!(first_hit.albedo, ALBEDO);
         let expected = lambert_expected(p);
         assert!(
             (radiance - expected).abs().max_element() <= 1e-5 * expected.max_element(),
@@ -179,6 +195,7 @@ fn point_in_shadow_gets_only_the_ambient_term() {
         LightWindow::ALL,
         &mut Rng::new(0, 0, 0),
         &mut SampleStats::default(),
+        &mut FirstHit::default(),
     );
     assert!(
         (radiance - ambient_only).abs().max_element() < 1e-6,
@@ -192,6 +209,7 @@ fn point_in_shadow_gets_only_the_ambient_term() {
         LightWindow::ALL,
         &mut Rng::new(0, 0, 0),
         &mut SampleStats::default(),
+        &mut FirstHit::default(),
     );
     assert!(lit.x > ambient_only.x * 2.0, "{lit}");
     // The image's centre pixel sees the ground under the sphere (umbra radius 0.75).

@@ -76,6 +76,7 @@ fn light_windows_sum_to_the_unsplit_estimate() {
                             s,
                             chambre::integrator::LightWindow::ALL,
                             &mut stats,
+                            &mut Default::default(),
                         )
                     })
                     .sum();

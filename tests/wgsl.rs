@@ -327,7 +327,7 @@ fn shared_structs_have_identical_layouts() {
             listed_pixels,
             accumulation_offset,
             scratch_offset,
-            _pad0,
+            aov_offset,
             _pad1,
             _pad2
         }

@@ -169,8 +169,23 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
     return total;
 }
 
+// What the camera ray's first hit shows, for the AOV layers (zero where it hits nothing).
+struct FirstHit {
+    depth: f32,
+    normal: vec3<f32>,
+    albedo: vec3<f32>,
+}
+
+fn first_hit_of(t: f32, surface: Surface, material: GpuMaterial) -> FirstHit {
+    var albedo = vec3<f32>(0.0);
+    if (material.model != MODEL_EMITTER) {
+        albedo = min(material.diffuse + material.mirror, vec3<f32>(1.0));
+    }
+    return FirstHit(t, surface.shading_normal, albedo);
+}
+
 fn trace_path(origin: vec3<f32>, direction: vec3<f32>, window: LightWindow, rng: ptr<function, Rng>,
-              counters: ptr<function, PathCounters>) -> vec3<f32> {
+              counters: ptr<function, PathCounters>, first_hit: ptr<function, FirstHit>) -> vec3<f32> {
     let first = window_is_first(window);
     var radiance = vec3<f32>(0.0);
     var throughput = vec3<f32>(1.0);
@@ -188,6 +203,9 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, window: LightWindow, rng:
         let prim = prims[found.prim];
         let material = materials[prim.material];
         let surface = surface_at(prim, ray, found.hit);
+        if (depth == 0u) {
+            *first_hit = first_hit_of(found.hit.t, surface, material);
+        }
         // An area light shows its radiance from the front, is black from behind, reflects nothing.
         if (material.model == MODEL_EMITTER) {
             if (surface.front_facing && first) {
@@ -226,7 +244,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, window: LightWindow, rng:
 }
 
 fn trace_sample(x: u32, y: u32, sample: u32, window: LightWindow,
-                counters: ptr<function, PathCounters>) -> vec3<f32> {
+                counters: ptr<function, PathCounters>, first_hit: ptr<function, FirstHit>) -> vec3<f32> {
     var rng = rng_new(frame.seed, y * frame.width + x, sample);
     let pixel_source = PatternSource(frame.pixel_sampler, frame.pixel_strata_columns, frame.pixel_table_offset, PIXEL_DIMENSION);
     let jitter = sample_2d(pixel_source, x, y, sample, &rng);
@@ -238,5 +256,5 @@ fn trace_sample(x: u32, y: u32, sample: u32, window: LightWindow,
         lens = sample_aperture(sample_2d(lens_source, x, y, sample, &rng));
     }
     let ray = generate_ray(camera, film, lens);
-    return trace_path(ray.origin, ray.direction, window, &rng, counters);
+    return trace_path(ray.origin, ray.direction, window, &rng, counters, first_hit);
 }

@@ -114,7 +114,7 @@ struct GpuPass {
     listed_pixels: u32,
     accumulation_offset: u32,
     scratch_offset: u32,
-    _pad0: u32,
+    aov_offset: u32,
     _pad1: u32,
     _pad2: u32,
 }

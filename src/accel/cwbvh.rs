@@ -20,11 +20,15 @@ use crate::layout::{CWBVH_STACK_SIZE, FEATURES_ALL, GpuCwNode, GpuPrimitive, NON
 
 /// A CWBVH and the bounded primitives in the order its leaves index them, planes after them.
 pub struct CwGeometry {
+    /// The CWBVH nodes, root first (one empty node for an empty scene).
     pub nodes: Vec<GpuCwNode>,
+    /// Bounded primitives in the order the leaves index them, then the planes.
     pub prims: Vec<GpuPrimitive>,
     /// For each primitive it was built from, its index in `prims`.
     position_of: Vec<u32>,
+    /// Index in `prims` of the first plane.
     pub plane_start: u32,
+    /// Planes at the end of `prims`.
     pub plane_count: u32,
 }
 
@@ -288,7 +292,9 @@ pub fn closest_hit(geometry: &CwGeometry, ray: &RayQuery, t_max: f32) -> Option<
 /// What one traversal reads: nodes visited and primitives tested (planes included).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counts {
+    /// Nodes visited.
     pub nodes: u32,
+    /// Primitives tested, planes included.
     pub prims: u32,
 }
 

@@ -34,12 +34,20 @@ pub const SLAB_FAR_SCALE: f32 = 1.0 + 4.0 * 3.0 * f32::EPSILON * 0.5;
 /// Per-ray constants of the watertight triangle test and the slab test.
 #[derive(Clone, Copy, Debug)]
 pub struct RayQuery {
+    /// Ray origin (scene units).
     pub origin: Vec3,
+    /// Ray direction; hit distances `t` are multiples of its length.
     pub direction: Vec3,
+    /// Per-component reciprocals of `direction`, kept finite (at most 1e20 in magnitude).
     pub inv_direction: Vec3,
+    /// The watertight test's first sheared axis: the one after `kz` (swapped with `ky` when the
+    /// direction's `kz` component is negative, to keep the winding).
     pub kx: usize,
+    /// The watertight test's second sheared axis.
     pub ky: usize,
+    /// The axis of the direction's largest component.
     pub kz: usize,
+    /// Shear constants (-d_kx / d_kz, -d_ky / d_kz, 1 / d_kz) that make the direction +z.
     pub shear: Vec3,
 }
 
@@ -54,6 +62,7 @@ fn safe_reciprocal(d: f32) -> f32 {
 }
 
 impl RayQuery {
+    /// The per-ray constants of the ray from `origin` along `direction`.
     pub fn new(origin: Vec3, direction: Vec3) -> Self {
         let abs = direction.abs();
         let kz = if abs.x > abs.y {
@@ -100,8 +109,12 @@ impl RayQuery {
 /// `b1` is instead a bound on the relative error of `t` (see `intersect_sphere`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
+    /// Distance along the ray, in units of its direction's length; `T_FAR` for a miss.
     pub t: f32,
+    /// Triangle: barycentric of the second vertex; quad: position along `edge_u` in [0, 1]; sphere:
+    /// relative error bound of `t`.
     pub b1: f32,
+    /// Triangle: barycentric of the third vertex; quad: position along `edge_v` in [0, 1].
     pub b2: f32,
 }
 
@@ -271,6 +284,8 @@ pub fn intersect_sphere(
     }
 }
 
+/// Intersect the parallelogram `corner + u edge_u + v edge_v` (u, v in [0, 1]) before `t_max`, from
+/// either side; `b1`, `b2` of the hit are (u, v).
 pub fn intersect_quad(ray: &RayQuery, corner: Vec3, edge_u: Vec3, edge_v: Vec3, t_max: f32) -> Hit {
     let n = edge_u.cross(edge_v);
     let denom = n.dot(ray.direction);
@@ -291,6 +306,8 @@ pub fn intersect_quad(ray: &RayQuery, corner: Vec3, edge_u: Vec3, edge_v: Vec3, 
     Hit { t, b1: u, b2: v }
 }
 
+/// Intersect the infinite plane through `point` with normal `normal` before `t_max`, from either
+/// side.
 pub fn intersect_plane(ray: &RayQuery, point: Vec3, normal: Vec3, t_max: f32) -> Hit {
     let denom = normal.dot(ray.direction);
     if denom == 0.0 {
@@ -351,7 +368,9 @@ pub fn shadow_ray_length(distance: f32) -> f32 {
 /// A shading point and the per-component bound on its distance from the true surface point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
+    /// The computed point (scene units).
     pub position: Vec3,
+    /// Per-component bound on `position`'s distance from the exact point.
     pub error: Vec3,
 }
 

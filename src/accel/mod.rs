@@ -28,9 +28,13 @@ pub struct Geometry {
     pub bvh: Bvh2,
     /// The BVH's nodes as the GPU reads them.
     pub nodes: Vec<GpuBvhNode>,
+    /// Bounded primitives in BVH order, then the planes.
     pub prims: Vec<GpuPrimitive>,
+    /// Vertex normals of smooth triangles, indexed by `GpuPrimitive::normals`.
     pub normals: Vec<GpuNormals>,
+    /// Index in `prims` of the first plane: the number of bounded primitives.
     pub plane_start: u32,
+    /// Planes at the end of `prims`.
     pub plane_count: u32,
     /// For each bounded primitive as given, its index in `prims`.
     pub new_index: Vec<u32>,
@@ -39,16 +43,20 @@ pub struct Geometry {
     /// Expected loop iterations of one traversal (`build::expected_traversal_iterations`),
     /// planes included.
     pub traversal_iterations: f32,
+    /// Wall-clock time of the BVH build.
     pub build_time: Duration,
 }
 
 /// What a traversal reads: the BVH, the primitives its leaves index, and the planes.
 #[derive(Clone, Copy)]
 pub struct Primitives<'a> {
+    /// obvhs BVH over `prims[..plane_start]`; leaves index `prims` directly.
     pub bvh: &'a Bvh2,
+    /// Bounded primitives in BVH order, then the planes.
     pub prims: &'a [GpuPrimitive],
     /// The planes are `prims[plane_start .. plane_start + plane_count]`.
     pub plane_start: u32,
+    /// Planes at the end of `prims`.
     pub plane_count: u32,
 }
 

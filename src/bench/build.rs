@@ -15,9 +15,13 @@ use crate::scene::mesh::load_mesh;
 /// One preset's figures.
 #[derive(Clone, Debug, Serialize)]
 pub struct BuildResult {
+    /// The obvhs preset's name.
     pub preset: &'static str,
+    /// Build time over the timed runs (ms).
     pub build_ms: Spread,
+    /// Nodes of the BVH.
     pub nodes: usize,
+    /// Longest root-to-leaf path (nodes).
     pub depth: usize,
     /// SAH cost with unit traversal and intersection costs: the expected loop iterations of a
     /// ray through the root box (`accel::build::expected_traversal_iterations`).
@@ -26,11 +30,16 @@ pub struct BuildResult {
     pub memory_bytes: usize,
 }
 
+/// The whole benchmark's report.
 #[derive(Clone, Debug, Serialize)]
 pub struct BuildReport {
+    /// The mesh file.
     pub mesh: PathBuf,
+    /// Triangles of the mesh.
     pub triangles: usize,
+    /// Threads the builds could use (rayon's pool).
     pub threads: usize,
+    /// One entry per preset.
     pub results: Vec<BuildResult>,
 }
 
@@ -76,6 +85,7 @@ pub fn run(mesh: &Path, runs: u32) -> Result<BuildReport> {
 }
 
 impl BuildReport {
+    /// The report as a Markdown table.
     pub fn to_markdown(&self) -> String {
         let mut out = format!(
             "build: {} ({} triangles), obvhs presets, {} threads; median (min–max) of the \

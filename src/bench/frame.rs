@@ -37,29 +37,40 @@ pub struct FrameRun {
     /// `cpu` or `gpu` (code specialised to the scene's features), `cpu-general` or
     /// `gpu-general` (every feature), `gpu-rpiN` (specialised, at most N rays per invocation).
     pub backend: String,
+    /// Wall-clock time of the whole render over the timed runs (ms).
     pub frame_ms: Spread,
     /// Rays traced: the same for every way but where a plan splits light samples into more
     /// windows, each retracing its paths.
     pub rays: u64,
     /// GPU kernel time from timestamp queries, where the adapter has them.
     pub kernel_ms: Option<Spread>,
+    /// Millions of rays per second at the median frame time.
     pub mrays_per_s: f64,
 }
 
+/// One scene's figures.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameResult {
+    /// The scene's name in `scenes/`.
     pub scene: String,
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Samples per pixel.
     pub spp: u32,
+    /// Triangles of the scene's meshes.
     pub triangles: usize,
     /// `layout::FEATURE_*` bits of the scene (the specialised kernel's).
     pub features: u32,
+    /// One entry per way of rendering it.
     pub runs: Vec<FrameRun>,
 }
 
+/// The whole benchmark's report.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameReport {
+    /// One entry per scene.
     pub results: Vec<FrameResult>,
 }
 
@@ -203,6 +214,7 @@ pub fn run(
 }
 
 impl FrameReport {
+    /// The report as a Markdown table.
     pub fn to_markdown(&self) -> String {
         let mut out = String::from(
             "frame: each sample scene at its own size and spp; median (min–max) ms of the timed \

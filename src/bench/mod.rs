@@ -48,6 +48,7 @@ pub enum BenchCommand {
     Precision(PrecisionArgs),
 }
 
+/// Arguments of `chambre bench precision`.
 #[derive(Debug, clap::Args)]
 pub struct PrecisionArgs {
     /// Mesh file (OBJ or PLY, optionally .gz).
@@ -60,8 +61,10 @@ pub struct PrecisionArgs {
     /// sizes away): a small height over a flat mesh in the xz plane makes grazing rays.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub camera_height: f64,
+    /// Backends whose hits are compared with the oracle.
     #[command(flatten)]
     pub backends: Backends,
+    /// Where the report goes.
     #[command(flatten)]
     pub output: Output,
 }
@@ -84,6 +87,7 @@ pub struct Backends {
 }
 
 impl Backends {
+    /// Whether the GPU is among the backends.
     pub fn gpu(&self) -> bool {
         self.backends.contains(&Backend::Gpu)
     }
@@ -92,6 +96,7 @@ impl Backends {
 /// The benchmarks' default mesh: 871k triangles, large enough to fill a GPU.
 const DRAGON_MESH: &str = "scenes/meshes/dragon_vrip.obj.gz";
 
+/// Arguments of `chambre bench scale`.
 #[derive(Debug, clap::Args)]
 pub struct ScaleArgs {
     /// Mesh whose prefixes and copies make the sizes.
@@ -106,10 +111,13 @@ pub struct ScaleArgs {
     /// Image size of the camera rays (one per pixel; the rays benchmark's camera).
     #[arg(long, default_value_t = 512)]
     pub size: u32,
+    /// Timed runs after one warm-up.
     #[arg(long, default_value_t = 3)]
     pub runs: u32,
+    /// Backends to measure.
     #[command(flatten)]
     pub backends: Backends,
+    /// Where the report goes.
     #[command(flatten)]
     pub output: Output,
     /// Write the log-log plot (SVG) here.
@@ -117,15 +125,18 @@ pub struct ScaleArgs {
     pub plot: Option<PathBuf>,
 }
 
+/// Arguments of `chambre bench samplers`.
 #[derive(Debug, clap::Args)]
 pub struct SamplersArgs {
     /// Samples per pixel of the reference image.
     #[arg(long, default_value_t = 4096)]
     pub reference_spp: u32,
+    /// Where the report goes.
     #[command(flatten)]
     pub output: Output,
 }
 
+/// Arguments of `chambre bench build`.
 #[derive(Debug, clap::Args)]
 pub struct BuildArgs {
     /// Mesh file (OBJ or PLY, optionally .gz).
@@ -134,10 +145,12 @@ pub struct BuildArgs {
     /// Timed runs after one warm-up.
     #[arg(long, default_value_t = 5)]
     pub runs: u32,
+    /// Where the report goes.
     #[command(flatten)]
     pub output: Output,
 }
 
+/// Arguments of `chambre bench frame`.
 #[derive(Debug, clap::Args)]
 pub struct FrameArgs {
     /// Scenes of `scenes/`, by name (default: every sample scene).
@@ -150,12 +163,15 @@ pub struct FrameArgs {
     /// each N given: the dispatch shapes behind `RayBudgets::for_adapter`.
     #[arg(long, value_delimiter = ',')]
     pub gpu_rays_per_invocation: Vec<u64>,
+    /// Backends to measure.
     #[command(flatten)]
     pub backends: Backends,
+    /// Where the report goes.
     #[command(flatten)]
     pub output: Output,
 }
 
+/// Arguments of `chambre bench rays`.
 #[derive(Debug, clap::Args)]
 pub struct RaysArgs {
     /// Mesh file (OBJ or PLY, optionally .gz).
@@ -176,8 +192,10 @@ pub struct RaysArgs {
     /// Vertical field of view in degrees.
     #[arg(long, default_value_t = Pinhole::DRAGON.vertical_fov_deg)]
     pub vertical_fov: f32,
+    /// Image width in pixels: one camera ray per pixel and frame.
     #[arg(long, default_value_t = Pinhole::DRAGON.width)]
     pub width: u32,
+    /// Image height in pixels.
     #[arg(long, default_value_t = Pinhole::DRAGON.height)]
     pub height: u32,
     /// Coherent frames (one jittered ray per pixel each); the incoherent set has as many rays.
@@ -186,13 +204,16 @@ pub struct RaysArgs {
     /// Timed runs after one warm-up.
     #[arg(long, default_value_t = 5)]
     pub runs: u32,
+    /// Seed of the pixel jitter and of the incoherent rays.
     #[arg(long, default_value_t = 1)]
     pub seed: u32,
     /// Acceleration structures to traverse, side by side.
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh])]
     pub bvh: Vec<Bvh>,
+    /// Backends to measure.
     #[command(flatten)]
     pub backends: Backends,
+    /// Where the report goes.
     #[command(flatten)]
     pub output: Output,
 }
@@ -200,8 +221,11 @@ pub struct RaysArgs {
 /// A benchmark's report with where it ran, as written to JSON.
 #[derive(Debug, Serialize)]
 pub struct Report<'a, T: Serialize> {
+    /// The command line that ran the benchmark.
     pub command: &'a str,
+    /// Where and when it ran.
     pub machine: &'a Machine,
+    /// The benchmark's own report.
     pub report: &'a T,
 }
 
@@ -372,8 +396,11 @@ fn write_json<T: Serialize>(path: &std::path::Path, value: &T) -> Result<()> {
 /// Median, minimum and maximum of repeated measurements.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Spread {
+    /// Median (the upper one of an even count).
     pub median: f64,
+    /// Smallest measurement.
     pub min: f64,
+    /// Largest measurement.
     pub max: f64,
 }
 
@@ -394,8 +421,11 @@ impl Spread {
 /// Where and when a benchmark ran: what a figure needs to be compared with another.
 #[derive(Clone, Debug, Serialize)]
 pub struct Machine {
+    /// The crate version that ran.
     pub chambre_version: String,
+    /// Date of the run (UTC), YYYY-MM-DD.
     pub date_utc: String,
+    /// Threads of the CPU path (rayon's pool).
     pub cpu_threads: usize,
     /// The GPU adapter, or why there is none.
     pub adapter: String,
@@ -410,6 +440,7 @@ impl Machine {
         )
     }
 
+    /// This machine, now, with the adapter of `gpu` (or why there is none).
     pub fn here(gpu: &Result<GpuContext>) -> Machine {
         Machine {
             chambre_version: env!("CARGO_PKG_VERSION").to_string(),

@@ -28,7 +28,9 @@ use crate::scene::mesh::load_mesh;
 /// One placement of the mesh: `world = scale * file + offset` (the offset along (1, 1, 1)).
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct Placement {
+    /// Offset added to every coordinate (scene units).
     pub offset: f64,
+    /// Uniform scale of the file's coordinates.
     pub scale: f64,
 }
 
@@ -69,22 +71,32 @@ pub const PLACEMENTS: [Placement; 7] = [
 pub struct PathErrors {
     /// Rays the path and the oracle disagree on hitting (silhouette rays).
     pub hit_disagreements: usize,
+    /// Median of |t - t_oracle| / t_oracle over rays both hit.
     pub median_relative_t: f64,
+    /// Largest |t - t_oracle| / t_oracle.
     pub max_relative_t: f64,
     /// Hit point distance from the oracle's, over the mesh's size.
     pub median_point_error: f64,
+    /// Largest hit point distance from the oracle's, over the mesh's size.
     pub max_point_error: f64,
 }
 
+/// One placement's figures.
 #[derive(Clone, Debug, Serialize)]
 pub struct PrecisionResult {
+    /// Where the mesh was, at what scale.
     pub placement: Placement,
+    /// Camera rays traced.
     pub rays: usize,
+    /// Rays that hit the mesh according to the oracle.
     pub oracle_hits: usize,
+    /// The CPU path's hits against the oracle.
     pub cpu: PathErrors,
+    /// The GPU's hits against the oracle, when it ran.
     pub gpu: Option<PathErrors>,
     /// The pixel values of a render of the placement (`pixel_run`) against the oracle's.
     pub cpu_pixels: PixelErrors,
+    /// The GPU render's pixels against the oracle's, when it ran.
     pub gpu_pixels: Option<PixelErrors>,
 }
 
@@ -98,15 +110,22 @@ pub struct PixelErrors {
     pub disagreements: usize,
     /// Relative error of the lit pixels: median, 99th percentile, largest.
     pub median_relative: f64,
+    /// 99th percentile of the lit pixels' relative error.
     pub p99_relative: f64,
+    /// Largest relative error of a lit pixel.
     pub max_relative: f64,
 }
 
+/// The whole benchmark's report.
 #[derive(Clone, Debug, Serialize)]
 pub struct PrecisionReport {
+    /// The mesh file.
     pub mesh: PathBuf,
+    /// The mesh's largest extent in file units (at scale 1).
     pub mesh_size: f64,
+    /// The camera's height above the mesh's centre, in mesh sizes.
     pub camera_height: f64,
+    /// One entry per placement.
     pub results: Vec<PrecisionResult>,
     /// The camera's own rays at the extremes of its settings, near and far from the origin.
     pub cameras: Vec<CameraResult>,
@@ -465,6 +484,7 @@ pub fn run(
 }
 
 impl PrecisionReport {
+    /// The report as Markdown tables.
     pub fn to_markdown(&self) -> String {
         let mut out = format!(
             "precision: {} ({:.3} units across), camera rays from {} mesh sizes above its \
@@ -559,11 +579,15 @@ pub const CAMERA_CASES: [(&str, &str); 7] = [
 /// f32 camera rays against their f64 twin for one camera.
 #[derive(Clone, Debug, Serialize)]
 pub struct CameraResult {
+    /// The camera settings, in words.
     pub case: String,
+    /// Offset added to every coordinate of the camera and its subject (scene units).
     pub offset: f64,
+    /// Rays compared.
     pub rays: usize,
     /// Angle between the f32 and the f64 direction, radians.
     pub median_angle: f64,
+    /// Largest angle between the f32 and the f64 direction, radians.
     pub max_angle: f64,
     /// Distance between the f32 and the f64 origin, over the distance from the camera to its
     /// subject (the look-at point).

@@ -29,11 +29,17 @@ use crate::scene::Scene;
 /// A pinhole camera as other ray tracers take it.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Pinhole {
+    /// Eye position (scene units).
     pub position: [f32; 3],
+    /// The point at the image centre.
     pub look_at: [f32; 3],
+    /// World up direction for the view.
     pub up: [f32; 3],
+    /// Vertical field of view (degrees).
     pub vertical_fov_deg: f32,
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
 }
 
@@ -52,12 +58,15 @@ impl Pinhole {
 /// What to trace.
 #[derive(Clone, Debug, Serialize)]
 pub struct RaysConfig {
+    /// Mesh file (OBJ or PLY, optionally .gz).
     pub mesh: PathBuf,
+    /// The camera of the coherent rays.
     pub camera: Pinhole,
     /// Coherent frames: `width * height * frames` rays per set.
     pub frames: u32,
     /// Timed runs after one warm-up.
     pub runs: u32,
+    /// Seed of the pixel jitter and of the incoherent rays.
     pub seed: u32,
     /// The acceleration structures traversed, side by side.
     pub bvhs: Vec<Bvh>,
@@ -68,22 +77,28 @@ pub struct RaysConfig {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Bvh {
+    /// The renderer's binary BVH.
     Bvh2,
+    /// The compressed wide BVH: eight children per node.
     Cwbvh,
 }
 
 /// Rays as structure of arrays.
 #[derive(Clone, Debug, Default)]
 pub struct RaySet {
+    /// Ray origins (scene units).
     pub origins: Vec<Vec3>,
+    /// Unit ray directions, one per origin.
     pub directions: Vec<Vec3>,
 }
 
 impl RaySet {
+    /// Number of rays.
     pub fn len(&self) -> usize {
         self.origins.len()
     }
 
+    /// Whether there are no rays.
     pub fn is_empty(&self) -> bool {
         self.origins.is_empty()
     }
@@ -141,13 +156,16 @@ pub fn incoherent_rays(lo: Vec3, hi: Vec3, count: usize, seed: u32) -> RaySet {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Query {
+    /// The nearest hit along each ray, with its distance.
     ClosestHit,
+    /// Whether anything lies along each ray (shadow rays).
     AnyHit,
 }
 
 /// What the rays found: the checksum another tracer can compare.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 pub struct Checksum {
+    /// Rays that hit something.
     pub hits: u64,
     /// Sum of the closest-hit distances (0 for any-hit queries).
     pub sum_t: f64,
@@ -211,27 +229,40 @@ pub fn trace_cpu(
 /// The figures of one ray set, query and backend.
 #[derive(Clone, Debug, Serialize)]
 pub struct RaysResult {
+    /// "coherent" or "incoherent".
     pub set: &'static str,
+    /// Closest hit or any hit.
     pub query: Query,
+    /// The backend and its threads or adapter.
     pub backend: String,
+    /// The acceleration structure traversed.
     pub bvh: Bvh,
+    /// Rays in the set.
     pub rays: usize,
+    /// Millions of rays per second over the timed runs.
     pub mrays_per_s: Spread,
+    /// What the rays found.
     pub checksum: Checksum,
 }
 
 /// The whole benchmark's report.
 #[derive(Clone, Debug, Serialize)]
 pub struct RaysReport {
+    /// What was traced.
     pub config: RaysConfig,
+    /// Triangles of the mesh.
     pub triangles: usize,
+    /// The BVH2 build (ms).
     pub bvh_build_ms: f64,
     /// The CWBVH's conversion from the BVH2, after it.
     pub cwbvh_build_ms: f64,
+    /// Nodes of the BVH2.
     pub bvh2_nodes: usize,
+    /// Nodes of the CWBVH.
     pub cwbvh_nodes: usize,
     /// What a CWBVH closest-hit query reads, per ray set.
     pub cwbvh_reads: Vec<Reads>,
+    /// One entry per ray set, backend, BVH and query.
     pub results: Vec<RaysResult>,
 }
 
@@ -240,9 +271,13 @@ pub struct RaysReport {
 /// and its result (4). Times rays/s, the memory traffic a kernel asks of the caches and DRAM.
 #[derive(Clone, Debug, Serialize)]
 pub struct Reads {
+    /// "coherent" or "incoherent".
     pub set: &'static str,
+    /// Mean CWBVH nodes visited per ray.
     pub nodes_per_ray: f64,
+    /// Mean primitives tested per ray, planes included.
     pub prims_per_ray: f64,
+    /// Mean bytes read per ray: nodes, primitives, the ray and its result.
     pub bytes_per_ray: f64,
 }
 
@@ -296,7 +331,9 @@ pub fn bounds(scene: &FlatScene) -> (Vec3, Vec3) {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Backend {
+    /// The CPU reference path (rayon threads).
     Cpu,
+    /// The GPU kernels (wgpu).
     Gpu,
 }
 

@@ -14,21 +14,32 @@ use crate::scene::Scene;
 
 const SCENE: &str = "scenes/bokeh.toml";
 const SIZE: [&str; 2] = ["render.width=120", "render.height=80"];
+/// The lens sample patterns compared.
 pub const SAMPLERS: [&str; 5] = ["random", "stratified", "poisson", "interleaved", "sobol"];
+/// Samples per pixel each pattern is measured at.
 pub const SAMPLE_COUNTS: [u32; 4] = [4, 16, 64, 256];
 
+/// One lens sampler at one sample count.
 #[derive(Clone, Debug, Serialize)]
 pub struct SamplerResult {
+    /// The lens sampler's name.
     pub sampler: &'static str,
+    /// Samples per pixel.
     pub spp: u32,
+    /// RMSE of linear radiance against the reference.
     pub rmse: f64,
+    /// Time of the render on the CPU path (ms).
     pub cpu_ms: f64,
 }
 
+/// The whole study's report.
 #[derive(Clone, Debug, Serialize)]
 pub struct SamplersReport {
+    /// The scene file rendered.
     pub scene: &'static str,
+    /// Samples per pixel of the reference image.
     pub reference_spp: u32,
+    /// One entry per sampler and sample count.
     pub results: Vec<SamplerResult>,
 }
 
@@ -88,6 +99,7 @@ pub fn run(reference_spp: u32) -> Result<SamplersReport> {
 }
 
 impl SamplersReport {
+    /// The report as a Markdown table.
     pub fn to_markdown(&self) -> String {
         let mut out = format!(
             "samplers: {} at 120x80, pixel sampler stratified, seed 2; RMSE of linear radiance \

@@ -24,29 +24,42 @@ use crate::scene::{Scene, Shape};
 
 /// Triangle counts measured by default: prefixes of the mesh, then 4 and 12 copies of it.
 pub const PREFIXES: [usize; 6] = [1_000, 4_000, 16_000, 64_000, 256_000, 1 << 40];
+/// Copies of the whole mesh measured by default.
 pub const COPIES: [usize; 2] = [4, 12];
 
+/// One scene size's figures.
 #[derive(Clone, Debug, Serialize)]
 pub struct ScaleResult {
+    /// Triangles of the scene.
     pub triangles: usize,
+    /// The BVH build (ms).
     pub build_ms: f64,
+    /// Nodes of the BVH.
     pub bvh_nodes: usize,
     /// Bytes of the arrays a traversal reads (nodes and primitives, normals included).
     pub scene_bytes: usize,
     /// The process's peak resident memory so far (Linux `VmHWM`), where the system says.
     pub peak_rss_bytes: Option<u64>,
+    /// Closest-hit Mrays/s of the CPU path over the timed runs.
     pub cpu_mrays_per_s: Spread,
     /// `None` with the reason in `gpu_refused` when the GPU does not take the scene.
     pub gpu_mrays_per_s: Option<Spread>,
+    /// Why the GPU did not take the scene, when it did not.
     pub gpu_refused: Option<String>,
+    /// What the CPU path's closest-hit rays found.
     pub checksum: Checksum,
 }
 
+/// The whole benchmark's report.
 #[derive(Clone, Debug, Serialize)]
 pub struct ScaleReport {
+    /// The mesh file.
     pub mesh: String,
+    /// The camera of the rays (one per pixel).
     pub camera: Pinhole,
+    /// Rays per measurement.
     pub rays: usize,
+    /// One entry per size, smallest first.
     pub results: Vec<ScaleResult>,
 }
 
@@ -179,6 +192,7 @@ pub fn run(
 }
 
 impl ScaleReport {
+    /// The report as a Markdown table.
     pub fn to_markdown(&self) -> String {
         let mut out = format!(
             "scale: {} (prefixes of its triangles, then copies beside it), {} coherent \

@@ -26,11 +26,19 @@ use crate::sampler::SamplerName;
 /// Film and lens movements in the scene file's units: degrees and millimetres.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Movements {
+    /// Film rotation about the horizontal axis (degrees): corrects a camera pitched up by it.
     pub film_tilt: f64,
+    /// Film rotation about the vertical axis (degrees): corrects a camera yawed right by it.
     pub film_swing: f64,
+    /// [right, up] movement of the film within its plane (mm): moves the framing.
     pub film_shift: [f64; 2],
+    /// Lens rotation about its horizontal axis (degrees); positive turns the plane of sharp focus
+    /// down.
     pub lens_tilt: f64,
+    /// Lens rotation about its vertical axis (degrees); positive turns the plane of sharp focus to
+    /// the right.
     pub lens_swing: f64,
+    /// [right, up] movement of the lens (mm).
     pub lens_shift: [f64; 2],
 }
 
@@ -50,20 +58,29 @@ pub enum Focus {
 /// The validated camera of a scene, in the units of the scene file (f64 until uploaded).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraSpec {
+    /// Lens centre before any lens shift (world, scene units).
     pub position: DVec3,
+    /// The point the unmoved optical axis passes through (world, scene units).
     pub look_at: DVec3,
+    /// World up direction for the view; not parallel to it.
     pub up: DVec3,
+    /// Focal length (mm).
     pub focal_length_mm: f64,
+    /// Film width and height (mm).
     pub film_mm: [f64; 2],
     /// 0: pinhole.
     pub f_number: f64,
+    /// How the focus was set.
     pub focus: Focus,
     /// Lens centre to the film's pivot (the rail axis), in mm: the bellows extension.
     pub film_distance_mm: f64,
+    /// Film and lens tilts, swings and shifts.
     pub movements: Movements,
     /// 0: circular aperture; n >= 3: regular polygon.
     pub aperture_blades: u32,
+    /// Rotation of the polygonal aperture (degrees, counter-clockwise in the image).
     pub aperture_rotation_deg: f64,
+    /// Pattern of the lens points.
     pub lens_sampler: SamplerName,
     /// Scene units per millimetre (0.001 / meters_per_unit).
     pub units_per_mm: f64,
@@ -72,8 +89,11 @@ pub struct CameraSpec {
 /// An orthonormal camera basis: right = forward x up, image row 0 at the top.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraBasis {
+    /// Image right (world, unit).
     pub right: DVec3,
+    /// Image up (world, unit), orthogonal to `forward`.
     pub up: DVec3,
+    /// Towards `look_at` (world, unit).
     pub forward: DVec3,
 }
 
@@ -110,6 +130,7 @@ pub struct Standards {
     pub film_center: DVec3,
     /// Film directions of image right and image up (mirror image: the film is inverted).
     pub film_u: DVec3,
+    /// Film direction of image up (see `film_u`).
     pub film_v: DVec3,
 }
 
@@ -126,6 +147,7 @@ impl Standards {
 }
 
 impl CameraSpec {
+    /// The camera frame's axes in world space, from `position`, `look_at` and `up`.
     pub fn basis(&self) -> CameraBasis {
         let forward = (self.look_at - self.position).normalize();
         let right = forward.cross(self.up).normalize();
@@ -136,10 +158,12 @@ impl CameraSpec {
         }
     }
 
+    /// Whether there is no lens (`f_number` 0): every ray passes through the lens centre.
     pub fn is_pinhole(&self) -> bool {
         self.f_number == 0.0
     }
 
+    /// Aperture radius, f / (2 N), in mm; 0 for a pinhole.
     pub fn lens_radius_mm(&self) -> f64 {
         if self.is_pinhole() {
             0.0
@@ -148,6 +172,7 @@ impl CameraSpec {
         }
     }
 
+    /// The lens and film placed by the movements, in the camera frame (mm).
     pub fn standards(&self) -> Standards {
         let m = &self.movements;
         let lens = standard_rotation(m.lens_tilt, m.lens_swing);
@@ -236,7 +261,9 @@ impl CameraSpec {
 /// A ray in world space; `direction` is unit length.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
+    /// Origin (world, scene units).
     pub origin: Vec3,
+    /// Unit direction.
     pub direction: Vec3,
 }
 

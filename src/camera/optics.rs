@@ -15,11 +15,14 @@ use super::{CameraSpec, standard_rotation};
 /// A plane in world space: a point on it and its unit normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plane {
+    /// A point on the plane (world, scene units).
     pub point: DVec3,
+    /// Unit normal.
     pub normal: DVec3,
 }
 
 impl Plane {
+    /// Distance of `p` from the plane, positive on the side the normal points to.
     pub fn signed_distance(&self, p: DVec3) -> f64 {
         (p - self.point).dot(self.normal)
     }
@@ -28,11 +31,14 @@ impl Plane {
 /// A line in world space: a point on it and its unit direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Line {
+    /// A point on the line (world, scene units).
     pub point: DVec3,
+    /// Unit direction.
     pub direction: DVec3,
 }
 
 impl Line {
+    /// Distance of `p` from the line (scene units).
     pub fn distance_to(&self, p: DVec3) -> f64 {
         (p - self.point)
             .reject_from_normalized(self.direction)
@@ -228,11 +234,17 @@ impl CameraSpec {
 /// glFrustum's parameters, in scene units.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frustum {
+    /// Left edge of the window on the near plane.
     pub left: f64,
+    /// Right edge of the window on the near plane.
     pub right: f64,
+    /// Bottom edge of the window on the near plane.
     pub bottom: f64,
+    /// Top edge of the window on the near plane.
     pub top: f64,
+    /// Distance from the eye to the near plane, along the view axis.
     pub near: f64,
+    /// Distance from the eye to the far plane, along the view axis.
     pub far: f64,
 }
 
@@ -264,12 +276,17 @@ impl Frustum {
 /// View rotation + off-axis frustum; `projection * view` maps world points to clip space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RasterProjection {
+    /// World to view space (OpenGL convention: the eye at the origin, looking down -z, along the
+    /// film normal).
     pub view: DMat4,
+    /// The off-axis frustum in view space.
     pub frustum: Frustum,
+    /// `frustum.matrix()`: view space to clip space.
     pub projection: DMat4,
 }
 
 impl RasterProjection {
+    /// World to clip space: `projection * view`.
     pub fn matrix(&self) -> DMat4 {
         self.projection * self.view
     }
@@ -290,8 +307,11 @@ impl RasterProjection {
 /// The lens movements and focus that put the plane of sharp focus through three points.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FocusSolution {
+    /// Lens tilt (degrees).
     pub lens_tilt: f64,
+    /// Lens swing (degrees).
     pub lens_swing: f64,
+    /// Lens centre to the film pivot (mm): the bellows extension.
     pub film_distance_mm: f64,
 }
 

@@ -14,16 +14,22 @@ use crate::layout::{FEATURES, GpuPass, wgsl_prelude};
 /// How a kernel accesses a binding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Access {
+    /// `var<uniform>`: a small struct of constants.
     Uniform,
+    /// `var<storage, read>`: an array the kernel only reads.
     StorageRead,
+    /// `var<storage, read_write>`: an array the kernel writes (or updates atomically).
     StorageReadWrite,
 }
 
 /// One binding of group 0: its number, its WGSL variable name, and its access.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Binding {
+    /// `@binding(n)` in `wgsl/bindings.wgsl`.
     pub binding: u32,
+    /// The WGSL variable's name, which `Pipeline::bind_group` looks buffers up by.
     pub name: &'static str,
+    /// Uniform or storage, read-only or not.
     pub access: Access,
     /// Bytes of one element, for a binding bound at a dynamic offset into an array of them
     /// (one per dispatch of a batch); 0 for a binding of the whole buffer.
@@ -127,10 +133,13 @@ pub const MODULES: [(&str, &str); 13] = [
 /// A compute kernel: what it is made of and what it reads.
 #[derive(Debug)]
 pub struct Kernel {
+    /// Label of its shader module, pipeline and bind group, and its name in messages.
     pub name: &'static str,
     /// Module file names (from [`MODULES`]), in composition order.
     pub modules: &'static [&'static str],
+    /// The `@compute` function to run.
     pub entry_point: &'static str,
+    /// The entries of [`BINDINGS`] it reads, in binding order.
     pub bindings: &'static [Binding],
 }
 
@@ -238,8 +247,11 @@ pub fn feature_constants(features: u32) -> Vec<(&'static str, f64)> {
 
 /// A pipeline and the layout of the bind group it takes.
 pub struct Pipeline {
+    /// The kernel compiled for one feature set.
     pub pipeline: wgpu::ComputePipeline,
+    /// Made from the kernel's bindings: group 0 of the pipeline.
     pub bind_group_layout: wgpu::BindGroupLayout,
+    /// The kernel it was built from.
     pub kernel: &'static Kernel,
 }
 

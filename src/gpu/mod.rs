@@ -34,6 +34,7 @@ pub fn describe_adapters() -> Vec<String> {
     adapters.iter().map(describe_adapter).collect()
 }
 
+/// One line for `adapter`: name, backend, type, driver, and the limits that bound a scene.
 pub fn describe_adapter(adapter: &wgpu::Adapter) -> String {
     let info = adapter.get_info();
     let limits = adapter.limits();
@@ -84,8 +85,11 @@ pub(crate) type Mapped = Arc<Mutex<Option<std::result::Result<(), wgpu::BufferAs
 /// render stopped finding any adapter partway through, and each device costs milliseconds).
 #[derive(Clone)]
 pub struct GpuContext {
+    /// The device, its errors caught by our handler rather than wgpu's panicking one.
     pub device: wgpu::Device,
+    /// The device's queue, which every submission goes to.
     pub queue: wgpu::Queue,
+    /// The adapter as [`describe_adapter`] writes it, for reports and CSV comments.
     pub adapter_description: String,
     /// The adapter's name alone (e.g. "llvmpipe (LLVM 15.0.6, 256 bits)").
     pub adapter_name: String,
@@ -96,6 +100,8 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
+    /// Opens the high-performance adapter (Vulkan, Metal or DX12) with its largest storage
+    /// limits, and timestamp queries where it has them.
     pub fn new() -> Result<GpuContext> {
         let adapter =
             pollster::block_on(instance().request_adapter(&wgpu::RequestAdapterOptions {

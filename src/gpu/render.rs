@@ -160,6 +160,7 @@ impl GpuRenderer {
         self.features
     }
 
+    /// The adapter rendering, as [`super::describe_adapter`] writes it.
     pub fn adapter_description(&self) -> &str {
         &self.context.adapter_description
     }
@@ -342,16 +343,17 @@ impl Backend for GpuRenderer {
     }
 
     fn accumulation(&mut self) -> Result<Vec<[f32; 4]>> {
-        let halves = self.halves()?;
+        let halves = self.read_slots(0..self.layout.image_len())?;
         Ok(self.layout.image_sums(halves))
     }
 
     /// Read after the batches in flight, like the snapshot.
-    fn halves(&mut self) -> Result<Vec<[f32; 4]>> {
+    fn read_slots(&mut self, slots: std::ops::Range<usize>) -> Result<Vec<[f32; 4]>> {
         let bytes = self.context.read_buffer(self.buffer("accumulation"))?;
+        // Copied, not cast: the bytes' alignment is a byte's.
         let mut sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
-        sums.truncate(self.layout.image_len());
-        Ok(sums)
+        sums.truncate(slots.end);
+        Ok(sums.split_off(slots.start))
     }
 
     /// A new buffer: the batches in flight keep the one they were bound with.

@@ -163,6 +163,7 @@ impl GpuTracer {
         Ok(all)
     }
 
+    /// The adapter's name alone (`GpuContext::adapter_name`).
     pub fn adapter_name(&self) -> &str {
         &self.context.adapter_name
     }

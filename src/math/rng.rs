@@ -21,10 +21,13 @@ pub struct Rng {
     /// The pixel (`y * width + x`) and camera sample the stream belongs to: the sample patterns
     /// of later dimensions (the light samples) index by them.
     pub pixel: u32,
+    /// The camera sample's index within its pixel (see `pixel`).
     pub sample: u32,
 }
 
 impl Rng {
+    /// The stream of sample `sample` of pixel `pixel` (`y * width + x`) in the render seeded
+    /// `seed`, at dimension 0.
     pub fn new(seed: u32, pixel: u32, sample: u32) -> Self {
         let key = pcg_hash(pcg_hash(pcg_hash(seed) ^ pixel) ^ sample);
         Rng {
@@ -40,6 +43,7 @@ impl Rng {
         self.dim = dim;
     }
 
+    /// The next dimension's 32 random bits.
     pub fn next_u32(&mut self) -> u32 {
         let h = pcg_hash(self.key ^ pcg_hash(self.dim));
         self.dim += 1;
@@ -51,6 +55,7 @@ impl Rng {
         (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
     }
 
+    /// Two consecutive dimensions, uniform in [0, 1)^2.
     pub fn next_2d(&mut self) -> [f32; 2] {
         let x = self.next_f32();
         let y = self.next_f32();

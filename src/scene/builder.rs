@@ -70,18 +70,22 @@ impl SceneBuilder {
         self
     }
 
+    /// Samples per pixel (`render.spp`).
     pub fn spp(self, spp: u32) -> Self {
         self.render_field("spp", Value::Integer(spp as i64))
     }
 
+    /// Mirror bounces per path (`render.max_depth`).
     pub fn max_depth(self, depth: u32) -> Self {
         self.render_field("max_depth", Value::Integer(depth as i64))
     }
 
+    /// Radiance of rays that escape the scene (`render.background`).
     pub fn background(self, radiance: [f64; 3]) -> Self {
         self.render_field("background", vec3(radiance))
     }
 
+    /// Ambient radiance L_a (`render.ambient`): each hit adds diffuse * L_a.
     pub fn ambient(self, radiance: [f64; 3]) -> Self {
         self.render_field("ambient", vec3(radiance))
     }
@@ -117,6 +121,7 @@ impl SceneBuilder {
         self
     }
 
+    /// A Lambert material named `name` of diffuse reflectance `diffuse`.
     pub fn lambert(self, name: &str, diffuse: [f64; 3]) -> Self {
         self.add_materials(&[
             ("name", name.into()),
@@ -125,6 +130,8 @@ impl SceneBuilder {
         ])
     }
 
+    /// A Blinn-Phong material: diffuse plus a lobe of reflectance `specular` and exponent
+    /// `shininess`.
     pub fn blinn_phong(
         self,
         name: &str,
@@ -141,6 +148,7 @@ impl SceneBuilder {
         ])
     }
 
+    /// A perfect mirror of reflectance `reflectance` (no diffuse term).
     pub fn mirror(self, name: &str, reflectance: [f64; 3]) -> Self {
         self.add_materials(&[
             ("name", name.into()),
@@ -149,6 +157,7 @@ impl SceneBuilder {
         ])
     }
 
+    /// A sphere (scene units) of the material named `material`.
     pub fn sphere(self, center: [f64; 3], radius: f64, material: &str) -> Self {
         self.add_shapes(&[
             ("type", "sphere".into()),
@@ -158,6 +167,7 @@ impl SceneBuilder {
         ])
     }
 
+    /// A parallelogram with corner `corner` and edges `edge_u`, `edge_v` (scene units).
     pub fn quad(
         self,
         corner: [f64; 3],
@@ -174,6 +184,7 @@ impl SceneBuilder {
         ])
     }
 
+    /// An infinite plane through `point` with normal `normal`.
     pub fn plane(self, point: [f64; 3], normal: [f64; 3], material: &str) -> Self {
         self.add_shapes(&[
             ("type", "plane".into()),
@@ -192,6 +203,7 @@ impl SceneBuilder {
         ])
     }
 
+    /// A point light of radiant intensity `intensity` (W/sr).
     pub fn point_light(self, position: [f64; 3], intensity: [f64; 3]) -> Self {
         self.add_lights(&[
             ("type", "point".into()),
@@ -200,6 +212,7 @@ impl SceneBuilder {
         ])
     }
 
+    /// A directional light travelling along `direction`, of irradiance `irradiance`.
     pub fn directional_light(self, direction: [f64; 3], irradiance: [f64; 3]) -> Self {
         self.add_lights(&[
             ("type", "directional".into()),
@@ -208,6 +221,8 @@ impl SceneBuilder {
         ])
     }
 
+    /// A one-sided parallelogram light (shining towards edge_u x edge_v) of radiance `radiance`,
+    /// sampled with `samples` shadow rays.
     pub fn area_light(
         self,
         corner: [f64; 3],

@@ -16,6 +16,7 @@ use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Exact<T, const N: usize>(pub [T; N]);
 
+/// A point, vector or colour: exactly three numbers.
 pub type Vec3 = Exact<f64, 3>;
 /// A [x, y] or [width, height] pair in millimetres.
 pub type Pair = Exact<f64, 2>;
@@ -62,21 +63,29 @@ impl<'de, T: Deserialize<'de>, const N: usize> Visitor<'de> for ExactVisitor<T, 
     }
 }
 
+/// A whole scene file: its sections and arrays of tables, as written.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
+    /// `[scene]`: global settings (units).
     #[serde(default)]
     pub scene: SceneSection,
+    /// `[render]`: image size, sampling and the radiance of the surroundings.
     pub render: RenderSection,
+    /// `[camera]`: position, lens and view-camera movements.
     pub camera: CameraSection,
+    /// `[[materials]]`: named materials, referred to by shapes.
     #[serde(default)]
     pub materials: Vec<MaterialEntry>,
+    /// `[[shapes]]`: spheres, quads, planes and meshes.
     #[serde(default)]
     pub shapes: Vec<ShapeEntry>,
+    /// `[[lights]]`: point, directional and area lights.
     #[serde(default)]
     pub lights: Vec<LightEntry>,
 }
 
+/// The `[scene]` section.
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneSection {
@@ -84,21 +93,30 @@ pub struct SceneSection {
     pub meters_per_unit: Option<f64>,
 }
 
+/// The `[render]` section.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RenderSection {
+    /// Image width in pixels, 1..=16384.
     pub width: i64,
+    /// Image height in pixels, 1..=16384.
     pub height: i64,
+    /// Samples per pixel, 1..=2^20 (default 16); with `noise_target`, the most a pixel takes.
     #[serde(default = "default_spp")]
     pub spp: i64,
+    /// Mirror bounces, 0..=1024 (default 4).
     #[serde(default = "default_max_depth")]
     pub max_depth: i64,
+    /// Seed of the random numbers, 0..=2^32-1 (default 0).
     #[serde(default)]
     pub seed: i64,
+    /// Pattern of the pixel positions (default stratified).
     #[serde(default)]
     pub pixel_sampler: SamplerName,
+    /// Radiance of rays that escape the scene, linear RGB, 0..=1e20 (default 0).
     #[serde(default)]
     pub background: Vec3,
+    /// Ambient radiance L_a: each hit adds diffuse * L_a; 0..=1e20 (default 0).
     #[serde(default)]
     pub ambient: Vec3,
     /// [x0, x1, y0, y1] in [0, 1]: render only this window of the image (pbrt's crop window)
@@ -117,11 +135,15 @@ fn default_max_depth() -> i64 {
     4
 }
 
+/// The `[camera]` section; the model and conventions are in `docs/camera.md`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSection {
+    /// Where the camera stands (scene units): the lens centre before any lens shift.
     pub position: Vec3,
+    /// The point the camera looks at (scene units); distinct from `position`.
     pub look_at: Vec3,
+    /// The world's up direction for the view (default [0, 1, 0]); not parallel to the view.
     #[serde(default = "default_up")]
     pub up: Vec3,
     /// mm
@@ -155,6 +177,7 @@ pub struct CameraSection {
     pub aperture_blades: Option<i64>,
     /// degrees, counter-clockwise in the image
     pub aperture_rotation: Option<f64>,
+    /// Pattern of the lens points (default stratified).
     #[serde(default)]
     pub lens_sampler: SamplerName,
 }
@@ -166,39 +189,58 @@ fn default_film() -> Pair {
     Exact([36.0, 24.0])
 }
 
+/// A material's reflection model (`materials[].model`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MaterialModel {
+    /// Diffuse only: BRDF diffuse / pi.
     Lambert,
+    /// Diffuse plus a normalised Phong lobe (`specular`, `shininess`).
     Phong,
+    /// Diffuse plus a normalised Blinn-Phong lobe (`specular`, `shininess`).
     BlinnPhong,
+    /// A perfect mirror: `diffuse` defaults to 0 and `mirror` to 1.
     Mirror,
 }
 
+/// One `[[materials]]` table.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialEntry {
+    /// Unique name shapes refer to it by.
     pub name: String,
+    /// Reflection model.
     pub model: MaterialModel,
+    /// Diffuse reflectance in [0, 1] per channel (default 0.8; mirror: 0).
     pub diffuse: Option<Vec3>,
+    /// Specular reflectance of the lobe in [0, 1] (default 0); phong and blinn_phong only.
     pub specular: Option<Vec3>,
+    /// Exponent of the lobe in [0, 1e4] (default 32); phong and blinn_phong only.
     pub shininess: Option<f64>,
+    /// Perfect-mirror reflectance in [0, 1] per channel (default 0; mirror: 1).
     pub mirror: Option<Vec3>,
 }
 
+/// The `type` of a `[[shapes]]` table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ShapeType {
+    /// A sphere: `center`, `radius`.
     Sphere,
+    /// A parallelogram: `corner`, `edge_u`, `edge_v`.
     Quad,
+    /// An infinite plane: `point`, `normal`.
     Plane,
+    /// A triangle mesh read from `file` (OBJ or PLY, optionally gzipped).
     Mesh,
 }
 
 /// A uniform scale factor or one per axis.
 #[derive(Debug, Clone, Copy)]
 pub enum Scale {
+    /// The same factor on every axis.
     Uniform(f64),
+    /// Factors [sx, sy, sz].
     PerAxis(Vec3),
 }
 
@@ -236,56 +278,85 @@ impl<'de> Visitor<'de> for ScaleVisitor {
     }
 }
 
+/// One `[[shapes]]` table: the fields its `type` takes are checked in `validate.rs`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ShapeEntry {
+    /// The `type` field.
     #[serde(rename = "type")]
     pub kind: ShapeType,
     /// Required, except on a mesh whose file brings its own materials (OBJ `.mtl`).
     pub material: Option<String>,
     // sphere
+    /// Sphere: centre (scene units).
     pub center: Option<Vec3>,
+    /// Sphere: radius (scene units), > 0.
     pub radius: Option<f64>,
     // quad
+    /// Quad: one corner (scene units).
     pub corner: Option<Vec3>,
+    /// Quad: the edge from `corner` to the next corner; non-zero.
     pub edge_u: Option<Vec3>,
+    /// Quad: the other edge from `corner`; non-zero, not parallel to `edge_u`.
     pub edge_v: Option<Vec3>,
     // plane
+    /// Plane: a point on it (scene units).
     pub point: Option<Vec3>,
+    /// Plane: its normal; non-zero.
     pub normal: Option<Vec3>,
     // mesh
+    /// Mesh: the OBJ or PLY file (`.gz` too), relative to the scene file's directory.
     pub file: Option<String>,
+    /// Mesh: translation (scene units), applied last.
     pub translate: Option<Vec3>,
+    /// Mesh: rotation in degrees about x, then y, then z; applied after `scale`.
     pub rotate: Option<Vec3>,
+    /// Mesh: scale factor, uniform or per axis; applied first.
     pub scale: Option<Scale>,
+    /// Mesh: smooth shading with vertex normals, the file's or computed (default true).
     pub smooth: Option<bool>,
     /// degrees: with `smooth` and no normals in the file, edges sharper than this stay sharp
     pub crease_angle: Option<f64>,
 }
 
+/// The `type` of a `[[lights]]` table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LightType {
+    /// A point light: `position`, `intensity`.
     Point,
+    /// A directional light: `direction`, `irradiance`.
     Directional,
+    /// A one-sided parallelogram light: `corner`, `edge_u`, `edge_v`, `radiance`, `samples`.
     Area,
 }
 
+/// One `[[lights]]` table: the fields its `type` takes are checked in `validate.rs`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightEntry {
+    /// The `type` field.
     #[serde(rename = "type")]
     pub kind: LightType,
     // point
+    /// Point: position (scene units).
     pub position: Option<Vec3>,
+    /// Point: radiant intensity (W/sr), 0..=1e20; irradiance I cos(theta) / r^2.
     pub intensity: Option<Vec3>,
     // directional
+    /// Directional: the direction the light travels in; non-zero.
     pub direction: Option<Vec3>,
+    /// Directional: irradiance on a surface facing the light, 0..=1e20.
     pub irradiance: Option<Vec3>,
     // area
+    /// Area: one corner (scene units).
     pub corner: Option<Vec3>,
+    /// Area: the first edge from `corner`; the light shines towards edge_u x edge_v.
     pub edge_u: Option<Vec3>,
+    /// Area: the second edge from `corner`.
     pub edge_v: Option<Vec3>,
+    /// Area: emitted radiance, 0..=1e20.
     pub radiance: Option<Vec3>,
+    /// Area: shadow rays per shading point (default 1).
     pub samples: Option<i64>,
 }

@@ -21,9 +21,11 @@ pub const MAX_LINE_BYTES: usize = 1 << 20;
 /// An indexed triangle mesh in scene space.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriangleMesh {
+    /// Vertex positions (scene units).
     pub positions: Vec<Vec3>,
     /// Per-vertex normals, when the file has them and the shape asks for smooth shading.
     pub normals: Option<Vec<Vec3>>,
+    /// Vertex indices of each triangle, into `positions` (and `normals`).
     pub triangles: Vec<[u32; 3]>,
     /// Zero-area triangles dropped on load (they can never be hit).
     pub dropped_degenerate: usize,
@@ -42,11 +44,17 @@ pub const NO_MATERIAL: u32 = u32::MAX;
 /// of reflectance `Ks` (1 where `Ks` is absent), `Ke` an emitter.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshMaterial {
+    /// Its `newmtl` name.
     pub name: String,
+    /// Diffuse reflectance: `Kd`, clamped to [0, 1].
     pub diffuse: Vec3,
+    /// Specular reflectance of the Blinn-Phong lobe: `Ks`, clamped to [0, 1]; zero for a mirror.
     pub specular: Vec3,
+    /// Exponent of the lobe: `Ns`, clamped to [0, 1e4].
     pub shininess: f32,
+    /// Mirror reflectance (`illum` 3 or 5): `Ks`, or 1 where absent; zero otherwise.
     pub mirror: Vec3,
+    /// `Ke`: emitted radiance; non-zero makes every triangle of it an area light.
     pub emission: Vec3,
 }
 

@@ -24,26 +24,41 @@ pub use mesh::TriangleMesh;
 
 use crate::error::Result;
 
+/// A validated scene, ready to flatten (`pack::flatten`) and render.
 #[derive(Clone, Debug)]
 pub struct Scene {
     /// The scene file it came from (for messages).
     pub source: PathBuf,
+    /// Image size, sampling and the radiance of the surroundings.
     pub render: RenderSettings,
+    /// The view camera.
     pub camera: CameraSpec,
+    /// Materials of the scene file, then those of OBJ material libraries.
     pub materials: Vec<Material>,
+    /// The shapes, meshes loaded and transformed to world space.
     pub shapes: Vec<Shape>,
+    /// The lights (emitting mesh triangles are found through their materials).
     pub lights: Vec<Light>,
 }
 
+/// The validated `[render]` section.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Samples per pixel (under adaptive sampling, the most a pixel takes).
     pub spp: u32,
+    /// Mirror bounces allowed per path.
     pub max_depth: u32,
+    /// Seed of every random number of the render.
     pub seed: u32,
+    /// Pattern of the pixel positions.
     pub pixel_sampler: SamplerName,
+    /// Radiance of rays that escape the scene.
     pub background: Vec3,
+    /// Ambient radiance L_a: each hit adds diffuse * L_a.
     pub ambient: Vec3,
     /// Pixels rendered: columns `crop[0]..crop[1]`, rows `crop[2]..crop[3]` (the whole image
     /// unless `render.crop` narrows it).
@@ -52,14 +67,20 @@ pub struct RenderSettings {
     pub adaptive: Option<AdaptiveSettings>,
 }
 
+/// A validated material.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
+    /// Its name in the scene file, or `file.obj:name` for an OBJ library's.
     pub name: String,
     /// One of `layout::MODEL_*`.
     pub model: u32,
+    /// Diffuse reflectance in [0, 1] per channel.
     pub diffuse: Vec3,
+    /// Specular reflectance of the Phong or Blinn-Phong lobe, in [0, 1].
     pub specular: Vec3,
+    /// Exponent of the Phong or Blinn-Phong lobe, in [0, 1e4].
     pub shininess: f32,
+    /// Perfect-mirror reflectance in [0, 1] per channel.
     pub mirror: Vec3,
     /// Radiance of an emitting surface (an OBJ `.mtl`'s `Ke`); zero for scene materials.
     pub emission: Vec3,
@@ -68,40 +89,72 @@ pub struct Material {
 /// A shape; `material` indexes [`Scene::materials`].
 #[derive(Clone, Debug)]
 pub enum Shape {
+    /// A sphere.
     Sphere {
+        /// Centre (scene units).
         center: Vec3,
+        /// Radius (scene units), > 0.
         radius: f32,
+        /// Index into the materials.
         material: u32,
     },
+    /// A parallelogram.
     Quad {
+        /// One corner (scene units).
         corner: Vec3,
+        /// Edge from `corner` to the next corner; the normal is edge_u x edge_v.
         edge_u: Vec3,
+        /// The other edge from `corner`.
         edge_v: Vec3,
+        /// Index into the materials.
         material: u32,
     },
+    /// An infinite plane, tested outside the BVH.
     Plane {
+        /// A point on the plane (scene units).
         point: Vec3,
+        /// Unit normal.
         normal: Vec3,
+        /// Index into the materials.
         material: u32,
     },
+    /// A triangle mesh, already in world space.
     Mesh {
+        /// Its triangles and vertex normals.
         mesh: TriangleMesh,
+        /// Index into the materials of faces whose own material the mesh does not give.
         material: u32,
     },
 }
 
+/// A validated light.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
     /// Radiant intensity (W/sr): irradiance I cos / r^2.
-    Point { position: Vec3, intensity: Vec3 },
+    Point {
+        /// Position (scene units).
+        position: Vec3,
+        /// Radiant intensity (W/sr), linear RGB.
+        intensity: Vec3,
+    },
     /// `direction` is the unit direction the light travels; `irradiance` at normal incidence.
-    Directional { direction: Vec3, irradiance: Vec3 },
+    Directional {
+        /// Unit direction of travel.
+        direction: Vec3,
+        /// Irradiance on a surface facing the light.
+        irradiance: Vec3,
+    },
     /// One-sided emitting parallelogram, normal = edge_u x edge_v.
     Area {
+        /// One corner (scene units).
         corner: Vec3,
+        /// First edge from `corner`.
         edge_u: Vec3,
+        /// Second edge from `corner`.
         edge_v: Vec3,
+        /// Emitted radiance, from the front side only.
         radiance: Vec3,
+        /// Shadow rays per shading point, >= 1.
         samples: u32,
     },
 }
@@ -119,6 +172,7 @@ impl Scene {
         validate::validate(parsed)
     }
 
+    /// Triangles in all meshes (other shapes count none).
     pub fn triangle_count(&self) -> usize {
         self.shapes
             .iter()
