@@ -345,6 +345,15 @@ fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
     Scene::load(path, overrides)
 }
 
+/// Loads the scene a command works on, and says what loading left out (a glTF's textures).
+fn load_and_note(path: &Path, overrides: &[String]) -> Result<Scene> {
+    let scene = load(path, overrides)?;
+    for n in scene.notes() {
+        note!("note: {n}");
+    }
+    Ok(scene)
+}
+
 fn run_converge(args: &chambre::converge::ConvergeArgs) -> anyhow::Result<ExitCode> {
     use chambre::output::OutputTarget;
     // Both outputs are checked before the first render, and written whole or not at all.
@@ -370,7 +379,7 @@ fn run_bench(command: &chambre::bench::BenchCommand) -> anyhow::Result<ExitCode>
 }
 
 fn run_check(path: &Path, overrides: &[String]) -> anyhow::Result<ExitCode> {
-    let scene = load(path, overrides)?;
+    let scene = load_and_note(path, overrides)?;
     let flat = flatten(&scene);
     let camera = &scene.camera;
     let fov = camera.field_of_view_deg();
@@ -425,7 +434,7 @@ fn run_camera(
     far: f64,
     overrides: &[String],
 ) -> anyhow::Result<ExitCode> {
-    let scene = load(path, overrides)?;
+    let scene = load_and_note(path, overrides)?;
     let camera = &scene.camera;
     let coc = coc.unwrap_or_else(|| camera.film_mm[0].hypot(camera.film_mm[1]) / 1500.0);
     if !(coc.is_finite() && coc > 0.0) {
@@ -508,7 +517,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         );
     }
     let overrides = args.overrides()?;
-    let mut scene = load(path, &overrides)?;
+    let mut scene = load_and_note(path, &overrides)?;
     let shard = args
         .shard
         .as_deref()

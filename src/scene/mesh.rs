@@ -34,6 +34,8 @@ pub struct TriangleMesh {
     /// Per triangle, its index in `materials`, or `NO_MATERIAL`; empty when the file names no
     /// material.
     pub face_materials: Vec<u32>,
+    /// What reading left out that a user should know (a glTF's textures), one sentence each.
+    pub notes: Vec<String>,
 }
 
 /// A triangle whose file gives it no material.
@@ -90,6 +92,19 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
 fn read_mesh(path: &Path) -> Result<TriangleMesh, String> {
     let file = std::fs::File::open(path).map_err(|e| format!("cannot open mesh file: {e}"))?;
     let name = path.to_string_lossy().to_ascii_lowercase();
+    if name.ends_with(".gltf") || name.ends_with(".glb") {
+        // The gltf crate reads the file (and its buffers) whole: bound it first.
+        let size = file.metadata().map(|m| m.len()).unwrap_or(0);
+        if size > MAX_MESH_BYTES {
+            return Err(format!(
+                "{size} bytes, more than the {MAX_MESH_BYTES} a mesh may have"
+            ));
+        }
+        let scene = super::gltf::read_gltf(path)?;
+        let mut mesh = scene.mesh;
+        mesh.notes = scene.notes;
+        return check_mesh(mesh);
+    }
     let compressed = name.ends_with(".gz");
     let inner_name = name.strip_suffix(".gz").unwrap_or(&name);
     // Only an uncompressed regular file tells its size; otherwise the read limit bounds it.
@@ -108,7 +123,9 @@ fn read_mesh(path: &Path) -> Result<TriangleMesh, String> {
     } else if inner_name.ends_with(".ply") {
         read_ply(&mut reader, available)?
     } else {
-        return Err("unknown mesh format (expected .obj, .ply, .obj.gz or .ply.gz)".into());
+        return Err(
+            "unknown mesh format (expected .obj, .ply, .obj.gz, .ply.gz, .gltf or .glb)".into(),
+        );
     };
     check_mesh(mesh)
 }

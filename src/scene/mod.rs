@@ -6,6 +6,7 @@
 
 pub mod builder;
 pub mod format;
+pub mod gltf;
 mod load;
 pub mod mesh;
 mod validate;
@@ -22,7 +23,7 @@ pub use builder::SceneBuilder;
 pub use load::parse_override;
 pub use mesh::TriangleMesh;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 
 /// A validated scene, ready to flatten (`pack::flatten`) and render.
 #[derive(Clone, Debug)]
@@ -160,10 +161,41 @@ pub enum Light {
 }
 
 impl Scene {
-    /// Parse, apply `--set` overrides (`key=value`), and validate a scene file.
+    /// Parse, apply `--set` overrides (`key=value`), and validate a scene file: chambre's TOML,
+    /// or a glTF file (`.gltf`, `.glb`) rendered as a scene (`gltf::scene_text`; what its
+    /// mapping left out is in the mesh's `notes`).
     pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
+        let extension = path.extension().map(|e| e.to_ascii_lowercase());
+        if extension
+            .as_ref()
+            .is_some_and(|e| e == "gltf" || e == "glb")
+        {
+            let (text, notes) = gltf::scene_text(path).map_err(|message| Error::File {
+                path: path.to_path_buf(),
+                message,
+            })?;
+            let mut scene = Scene::from_str(path, &text, overrides)?;
+            // The file's notes are on the one mesh (textures) already; the lights' join them.
+            if let Some(Shape::Mesh { mesh, .. }) = scene.shapes.first_mut() {
+                for note in notes {
+                    if !mesh.notes.contains(&note) {
+                        mesh.notes.push(note);
+                    }
+                }
+            }
+            return Ok(scene);
+        }
         let parsed = load::parse_scene_file(path, overrides)?;
         validate::validate(parsed)
+    }
+
+    /// What loading left out that the user should know (`TriangleMesh::notes`).
+    pub fn notes(&self) -> Vec<String> {
+        let meshes = self.shapes.iter().filter_map(|s| match s {
+            Shape::Mesh { mesh, .. } => Some(mesh),
+            _ => None,
+        });
+        meshes.flat_map(|m| m.notes.iter().cloned()).collect()
     }
 
     /// Parse and validate scene text (meshes are resolved relative to `path`'s folder).
