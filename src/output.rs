@@ -66,10 +66,68 @@ pub enum ToneMap {
     Reinhard,
     /// Narkowicz's fit of the ACES filmic curve: (x (2.51 x + 0.03)) / (x (2.43 x + 0.59) + 0.14).
     Aces,
+    /// AgX (Sobotka; Blender's default view since 4.0), as three.js has it: in Rec.2020, an
+    /// inset matrix, log2 encoding over [-12.47, 4.03] stops, a sigmoid, the outset matrix;
+    /// bright saturated colours go towards white rather than clip to a hue.
+    Agx,
+}
+
+/// AgX's matrices as three.js has them (after Filament, after Blender; working in Rec.2020),
+/// column-major: linear sRGB to Rec.2020, the inset, the outset, and Rec.2020 back to sRGB.
+/// Each maps grey to grey (its rows sum to 1).
+const SRGB_TO_REC2020: [f32; 9] = [
+    0.6274, 0.0691, 0.0164, 0.3293, 0.9195, 0.0880, 0.0433, 0.0113, 0.8956,
+];
+const AGX_INSET: [f32; 9] = [
+    0.856_627_15,
+    0.137_318_97,
+    0.111_898_21,
+    0.095_121_24,
+    0.761_242,
+    0.076_799_42,
+    0.048_251_6,
+    0.101_439_04,
+    0.811_302_37,
+];
+const AGX_OUTSET: [f32; 9] = [
+    1.127_100_6,
+    -0.141_329_76,
+    -0.141_329_76,
+    -0.110_606_64,
+    1.157_823_7,
+    -0.110_606_64,
+    -0.016_493_94,
+    -0.016_493_94,
+    1.251_936_4,
+];
+const REC2020_TO_SRGB: [f32; 9] = [
+    1.6605, -0.1246, -0.0182, -0.5876, 1.1329, -0.1006, -0.0728, -0.0083, 1.1187,
+];
+/// The stops AgX's log encoding spans, relative to 0.18.
+const AGX_MIN_EV: f32 = -12.473_93;
+const AGX_MAX_EV: f32 = 4.026_069;
+
+/// AgX of a linear Rec.709 colour: display-linear values in [0, 1].
+fn agx(rgb: glam::Vec3) -> glam::Vec3 {
+    let matrix = glam::Mat3::from_cols_array;
+    let inset = matrix(&AGX_INSET) * matrix(&SRGB_TO_REC2020) * rgb;
+    let inset = inset.max(glam::Vec3::splat(1e-10));
+    let encoded = inset.to_array().map(|v| {
+        let x = (v.log2().clamp(AGX_MIN_EV, AGX_MAX_EV) - AGX_MIN_EV) / (AGX_MAX_EV - AGX_MIN_EV);
+        // The sigmoid, as the minimal form's 6th-order polynomial fit.
+        let (x2, x4) = (x * x, x * x * x * x);
+        15.5 * x4 * x2 - 40.14 * x4 * x + 31.96 * x4 - 6.868 * x2 * x + 0.4298 * x2 + 0.1191 * x
+            - 0.00232
+    });
+    let outset = matrix(&AGX_OUTSET) * glam::Vec3::from(encoded);
+    // The curve's output is display-encoded for a 2.2 power display: back to linear.
+    let linear = outset.max(glam::Vec3::ZERO).powf(2.2);
+    (matrix(&REC2020_TO_SRGB) * linear).clamp(glam::Vec3::ZERO, glam::Vec3::ONE)
 }
 
 impl ToneMap {
-    /// The display value in [0, 1] of linear value `x` (after exposure).
+    /// The display value in [0, 1] of linear value `x` (after exposure), for the maps that
+    /// work per channel; AgX mixes channels (`apply_rgb`) and takes a grey here.
     pub fn apply(self, x: f32) -> f32 {
         let x = x.max(0.0);
         match self {
@@ -78,6 +136,15 @@ impl ToneMap {
             ToneMap::Aces => {
                 ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
             }
+            ToneMap::Agx => agx(glam::Vec3::splat(x)).x,
+        }
+    }
+
+    /// The display-linear colour in [0, 1]^3 of linear colour `rgb` (after exposure).
+    pub fn apply_rgb(self, rgb: glam::Vec3) -> glam::Vec3 {
+        match self {
+            ToneMap::Agx => agx(rgb),
+            _ => glam::Vec3::new(self.apply(rgb.x), self.apply(rgb.y), self.apply(rgb.z)),
         }
     }
 }
@@ -400,7 +467,13 @@ fn pfm_bytes(image: &Image) -> Vec<u8> {
 /// image the conversion, not the compression, is what keeps an interrupted render waiting.
 fn png_pixels(image: &Image, display: Display) -> Vec<u8> {
     let scale = display.exposure_ev.exp2();
-    let show = |v: f32| srgb_encode(display.tone_map.apply(v * scale));
+    let show = |p: glam::Vec3| {
+        display
+            .tone_map
+            .apply_rgb(p * scale)
+            .to_array()
+            .map(srgb_encode)
+    };
     let width = image.width as usize;
     let mut bytes = vec![0u8; image.pixels.len() * 3];
     bytes
@@ -409,7 +482,7 @@ fn png_pixels(image: &Image, display: Display) -> Vec<u8> {
         .for_each(|(out, row)| {
             for (rgb, p) in out.chunks_exact_mut(3).zip(row) {
                 let encoded = if p.is_finite() {
-                    [show(p.x), show(p.y), show(p.z)]
+                    show(*p)
                 } else {
                     NON_FINITE_PNG
                 };
@@ -497,6 +570,41 @@ mod tests {
         assert!(samples.windows(2).all(|w| w[1] >= w[0]));
         for map in [ToneMap::Clamp, ToneMap::Reinhard, ToneMap::Aces] {
             assert_eq!(map.apply(-1.0), 0.0, "{map:?}");
+        }
+    }
+
+    #[test]
+    fn agx_maps_black_to_black_grey_to_grey_and_bright_colours_towards_white() {
+        use glam::Vec3;
+        let agx = |rgb: Vec3| ToneMap::Agx.apply_rgb(rgb);
+        assert!(agx(Vec3::ZERO).max_element() < 1e-3, "{}", agx(Vec3::ZERO));
+        // Greys stay grey (the matrices' rows sum to the same), rise monotonically, and reach
+        // white only far above 1.
+        let greys: Vec<Vec3> = (0..=60)
+            .map(|i| agx(Vec3::splat(2f32.powf(i as f32 / 4.0 - 10.0))))
+            .collect();
+        for g in &greys {
+            assert!((g.x - g.y).abs() < 2e-3 && (g.y - g.z).abs() < 2e-3, "{g}");
+        }
+        assert!(greys.windows(2).all(|w| w[1].x >= w[0].x));
+        // Middle grey 0.18 shows near the middle of the display range (sRGB about 0.5).
+        let middle = srgb_encode(agx(Vec3::splat(0.18)).x);
+        assert!((100..=150).contains(&middle), "{middle}");
+        assert!(agx(Vec3::splat(1.0)).x < 0.95 && agx(Vec3::splat(1e3)).x > 0.95);
+        // A bright pure red desaturates towards white instead of clipping at pure red.
+        let red = agx(Vec3::new(50.0, 0.0, 0.0));
+        assert!(red.x > 0.9 && red.y > 0.2 && red.z > 0.2, "{red}");
+        // Never out of [0, 1].
+        for rgb in [
+            Vec3::new(1e6, 0.0, 0.0),
+            Vec3::new(0.0, 1e-8, 3.0),
+            Vec3::splat(-1.0),
+        ] {
+            let out = agx(rgb);
+            assert!(
+                out.min_element() >= 0.0 && out.max_element() <= 1.0,
+                "{out}"
+            );
         }
     }
 
