@@ -22,7 +22,7 @@ use crate::accel::intersect::{
     sphere_surface_point, triangle_point,
 };
 use crate::accel::traverse::{closest_hit, occluded};
-use crate::camera::{film_position_mm, generate_ray};
+use crate::camera::{Ray, film_position_mm, generate_ray};
 use crate::layout::*;
 use crate::math::rng::Rng;
 use crate::pack::FlatScene;
@@ -133,6 +133,22 @@ fn surface_at(scene: &FlatScene, prim: &GpuPrimitive, ray: &RayQuery, hit: Hit) 
     }
 }
 
+/// The surface of primitive `id` hit by `ray` at the ray's time: found in the primitive's own
+/// frame (where it was built), then moved to where it is. Twin: `moved_surface_at` in
+/// integrator.wgsl.
+fn moved_surface_at(scene: &FlatScene, id: u32, ray: &RayQuery, hit: Hit) -> Surface {
+    let prim = &scene.prims[id as usize];
+    let offset = scene.primitives().offset(id, ray.time);
+    if offset == Vec3::ZERO {
+        return surface_at(scene, prim, ray, hit);
+    }
+    let mut surface = surface_at(scene, prim, &ray.relative_to(offset), hit);
+    surface.position += offset;
+    // The addition rounds once more: half an ULP of the larger magnitude, per component.
+    surface.position_error += (surface.position.abs() + offset.abs()) * (0.5 * f32::EPSILON);
+    surface
+}
+
 /// BRDF value for light arriving along `wi` and leaving along `wo` (both unit, away from p).
 pub fn eval_brdf(material: &GpuMaterial, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
     let mut f = Vec3::from(material.diffuse) / PI;
@@ -208,6 +224,7 @@ fn light_dimension(frame: &GpuFrame, depth: u32, offset: u32, k: u32) -> u32 {
 #[allow(clippy::too_many_arguments)]
 fn direct_light<const F: u32>(
     scene: &FlatScene,
+    time: f32,
     surface: &Surface,
     material: &GpuMaterial,
     prim_id: u32,
@@ -268,7 +285,7 @@ fn direct_light<const F: u32>(
                     stats.rays += 1;
                     if !occluded::<F>(
                         scene.primitives(),
-                        &RayQuery::new(origin, wi),
+                        &RayQuery::new(origin, wi).at_time(time),
                         prim_id,
                         light.prim,
                         shadow_ray_length(distance),
@@ -292,7 +309,7 @@ fn direct_light<const F: u32>(
                 stats.rays += 1;
                 if !occluded::<F>(
                     scene.primitives(),
-                    &RayQuery::new(origin, wi),
+                    &RayQuery::new(origin, wi).at_time(time),
                     prim_id,
                     NONE,
                     shadow_ray_length(distance),
@@ -305,13 +322,14 @@ fn direct_light<const F: u32>(
     total
 }
 
-/// Radiance along one path that starts with `origin`, `direction`, with the area-light samples
-/// in `window` (the path itself is deterministic: every window retraces the same rays); what
-/// its first hit shows goes to `first_hit`.
+/// Radiance along one path that starts with `camera_ray`, with the area-light samples
+/// in `window` (the path itself is deterministic: every window retraces the same rays), at
+/// `time` (seconds: moving primitives are where they are then); what its first hit shows goes
+/// to `first_hit`.
 pub fn trace_path<const F: u32>(
     scene: &FlatScene,
-    origin: Vec3,
-    direction: Vec3,
+    camera_ray: Ray,
+    time: f32,
     window: LightWindow,
     rng: &mut Rng,
     stats: &mut SampleStats,
@@ -321,7 +339,7 @@ pub fn trace_path<const F: u32>(
     let frame = &scene.frame;
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
-    let mut ray = RayQuery::new(origin, direction);
+    let mut ray = RayQuery::new(camera_ray.origin, camera_ray.direction).at_time(time);
     let mut skip = NONE;
     for depth in 0..=frame.max_depth {
         stats.rays += 1;
@@ -333,7 +351,7 @@ pub fn trace_path<const F: u32>(
         };
         let prim = &scene.prims[prim_id as usize];
         let material = &scene.materials[prim.material as usize];
-        let surface = surface_at(scene, prim, &ray, hit);
+        let surface = moved_surface_at(scene, prim_id, &ray, hit);
         if depth == 0 {
             *first_hit = FirstHit::of(hit.t, &surface, material);
         }
@@ -350,7 +368,7 @@ pub fn trace_path<const F: u32>(
         }
         radiance += throughput
             * direct_light::<F>(
-                scene, &surface, material, prim_id, wo, depth, window, rng, stats,
+                scene, time, &surface, material, prim_id, wo, depth, window, rng, stats,
             );
         // Perfect mirror bounce.
         let mirror = Vec3::from(material.mirror);
@@ -376,7 +394,8 @@ pub fn trace_path<const F: u32>(
                 surface.geometric_normal,
             ),
             reflected.normalize(),
-        );
+        )
+        .at_time(time);
         skip = if prim.kind == PRIM_SPHERE {
             NONE
         } else {
@@ -387,8 +406,9 @@ pub fn trace_path<const F: u32>(
 }
 
 /// Radiance of sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1),
-/// lens point (2-3, drawn only by a lens), then the path with the light samples in `window`
-/// (its first hit to `first_hit`).
+/// lens point (2-3, drawn only by a lens), time (4, drawn only while the shutter is open a
+/// while; from the pixel pattern), then the path with the light samples in `window` (its
+/// first hit to `first_hit`).
 pub fn trace_sample<const F: u32>(
     scene: &FlatScene,
     x: u32,
@@ -427,14 +447,25 @@ pub fn trace_sample<const F: u32>(
         );
         lens = Vec2::from(sample_aperture(camera, &scene.sample_table, u));
     }
+    let mut time = camera.shutter_open;
+    if camera.shutter_span > 0.0 {
+        rng.seek(TIME_DIMENSION);
+        let source = PatternSource {
+            dim: TIME_DIMENSION,
+            ..PatternSource::pixel(frame)
+        };
+        let u = sample_2d(
+            frame,
+            &scene.sample_table,
+            source,
+            x,
+            y,
+            sample,
+            &mut rng,
+            &mut stats.flags,
+        );
+        time += u[0] * camera.shutter_span;
+    }
     let ray = generate_ray(camera, film, lens);
-    trace_path::<F>(
-        scene,
-        ray.origin,
-        ray.direction,
-        window,
-        &mut rng,
-        stats,
-        first_hit,
-    )
+    trace_path::<F>(scene, ray, time, window, &mut rng, stats, first_hit)
 }

@@ -70,11 +70,14 @@ pub const PERMUTE_WALK_CAP: u32 = 64;
 pub const PIXEL_DIMENSION: u32 = 0;
 /// First random dimension of the lens point (it takes 2 and 3).
 pub const LENS_DIMENSION: u32 = 2;
+/// The random dimensions of a camera sample's time (4; 5 unused), drawn only while the
+/// shutter is open for a while (`GpuCamera::shutter_span`).
+pub const TIME_DIMENSION: u32 = 4;
 /// First random dimension of the area-light samples. Light sample `k` of the area light whose
 /// samples start at `offset`, at path vertex `depth`, draws dimensions
 /// `LIGHT_DIMENSION + 2 * (depth * frame.light_samples_per_vertex + offset + k)` and the next
 /// one: any window of light samples can then be evaluated on its own (`GpuPass`).
-pub const LIGHT_DIMENSION: u32 = 4;
+pub const LIGHT_DIMENSION: u32 = 6;
 /// Poisson-disk sets in the sample table; a pixel picks one by hash and shifts it.
 pub const POISSON_SETS: u32 = 16;
 /// Interleaved sampling repeats a tile of INTERLEAVED_TILE x INTERLEAVED_TILE basis patterns.
@@ -306,10 +309,11 @@ pub struct GpuCamera {
     pub aperture_blades: u32,
     /// Where the aperture polygon's vertices start in the sample table.
     pub aperture_table_offset: u32,
-    /// Padding to the WGSL layout.
-    pub _pad0: u32,
-    /// Padding to the WGSL layout.
-    pub _pad1: u32,
+    /// When the shutter opens (seconds): a camera sample's time is
+    /// `shutter_open + u * shutter_span` for a pattern point `u` in [0, 1).
+    pub shutter_open: f32,
+    /// How long it stays open (seconds); 0: every sample at `shutter_open`, no time drawn.
+    pub shutter_span: f32,
     /// Padding to the WGSL layout.
     pub _pad2: u32,
 }
@@ -356,8 +360,9 @@ pub struct GpuFrame {
     pub light_samples_per_vertex: u32,
     /// Ambient radiance L_a: each hit adds diffuse * L_a.
     pub ambient: [f32; 3],
-    /// Padding to the WGSL layout.
-    pub _pad2: u32,
+    /// 0 for a static scene; else where the velocity records start in the primitive array:
+    /// primitive `i` moves with velocity `prims[motion_base + i].p0` (scene units a second).
+    pub motion_base: u32,
 }
 
 /// What one dispatch renders: a rectangle of pixels (whole rows: a band), a range of sample
@@ -486,6 +491,7 @@ pub fn wgsl_prelude() -> String {
         ("PIXEL_DIMENSION", PIXEL_DIMENSION),
         ("LENS_DIMENSION", LENS_DIMENSION),
         ("LIGHT_DIMENSION", LIGHT_DIMENSION),
+        ("TIME_DIMENSION", TIME_DIMENSION),
         ("INTERLEAVED_TILE", INTERLEAVED_TILE),
         ("STATUS_TRAVERSAL_CAP", STATUS_TRAVERSAL_CAP),
         ("STATUS_STACK_OVERFLOW", STATUS_STACK_OVERFLOW),

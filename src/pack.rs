@@ -8,7 +8,7 @@ use glam::Vec3;
 use obvhs::bvh2::Bvh2;
 
 use crate::accel::cwbvh::{self, CwGeometry};
-use crate::accel::{Primitives, build_geometry, intersect};
+use crate::accel::{Motion, Primitives, build_geometry, intersect};
 use crate::layout::*;
 use crate::math::sampling::strata_columns;
 use crate::sampler::SampleTable;
@@ -71,6 +71,11 @@ impl FlatScene {
             prims: &self.prims,
             plane_start: self.frame.plane_start,
             plane_count: self.frame.plane_count,
+            motion_base: self.frame.motion_base,
+            shutter: [
+                self.camera.shutter_open,
+                self.camera.shutter_open + self.camera.shutter_span,
+            ],
         }
     }
 
@@ -134,7 +139,11 @@ pub fn flatten(scene: &Scene) -> FlatScene {
     let mut bounded: Vec<(GpuPrimitive, Option<GpuNormals>)> = Vec::new();
     let mut planes = Vec::new();
     let mut triangle_count = 0;
-    for shape in &scene.shapes {
+    // Each bounded primitive's velocity, in `bounded` order (filled as they are added).
+    let mut velocities: Vec<Vec3> = Vec::new();
+    let velocity_of = |shape: usize| scene.velocities.get(shape).copied().unwrap_or(Vec3::ZERO);
+    for (shape_index, shape) in scene.shapes.iter().enumerate() {
+        let velocity = velocity_of(shape_index);
         match shape {
             Shape::Sphere {
                 center,
@@ -204,6 +213,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
                 }
             }
         }
+        velocities.resize(bounded.len(), velocity);
     }
     // Area lights are surfaces too: a one-sided emitting quad with a material of its own.
     let mut lights = Vec::new();
@@ -259,7 +269,18 @@ pub fn flatten(scene: &Scene) -> FlatScene {
     }
 
     lights.extend(triangle_lights);
-    let geometry = build_geometry(bounded, planes);
+    // Area lights' quads stand still.
+    velocities.resize(bounded.len(), Vec3::ZERO);
+    let camera = &scene.camera;
+    let motion = Motion {
+        velocities: if scene.velocities.is_empty() {
+            Vec::new()
+        } else {
+            velocities
+        },
+        shutter: camera.shutter.map(|t| t as f32),
+    };
+    let geometry = build_geometry(bounded, planes, &motion);
     // The area lights' quads, now in BVH order.
     for light in &mut lights {
         if light.prim != NONE {
@@ -267,7 +288,6 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         }
     }
     let render = &scene.render;
-    let camera = &scene.camera;
     let lens_sampler = (!camera.is_pinhole()).then_some(camera.lens_sampler);
     let table = SampleTable::build(
         render.spp,
@@ -301,7 +321,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             .map(|l| l.samples)
             .sum(),
         ambient: render.ambient.to_array(),
-        ..Default::default()
+        motion_base: geometry.motion_base,
     };
     FlatScene {
         bvh: geometry.bvh,

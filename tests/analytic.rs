@@ -4,6 +4,7 @@ mod common;
 
 use std::f32::consts::PI;
 
+use chambre::camera::Ray;
 use chambre::camera::{film_position_mm, generate_ray};
 use chambre::integrator::{FirstHit, LightWindow, SampleStats, trace_path};
 use chambre::layout::FEATURES_ALL;
@@ -65,8 +66,11 @@ fn lambert_sphere_under_point_light_matches_closed_form_on_cpu() {
         let mut first_hit = FirstHit::default();
         let radiance = trace_path::<FEATURES_ALL>(
             &flat,
-            origin,
-            (p - origin).normalize(),
+            Ray {
+                origin,
+                direction: (p - origin).normalize(),
+            },
+            0.0,
             LightWindow::ALL,
             &mut Rng::new(0, 0, 0),
             &mut SampleStats::default(),
@@ -190,8 +194,11 @@ fn point_in_shadow_gets_only_the_ambient_term() {
     let ambient_only = Vec3::new(0.8, 0.6, 0.4) * 0.2;
     let radiance = trace_path::<FEATURES_ALL>(
         &flat,
-        Vec3::new(3.0, 1.0, 0.0),
-        Vec3::new(-3.0, -1.0, 0.0).normalize(),
+        Ray {
+            origin: Vec3::new(3.0, 1.0, 0.0),
+            direction: Vec3::new(-3.0, -1.0, 0.0).normalize(),
+        },
+        0.0,
         LightWindow::ALL,
         &mut Rng::new(0, 0, 0),
         &mut SampleStats::default(),
@@ -204,8 +211,11 @@ fn point_in_shadow_gets_only_the_ambient_term() {
     // A point outside the shadow gets more.
     let lit = trace_path::<FEATURES_ALL>(
         &flat,
-        Vec3::new(3.0, 1.0, 0.0),
-        Vec3::new(-1.0, -1.0, 0.0).normalize(),
+        Ray {
+            origin: Vec3::new(3.0, 1.0, 0.0),
+            direction: Vec3::new(-1.0, -1.0, 0.0).normalize(),
+        },
+        0.0,
         LightWindow::ALL,
         &mut Rng::new(0, 0, 0),
         &mut SampleStats::default(),

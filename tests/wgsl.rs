@@ -281,8 +281,8 @@ fn shared_structs_have_identical_layouts() {
             film_v,
             aperture_blades,
             aperture_table_offset,
-            _pad0,
-            _pad1,
+            shutter_open,
+            shutter_span,
             _pad2
         }
     );
@@ -308,7 +308,7 @@ fn shared_structs_have_identical_layouts() {
             background,
             light_samples_per_vertex,
             ambient,
-            _pad2
+            motion_base
         }
     );
     layout!(

@@ -18,6 +18,11 @@ mkdir -p bench
     # Beside the adapter's dispatch shape, two fixed ones (rays per invocation).
     "$chambre" bench frame --runs "$runs" --gpu-rays-per-invocation 64,4 --json bench/frame.json
     echo
+    # Motion blur: the bunny moving half a unit while the shutter is open, against the same
+    # scene standing still (its row in the table above).
+    "$chambre" bench frame --runs "$runs" --scenes bunny -D 'shapes[0].velocity=[0.5,0.0,0.0]' \
+        -D 'camera.shutter=[0.0,1.0]' --json bench/frame_motion.json
+    echo
     "$chambre" bench rays --runs "$runs" --json bench/rays.json
     echo
     # The throughput issue's real-GPU target is stated at 1920x1080.

@@ -104,7 +104,7 @@ fn light_dimension(depth: u32, offset: u32, k: u32) -> u32 {
     return LIGHT_DIMENSION + 2u * (depth * frame.light_samples_per_vertex + offset + k);
 }
 
-fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<f32>,
+fn direct_light(time: f32, surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<f32>,
                 depth: u32, window: LightWindow,
                 rng: ptr<function, Rng>, counters: ptr<function, PathCounters>) -> vec3<f32> {
     let n = surface.shading_normal;
@@ -141,7 +141,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
                 let cos_light = -dot(light_normal, wi);
                 if (cos_surface > 0.0 && cos_light > 0.0 && dot(ng, wi) > 0.0) {
                     (*counters).rays += 1u;
-                    if (!cw_occluded(ray_query_new(origin, wi), prim_id, light.prim, shadow_ray_length(distance))) {
+                    if (!cw_occluded(ray_at_time(ray_query_new(origin, wi), time), prim_id, light.prim, shadow_ray_length(distance))) {
                         sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance);
                     }
                 }
@@ -160,7 +160,7 @@ fn direct_light(surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<
             let cos_surface = dot(n, wi);
             if (cos_surface > 0.0 && dot(ng, wi) > 0.0) {
                 (*counters).rays += 1u;
-                if (!cw_occluded(ray_query_new(origin, wi), prim_id, NONE, shadow_ray_length(distance))) {
+                if (!cw_occluded(ray_at_time(ray_query_new(origin, wi), time), prim_id, NONE, shadow_ray_length(distance))) {
                     total += eval_brdf(material, n, wo, wi) * light.color * (cos_surface * falloff);
                 }
             }
@@ -184,12 +184,25 @@ fn first_hit_of(t: f32, surface: Surface, material: GpuMaterial) -> FirstHit {
     return FirstHit(t, surface.shading_normal, albedo);
 }
 
-fn trace_path(origin: vec3<f32>, direction: vec3<f32>, window: LightWindow, rng: ptr<function, Rng>,
+// The surface of primitive `id` hit by `ray` at the ray's time: found in the primitive's own
+// frame, then moved to where it is. Twin: moved_surface_at in src/integrator.rs.
+fn moved_surface_at(id: u32, ray: RayQuery, hit: Hit) -> Surface {
+    let offset = prim_offset(id, ray.time);
+    if (all(offset == vec3<f32>(0.0))) {
+        return surface_at(prims[id], ray, hit);
+    }
+    var surface = surface_at(prims[id], ray_relative_to(ray, offset), hit);
+    surface.position += offset;
+    surface.position_error += (abs(surface.position) + abs(offset)) * 5.9604645e-8; // 2^-24
+    return surface;
+}
+
+fn trace_path(origin: vec3<f32>, direction: vec3<f32>, time: f32, window: LightWindow, rng: ptr<function, Rng>,
               counters: ptr<function, PathCounters>, first_hit: ptr<function, FirstHit>) -> vec3<f32> {
     let first = window_is_first(window);
     var radiance = vec3<f32>(0.0);
     var throughput = vec3<f32>(1.0);
-    var ray = ray_query_new(origin, direction);
+    var ray = ray_at_time(ray_query_new(origin, direction), time);
     var skip = NONE;
     for (var depth = 0u; depth <= frame.max_depth; depth += 1u) {
         (*counters).rays += 1u;
@@ -202,7 +215,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, window: LightWindow, rng:
         }
         let prim = prims[found.prim];
         let material = materials[prim.material];
-        let surface = surface_at(prim, ray, found.hit);
+        let surface = moved_surface_at(found.prim, ray, found.hit);
         if (depth == 0u) {
             *first_hit = first_hit_of(found.hit.t, surface, material);
         }
@@ -217,7 +230,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, window: LightWindow, rng:
         if (first) {
             radiance += throughput * material.diffuse * frame.ambient;
         }
-        radiance += throughput * direct_light(surface, material, found.prim, wo, depth, window, rng, counters);
+        radiance += throughput * direct_light(time, surface, material, found.prim, wo, depth, window, rng, counters);
         // Perfect mirror bounce.
         if (!FEATURE_MIRRORS || max(max(material.mirror.x, material.mirror.y), material.mirror.z) <= 0.0) {
             break;
@@ -234,7 +247,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, window: LightWindow, rng:
             break;
         }
         throughput *= material.mirror;
-        ray = ray_query_new(offset_ray_origin(surface.position, surface.position_error, surface.geometric_normal), normalize(reflected));
+        ray = ray_at_time(ray_query_new(offset_ray_origin(surface.position, surface.position_error, surface.geometric_normal), normalize(reflected)), time);
         skip = found.prim;
         if (prim.kind == PRIM_SPHERE) {
             skip = NONE;
@@ -255,6 +268,12 @@ fn trace_sample(x: u32, y: u32, sample: u32, window: LightWindow,
         let lens_source = PatternSource(frame.lens_sampler, frame.lens_strata_columns, frame.lens_table_offset, LENS_DIMENSION);
         lens = sample_aperture(sample_2d(lens_source, x, y, sample, &rng));
     }
+    var time = camera.shutter_open;
+    if (camera.shutter_span > 0.0) {
+        rng_seek(&rng, TIME_DIMENSION);
+        let time_source = PatternSource(frame.pixel_sampler, frame.pixel_strata_columns, frame.pixel_table_offset, TIME_DIMENSION);
+        time += sample_2d(time_source, x, y, sample, &rng).x * camera.shutter_span;
+    }
     let ray = generate_ray(camera, film, lens);
-    return trace_path(ray.origin, ray.direction, window, &rng, counters, first_hit);
+    return trace_path(ray.origin, ray.direction, time, window, &rng, counters, first_hit);
 }

@@ -15,6 +15,8 @@ struct RayQuery {
     ky: u32,
     kz: u32,
     shear: vec3<f32>,
+    // The time (seconds) the ray is traced at: moving primitives are where they are then.
+    time: f32,
 }
 
 // For spheres, b1 is the bound on t's relative error (see intersect_sphere).
@@ -62,7 +64,34 @@ fn ray_query_new(origin: vec3<f32>, direction: vec3<f32>) -> RayQuery {
     let dz = direction[kz];
     let inv = vec3<f32>(safe_reciprocal(direction.x), safe_reciprocal(direction.y), safe_reciprocal(direction.z));
     return RayQuery(origin, direction, inv, kx, ky, kz,
-        vec3<f32>(-direction[kx] / dz, -direction[ky] / dz, 1.0 / dz));
+        vec3<f32>(-direction[kx] / dz, -direction[ky] / dz, 1.0 / dz), 0.0);
+}
+
+fn ray_at_time(ray: RayQuery, time: f32) -> RayQuery {
+    var timed = ray;
+    timed.time = time;
+    return timed;
+}
+
+// The ray in the frame of a primitive that has moved by `offset` (origin moved by -offset).
+fn ray_relative_to(ray: RayQuery, offset: vec3<f32>) -> RayQuery {
+    var relative = ray;
+    relative.origin = ray.origin - offset;
+    return relative;
+}
+
+// How far bounded primitive `id` has moved at `time`: zero in a static scene. Its velocity is
+// the record `prims[frame.motion_base + id]`. Twin: accel::Primitives::offset.
+fn prim_offset(id: u32, time: f32) -> vec3<f32> {
+    if (frame.motion_base == 0u) {
+        return vec3<f32>(0.0);
+    }
+    return prims[frame.motion_base + id].p0 * time;
+}
+
+// Bounded primitive `id` tested where it is at the ray's time.
+fn intersect_at_time(ray: RayQuery, id: u32, t_max: f32) -> Hit {
+    return intersect_primitive(ray_relative_to(ray, prim_offset(id, ray.time)), prims[id], t_max);
 }
 
 fn intersect_triangle(ray: RayQuery, v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>, t_max: f32) -> Hit {

@@ -77,7 +77,7 @@ fn closest_in_leaf(ray: RayQuery, leaf: GpuBvhNode, skip: u32, best_in: PrimHit)
     var best = best_in;
     for (var id = leaf.first_index; id < leaf.first_index + leaf.prim_count; id += 1u) {
         if (id != skip) {
-            let hit = intersect_primitive(ray, prims[id], best.hit.t);
+            let hit = intersect_at_time(ray, id, best.hit.t);
             if (hit.t < best.hit.t) {
                 best = PrimHit(id, hit);
             }
@@ -88,7 +88,7 @@ fn closest_in_leaf(ray: RayQuery, leaf: GpuBvhNode, skip: u32, best_in: PrimHit)
 
 fn leaf_occludes(ray: RayQuery, leaf: GpuBvhNode, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
     for (var id = leaf.first_index; id < leaf.first_index + leaf.prim_count; id += 1u) {
-        if (id != skip_a && id != skip_b && intersect_primitive(ray, prims[id], t_max).t < t_max) {
+        if (id != skip_a && id != skip_b && intersect_at_time(ray, id, t_max).t < t_max) {
             return true;
         }
     }

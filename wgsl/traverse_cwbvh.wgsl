@@ -127,7 +127,7 @@ fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
             state.prims.y &= ~(1u << bit);
             let id = state.prims.x + bit;
             if (id != skip) {
-                let hit = intersect_primitive(ray, prims[id], best.hit.t);
+                let hit = intersect_at_time(ray, id, best.hit.t);
                 if (hit.t < best.hit.t) {
                     best = PrimHit(id, hit);
                 }
@@ -150,7 +150,7 @@ fn cw_occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
             let bit = firstLeadingBit(state.prims.y);
             state.prims.y &= ~(1u << bit);
             let id = state.prims.x + bit;
-            if (id != skip_a && id != skip_b && intersect_primitive(ray, prims[id], t_max).t < t_max) {
+            if (id != skip_a && id != skip_b && intersect_at_time(ray, id, t_max).t < t_max) {
                 return true;
             }
         }

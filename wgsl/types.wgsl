@@ -72,8 +72,8 @@ struct GpuCamera {
     film_v: vec3<f32>,
     aperture_blades: u32,
     aperture_table_offset: u32,
-    _pad0: u32,
-    _pad1: u32,
+    shutter_open: f32,
+    shutter_span: f32,
     _pad2: u32,
 }
 
@@ -97,7 +97,7 @@ struct GpuFrame {
     background: vec3<f32>,
     light_samples_per_vertex: u32,
     ambient: vec3<f32>,
-    _pad2: u32,
+    motion_base: u32,
 }
 
 struct GpuPass {

@@ -15,7 +15,7 @@ use obvhs::bvh2::node::Bvh2Node;
 
 use super::intersect::{Hit, RayQuery, intersect_box, intersect_primitive};
 use super::traverse::{closest_plane, plane_occludes};
-use super::{Primitives, primitive_bounds, widen};
+use super::{Primitives, swept_bounds, widen};
 use crate::layout::{CWBVH_STACK_SIZE, FEATURES_ALL, GpuCwNode, GpuPrimitive, NONE, T_FAR};
 
 /// A CWBVH and the bounded primitives in the order its leaves index them, planes after them.
@@ -30,6 +30,9 @@ pub struct CwGeometry {
     pub plane_start: u32,
     /// Planes at the end of `prims`.
     pub plane_count: u32,
+    /// 0 when nothing moves; else where the velocity records start in `prims` (in this
+    /// order; the same index as in the scene's BVH2 order).
+    pub motion_base: u32,
 }
 
 /// Builds the CWBVH of `geometry`'s bounded primitives: obvhs's converter collapses a BVH2 of
@@ -40,7 +43,18 @@ pub struct CwGeometry {
 /// the traversal stack.
 pub fn build(geometry: Primitives<'_>) -> Result<CwGeometry, String> {
     let bounded = &geometry.prims[..geometry.plane_start as usize];
-    let bvh = single_primitive_leaves(geometry.bvh, bounded);
+    // Each primitive's box over the shutter, widened as the BVH2's are.
+    let boxes: Vec<Aabb> = bounded
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let velocity = geometry.offset(i as u32, 1.0);
+            let mut b = swept_bounds(p, velocity, geometry.shutter);
+            widen(&mut b);
+            b
+        })
+        .collect();
+    let bvh = single_primitive_leaves(geometry.bvh, &boxes);
     // `primitive_indices` of the result are positions in `bounded`.
     let cw = obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh(&bvh, 3, true, false);
     let mut nodes: Vec<GpuCwNode> = cw.nodes.iter().map(|n| bytemuck::cast(*n)).collect();
@@ -63,7 +77,16 @@ pub fn build(geometry: Primitives<'_>) -> Result<CwGeometry, String> {
     }
     let planes = geometry.plane_start..geometry.plane_start + geometry.plane_count;
     let order: Vec<u32> = cw.primitive_indices.iter().copied().chain(planes).collect();
-    let prims = order.iter().map(|&i| geometry.prims[i as usize]).collect();
+    let mut prims: Vec<GpuPrimitive> = order.iter().map(|&i| geometry.prims[i as usize]).collect();
+    // The velocity records follow in the same order (the planes do not move).
+    if geometry.motion_base != 0 {
+        let base = geometry.motion_base;
+        prims.extend(
+            cw.primitive_indices
+                .iter()
+                .map(|&i| geometry.prims[(base + i) as usize]),
+        );
+    }
     let mut position_of = vec![NONE; order.len()];
     for (position, &i) in order.iter().enumerate() {
         position_of[i as usize] = position as u32;
@@ -75,6 +98,7 @@ pub fn build(geometry: Primitives<'_>) -> Result<CwGeometry, String> {
         position_of,
         plane_start,
         plane_count: geometry.plane_count,
+        motion_base: geometry.motion_base,
     })
 }
 
@@ -82,6 +106,14 @@ impl CwGeometry {
     /// The planes' indices in `prims`.
     pub fn planes(&self) -> std::ops::Range<u32> {
         self.plane_start..self.plane_start + self.plane_count
+    }
+
+    /// How far primitive `id` has moved at `time` (zero in a static scene).
+    pub fn offset(&self, id: u32, time: f32) -> glam::Vec3 {
+        if self.motion_base == 0 {
+            return glam::Vec3::ZERO;
+        }
+        glam::Vec3::from(self.prims[(self.motion_base + id) as usize].p0) * time
     }
 
     /// The index in `prims` of primitive `index` of the primitives it was built from (`NONE`
@@ -95,23 +127,15 @@ impl CwGeometry {
     }
 }
 
-/// `bvh` (whose leaves index `bounded` directly) with every leaf of several primitives replaced
-/// by a median tree of one-primitive leaves; `primitive_indices` of the result are positions in
-/// `bounded`.
-fn single_primitive_leaves(bvh: &Bvh2, bounded: &[GpuPrimitive]) -> Bvh2 {
+/// `bvh` (whose leaves index the primitives of `boxes` directly) with every leaf of several
+/// primitives replaced by a median tree of one-primitive leaves; `primitive_indices` of the
+/// result are positions in `boxes`.
+fn single_primitive_leaves(bvh: &Bvh2, boxes: &[Aabb]) -> Bvh2 {
     enum Work {
         Node(usize),
         Slots(usize, usize),
     }
-    let boxes: Vec<Aabb> = bounded
-        .iter()
-        .map(|p| {
-            let mut b = primitive_bounds(p);
-            widen(&mut b);
-            b
-        })
-        .collect();
-    let mut indices: Vec<u32> = (0..bounded.len() as u32).collect();
+    let mut indices: Vec<u32> = (0..boxes.len() as u32).collect();
     let mut nodes = vec![Bvh2Node::default(); bvh.nodes.len().min(1)];
     let mut stack = vec![(Work::Node(0), 0usize)];
     if bvh.nodes.is_empty() {
@@ -316,7 +340,8 @@ pub fn closest_hit_counted(
     let mut best_prim = NONE;
     let visited = traverse(&geometry.nodes, ray, t_max, |id, t| {
         counts.prims += 1;
-        let hit = intersect_primitive::<FEATURES_ALL>(ray, &geometry.prims[id as usize], t);
+        let moved = ray.relative_to(geometry.offset(id, ray.time));
+        let hit = intersect_primitive::<FEATURES_ALL>(&moved, &geometry.prims[id as usize], t);
         if hit.t < t {
             best = hit;
             best_prim = id;
@@ -340,7 +365,8 @@ pub fn occluded(geometry: &CwGeometry, ray: &RayQuery, t_max: f32) -> bool {
     let mut blocked = false;
     let visited = traverse(&geometry.nodes, ray, t_max, |id, t| {
         let prim = &geometry.prims[id as usize];
-        blocked = intersect_primitive::<FEATURES_ALL>(ray, prim, t).t < t;
+        let moved = ray.relative_to(geometry.offset(id, ray.time));
+        blocked = intersect_primitive::<FEATURES_ALL>(&moved, prim, t).t < t;
         (!blocked).then_some(t)
     });
     visited.expect("build() bounds the depth by the stack");

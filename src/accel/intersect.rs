@@ -49,6 +49,8 @@ pub struct RayQuery {
     pub kz: usize,
     /// Shear constants (-d_kx / d_kz, -d_ky / d_kz, 1 / d_kz) that make the direction +z.
     pub shear: Vec3,
+    /// The time (seconds) the ray is traced at: moving primitives are where they are then.
+    pub time: f32,
 }
 
 fn safe_reciprocal(d: f32) -> f32 {
@@ -90,6 +92,21 @@ impl RayQuery {
             ky,
             kz,
             shear: Vec3::new(-direction[kx] / dz, -direction[ky] / dz, 1.0 / dz),
+            time: 0.0,
+        }
+    }
+
+    /// The ray traced at `time`.
+    pub fn at_time(self, time: f32) -> Self {
+        RayQuery { time, ..self }
+    }
+
+    /// The ray in the frame of a primitive that has moved by `offset`: its origin moved by
+    /// `-offset`, so testing the primitive where it was built tests it where it is.
+    pub fn relative_to(&self, offset: Vec3) -> Self {
+        RayQuery {
+            origin: self.origin - offset,
+            ..*self
         }
     }
 

@@ -14,7 +14,7 @@ pub mod traverse;
 
 use std::time::Duration;
 
-use glam::Vec3A;
+use glam::{Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
 
@@ -36,6 +36,9 @@ pub struct Geometry {
     pub plane_start: u32,
     /// Planes at the end of `prims`.
     pub plane_count: u32,
+    /// 0 when nothing moves; else where the velocity records start in `prims` (after the
+    /// planes): `prims[motion_base + i].p0` is primitive `i`'s velocity.
+    pub motion_base: u32,
     /// For each bounded primitive as given, its index in `prims`.
     pub new_index: Vec<u32>,
     /// Longest root-to-leaf path (nodes); bounds the traversal stack.
@@ -58,6 +61,10 @@ pub struct Primitives<'a> {
     pub plane_start: u32,
     /// Planes at the end of `prims`.
     pub plane_count: u32,
+    /// 0 when nothing moves; else where the velocity records start in `prims`.
+    pub motion_base: u32,
+    /// [open, close] (seconds): the boxes bound each primitive over this interval.
+    pub shutter: [f32; 2],
 }
 
 impl Primitives<'_> {
@@ -65,6 +72,50 @@ impl Primitives<'_> {
     pub fn planes(&self) -> std::ops::Range<u32> {
         self.plane_start..self.plane_start + self.plane_count
     }
+
+    /// How far primitive `id` has moved at `time` (zero in a static scene).
+    pub fn offset(&self, id: u32, time: f32) -> Vec3 {
+        if self.motion_base == 0 {
+            return Vec3::ZERO;
+        }
+        Vec3::from(self.prims[(self.motion_base + id) as usize].p0) * time
+    }
+}
+
+/// How the bounded primitives move: each one's velocity in the order given (empty when nothing
+/// moves), and the shutter interval [open, close] the BVH's boxes must cover.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Motion {
+    /// Scene units a second, per bounded primitive.
+    pub velocities: Vec<Vec3>,
+    /// Seconds.
+    pub shutter: [f32; 2],
+}
+
+/// The box of `p` over the shutter: its boxes at the shutter's ends joined (a translation
+/// sweeps a box's corners along straight lines, so the two ends bound every time between).
+pub(crate) fn swept_bounds(p: &GpuPrimitive, velocity: Vec3, shutter: [f32; 2]) -> Aabb {
+    if velocity == Vec3::ZERO {
+        return primitive_bounds(p);
+    }
+    let at = |t: f32| {
+        let d = (velocity * t).to_array();
+        let add = |a: [f32; 3]| [a[0] + d[0], a[1] + d[1], a[2] + d[2]];
+        let moved = match p.kind {
+            PRIM_TRIANGLE => GpuPrimitive {
+                p0: add(p.p0),
+                p1: add(p.p1),
+                p2: add(p.p2),
+                ..*p
+            },
+            _ => GpuPrimitive {
+                p0: add(p.p0),
+                ..*p
+            },
+        };
+        primitive_bounds(&moved)
+    };
+    at(shutter[0]).union(&at(shutter[1]))
 }
 
 /// Relative widening of node boxes: 16 ULPs of the box's largest coordinate.
@@ -75,8 +126,14 @@ const BOX_WIDENING: f32 = 16.0 * f32::EPSILON;
 pub fn build_geometry(
     bounded: Vec<(GpuPrimitive, Option<GpuNormals>)>,
     planes: Vec<GpuPrimitive>,
+    motion: &Motion,
 ) -> Geometry {
-    let aabbs: Vec<Aabb> = bounded.iter().map(|(p, _)| primitive_bounds(p)).collect();
+    let velocity = |i: usize| motion.velocities.get(i).copied().unwrap_or(Vec3::ZERO);
+    let aabbs: Vec<Aabb> = bounded
+        .iter()
+        .enumerate()
+        .map(|(i, (p, _))| swept_bounds(p, velocity(i), motion.shutter))
+        .collect();
     // The GPU's traversal stack bounds the depth (see `build`).
     let (mut bvh, build_time) = build_bvh(&aabbs, BVH_STACK_SIZE as usize);
     for node in &mut bvh.nodes {
@@ -101,6 +158,18 @@ pub fn build_geometry(
     }
     let plane_start = prims.len() as u32;
     prims.extend(&planes);
+    // The velocity records, in BVH order, after the planes.
+    let motion_base = if motion.velocities.is_empty() {
+        0
+    } else {
+        let base = prims.len() as u32;
+        prims.extend(order.iter().map(|&old| GpuPrimitive {
+            p0: velocity(old as usize).to_array(),
+            kind: NONE,
+            ..Default::default()
+        }));
+        base
+    };
 
     let nodes: Vec<GpuBvhNode> = bvh
         .nodes
@@ -123,6 +192,7 @@ pub fn build_geometry(
         normals,
         plane_start,
         plane_count: planes.len() as u32,
+        motion_base,
         new_index: new_position,
         bvh_depth,
         traversal_iterations,

@@ -30,7 +30,8 @@ pub fn closest_hit<const F: u32>(
                 if id as u32 == skip {
                     return f32::INFINITY;
                 }
-                let hit = intersect_primitive::<F>(ray, &geometry.prims[id], r.tmax);
+                let moved = ray.relative_to(geometry.offset(id as u32, ray.time));
+                let hit = intersect_primitive::<F>(&moved, &geometry.prims[id], r.tmax);
                 if hit.t < r.tmax {
                     best = hit;
                     best_prim = id as u32;
@@ -102,7 +103,8 @@ pub fn occluded<const F: u32>(
                 if id as u32 == skip_a || id as u32 == skip_b {
                     return f32::INFINITY;
                 }
-                intersect_primitive::<F>(ray, &geometry.prims[id], r.tmax).t
+                let moved = ray.relative_to(geometry.offset(id as u32, ray.time));
+                intersect_primitive::<F>(&moved, &geometry.prims[id], r.tmax).t
             });
         if !missed {
             return true;

@@ -109,16 +109,17 @@ fn render_once(scene: &FlatScene, way: Way, gpu: Option<&GpuContext>) -> Result<
 /// Renders each scene of `scenes` (names in `scenes/`) with each backend of `backends`
 /// interleaved run by run, after one warm-up run each; on the GPU too when `gpu` is given, and
 /// there once more for each of `rays_per_invocation` (dispatch shapes: the budgets' largest
-/// number of rays one invocation traces).
+/// number of rays one invocation traces). `overrides` apply to every scene.
 pub fn run(
     scenes: &[String],
+    overrides: &[String],
     gpu: Option<&GpuContext>,
     rays_per_invocation: &[u64],
     runs: u32,
 ) -> Result<FrameReport> {
     let mut results = Vec::new();
     for name in scenes {
-        let scene = Scene::load(Path::new(&format!("scenes/{name}.toml")), &[])?;
+        let scene = Scene::load(Path::new(&format!("scenes/{name}.toml")), overrides)?;
         let flat = flatten(&scene);
         let mut ways: Vec<(String, Way)> = vec![
             (

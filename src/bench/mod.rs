@@ -163,6 +163,9 @@ pub struct FrameArgs {
     /// each N given: the dispatch shapes behind `RayBudgets::for_adapter`.
     #[arg(long, value_delimiter = ',')]
     pub gpu_rays_per_invocation: Vec<u64>,
+    /// Override a field of every scene, e.g. --set camera.shutter=[0.0,1.0] (also -D).
+    #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
     /// Backends to measure.
     #[command(flatten)]
     pub backends: Backends,
@@ -279,7 +282,13 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 args.scenes.clone()
             };
             let gpu = args.backends.gpu().then(|| usable(&context)).transpose()?;
-            let report = frame::run(&scenes, gpu, &args.gpu_rays_per_invocation, args.runs)?;
+            let report = frame::run(
+                &scenes,
+                &args.set,
+                gpu,
+                &args.gpu_rays_per_invocation,
+                args.runs,
+            )?;
             finish(
                 &command_line,
                 &machine,

@@ -84,6 +84,8 @@ pub struct CameraSpec {
     pub lens_sampler: SamplerName,
     /// Scene units per millimetre (0.001 / meters_per_unit).
     pub units_per_mm: f64,
+    /// [open, close] (seconds): the interval each camera sample takes its time from.
+    pub shutter: [f64; 2],
 }
 
 /// An orthonormal camera basis: right = forward x up, image row 0 at the top.
@@ -253,6 +255,8 @@ impl CameraSpec {
             film_v: film_dir(s.film_v),
             aperture_blades: self.aperture_blades,
             aperture_table_offset,
+            shutter_open: self.shutter[0] as f32,
+            shutter_span: (self.shutter[1] - self.shutter[0]) as f32,
             ..Default::default()
         }
     }

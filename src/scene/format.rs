@@ -180,6 +180,9 @@ pub struct CameraSection {
     /// Pattern of the lens points (default stratified).
     #[serde(default)]
     pub lens_sampler: SamplerName,
+    /// [open, close] (seconds): the interval the shutter is open; each camera sample takes a
+    /// time in it (default [0, 0]: no motion blur).
+    pub shutter: Option<Pair>,
 }
 
 fn default_up() -> Vec3 {
@@ -317,6 +320,9 @@ pub struct ShapeEntry {
     pub smooth: Option<bool>,
     /// degrees: with `smooth` and no normals in the file, edges sharper than this stay sharp
     pub crease_angle: Option<f64>,
+    /// Linear motion (scene units a second): at time `t` the shape is moved by `velocity * t`;
+    /// with the camera's `shutter`, motion blur. Not on planes or emitters.
+    pub velocity: Option<Vec3>,
 }
 
 /// The `type` of a `[[lights]]` table.

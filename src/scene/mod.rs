@@ -40,6 +40,9 @@ pub struct Scene {
     pub shapes: Vec<Shape>,
     /// The lights (emitting mesh triangles are found through their materials).
     pub lights: Vec<Light>,
+    /// Each shape's velocity (scene units a second), in `shapes` order; empty when nothing
+    /// moves.
+    pub velocities: Vec<Vec3>,
 }
 
 /// The validated `[render]` section.

@@ -196,6 +196,7 @@ pub fn validate(parsed: ParsedScene) -> Result<Scene> {
     let mut materials = materials;
     let shapes = validate_shapes(&check, file, &mut materials)?;
     let lights = validate_lights(&check, file)?;
+    let velocities = validate_velocities(&check, file, &shapes, &materials)?;
     Ok(Scene {
         source: parsed.path.clone(),
         render,
@@ -203,7 +204,71 @@ pub fn validate(parsed: ParsedScene) -> Result<Scene> {
         materials,
         shapes,
         lights,
+        velocities,
     })
+}
+
+/// `camera.shutter`: finite, opening before it closes.
+fn shutter(check: &Checker, shutter: Option<Pair>) -> Result<[f64; 2]> {
+    let Some(Exact([open, close])) = shutter else {
+        return Ok([0.0, 0.0]);
+    };
+    let (open, close) = (
+        check.finite("camera.shutter[0]", open)?,
+        check.finite("camera.shutter[1]", close)?,
+    );
+    if close < open {
+        return Err(check.err(
+            "camera.shutter",
+            format!("closes ({}) before it opens ({})", num(close), num(open)),
+        ));
+    }
+    Ok([open, close])
+}
+
+/// Each shape's `velocity` (zero where not given); empty when none moves. A plane is unbounded
+/// and an emitter is sampled where it stands, so neither may move.
+fn validate_velocities(
+    check: &Checker,
+    file: &SceneFile,
+    shapes: &[Shape],
+    materials: &[Material],
+) -> Result<Vec<Vec3>> {
+    let mut velocities = Vec::with_capacity(shapes.len());
+    for (i, (entry, shape)) in file.shapes.iter().zip(shapes).enumerate() {
+        let field = format!("shapes[{i}].velocity");
+        let Some(v) = entry.velocity else {
+            velocities.push(Vec3::ZERO);
+            continue;
+        };
+        let v = check.vector(&field, v)?.as_vec3();
+        let emits = |m: u32| materials[m as usize].emission.max_element() > 0.0;
+        let (moves_plane, moves_emitter) = match shape {
+            Shape::Plane { .. } => (true, false),
+            Shape::Mesh { mesh, material } => (
+                false,
+                emits(*material)
+                    || mesh
+                        .materials
+                        .iter()
+                        .any(|m| m.emission.max_element() > 0.0),
+            ),
+            Shape::Sphere { material, .. } | Shape::Quad { material, .. } => {
+                (false, emits(*material))
+            }
+        };
+        if v != Vec3::ZERO && moves_plane {
+            return Err(check.err(&field, "an infinite plane cannot move"));
+        }
+        if v != Vec3::ZERO && moves_emitter {
+            return Err(check.err(&field, "an emitter cannot move (lights stand still)"));
+        }
+        velocities.push(v);
+    }
+    if velocities.iter().all(|&v| v == Vec3::ZERO) {
+        velocities.clear();
+    }
+    Ok(velocities)
 }
 
 /// Table-based samplers store `spp` points per pattern; beyond MAX_TABLE_SPP use another.
@@ -464,6 +529,7 @@ fn validate_camera(
         )?,
         lens_sampler: c.lens_sampler,
         units_per_mm,
+        shutter: shutter(check, c.shutter)?,
     };
     if f_number > 0.0 {
         check_sampler_spp(
