@@ -230,3 +230,28 @@ fn bench_precision_measures_f32_error_against_an_f64_oracle() {
         }
     }
 }
+
+/// `bench motion`: every slicing of the shutter finds the same hits at the same distances (a
+/// ray's geometry depends on its time, not on which BVH bounds it).
+#[test]
+fn bench_motion_finds_the_same_hits_with_every_slicing() {
+    let json = std::env::temp_dir().join(format!("chambre-motion-{}.json", std::process::id()));
+    let report = run_bench(
+        &["motion", "--size", "48", "--slices", "1,3,8", "--runs", "1"],
+        &json,
+        "| slices | build ms |",
+    );
+    let results = report["report"]["results"].as_array().unwrap();
+    assert_eq!(results.len(), 3);
+    let hits: Vec<u64> = results
+        .iter()
+        .map(|r| r["hits"].as_u64().unwrap())
+        .collect();
+    assert!(hits[0] > 100, "{hits:?}");
+    assert!(hits.iter().all(|&h| h == hits[0]), "{hits:?}");
+    let t: Vec<f64> = results
+        .iter()
+        .map(|r| r["t_sum"].as_f64().unwrap())
+        .collect();
+    assert!(t.iter().all(|&x| (x - t[0]).abs() <= 1e-9 * t[0]), "{t:?}");
+}

@@ -23,6 +23,8 @@ mkdir -p bench
     "$chambre" bench frame --runs "$runs" --scenes bunny -D 'shapes[0].velocity=[0.5,0.0,0.0]' \
         -D 'camera.shutter=[0.0,1.0]' --json bench/frame_motion.json
     echo
+    "$chambre" bench motion --size 768 --runs "$runs" --json bench/motion.json
+    echo
     "$chambre" bench rays --runs "$runs" --json bench/rays.json
     echo
     # The throughput issue's real-GPU target is stated at 1920x1080.

@@ -8,12 +8,15 @@
 //!   against the general one.
 //! - [`samplers`]: the lens sample patterns' error against samples and time.
 //! - [`scale`]: the same rays on meshes from a thousand to ten million triangles.
+//! - [`precision`]: f32 hits and pixels of both paths against an f64 oracle.
+//! - [`motion`]: motion blur's BVH, swept over the shutter or per time slice.
 //!
 //! Timings are medians (with min and max) of several runs after a warm-up, measured side by side
 //! in one process: machines here are noisy, so only ratios within one run are compared.
 
 pub mod build;
 pub mod frame;
+pub mod motion;
 pub mod precision;
 pub mod rays;
 pub mod samplers;
@@ -46,6 +49,32 @@ pub enum BenchCommand {
     /// How accurate the f32 hits of both paths are against an f64 oracle, with the mesh far
     /// from the origin, tiny and huge.
     Precision(PrecisionArgs),
+    /// Motion blur's BVH: one over boxes swept over the whole shutter against one per time
+    /// slice; build time and Mrays/s of the same timed rays, CPU path.
+    Motion(MotionArgs),
+}
+
+/// Arguments of `chambre bench motion`.
+#[derive(Debug, clap::Args)]
+pub struct MotionArgs {
+    /// Mesh file (OBJ, PLY or glTF, optionally .gz).
+    #[arg(long, default_value = "scenes/meshes/bunny-npm-lowres.obj")]
+    pub mesh: PathBuf,
+    /// How far the mesh moves while the shutter is open, in mesh sizes.
+    #[arg(long, default_value_t = 0.3)]
+    pub travel: f64,
+    /// Time slices to compare, each with its own BVH (1: one BVH over the whole shutter).
+    #[arg(long, value_delimiter = ',', default_values_t = [1, 2, 4, 8, 16])]
+    pub slices: Vec<u32>,
+    /// Camera rays: SIZE x SIZE.
+    #[arg(long, default_value_t = 256)]
+    pub size: u32,
+    /// Timed runs after one warm-up.
+    #[arg(long, default_value_t = 3)]
+    pub runs: u32,
+    /// Where the report goes.
+    #[command(flatten)]
+    pub output: Output,
 }
 
 /// Arguments of `chambre bench precision`.
@@ -338,6 +367,16 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 args.camera_height,
                 gpu,
             )?;
+            finish(
+                &command_line,
+                &machine,
+                report.to_markdown(),
+                &report,
+                &args.output,
+            )
+        }
+        BenchCommand::Motion(args) => {
+            let report = motion::run(&args.mesh, args.travel, &args.slices, args.size, args.runs)?;
             finish(
                 &command_line,
                 &machine,
