@@ -297,13 +297,18 @@ fn direct_light<const F: u32>(
             }
             total += color * sum * (area / light.samples as f32);
         } else if has(F, FEATURE_PUNCTUAL_LIGHTS) && window.is_first() {
-            let (wi, distance, falloff) = if light.kind == LIGHT_POINT {
+            let (wi, distance, mut falloff) = if light.kind == LIGHT_DIRECTIONAL {
+                (Vec3::from(light.p0), T_FAR, 1.0)
+            } else {
                 let to_light = Vec3::from(light.p0) - surface.position;
                 let distance = to_light.length();
                 (to_light / distance, distance, 1.0 / (distance * distance))
-            } else {
-                (Vec3::from(light.p0), T_FAR, 1.0)
             };
+            if light.kind == LIGHT_SPOT {
+                let cos = -Vec3::from(light.p1).dot(wi);
+                let cone = (cos * light.p2[0] + light.p2[1]).clamp(0.0, 1.0);
+                falloff *= cone * cone;
+            }
             let cos_surface = n.dot(wi);
             if cos_surface > 0.0 && ng.dot(wi) > 0.0 {
                 stats.rays += 1;

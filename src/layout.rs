@@ -50,6 +50,10 @@ pub const LIGHT_AREA: u32 = 2;
 /// An emitting triangle (an OBJ face with `Ke`): `p0` a vertex, `p1` and `p2` the edges to
 /// the others; sampled by folding the unit square onto the triangle.
 pub const LIGHT_TRIANGLE: u32 = 3;
+/// A spot light: a point light at `p0` pointing along the unit `p1`, its intensity scaled by
+/// `saturate(cos * p2.x + p2.y)^2` with `cos` between `p1` and the direction to the lit point
+/// (KHR_lights_punctual's falloff from the inner to the outer cone).
+pub const LIGHT_SPOT: u32 = 4;
 
 /// Sample patterns (`GpuFrame::pixel_sampler`, `GpuFrame::lens_sampler`); see `src/sampler.rs`.
 /// Random: independent uniform points.
@@ -479,6 +483,7 @@ pub fn wgsl_prelude() -> String {
         ("MODEL_EMITTER", MODEL_EMITTER),
         ("LIGHT_POINT", LIGHT_POINT),
         ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
+        ("LIGHT_SPOT", LIGHT_SPOT),
         ("LIGHT_AREA", LIGHT_AREA),
         ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),
         ("SAMPLER_RANDOM", SAMPLER_RANDOM),

@@ -229,6 +229,27 @@ pub fn flatten(scene: &Scene) -> FlatScene {
                 prim: NONE,
                 ..Default::default()
             },
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                inner_deg,
+                outer_deg,
+            } => {
+                // KHR_lights_punctual's falloff: saturate(cos * scale + offset)^2.
+                let (cos_inner, cos_outer) =
+                    (inner_deg.to_radians().cos(), outer_deg.to_radians().cos());
+                let scale = 1.0 / (cos_inner - cos_outer).max(1e-3);
+                GpuLight {
+                    p0: position.to_array(),
+                    kind: LIGHT_SPOT,
+                    p1: direction.to_array(),
+                    p2: [scale, -cos_outer * scale, 0.0],
+                    color: intensity.to_array(),
+                    prim: NONE,
+                    ..Default::default()
+                }
+            }
             Light::Directional {
                 direction,
                 irradiance,

@@ -293,3 +293,72 @@ material = "red"
         );
     }
 }
+
+/// A spot light 2 units above a grey Lambert floor, pointing down, full within 10° of its axis
+/// and dark beyond 30°.
+const SPOT: &str = r#"
+[render]
+width = 48
+height = 48
+spp = 4
+[camera]
+position = [0.0, 6.0, 0.01]
+look_at = [0.0, 0.0, 0.0]
+vertical_fov = 60.0
+film = [24.0, 24.0]
+[[materials]]
+name = "grey"
+model = "lambert"
+diffuse = [0.5, 0.5, 0.5]
+[[shapes]]
+type = "quad"
+corner = [-5.0, 0.0, 5.0]
+edge_u = [10.0, 0.0, 0.0]
+edge_v = [0.0, 0.0, -10.0]
+material = "grey"
+[[lights]]
+type = "spot"
+position = [0.0, 2.0, 0.0]
+direction = [0.0, -1.0, 0.0]
+intensity = [8.0, 8.0, 8.0]
+inner_angle = 10.0
+outer_angle = 30.0
+"#;
+
+#[test]
+fn a_spot_light_falls_off_between_its_cones_as_khr_lights_punctual_says() {
+    let flat = flatten(&scene(SPOT));
+    let (cos_inner, cos_outer) = (10f32.to_radians().cos(), 30f32.to_radians().cos());
+    // Floor points at distance rho from the spot's foot: inside the inner cone, between the
+    // cones, outside the outer one.
+    for rho in [0.2f32, 0.5, 0.8, 1.0, 2.0] {
+        let p = Vec3::new(rho, 0.0, 0.0);
+        let radiance = trace_path::<FEATURES_ALL>(
+            &flat,
+            Ray {
+                origin: p + Vec3::new(0.0, 5.0, 0.0),
+                direction: Vec3::NEG_Y,
+            },
+            0.0,
+            LightWindow::ALL,
+            &mut Rng::new(0, 0, 0),
+            &mut SampleStats::default(),
+            &mut FirstHit::default(),
+        );
+        let r2 = 4.0 + rho * rho;
+        let cos = 2.0 / r2.sqrt();
+        let cone = ((cos - cos_outer) / (cos_inner - cos_outer)).clamp(0.0, 1.0);
+        let expected = 0.5 / PI * 8.0 * cos * cone * cone / r2;
+        assert!(
+            (radiance.x - expected).abs() <= 1e-5 * expected.max(1e-3),
+            "rho {rho}: {} against {expected}",
+            radiance.x
+        );
+    }
+    // Both paths render the pool of light alike.
+    let cpu = common::render_cpu(&flat);
+    if let Some(gpu) = common::render_gpu(&flat) {
+        let (within, _) = common::agreement(&cpu, &gpu, 1e-3);
+        assert!(within > 0.99, "{within}");
+    }
+}

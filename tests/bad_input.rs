@@ -623,3 +623,18 @@ fn adaptive_sampling_settings_are_checked_with_their_field() {
         "2..=8",
     );
 }
+
+#[test]
+fn a_spot_light_needs_its_direction_and_ordered_cones() {
+    let spot = |extra: &str| {
+        format!("type = \"spot\"\nposition = [0.0, 3.0, 0.0]\nintensity = [5.0, 5.0, 5.0]\n{extra}")
+    };
+    let from = "type = \"point\"\nposition = [0.0, 3.0, 0.0]\nintensity = [5.0, 5.0, 5.0]";
+    expect_error(from, &spot(""), 23, "lights[0].direction", "required");
+    let cones = spot("direction = [0.0, -1.0, 0.0]\ninner_angle = 40.0\nouter_angle = 30.0");
+    expect_error(from, &cones, 28, "lights[0].inner_angle", "[0, outer_angle");
+    let wide = spot("direction = [0.0, -1.0, 0.0]\nouter_angle = 120.0");
+    expect_error(from, &wide, 28, "lights[0].outer_angle", "(0, 90]");
+    let area = spot("direction = [0.0, -1.0, 0.0]\nsamples = 4");
+    expect_error(from, &area, 28, "samples", "spot light");
+}

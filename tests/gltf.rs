@@ -262,3 +262,41 @@ fn a_broken_gltf_names_the_file() {
         "{error}"
     );
 }
+
+#[test]
+fn a_gltf_spot_light_keeps_its_cone() {
+    let dir = scratch("spot");
+    std::fs::write(dir.join("quad.bin"), quad_buffer()).unwrap();
+    let json = gltf_json(Some("quad.bin"), true).replace(
+        r#"{"type": "point", "color": [1, 1, 1], "intensity": 6830}"#,
+        r#"{"type": "spot", "color": [1, 1, 1], "intensity": 6830,
+            "spot": {"innerConeAngle": 0.1, "outerConeAngle": 0.3}}"#,
+    );
+    assert!(json.contains("\"spot\""));
+    let path = dir.join("quad.gltf");
+    std::fs::write(&path, json).unwrap();
+    let scene = Scene::load(
+        &path,
+        &["render.width=33".into(), "render.height=33".into()],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    match scene.lights[0] {
+        chambre::scene::Light::Spot {
+            direction,
+            inner_deg,
+            outer_deg,
+            ..
+        } => {
+            assert_eq!(direction, -Vec3::Z);
+            assert!((inner_deg - 0.1f32.to_degrees()).abs() < 1e-4);
+            assert!((outer_deg - 0.3f32.to_degrees()).abs() < 1e-4);
+        }
+        ref other => panic!("{other:?}"),
+    }
+    let image = common::render_cpu(&flatten(&scene));
+    // On the axis, as the point light gave; the image's corner is 33° off the axis, beyond the
+    // outer cone's 17.2°.
+    let expected = expected_centre();
+    assert!((image.get(16, 16) - expected).abs().max_element() < 2e-3 * expected.max_element());
+    assert_eq!(image.get(0, 0), Vec3::ZERO);
+}

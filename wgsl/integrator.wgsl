@@ -151,11 +151,15 @@ fn direct_light(time: f32, surface: Surface, material: GpuMaterial, prim_id: u32
             var wi = light.p0;
             var distance = T_FAR;
             var falloff = 1.0;
-            if (light.kind == LIGHT_POINT) {
+            if (light.kind != LIGHT_DIRECTIONAL) {
                 let to_light = light.p0 - surface.position;
                 distance = length(to_light);
                 wi = to_light / distance;
                 falloff = 1.0 / (distance * distance);
+            }
+            if (light.kind == LIGHT_SPOT) {
+                let cone = clamp(-dot(light.p1, wi) * light.p2.x + light.p2.y, 0.0, 1.0);
+                falloff *= cone * cone;
             }
             let cos_surface = dot(n, wi);
             if (cos_surface > 0.0 && dot(ng, wi) > 0.0) {

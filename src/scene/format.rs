@@ -335,6 +335,9 @@ pub enum LightType {
     Directional,
     /// A one-sided parallelogram light: `corner`, `edge_u`, `edge_v`, `radiance`, `samples`.
     Area,
+    /// A spot light: `position`, `direction` (where it points), `intensity` on its axis,
+    /// `outer_angle` and `inner_angle`.
+    Spot,
 }
 
 /// One `[[lights]]` table: the fields its `type` takes are checked in `validate.rs`.
@@ -365,4 +368,10 @@ pub struct LightEntry {
     pub radiance: Option<Vec3>,
     /// Area: shadow rays per shading point (default 1).
     pub samples: Option<i64>,
+    // spot
+    /// Spot: angle (degrees) from its axis where the light ends, (0, 90]; default 45.
+    pub outer_angle: Option<f64>,
+    /// Spot: angle (degrees) from its axis within which the light is full, [0, outer_angle);
+    /// default 0.
+    pub inner_angle: Option<f64>,
 }

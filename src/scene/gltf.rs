@@ -22,7 +22,7 @@ pub struct GltfScene {
     pub camera: Option<GltfCamera>,
     /// KHR_lights_punctual lights, radiometric.
     pub lights: Vec<GltfLight>,
-    /// What the mapping left out (textures, a spot light's cone), for the user to read.
+    /// What the mapping left out (textures), for the user to read.
     pub notes: Vec<String>,
 }
 
@@ -44,12 +44,25 @@ pub struct GltfCamera {
 /// A KHR_lights_punctual light in chambre's radiometric units.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum GltfLight {
-    /// A point light (or a spot light, its cone left out).
+    /// A point light.
     Point {
         /// World position.
         position: DVec3,
         /// Radiant intensity, W/sr: colour × candela / 683.
         intensity: Vec3,
+    },
+    /// A spot light.
+    Spot {
+        /// World position.
+        position: DVec3,
+        /// The unit direction it points along (the node's -Z axis).
+        direction: DVec3,
+        /// Radiant intensity on its axis, W/sr: colour × candela / 683.
+        intensity: Vec3,
+        /// `innerConeAngle`, degrees.
+        inner_deg: f64,
+        /// `outerConeAngle`, degrees.
+        outer_deg: f64,
     },
     /// A directional light.
     Directional {
@@ -95,7 +108,7 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
             out.camera = Some(placed_camera(&camera, world)?);
         }
         if let Some(light) = node.light() {
-            out.lights.push(placed_light(&light, world, &mut out.notes));
+            out.lights.push(placed_light(&light, world));
         }
         stack.extend(node.children().map(|c| (c, world)));
     }
@@ -256,30 +269,30 @@ fn placed_camera(camera: &gltf::Camera, world: DMat4) -> Result<GltfCamera, Stri
     })
 }
 
-fn placed_light(
-    light: &gltf::khr_lights_punctual::Light,
-    world: DMat4,
-    notes: &mut Vec<String>,
-) -> GltfLight {
+fn placed_light(light: &gltf::khr_lights_punctual::Light, world: DMat4) -> GltfLight {
     use gltf::khr_lights_punctual::Kind;
     let power = Vec3::from(light.color()) * (light.intensity() as f64 / LUMENS_PER_WATT) as f32;
+    let position = world.transform_point3(DVec3::ZERO);
+    let axis = world.transform_vector3(DVec3::NEG_Z).normalize();
     match light.kind() {
         Kind::Directional => GltfLight::Directional {
-            direction: world.transform_vector3(DVec3::NEG_Z).normalize(),
+            direction: axis,
             irradiance: power,
         },
-        kind => {
-            if let Kind::Spot { .. } = kind {
-                notes.push(format!(
-                    "spot light {:?} is rendered as a point light: its cone is left out",
-                    light.name().unwrap_or("(unnamed)")
-                ));
-            }
-            GltfLight::Point {
-                position: world.transform_point3(DVec3::ZERO),
-                intensity: power,
-            }
-        }
+        Kind::Point => GltfLight::Point {
+            position,
+            intensity: power,
+        },
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => GltfLight::Spot {
+            position,
+            direction: axis,
+            intensity: power,
+            inner_deg: (inner_cone_angle as f64).to_degrees(),
+            outer_deg: (outer_cone_angle as f64).to_degrees(),
+        },
     }
 }
 
@@ -291,8 +304,7 @@ pub const DEFAULT_WIDTH: u32 = 960;
 /// first perspective camera (or one framing its bounds: 40° vertical field of view, from above
 /// the front right, the bounds filling the view), its lights (or, when it has none, a default
 /// key light: a directional light of irradiance 3 from above the camera, and ambient 0.1).
-/// Returns the text and the notes to show the user.
-pub fn scene_text(path: &Path) -> Result<(String, Vec<String>), String> {
+pub fn scene_text(path: &Path) -> Result<String, String> {
     let scene = read_gltf(path)?;
     if scene.mesh.triangles.is_empty() {
         return Err("the file's default scene has no triangles".into());
@@ -334,6 +346,21 @@ pub fn scene_text(path: &Path) -> Result<(String, Vec<String>), String> {
                 v(*position),
                 rgb(*intensity)
             ),
+            GltfLight::Spot {
+                position,
+                direction,
+                intensity,
+                inner_deg,
+                outer_deg,
+            } => format!(
+                "\n[[lights]]\ntype = \"spot\"\nposition = {}\ndirection = {}\nintensity = {}\n\
+                 outer_angle = {:?}\ninner_angle = {:?}\n",
+                v(*position),
+                v(*direction),
+                rgb(*intensity),
+                outer_deg.clamp(1e-3, 90.0),
+                inner_deg.clamp(0.0, outer_deg.clamp(1e-3, 90.0) * 0.999),
+            ),
             GltfLight::Directional {
                 direction,
                 irradiance,
@@ -352,7 +379,7 @@ pub fn scene_text(path: &Path) -> Result<(String, Vec<String>), String> {
             v(direction)
         );
     }
-    Ok((text, scene.notes))
+    Ok(text)
 }
 
 /// A camera that frames the box `lo..hi`: 40° vertical field of view, looking at its centre

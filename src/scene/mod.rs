@@ -161,32 +161,37 @@ pub enum Light {
         /// Shadow rays per shading point, >= 1.
         samples: u32,
     },
+    /// A point light limited to a cone, with KHR_lights_punctual's falloff between its inner
+    /// and outer angles.
+    Spot {
+        /// Position (scene units).
+        position: Vec3,
+        /// Unit direction it points along.
+        direction: Vec3,
+        /// Radiant intensity on its axis (W/sr), linear RGB.
+        intensity: Vec3,
+        /// Angle from the axis within which the light is full (degrees).
+        inner_deg: f32,
+        /// Angle from the axis where it ends (degrees).
+        outer_deg: f32,
+    },
 }
 
 impl Scene {
     /// Parse, apply `--set` overrides (`key=value`), and validate a scene file: chambre's TOML,
     /// or a glTF file (`.gltf`, `.glb`) rendered as a scene (`gltf::scene_text`; what its
-    /// mapping left out is in the mesh's `notes`).
+    /// mapping left out is in its mesh's `notes`).
     pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
         let extension = path.extension().map(|e| e.to_ascii_lowercase());
         if extension
             .as_ref()
             .is_some_and(|e| e == "gltf" || e == "glb")
         {
-            let (text, notes) = gltf::scene_text(path).map_err(|message| Error::File {
+            let text = gltf::scene_text(path).map_err(|message| Error::File {
                 path: path.to_path_buf(),
                 message,
             })?;
-            let mut scene = Scene::from_str(path, &text, overrides)?;
-            // The file's notes are on the one mesh (textures) already; the lights' join them.
-            if let Some(Shape::Mesh { mesh, .. }) = scene.shapes.first_mut() {
-                for note in notes {
-                    if !mesh.notes.contains(&note) {
-                        mesh.notes.push(note);
-                    }
-                }
-            }
-            return Ok(scene);
+            return Scene::from_str(path, &text, overrides);
         }
         let parsed = load::parse_scene_file(path, overrides)?;
         validate::validate(parsed)

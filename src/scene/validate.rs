@@ -955,12 +955,16 @@ fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
             ("radiance", l.radiance.is_some()),
             ("samples", l.samples.is_some()),
         ];
+        let cone_fields = [
+            ("outer_angle", l.outer_angle.is_some()),
+            ("inner_angle", l.inner_angle.is_some()),
+        ];
         let light = match l.kind {
             LightType::Point => {
                 check.forbid(
                     &prefix,
                     "point light",
-                    &[&directional_fields[..], &area_fields].concat(),
+                    &[&directional_fields[..], &area_fields, &cone_fields].concat(),
                 )?;
                 Light::Point {
                     position: check
@@ -979,7 +983,7 @@ fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
                 check.forbid(
                     &prefix,
                     "directional light",
-                    &[&point_fields[..], &area_fields].concat(),
+                    &[&point_fields[..], &area_fields, &cone_fields].concat(),
                 )?;
                 let direction = check.nonzero(
                     &at("direction"),
@@ -993,11 +997,51 @@ fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
                     )?,
                 }
             }
+            LightType::Spot => {
+                check.forbid(&prefix, "spot light", &area_fields[..])?;
+                let direction = check.nonzero(
+                    &at("direction"),
+                    check.require(&at("direction"), l.direction, "spot light")?,
+                )?;
+                let outer = check.finite(&at("outer_angle"), l.outer_angle.unwrap_or(45.0))?;
+                if !(outer > 0.0 && outer <= 90.0) {
+                    return Err(check.err(
+                        &at("outer_angle"),
+                        format!("lies in (0, 90] degrees, got {}", num(outer)),
+                    ));
+                }
+                let inner = check.finite(&at("inner_angle"), l.inner_angle.unwrap_or(0.0))?;
+                if !(0.0..outer).contains(&inner) {
+                    return Err(check.err(
+                        &at("inner_angle"),
+                        format!(
+                            "lies in [0, outer_angle = {}) degrees, got {}",
+                            num(outer),
+                            num(inner)
+                        ),
+                    ));
+                }
+                Light::Spot {
+                    position: check
+                        .point(
+                            &at("position"),
+                            check.require(&at("position"), l.position, "spot light")?,
+                        )?
+                        .as_vec3(),
+                    direction: direction.normalize().as_vec3(),
+                    intensity: check.radiometric(
+                        &at("intensity"),
+                        check.require(&at("intensity"), l.intensity, "spot light")?,
+                    )?,
+                    inner_deg: inner as f32,
+                    outer_deg: outer as f32,
+                }
+            }
             LightType::Area => {
                 check.forbid(
                     &prefix,
                     "area light",
-                    &[&point_fields[..], &directional_fields].concat(),
+                    &[&point_fields[..], &directional_fields, &cone_fields].concat(),
                 )?;
                 let (corner, edge_u, edge_v) =
                     parallelogram(check, &prefix, l.corner, l.edge_u, l.edge_v, "area light")?;
