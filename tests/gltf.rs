@@ -300,3 +300,41 @@ fn a_gltf_spot_light_keeps_its_cone() {
     assert!((image.get(16, 16) - expected).abs().max_element() < 2e-3 * expected.max_element());
     assert_eq!(image.get(0, 0), Vec3::ZERO);
 }
+
+#[test]
+fn gltf_camera_names_the_camera_to_render_with() {
+    let dir = scratch("named");
+    std::fs::write(dir.join("quad.bin"), quad_buffer()).unwrap();
+    // A second camera node, named "side", 5 units along +x looking back at the origin.
+    let json = gltf_json(Some("quad.bin"), true)
+        .replace(
+            r#""cameras": [{"type": "perspective","#,
+            r#""cameras": [{"name": "side", "type": "perspective",
+                            "perspective": {"yfov": 0.5, "aspectRatio": 2.0, "znear": 0.01}},
+                           {"name": "front", "type": "perspective","#,
+        )
+        .replace(
+            r#"{"camera": 0, "translation": [0, 0, 5]}"#,
+            r#"{"camera": 1, "translation": [0, 0, 5]},
+            {"camera": 0, "translation": [5, 0, 0], "rotation": [0, 0.7071068, 0, 0.7071068]}"#,
+        )
+        .replace(r#""nodes": [0, 1, 2]"#, r#""nodes": [0, 1, 2, 3]"#);
+    let path = dir.join("quad.gltf");
+    std::fs::write(&path, json).unwrap();
+    let side = Scene::load(&path, &["gltf.camera=side".into()]).unwrap_or_else(|e| panic!("{e}"));
+    assert!((side.camera.position - glam::DVec3::new(5.0, 0.0, 0.0)).length() < 1e-9);
+    assert_eq!(
+        (side.render.width, side.render.height),
+        (960, 480),
+        "its 2:1 aspect"
+    );
+    let front = Scene::load(&path, &["gltf.camera=\"front\"".into()]).unwrap();
+    assert_eq!(front.camera.position, glam::DVec3::new(0.0, 0.0, 5.0));
+    let error = Scene::load(&path, &["gltf.camera=top".into()])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("\"top\"") && error.contains("\"side\", \"front\""),
+        "{error}"
+    );
+}

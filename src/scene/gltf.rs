@@ -73,8 +73,15 @@ pub enum GltfLight {
     },
 }
 
-/// Reads a glTF or GLB file: the error is a sentence without the path (the caller adds it).
+/// Reads a glTF or GLB file, with its first perspective camera: the error is a sentence
+/// without the path (the caller adds it).
 pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
+    read_gltf_with_camera(path, None)
+}
+
+/// [`read_gltf`] with the perspective camera named `camera` (an error naming the cameras
+/// found if there is none of that name), or the first when `None`.
+pub fn read_gltf_with_camera(path: &Path, camera: Option<&str>) -> Result<GltfScene, String> {
     let gltf = gltf::Gltf::open(path).map_err(|e| format!("not a readable glTF file: {e}"))?;
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
@@ -104,13 +111,29 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
                 any_normals |= added;
             }
         }
-        if let (None, Some(camera)) = (out.camera, node.camera()) {
-            out.camera = Some(placed_camera(&camera, world)?);
+        if let (None, Some(found)) = (out.camera, node.camera())
+            && camera.is_none_or(|name| found.name() == Some(name))
+        {
+            out.camera = Some(placed_camera(&found, world)?);
         }
         if let Some(light) = node.light() {
             out.lights.push(placed_light(&light, world));
         }
         stack.extend(node.children().map(|c| (c, world)));
+    }
+    if let (Some(name), None) = (camera, out.camera) {
+        let names: Vec<String> = document
+            .cameras()
+            .map(|c| format!("{:?}", c.name().unwrap_or("(unnamed)")))
+            .collect();
+        return Err(format!(
+            "no camera named {name:?} in the default scene (cameras: {})",
+            if names.is_empty() {
+                "none".to_string()
+            } else {
+                names.join(", ")
+            }
+        ));
     }
     if any_normals {
         out.mesh.normals = Some(normals);
@@ -301,11 +324,11 @@ pub const DEFAULT_WIDTH: u32 = 960;
 
 /// A glTF file as chambre scene text, so that `chambre render model.glb` renders it (with
 /// `--set` overrides as for any scene): the file as one mesh shape with its own materials, its
-/// first perspective camera (or one framing its bounds: 40° vertical field of view, from above
+/// perspective camera named `camera` or its first (or one framing its bounds: 40° vertical field of view, from above
 /// the front right, the bounds filling the view), its lights (or, when it has none, a default
 /// key light: a directional light of irradiance 3 from above the camera, and ambient 0.1).
-pub fn scene_text(path: &Path) -> Result<String, String> {
-    let scene = read_gltf(path)?;
+pub fn scene_text(path: &Path, camera: Option<&str>) -> Result<String, String> {
+    let scene = read_gltf_with_camera(path, camera)?;
     if scene.mesh.triangles.is_empty() {
         return Err("the file's default scene has no triangles".into());
     }

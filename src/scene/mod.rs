@@ -177,21 +177,34 @@ pub enum Light {
     },
 }
 
+/// The override that names the camera of a glTF file rendered as a scene.
+pub const GLTF_CAMERA_KEY: &str = "gltf.camera";
+
 impl Scene {
     /// Parse, apply `--set` overrides (`key=value`), and validate a scene file: chambre's TOML,
-    /// or a glTF file (`.gltf`, `.glb`) rendered as a scene (`gltf::scene_text`; what its
-    /// mapping left out is in its mesh's `notes`).
+    /// or a glTF file (`.gltf`, `.glb`) rendered as a scene (`gltf::scene_text`, with the camera
+    /// an override `gltf.camera=NAME` names; what its mapping left out is in its mesh's
+    /// `notes`).
     pub fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
         let extension = path.extension().map(|e| e.to_ascii_lowercase());
         if extension
             .as_ref()
             .is_some_and(|e| e == "gltf" || e == "glb")
         {
-            let text = gltf::scene_text(path).map_err(|message| Error::File {
+            // `gltf.camera=NAME` picks the file's camera; the other overrides apply to the scene.
+            let (camera, overrides): (Vec<&String>, Vec<&String>) = overrides
+                .iter()
+                .partition(|o| o.trim_start().starts_with(GLTF_CAMERA_KEY));
+            let name = camera.last().map(|o| {
+                let value = o.split_once('=').map_or("", |(_, v)| v).trim();
+                value.trim_matches('"').to_string()
+            });
+            let text = gltf::scene_text(path, name.as_deref()).map_err(|message| Error::File {
                 path: path.to_path_buf(),
                 message,
             })?;
-            return Scene::from_str(path, &text, overrides);
+            let overrides: Vec<String> = overrides.into_iter().cloned().collect();
+            return Scene::from_str(path, &text, &overrides);
         }
         let parsed = load::parse_scene_file(path, overrides)?;
         validate::validate(parsed)
