@@ -25,6 +25,7 @@
 //! | adaptive sampling    | `adaptive.rs` (decisions on the host, for both paths) | `wgsl/render.wgsl` (pixel lists, halves) |
 //! | ray queries (bench)  | `bench/rays.rs`             | `wgsl/trace.wgsl`      |
 //! | bindings             | `gpu/kernels.rs` (table)    | `wgsl/bindings.wgsl`   |
+//! | raster preview       | `preview.rs`, `gpu/preview.rs` (render pipeline) | `wgsl/preview.wgsl` |
 //!
 //! Kernels are listed in `gpu/kernels.rs` (modules, entry point, bindings) and built by its one
 //! pipeline builder, specialised to the scene's features (`layout::FEATURES`).
@@ -43,6 +44,7 @@ pub mod math;
 pub mod output;
 pub mod pack;
 pub mod plot;
+pub mod preview;
 pub mod provenance;
 pub mod render;
 pub mod sampler;

@@ -64,6 +64,22 @@ enum Command {
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
+    /// Draw a scene fast with the GPU's raster pipeline through the view camera's projection
+    /// (film tilt, swing and shift as the ray tracer has them; no shadows, reflections or depth
+    /// of field) and report the frame time.
+    Preview {
+        /// Scene file (TOML or glTF; see docs/scene-format.md).
+        scene: PathBuf,
+        /// Image to write: .png, .exr or .pfm.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Timed frames after a warm-up; the median is reported.
+        #[arg(long, default_value_t = 5)]
+        frames: u32,
+        /// Override any scene field, e.g. --set camera.film_tilt=10 (also -D).
+        #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
     /// List the GPU adapters found and their relevant limits.
     Info,
     /// Put the shards of a render (`render --shard I/N`) back together, bit-identical to one
@@ -304,6 +320,12 @@ fn main() -> ExitCode {
             far,
             set,
         } => run_camera(&scene, coc, far, &set),
+        Command::Preview {
+            scene,
+            output,
+            frames,
+            set,
+        } => run_preview(&scene, &output, frames, &set),
         Command::Info => run_info(),
         Command::Merge { manifests, output } => run_merge(&manifests, &output),
     };
@@ -683,6 +705,35 @@ fn shard_manifest(
         spp_min: output.samples_per_pixel,
         spp_max: output.max_samples_per_pixel,
     }
+}
+
+/// `chambre preview`: the raster preview, written atomically, with its frame time.
+fn run_preview(
+    path: &Path,
+    output: &Path,
+    frames: u32,
+    overrides: &[String],
+) -> anyhow::Result<ExitCode> {
+    let target = OutputTarget::prepare(output)?;
+    let scene = load_and_note(path, overrides)?;
+    for omission in chambre::preview::omissions(&scene) {
+        note!("note: {omission}");
+    }
+    let flat = flatten(&scene);
+    let context = chambre::gpu::GpuContext::new()?;
+    let frame = chambre::gpu::preview::draw(&context, &scene, &flat, frames)?;
+    target.write(&frame.image)?;
+    note!(
+        "{}: {}x{}, {} triangles in {:.2} ms a frame (median of {frames}, drawn and finished on \
+         the device, read-back excluded) on {}",
+        output.display(),
+        frame.image.width,
+        frame.image.height,
+        frame.triangles,
+        frame.frame_time.as_secs_f64() * 1e3,
+        context.adapter_description
+    );
+    Ok(ExitCode::SUCCESS)
 }
 
 /// `chambre merge`: the shards' bands stacked into one image, written atomically.

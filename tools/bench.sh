@@ -23,6 +23,12 @@ mkdir -p bench
     "$chambre" bench frame --runs "$runs" --scenes bunny -D 'shapes[0].velocity=[0.5,0.0,0.0]' \
         -D 'camera.shutter=[0.0,1.0]' --json bench/frame_motion.json
     echo
+    # The raster preview's frame time, beside the ray-traced frames of the table above.
+    for scene in architecture tabletop spheres bunny; do
+        "$chambre" preview "scenes/$scene.toml" -o "bench/preview_$scene.png" --frames 5 2>&1 \
+            | grep -v '^note:'
+    done
+    echo
     "$chambre" bench motion --size 768 --runs "$runs" --json bench/motion.json
     echo
     "$chambre" bench rays --runs "$runs" --json bench/rays.json

@@ -5,6 +5,7 @@
 //! records them, and every wait on the device has a timeout (lavapipe has no watchdog).
 
 pub mod kernels;
+pub mod preview;
 pub mod render;
 pub mod trace;
 

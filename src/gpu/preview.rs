@@ -1,0 +1,273 @@
+//! The raster preview's GPU side: a wgpu render pipeline (not a compute kernel: it rasterises)
+//! that draws `preview::tessellate`'s triangles through the view camera's clip matrix into a
+//! float target with a depth buffer, and reads the image back. Shader: `wgsl/preview.wgsl`,
+//! composed after the generated constants and the shared struct types, as the kernels are.
+
+use std::time::{Duration, Instant};
+
+use wgpu::util::DeviceExt;
+
+use super::{GpuContext, wgpu_error_text};
+use crate::error::{Error, Result};
+use crate::layout::wgsl_prelude;
+use crate::pack::FlatScene;
+use crate::preview::{PreviewUniforms, PreviewVertex, bounded_radius, clip_matrix, tessellate};
+use crate::render::Image;
+use crate::scene::Scene;
+
+/// The colour target: linear radiance, as the ray tracer's accumulation.
+const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// A preview frame and how long drawing it took.
+pub struct PreviewFrame {
+    /// Linear radiance, row 0 at the top.
+    pub image: Image,
+    /// Triangles drawn.
+    pub triangles: usize,
+    /// Median time of the timed frames: the draw submitted and finished on the device, without
+    /// the read-back.
+    pub frame_time: Duration,
+}
+
+/// The shader's source: constants, the shared types, the preview's stages.
+fn shader_source() -> String {
+    let types = super::kernels::MODULES
+        .iter()
+        .find(|(name, _)| *name == "types.wgsl")
+        .expect("types.wgsl is a module")
+        .1;
+    format!(
+        "{}\n{types}\n{}",
+        wgsl_prelude(),
+        include_str!("../../wgsl/preview.wgsl")
+    )
+}
+
+/// Draws `scene` (flattened as `flat`) `frames` times after one warm-up and returns the last
+/// frame, read back.
+pub fn draw(
+    context: &GpuContext,
+    scene: &Scene,
+    flat: &FlatScene,
+    frames: u32,
+) -> Result<PreviewFrame> {
+    let device = &context.device;
+    let (width, height) = (flat.frame.width, flat.frame.height);
+    let radius = bounded_radius(flat);
+    let eye = scene
+        .camera
+        .raster_projection(1.0)
+        .view
+        .inverse()
+        .w_axis
+        .truncate();
+    // Planes reach 100 scene radii; the far plane lies beyond them from anywhere near.
+    let extent = 100.0 * (radius + eye.length() as f32);
+    let vertices = tessellate(flat, extent);
+    let uniforms = PreviewUniforms {
+        clip: clip_matrix(scene, 3.0 * extent as f64)
+            .as_mat4()
+            .to_cols_array_2d(),
+        light_count: flat.frame.light_count,
+        ambient: [
+            flat.frame.ambient[0],
+            flat.frame.ambient[1],
+            flat.frame.ambient[2],
+            0.0,
+        ],
+        eye: [eye.x as f32, eye.y as f32, eye.z as f32, 0.0],
+        ..Default::default()
+    };
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("preview"),
+        source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+    });
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("preview"),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("preview_vertex"),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: size_of::<PreviewVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![
+                    0 => Float32x3, 1 => Uint32, 2 => Float32x3
+                ],
+            })],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("preview_fragment"),
+            compilation_options: Default::default(),
+            targets: &[Some(COLOR_FORMAT.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("preview vertices"),
+        contents: bytemuck::cast_slice(&vertices),
+        usage: wgpu::BufferUsages::VERTEX,
+    });
+    let uniform_buffer = context.uniform_buffer("preview uniforms", bytemuck::bytes_of(&uniforms));
+    let materials = context.storage_buffer("materials", bytemuck::cast_slice(&flat.materials))?;
+    let lights = context.storage_buffer("lights", bytemuck::cast_slice(&flat.lights))?;
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("preview"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniform_buffer.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: materials.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: lights.as_entire_binding(),
+            },
+        ],
+    });
+    let size = wgpu::Extent3d {
+        width,
+        height,
+        depth_or_array_layers: 1,
+    };
+    let target = |format, usage| {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("preview target"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    };
+    let color = target(
+        COLOR_FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
+    let depth = target(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let (color_view, depth_view) = (
+        color.create_view(&Default::default()),
+        depth.create_view(&Default::default()),
+    );
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        return Err(Error::Gpu(format!(
+            "creating the preview pipeline: {}",
+            wgpu_error_text(&e)
+        )));
+    }
+    let [r, g, b] = flat.frame.background.map(f64::from);
+    let draw_once = || {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("preview"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &color_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.set_vertex_buffer(0, vertex_buffer.slice(..));
+            pass.draw(0..vertices.len() as u32, 0..1);
+        }
+        context.wait(context.queue.submit([encoder.finish()]))
+    };
+    draw_once()?;
+    let mut times = Vec::new();
+    for _ in 0..frames.max(1) {
+        let start = Instant::now();
+        draw_once()?;
+        times.push(start.elapsed());
+    }
+    times.sort();
+    let image = read_back(context, &color, width, height)?;
+    Ok(PreviewFrame {
+        image,
+        triangles: vertices.len() / 3,
+        frame_time: times[times.len() / 2],
+    })
+}
+
+/// The colour target's pixels, rows padded to wgpu's 256-byte copy alignment on the way.
+fn read_back(
+    context: &GpuContext,
+    color: &wgpu::Texture,
+    width: u32,
+    height: u32,
+) -> Result<Image> {
+    let row = (width * 16).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+        * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = context.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("preview pixels"),
+        size: row as u64 * height as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let mut encoder = context.device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        color.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(height),
+            },
+        },
+        color.size(),
+    );
+    context.wait(context.queue.submit([encoder.finish()]))?;
+    let bytes = context.read_buffer(&buffer)?;
+    let pixels = bytes
+        .chunks(row as usize)
+        .flat_map(|r| {
+            let floats: Vec<f32> = bytemuck::pod_collect_to_vec(&r[..width as usize * 16]);
+            floats
+                .chunks(4)
+                .map(|p| glam::Vec3::new(p[0], p[1], p[2]))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    Ok(Image {
+        width,
+        height,
+        pixels,
+    })
+}

@@ -1,0 +1,129 @@
+//! The raster preview (`chambre preview`) draws through the view camera exactly as the ray
+//! tracer sees: for film tilts, swings and shifts, each object's silhouette lands where the
+//! ray-traced pinhole image has it (centroids within a fraction of a pixel, areas within a few
+//! percent), and what it cannot show is said.
+
+use std::path::Path;
+
+use chambre::pack::flatten;
+use chambre::render::Image;
+use chambre::scene::Scene;
+use glam::DVec3;
+
+mod common;
+
+/// Small spheres lit by ambient light only (radiance exactly 1) on a black background, seen by
+/// a pinhole; `camera` adds the movements.
+fn scene(camera: &str) -> Scene {
+    let text = format!(
+        r#"
+[render]
+width = 96
+height = 64
+spp = 64
+pixel_sampler = "sobol"
+ambient = [1.0, 1.0, 1.0]
+[camera]
+position = [0.0, 0.5, 6.0]
+look_at = [0.0, 0.5, 0.0]
+focal_length = 35.0
+film = [36.0, 24.0]
+{camera}
+[[materials]]
+name = "white"
+model = "lambert"
+diffuse = [1.0, 1.0, 1.0]
+[[shapes]]
+type = "sphere"
+center = [-1.2, 0.9, 0.0]
+radius = 0.25
+material = "white"
+[[shapes]]
+type = "sphere"
+center = [1.0, 0.2, -1.0]
+radius = 0.3
+material = "white"
+[[shapes]]
+type = "sphere"
+center = [0.2, 1.3, 1.0]
+radius = 0.2
+material = "white"
+"#
+    );
+    Scene::from_str(Path::new("preview.toml"), &text, &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Coverage mass and centroid of the pixels within `half` of `around` (x, y in pixels).
+fn blob(image: &Image, around: (f64, f64), half: f64) -> (f64, f64, f64) {
+    let (mut mass, mut sx, mut sy) = (0.0, 0.0, 0.0);
+    for y in 0..image.height {
+        for x in 0..image.width {
+            let (cx, cy) = (x as f64 + 0.5, y as f64 + 0.5);
+            if (cx - around.0).abs() > half || (cy - around.1).abs() > half {
+                continue;
+            }
+            let v = image.get(x, y).x.clamp(0.0, 1.0) as f64;
+            mass += v;
+            sx += v * cx;
+            sy += v * cy;
+        }
+    }
+    (mass, sx / mass.max(1e-12), sy / mass.max(1e-12))
+}
+
+#[test]
+fn silhouettes_land_where_the_ray_traced_pinhole_puts_them() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    for camera in [
+        "",
+        "film_tilt = 20.0",
+        "film_swing = -15.0",
+        "film_tilt = 10.0\nfilm_swing = 8.0\nfilm_shift = [4.0, -3.0]",
+    ] {
+        let scene = scene(camera);
+        let flat = flatten(&scene);
+        let traced = common::render_cpu(&flat);
+        let preview = chambre::gpu::preview::draw(&context, &scene, &flat, 1).unwrap();
+        assert_eq!((preview.image.width, preview.image.height), (96, 64));
+        let projection = scene.camera.raster_projection(100.0);
+        for center in [
+            DVec3::new(-1.2, 0.9, 0.0),
+            DVec3::new(1.0, 0.2, -1.0),
+            DVec3::new(0.2, 1.3, 1.0),
+        ] {
+            let p = projection.project(center, 96, 64).unwrap();
+            let (mass_t, xt, yt) = blob(&traced, (p.x, p.y), 9.0);
+            let (mass_p, xp, yp) = blob(&preview.image, (p.x, p.y), 9.0);
+            assert!(
+                mass_t > 20.0,
+                "{camera:?}: the sphere at {center} is in view ({mass_t})"
+            );
+            let moved = ((xt - xp).powi(2) + (yt - yp).powi(2)).sqrt();
+            assert!(
+                moved < 0.25,
+                "{camera:?}, sphere at {center}: preview centroid ({xp:.2}, {yp:.2}) against \
+                 ({xt:.2}, {yt:.2}) ray-traced"
+            );
+            assert!(
+                (mass_p - mass_t).abs() < 0.05 * mass_t,
+                "{camera:?}, sphere at {center}: area {mass_p} against {mass_t}"
+            );
+        }
+    }
+}
+
+#[test]
+fn the_preview_says_what_it_cannot_show() {
+    let pinhole = chambre::preview::omissions(&scene(""));
+    assert_eq!(pinhole.len(), 1, "{pinhole:?}");
+    let lens = chambre::preview::omissions(&scene(
+        "f_number = 2.8\nfocus_distance = 6.0\nlens_tilt = 5.0",
+    ));
+    assert!(
+        lens.iter()
+            .any(|n| n.contains("no depth of field") && n.contains("lens tilt")),
+        "{lens:?}"
+    );
+}

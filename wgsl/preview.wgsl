@@ -1,0 +1,88 @@
+// The raster preview (`chambre preview`): the scene's triangles through the view camera's clip
+// matrix (film tilt, swing and shift as the ray tracer defines them), shaded per fragment with
+// Lambert's BRDF, the ambient term, emission, and every light without shadows (area lights as
+// points at their centres with their cosine falloff).
+// Mirrors: src/preview.rs (tessellation, the clip matrix), src/gpu/preview.rs (the pipeline).
+
+struct PreviewUniforms {
+    clip: mat4x4<f32>,
+    light_count: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    ambient: vec4<f32>,
+    // The eye (the lens centre), world space; w unused.
+    eye: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> preview: PreviewUniforms;
+@group(0) @binding(1) var<storage, read> preview_materials: array<GpuMaterial>;
+@group(0) @binding(2) var<storage, read> preview_lights: array<GpuLight>;
+
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) material: u32,
+    @location(2) normal: vec3<f32>,
+}
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) @interpolate(flat) material: u32,
+}
+
+@vertex
+fn preview_vertex(v: VertexIn) -> VertexOut {
+    return VertexOut(preview.clip * vec4<f32>(v.position, 1.0), v.position, v.normal, v.material);
+}
+
+// Irradiance-like factor (W/m^2 per unit BRDF) at `p` with normal `n` from light `light`.
+fn light_at(light: GpuLight, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    if (light.kind == LIGHT_DIRECTIONAL) {
+        return light.color * max(dot(n, light.p0), 0.0);
+    }
+    var position = light.p0;
+    var power = light.color;
+    if (light.kind == LIGHT_AREA || light.kind == LIGHT_TRIANGLE) {
+        // A point at the centre radiating L A cos(theta_light).
+        let c = cross(light.p1, light.p2);
+        var area = length(c);
+        position = light.p0 + 0.5 * (light.p1 + light.p2);
+        if (light.kind == LIGHT_TRIANGLE) {
+            area = 0.5 * area;
+            position = light.p0 + (light.p1 + light.p2) / 3.0;
+        }
+        let to_p = normalize(p - position);
+        power = light.color * area * max(dot(normalize(c), to_p), 0.0);
+    }
+    let to_light = position - p;
+    let d2 = max(dot(to_light, to_light), 1e-20);
+    let wi = to_light * inverseSqrt(d2);
+    var falloff = 1.0 / d2;
+    if (light.kind == LIGHT_SPOT) {
+        let cone = clamp(-dot(light.p1, wi) * light.p2.x + light.p2.y, 0.0, 1.0);
+        falloff *= cone * cone;
+    }
+    return power * max(dot(n, wi), 0.0) * falloff;
+}
+
+@fragment
+fn preview_fragment(f: VertexOut) -> @location(0) vec4<f32> {
+    let material = preview_materials[f.material];
+    var n = normalize(f.normal);
+    let facing = dot(n, preview.eye.xyz - f.world) > 0.0;
+    if (material.model == MODEL_EMITTER) {
+        // One-sided, as the ray tracer shows it.
+        return vec4<f32>(select(vec3<f32>(0.0), material.emission, facing), 1.0);
+    }
+    // Two-sided shading: the normal faces the eye.
+    if (!facing) {
+        n = -n;
+    }
+    var radiance = material.diffuse * preview.ambient.xyz;
+    for (var i = 0u; i < preview.light_count; i += 1u) {
+        radiance += material.diffuse / 3.14159265 * light_at(preview_lights[i], f.world, n);
+    }
+    return vec4<f32>(radiance, 1.0);
+}
