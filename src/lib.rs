@@ -37,6 +37,7 @@ pub mod camera;
 pub mod converge;
 pub mod cpu;
 pub mod error;
+pub mod fermat;
 pub mod gpu;
 pub mod integrator;
 pub mod layout;
