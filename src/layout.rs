@@ -67,6 +67,38 @@ pub const SAMPLER_POISSON: u32 = 2;
 pub const SAMPLER_INTERLEAVED: u32 = 3;
 /// Owen-scrambled 2-D Sobol points.
 pub const SAMPLER_SOBOL: u32 = 4;
+/// The generator matrices (direction numbers, most significant bit first) of Sobol dimensions
+/// 2 and 3 (Joe and Kuo's table: s = 2, a = 1, m = 1 3; s = 3, a = 1, m = 1 3 1): the lens
+/// coordinates of the joint pixel x lens Sobol pattern (`sampler::sobol_owen_lens`). The WGSL
+/// twin makes the same numbers by the recurrence in registers (`sobol_dimension_2` and `_3`).
+pub const SOBOL_MATRIX_2: [u32; 32] = sobol_matrix(2, 1, [1, 3, 0]);
+/// Sobol dimension 3's generator matrix (see [`SOBOL_MATRIX_2`]).
+pub const SOBOL_MATRIX_3: [u32; 32] = sobol_matrix(3, 1, [1, 3, 1]);
+
+/// Direction numbers v_1..v_32 of a Sobol dimension of degree `s`, polynomial coefficients `a`
+/// and initial numbers `m` (Joe and Kuo's recurrence), as 32-bit fractions.
+const fn sobol_matrix(s: usize, a: u32, m: [u32; 3]) -> [u32; 32] {
+    let mut v = [0u32; 32];
+    let mut k = 0;
+    while k < s {
+        v[k] = m[k] << (31 - k);
+        k += 1;
+    }
+    while k < 32 {
+        let mut x = v[k - s] ^ (v[k - s] >> s);
+        let mut i = 1;
+        while i < s {
+            if (a >> (s - 1 - i)) & 1 != 0 {
+                x ^= v[k - i];
+            }
+            i += 1;
+        }
+        v[k] = x;
+        k += 1;
+    }
+    v
+}
+
 /// Cap on the cycle-walking loop of the stratified sampler's permutation (`sampler::permute`).
 pub const PERMUTE_WALK_CAP: u32 = 64;
 /// Random dimensions of the pixel position and of the lens point: the pixel position takes

@@ -17,6 +17,8 @@
 //!   basis patterns repeated regularly across the image, with no per-pixel randomness.
 //! - `sobol`: the first two Sobol dimensions, shuffled and Owen-scrambled with Burley's
 //!   hash-based nested uniform scrambling ("Practical Hash-based Owen Scrambling", JCGT 2020).
+//!   A Sobol lens under a Sobol pixel pattern takes Sobol dimensions 2 and 3 of the pixel's own
+//!   shuffled index (`sobol_owen_lens`): pixel and lens points form one 4-D Sobol point.
 //!
 //! Every pattern consumes the same two random dimensions per 2-D sample, so switching the camera
 //! sampler leaves the light samples untouched and comparisons isolate the camera.
@@ -364,6 +366,41 @@ fn sobol_dimension_1(mut index: u32) -> u32 {
     result
 }
 
+/// `index` through a Sobol generator matrix: the XOR of the columns of its set bits.
+fn sobol_dimension(mut index: u32, matrix: &[u32; 32]) -> u32 {
+    let mut result = 0;
+    let mut k = 0;
+    while index != 0 {
+        if index & 1 != 0 {
+            result ^= matrix[k];
+        }
+        index >>= 1;
+        k += 1;
+    }
+    result
+}
+
+/// The lens point of sample `index` in the joint pixel x lens Sobol pattern: Sobol dimensions 2
+/// and 3 of the same shuffled index as the pixel's (`pixel_seed` shuffles it, as in
+/// [`sobol_owen_2d`]), each Owen-scrambled by `lens_seed`. The four coordinates of a sample are
+/// then one 4-D Sobol point, jointly stratified (pbrt-v4's `SobolSampler` idea), where padding
+/// two 2-D sets pairs them at random.
+pub fn sobol_owen_lens(index: u32, pixel_seed: u32, lens_seed: u32) -> [f32; 2] {
+    let shuffled = nested_uniform_scramble(index, pixel_seed);
+    let x = sobol_dimension(shuffled, &SOBOL_MATRIX_2);
+    let y = sobol_dimension(shuffled, &SOBOL_MATRIX_3);
+    [
+        unit_float(nested_uniform_scramble(
+            x,
+            pcg_hash(lens_seed ^ 0x0000_a511),
+        )),
+        unit_float(nested_uniform_scramble(
+            y,
+            pcg_hash(lens_seed ^ 0x0000_b0b1),
+        )),
+    ]
+}
+
 /// Point `index` of the shuffled, Owen-scrambled 2-D Sobol sequence keyed by `seed`.
 pub fn sobol_owen_2d(index: u32, seed: u32) -> [f32; 2] {
     let shuffled = nested_uniform_scramble(index, seed);
@@ -446,6 +483,11 @@ pub fn sample_2d(
             let pattern = (x % INTERLEAVED_TILE) + INTERLEAVED_TILE * (y % INTERLEAVED_TILE);
             table[(source.table_offset + pattern * frame.spp + sample) as usize]
         }
+        // A Sobol lens under a Sobol pixel pattern: the joint 4-D pattern.
+        SAMPLER_SOBOL if source.dim == LENS_DIMENSION && frame.pixel_sampler == SAMPLER_SOBOL => {
+            let pixel_key = pixel_hash(frame.seed, y * frame.width + x, PIXEL_DIMENSION);
+            sobol_owen_lens(sample, pixel_key, key)
+        }
         SAMPLER_SOBOL => sobol_owen_2d(sample, key),
         _ => u,
     }
@@ -514,4 +556,38 @@ pub fn sample_aperture(camera: &GpuCamera, table: &[[f32; 2]], u: [f32; 2]) -> [
         s * (a[0] + u[1] * (b[0] - a[0])),
         s * (a[1] + u[1] * (b[1] - a[1])),
     ]
+}
+
+#[cfg(test)]
+mod sobol_matrix_tests {
+    use super::*;
+
+    #[test]
+    fn each_sobol_dimension_stratifies_every_power_of_two_prefix() {
+        for matrix in [&SOBOL_MATRIX_2, &SOBOL_MATRIX_3] {
+            for m in 1..=12 {
+                let mut seen = vec![false; 1 << m];
+                for i in 0..1u32 << m {
+                    let cell = (sobol_dimension(i, matrix) >> (32 - m)) as usize;
+                    assert!(!seen[cell], "dimension prefix {m}: cell {cell} twice");
+                    seen[cell] = true;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_joint_lens_points_pair_with_the_pixel_points_as_sobol_dimensions_do() {
+        // The shuffled index is the pixel's: 2^m pixel points and their lens points are the
+        // first 2^m points of a 4-D Sobol sequence, scrambled, so the lens projection alone is
+        // stratified too, and for 16 points each 4 x 4 lens cell holds one (dimensions 2 and 3
+        // of Sobol form a (0, 2)-net at this size).
+        let (pixel_seed, lens_seed) = (0x1234_5678, 0x9abc_def0);
+        let mut cells = [0u32; 16];
+        for i in 0..16 {
+            let [u, v] = sobol_owen_lens(i, pixel_seed, lens_seed);
+            cells[(u * 4.0) as usize + 4 * (v * 4.0) as usize] += 1;
+        }
+        assert!(cells.iter().all(|&c| c == 1), "{cells:?}");
+    }
 }

@@ -28,8 +28,8 @@ fn the_solver_finds_alhazens_point_within_five_steps() {
     for _ in 0..trials {
         let eye =
             base.center + direction(&mut rng) * base.radius * (2.0 + 4.0 * rng.next_f32() as f64);
-        let vertex = base.center
-            + direction(&mut rng) * base.radius * (1.2 + 3.0 * rng.next_f32() as f64);
+        let vertex =
+            base.center + direction(&mut rng) * base.radius * (1.2 + 3.0 * rng.next_f32() as f64);
         let (e, v) = (eye - base.center, vertex - base.center);
         // Beyond 150° apart the reflection grazes the silhouette.
         if e.angle_between(v).to_degrees() > 150.0 {

@@ -80,6 +80,55 @@ fn sobol_dimension_1(index: u32) -> u32 {
     return result;
 }
 
+// Sobol dimensions 2 and 3 of `index`: the XOR of the direction numbers of its set bits, the
+// numbers made by Joe and Kuo's recurrences as the bits go (in registers: a table indexed at run
+// time is slow on some drivers). Dimension 2: v_k = v_{k-2} ^ (v_{k-2} >> 2) ^ v_{k-1} from
+// 1 << 31, 3 << 30; dimension 3: v_k = v_{k-3} ^ (v_{k-3} >> 3) ^ v_{k-2} from 1 << 31, 3 << 30,
+// 1 << 29. Rust twin: layout::SOBOL_MATRIX_2 and SOBOL_MATRIX_3.
+fn sobol_dimension_2(index: u32) -> u32 {
+    var bits = index;
+    var result = 0u;
+    var a = 1u << 31u;
+    var b = 3u << 30u;
+    while (bits != 0u) {
+        if ((bits & 1u) != 0u) {
+            result ^= a;
+        }
+        bits >>= 1u;
+        let next = a ^ (a >> 2u) ^ b;
+        a = b;
+        b = next;
+    }
+    return result;
+}
+
+fn sobol_dimension_3(index: u32) -> u32 {
+    var bits = index;
+    var result = 0u;
+    var a = 1u << 31u;
+    var b = 3u << 30u;
+    var c = 1u << 29u;
+    while (bits != 0u) {
+        if ((bits & 1u) != 0u) {
+            result ^= a;
+        }
+        bits >>= 1u;
+        let next = a ^ (a >> 3u) ^ b;
+        a = b;
+        b = c;
+        c = next;
+    }
+    return result;
+}
+
+// The lens point of the joint pixel x lens Sobol pattern (Rust twin: sobol_owen_lens).
+fn sobol_owen_lens(index: u32, pixel_seed: u32, lens_seed: u32) -> vec2<f32> {
+    let shuffled = nested_uniform_scramble(index, pixel_seed);
+    let x = nested_uniform_scramble(sobol_dimension_2(shuffled), pcg_hash(lens_seed ^ 0x0000a511u));
+    let y = nested_uniform_scramble(sobol_dimension_3(shuffled), pcg_hash(lens_seed ^ 0x0000b0b1u));
+    return vec2<f32>(unit_float(x), unit_float(y));
+}
+
 fn sobol_owen_2d(index: u32, seed: u32) -> vec2<f32> {
     let shuffled = nested_uniform_scramble(index, seed);
     let x = nested_uniform_scramble(reverseBits(shuffled), pcg_hash(seed ^ 0x0000a511u));
@@ -117,6 +166,11 @@ fn sample_2d(source: PatternSource, x: u32, y: u32, sample: u32, rng: ptr<functi
             return sample_table[source.table_offset + pattern * frame.spp + sample];
         }
         case SAMPLER_SOBOL: {
+            // A Sobol lens under a Sobol pixel pattern: the joint 4-D pattern.
+            if (source.dim == LENS_DIMENSION && frame.pixel_sampler == SAMPLER_SOBOL) {
+                let pixel_key = pixel_hash(frame.seed, y * frame.width + x, PIXEL_DIMENSION);
+                return sobol_owen_lens(sample, pixel_key, key);
+            }
             return sobol_owen_2d(sample, key);
         }
         default: {
