@@ -41,6 +41,13 @@ pub const MODEL_BLINN_PHONG: u32 = 2;
 /// The one-sided emitting surface of an area light.
 pub const MODEL_EMITTER: u32 = 3;
 
+/// Focal surfaces (`GpuCamera::focus_surface`): the thin lens's plane.
+pub const FOCUS_PLANE: u32 = 0;
+/// A sphere centred on the lens (field curvature, as real lenses have).
+pub const FOCUS_SPHERE: u32 = 1;
+/// A cylinder whose axis is the lens's vertical through its centre.
+pub const FOCUS_CYLINDER: u32 = 2;
+
 /// Light kinds (`GpuLight::kind`; fields per kind on [`GpuLight`]): a point light.
 pub const LIGHT_POINT: u32 = 0;
 /// A directional light (light from infinitely far away, one direction).
@@ -350,8 +357,18 @@ pub struct GpuCamera {
     pub shutter_open: f32,
     /// How long it stays open (seconds); 0: every sample at `shutter_open`, no time drawn.
     pub shutter_span: f32,
+    /// The surface of sharp focus: `FOCUS_PLANE` (the thin lens's, tilted by the lens
+    /// movements), or `FOCUS_SPHERE` / `FOCUS_CYLINDER` of radius `focus_radius_mm` about the
+    /// lens centre (the cylinder's axis the lens's vertical).
+    pub focus_surface: u32,
+    /// The curved focal surface's radius (mm in the lens frame).
+    pub focus_radius_mm: f32,
     /// Padding to the WGSL layout.
-    pub _pad2: u32,
+    pub _pad3: u32,
+    /// Padding to the WGSL layout.
+    pub _pad4: u32,
+    /// Padding to the WGSL layout.
+    pub _pad5: u32,
 }
 
 /// Settings constant over one render.
@@ -492,7 +509,7 @@ const _: () = assert!(size_of::<GpuPrimitive>() == 48);
 const _: () = assert!(size_of::<GpuNormals>() == 36);
 const _: () = assert!(size_of::<GpuMaterial>() == 64);
 const _: () = assert!(size_of::<GpuLight>() == 64);
-const _: () = assert!(size_of::<GpuCamera>() == 128);
+const _: () = assert!(size_of::<GpuCamera>() == 144);
 const _: () = assert!(size_of::<GpuFrame>() == 96);
 const _: () = assert!(size_of::<GpuPass>() == 64);
 
@@ -516,6 +533,9 @@ pub fn wgsl_prelude() -> String {
         ("LIGHT_POINT", LIGHT_POINT),
         ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
         ("LIGHT_SPOT", LIGHT_SPOT),
+        ("FOCUS_PLANE", FOCUS_PLANE),
+        ("FOCUS_SPHERE", FOCUS_SPHERE),
+        ("FOCUS_CYLINDER", FOCUS_CYLINDER),
         ("LIGHT_AREA", LIGHT_AREA),
         ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),
         ("SAMPLER_RANDOM", SAMPLER_RANDOM),

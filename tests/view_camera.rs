@@ -6,12 +6,13 @@ mod common;
 use std::path::Path;
 
 use chambre::camera::optics::solve_focus_points;
-use chambre::camera::{CameraSpec, Focus, film_position_mm, generate_ray};
+use chambre::camera::{CameraSpec, Focus, film_position_mm, generate_ray, generate_ray_f64};
+use chambre::layout::GpuCamera;
 use chambre::math::rng::Rng;
 use chambre::pack::flatten;
 use chambre::sampler::sample_aperture;
 use chambre::scene::Scene;
-use glam::{DVec2, DVec3, Vec2};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 
 /// A scene around `camera_fields` (TOML lines of the [camera] table), at `width` x `height`.
 fn scene_text(camera_fields: &str, width: u32, height: u32) -> String {
@@ -693,4 +694,107 @@ fn untilted_depth_of_field_matches_the_hyperfocal_formulas() {
     // Beyond the hyperfocal distance the far limit is at infinity.
     let camera = camera("focal_length = 50.0\nf_number = 16.0\nfocus_distance = 10.0");
     assert!(camera.depth_of_field(0.03).unwrap().1.is_none());
+}
+
+/// The point of a curved focal surface on the chief ray of `film_mm`, in world space: at
+/// distance `radius` from the lens centre (a sphere) or from the lens's vertical axis through
+/// it (a cylinder).
+fn on_curved_surface(gpu: &GpuCamera, film_mm: Vec2, radius: f32, cylinder: bool) -> Vec3 {
+    let chief = generate_ray(gpu, film_mm, Vec2::ZERO);
+    let axis = Vec3::from(gpu.lens_to_world_y);
+    let reach = if cylinder {
+        (chief.direction - axis * chief.direction.dot(axis)).length()
+    } else {
+        1.0
+    };
+    chief.origin + chief.direction * (radius / reach)
+}
+
+#[test]
+fn a_curved_focal_surface_brings_every_lens_point_to_its_points() {
+    for (surface, cylinder) in [("sphere", false), ("cylinder", true)] {
+        let spec = camera(&format!(
+            "focal_length = 50.0\nf_number = 2.0\nfocus_distance = 4.0\nfilm_tilt = 8.0\n\
+             focus_surface = \"{surface}\""
+        ));
+        let plane =
+            camera("focal_length = 50.0\nf_number = 2.0\nfocus_distance = 4.0\nfilm_tilt = 8.0");
+        let (gpu, plane_gpu) = (spec.to_gpu(0), plane.to_gpu(0));
+        let radius = 4.0;
+        let mut plane_miss: f32 = 0.0;
+        for film in [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(15.0, 9.0),
+            Vec2::new(-17.0, -11.0),
+            Vec2::new(8.0, -10.0),
+        ] {
+            let sharp = on_curved_surface(&gpu, film, radius, cylinder);
+            for lens in [
+                Vec2::new(12.0, 0.0),
+                Vec2::new(-12.0, 0.0),
+                Vec2::new(0.0, 12.0),
+                Vec2::new(-8.0, -8.0),
+            ] {
+                let ray = generate_ray(&gpu, film, lens);
+                let to = sharp - ray.origin;
+                let miss = (to - ray.direction * to.dot(ray.direction)).length();
+                assert!(
+                    miss < 2e-6 * radius,
+                    "{surface}, film {film}, lens {lens}: {miss}"
+                );
+                // A plane of focus brings the off-axis points of the curved surface to a blur.
+                let ray = generate_ray(&plane_gpu, film, lens);
+                let to = sharp - ray.origin;
+                plane_miss = plane_miss.max((to - ray.direction * to.dot(ray.direction)).length());
+            }
+        }
+        assert!(
+            plane_miss > 1e-3,
+            "{surface}: the plane focuses there too ({plane_miss})"
+        );
+        // The f64 twin agrees.
+        let (o, d) = generate_ray_f64(&spec, DVec2::new(15.0, 9.0), DVec2::new(12.0, 0.0));
+        let ray = generate_ray(&gpu, Vec2::new(15.0, 9.0), Vec2::new(12.0, 0.0));
+        assert!(
+            (d.as_vec3() - ray.direction).length() < 1e-6,
+            "{d} {}",
+            ray.direction
+        );
+        assert!((o.as_vec3() - ray.origin).length() < 1e-5);
+    }
+}
+
+#[test]
+fn a_curved_focal_surface_needs_a_focused_lens_and_no_lens_tilt() {
+    let pinhole = error("focal_length = 50.0\nfocus_surface = \"sphere\"");
+    assert!(
+        pinhole.contains("camera.focus_surface") && pinhole.contains("focus_distance"),
+        "{pinhole}"
+    );
+    let tilted = error(
+        "focal_length = 50.0\nf_number = 2.0\nfocus_distance = 4.0\nlens_tilt = 5.0\n\
+         focus_surface = \"cylinder\"",
+    );
+    assert!(tilted.contains("cannot be tilted"), "{tilted}");
+}
+
+#[test]
+fn curved_focal_surfaces_render_alike_on_both_paths() {
+    for surface in ["sphere", "cylinder"] {
+        let text = scene_text(
+            &format!(
+                "focal_length = 35.0\nf_number = 1.4\nfocus_distance = 5.5\nfilm_shift = [2.0, 1.0]\n\
+                 focus_surface = \"{surface}\""
+            ),
+            48,
+            32,
+        );
+        let scene = Scene::from_str(Path::new("t.toml"), &text, &[]).unwrap();
+        let flat = flatten(&scene);
+        let cpu = common::render_cpu(&flat);
+        if let Some(gpu) = common::render_gpu(&flat) {
+            let (within, _) = common::agreement(&cpu, &gpu, 1e-3);
+            assert!(within > 0.99, "{surface}: {within}");
+        }
+    }
 }

@@ -283,7 +283,11 @@ fn shared_structs_have_identical_layouts() {
             aperture_table_offset,
             shutter_open,
             shutter_span,
-            _pad2
+            focus_surface,
+            focus_radius_mm,
+            _pad3,
+            _pad4,
+            _pad5
         }
     );
     layout!(

@@ -74,7 +74,11 @@ struct GpuCamera {
     aperture_table_offset: u32,
     shutter_open: f32,
     shutter_span: f32,
-    _pad2: u32,
+    focus_surface: u32,
+    focus_radius_mm: f32,
+    _pad3: u32,
+    _pad4: u32,
+    _pad5: u32,
 }
 
 struct GpuFrame {

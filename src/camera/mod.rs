@@ -20,7 +20,7 @@ pub mod report;
 
 use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
 
-use crate::layout::GpuCamera;
+use crate::layout::{FOCUS_CYLINDER, FOCUS_PLANE, FOCUS_SPHERE, GpuCamera};
 use crate::sampler::SamplerName;
 
 /// Film and lens movements in the scene file's units: degrees and millimetres.
@@ -86,6 +86,21 @@ pub struct CameraSpec {
     pub units_per_mm: f64,
     /// [open, close] (seconds): the interval each camera sample takes its time from.
     pub shutter: [f64; 2],
+    /// The surface of sharp focus (a curved one takes `focus_distance` as its radius).
+    pub focus_surface: FocusSurface,
+}
+
+/// The surface a lens focuses on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FocusSurface {
+    /// The thin lens's plane (tilted by lens tilt and swing: Scheimpflug).
+    #[default]
+    Plane,
+    /// A sphere centred on the lens, of radius `focus_distance`: field curvature.
+    Sphere,
+    /// A cylinder about the lens's vertical axis, of radius `focus_distance`.
+    Cylinder,
 }
 
 /// An orthonormal camera basis: right = forward x up, image row 0 at the top.
@@ -257,6 +272,15 @@ impl CameraSpec {
             aperture_table_offset,
             shutter_open: self.shutter[0] as f32,
             shutter_span: (self.shutter[1] - self.shutter[0]) as f32,
+            focus_surface: match self.focus_surface {
+                FocusSurface::Plane => FOCUS_PLANE,
+                FocusSurface::Sphere => FOCUS_SPHERE,
+                FocusSurface::Cylinder => FOCUS_CYLINDER,
+            },
+            focus_radius_mm: match self.focus {
+                Focus::Distance(Some(d)) => (d / self.units_per_mm) as f32,
+                _ => 0.0,
+            },
             ..Default::default()
         }
     }
@@ -286,15 +310,35 @@ pub fn generate_ray(camera: &GpuCamera, film_mm: Vec2, lens_mm: Vec2) -> Ray {
     let film_point = Vec3::from(camera.film_center)
         + film_mm.x * Vec3::from(camera.film_u)
         + film_mm.y * Vec3::from(camera.film_v);
-    // Thin-lens ray transfer: outgoing slope = incoming slope - h / f.
-    let slope_in = (lens_mm - film_point.truncate()) / -film_point.z;
-    let slope_out = slope_in - lens_mm * camera.inv_focal_length_mm;
-    let direction_lens = slope_out.extend(1.0).normalize();
+    let direction_lens = if camera.focus_surface == FOCUS_PLANE {
+        // Thin-lens ray transfer: outgoing slope = incoming slope - h / f.
+        let slope_in = (lens_mm - film_point.truncate()) / -film_point.z;
+        let slope_out = slope_in - lens_mm * camera.inv_focal_length_mm;
+        slope_out.extend(1.0).normalize()
+    } else {
+        // The chief ray's point on the curved surface, then the ray from the lens point to it.
+        let sharp = curved_focus_point(camera.focus_surface, camera.focus_radius_mm, film_point);
+        (sharp - lens_mm.extend(0.0)).normalize()
+    };
     let origin_lens = lens_mm.extend(0.0) * camera.units_per_mm;
     Ray {
         origin: Vec3::from(camera.lens_center) + lens_to_world(camera, origin_lens),
         direction: lens_to_world(camera, direction_lens),
     }
+}
+
+/// Where the chief ray of film point `film_point` (lens frame, mm; the lens centre at the
+/// origin) meets a curved focal surface of radius `radius_mm`: on the ray from the film point
+/// through the lens centre, at distance `radius_mm` from the centre (a sphere) or from the
+/// lens's vertical axis (a cylinder). Twin: `curved_focus_point` in camera.wgsl.
+pub fn curved_focus_point(surface: u32, radius_mm: f32, film_point: Vec3) -> Vec3 {
+    let chief = -film_point.normalize();
+    let reach = if surface == FOCUS_CYLINDER {
+        chief.x.hypot(chief.z)
+    } else {
+        1.0
+    };
+    chief * (radius_mm / reach)
 }
 
 /// [`generate_ray`] in f64 from the camera's own f64 description: the same thin-lens transfer
@@ -304,9 +348,22 @@ pub fn generate_ray_f64(camera: &CameraSpec, film_mm: DVec2, lens_mm: DVec2) -> 
     let s = camera.standards();
     let basis = camera.basis();
     let film_point = s.to_lens_frame(s.film_point(film_mm));
-    let slope_in = (lens_mm - film_point.truncate()) / -film_point.z;
-    let slope_out = slope_in - lens_mm / camera.focal_length_mm;
-    let direction_lens = slope_out.extend(1.0).normalize();
+    let direction_lens = match (camera.focus_surface, camera.focus) {
+        (FocusSurface::Sphere | FocusSurface::Cylinder, Focus::Distance(Some(d))) => {
+            let radius = d / camera.units_per_mm;
+            let chief = -film_point.normalize();
+            let reach = match camera.focus_surface {
+                FocusSurface::Cylinder => chief.x.hypot(chief.z),
+                _ => 1.0,
+            };
+            (chief * (radius / reach) - lens_mm.extend(0.0)).normalize()
+        }
+        _ => {
+            let slope_in = (lens_mm - film_point.truncate()) / -film_point.z;
+            let slope_out = slope_in - lens_mm / camera.focal_length_mm;
+            slope_out.extend(1.0).normalize()
+        }
+    };
     let origin_lens = lens_mm.extend(0.0) * camera.units_per_mm;
     (
         camera.camera_to_world(s.lens_center) + basis.to_world(s.lens * origin_lens),

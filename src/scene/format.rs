@@ -183,6 +183,9 @@ pub struct CameraSection {
     /// [open, close] (seconds): the interval the shutter is open; each camera sample takes a
     /// time in it (default [0, 0]: no motion blur).
     pub shutter: Option<Pair>,
+    /// The surface of sharp focus: "plane" (default), or "sphere" / "cylinder" of radius
+    /// `focus_distance` about the lens centre.
+    pub focus_surface: Option<crate::camera::FocusSurface>,
 }
 
 fn default_up() -> Vec3 {

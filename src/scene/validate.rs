@@ -530,6 +530,7 @@ fn validate_camera(
         lens_sampler: c.lens_sampler,
         units_per_mm,
         shutter: shutter(check, c.shutter)?,
+        focus_surface: c.focus_surface.unwrap_or_default(),
     };
     if f_number > 0.0 {
         check_sampler_spp(
@@ -606,7 +607,32 @@ fn validate_camera(
         camera.focus = Focus::Distance(focus_distance);
     }
     check_film_behind_lens(check, &camera)?;
+    check_focus_surface(check, &camera)?;
     Ok(camera)
+}
+
+/// A curved focal surface needs a lens focused at a distance (its radius), and no lens tilt or
+/// swing: those tilt a plane of focus, which a sphere or cylinder about the lens does not have.
+fn check_focus_surface(check: &Checker, camera: &CameraSpec) -> Result<()> {
+    if camera.focus_surface == crate::camera::FocusSurface::Plane {
+        return Ok(());
+    }
+    let field = "camera.focus_surface";
+    if !matches!(camera.focus, Focus::Distance(Some(_))) {
+        return Err(check.err(
+            field,
+            "a curved focal surface needs a lens (f_number) and focus_distance, its radius",
+        ));
+    }
+    let m = &camera.movements;
+    if m.lens_tilt != 0.0 || m.lens_swing != 0.0 {
+        return Err(check.err(
+            field,
+            "a curved focal surface cannot be tilted: give lens_tilt and lens_swing 0 (or a \
+             plane of focus)",
+        ));
+    }
+    Ok(())
 }
 
 /// Every film corner must lie behind the lens plane, by a margin: a film that reaches the lens
