@@ -1,6 +1,7 @@
 //! The `chambre` command line end to end: overrides and sampler flags reach the render, EXR
 //! keeps the linear floats, `chambre camera` reports, bad input exits non-zero with its place,
-//! and an interrupted render keeps what it computed.
+//! an interrupted render keeps what it computed, and the newer flags (adaptive sampling, AgX,
+//! the preview) work end to end.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -189,4 +190,69 @@ fn an_interrupted_render_keeps_the_samples_it_finished() {
         lit > output.image.pixels.len() / 2,
         "the partial image holds the finished samples"
     );
+}
+
+/// The flags of this session's features, end to end: adaptive sampling reports what it reached
+/// and writes the counts; AgX writes a PNG; `preview` writes its image and its frame time.
+#[test]
+fn adaptive_sampling_agx_and_the_preview_from_the_command_line() {
+    drop(common::gpu_context());
+    let dir = scratch("flags");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (image, counts) = (dir.join("adaptive.exr"), dir.join("counts.pfm"));
+    let output = chambre()
+        .args(["render", "--backend", "cpu", "--spp", "32", "--width", "48"])
+        .args(["--noise-target", "0.1", "--min-spp", "4", "--sample-counts"])
+        .arg(&counts)
+        .arg("-o")
+        .arg(&image)
+        .arg(scene_path("area_light.toml"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("adaptive sampling:") && stderr.contains("below the noise target 0.1"));
+    assert!(image.exists() && counts.exists());
+    let agx = dir.join("agx.png");
+    let output = chambre()
+        .args([
+            "render",
+            "--backend",
+            "cpu",
+            "--spp",
+            "2",
+            "--width",
+            "48",
+            "--tonemap",
+            "agx",
+        ])
+        .arg("-o")
+        .arg(&agx)
+        .arg(scene_path("area_light.toml"))
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let png = image::open(&agx).unwrap().into_rgb8();
+    assert!(
+        png.pixels().any(|p| p.0 != [0, 0, 0]),
+        "an AgX image with something in it"
+    );
+    let preview = dir.join("preview.png");
+    let output = chambre()
+        .args(["preview", "--frames", "2", "-o"])
+        .arg(&preview)
+        .arg(scene_path("spheres.toml"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("ms a frame") && stderr.contains("no shadows"),
+        "{stderr}"
+    );
+    assert_eq!(image::open(&preview).unwrap().width(), 480);
 }
