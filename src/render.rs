@@ -655,28 +655,38 @@ fn drive(
     run.drain(backend);
     let mut output = run.output;
     let [x0, x1, y0, y1] = scene.crop;
-    if scene.aovs {
-        let layout = &plan.layout;
-        let offset = layout.aov_offset() as usize;
-        let sums = backend.read_slots(offset..offset + layout.aov_len())?;
-        let counts = backend.read_slots(0..layout.image_len())?;
-        let counts = crop_rows(layout.image_sums(counts), frame.width, scene.crop);
-        let (normal_depth, albedo) = sums.split_at(layout.pixels);
-        let crop = |layer: &[[f32; 4]]| crop_rows(layer.to_vec(), frame.width, scene.crop);
-        output.aovs = Some(Aovs::from_sums(&crop(normal_depth), &crop(albedo), &counts));
-    }
-    if let Some(settings) = &scene.adaptive {
-        let halves = backend.read_slots(0..plan.layout.image_len())?;
-        let errors = crate::adaptive::pixel_errors(&plan.layout, &halves);
-        let errors = crop_rows(errors, frame.width, scene.crop);
-        let counts = crop_rows(plan.layout.image_sums(halves), frame.width, scene.crop);
-        let counts: Vec<u32> = counts.iter().map(|a| a[3] as u32).collect();
-        output.adaptive = Some(AdaptiveReport::new(settings, &errors, &counts, decisions));
-    }
+    let layout = &plan.layout;
+    let crop = |layer: Vec<[f32; 4]>| crop_rows(layer, frame.width, scene.crop);
+    // What needs the layers beyond the image's sums reads them before `accumulation`, which
+    // may move the buffer out (the CPU path's does).
+    let errors = match scene.adaptive {
+        Some(_) => {
+            let halves = backend.read_slots(0..layout.image_len())?;
+            let errors = crate::adaptive::pixel_errors(layout, &halves);
+            Some(crop_rows(errors, frame.width, scene.crop))
+        }
+        None => None,
+    };
+    let aov_sums = match scene.aovs {
+        true => {
+            let offset = layout.aov_offset() as usize;
+            Some(backend.read_slots(offset..offset + layout.aov_len())?)
+        }
+        false => None,
+    };
     // The crop window's pixels alone (the whole image unless `render.crop` narrows it).
-    let accumulation = crop_rows(backend.accumulation()?, frame.width, scene.crop);
+    let accumulation = crop(backend.accumulation()?);
     output.image = Image::from_accumulation(x1 - x0, y1 - y0, &accumulation);
     output.sample_counts = accumulation.iter().map(|a| a[3] as u32).collect();
+    if let Some(sums) = aov_sums {
+        let (normal_depth, albedo) = sums.split_at(layout.pixels);
+        let (normal_depth, albedo) = (crop(normal_depth.to_vec()), crop(albedo.to_vec()));
+        output.aovs = Some(Aovs::from_sums(&normal_depth, &albedo, &accumulation));
+    }
+    if let (Some(settings), Some(errors)) = (&scene.adaptive, errors) {
+        let counts = &output.sample_counts;
+        output.adaptive = Some(AdaptiveReport::new(settings, &errors, counts, decisions));
+    }
     let stopped = output.stopped.is_some() || output.deadline_reached;
     if stopped || scene.adaptive.is_some() {
         // Pixels of an unfinished pass, or that adaptive sampling kept going, carry more
