@@ -383,6 +383,35 @@ impl Study {
             .collect()
     }
 
+    /// Each uniform curve against the first uniform curve of its backend (the first sampler
+    /// asked for, `random` in the studies of `BENCHMARKS.md`) at equal time: the RMSE of both,
+    /// interpolated log-log along their runs, at the wall time of the first curve's last run
+    /// (or this curve's, if shorter). `None` where the curves' times do not overlap there, and
+    /// for the first curve itself.
+    pub fn equal_time_ratios(&self) -> Vec<(Curve, Option<EqualTime>)> {
+        let uniform: Vec<Curve> = self
+            .slopes()
+            .into_iter()
+            .map(|(c, _)| c)
+            .filter(|c| !c.adaptive)
+            .collect();
+        let at_equal_time = |curve: Curve| -> Option<EqualTime> {
+            let first = uniform.iter().find(|c| c.backend == curve.backend)?;
+            if *first == curve {
+                return None;
+            }
+            let mine = self.curve(curve, |r| r.wall_ms);
+            let theirs = self.curve(*first, |r| r.wall_ms);
+            let wall_ms = mine.last()?.0.min(theirs.last()?.0);
+            Some(EqualTime {
+                wall_ms,
+                rmse: log_log_at(&mine, wall_ms)?,
+                first_rmse: log_log_at(&theirs, wall_ms)?,
+            })
+        };
+        uniform.iter().map(|&c| (c, at_equal_time(c))).collect()
+    }
+
     /// For each adaptive run, the uniform runs of its backend and pattern at the same RMSE:
     /// their wall time and FLIP, interpolated log-log between the two uniform runs around it
     /// (none when the adaptive run's RMSE is beyond the uniform curve).
@@ -487,6 +516,28 @@ impl Study {
                 last.flip,
                 last.wall_ms
             );
+        }
+        let equal_time: Vec<(Curve, EqualTime)> = self
+            .equal_time_ratios()
+            .into_iter()
+            .filter_map(|(c, e)| Some((c, e?)))
+            .collect();
+        if !equal_time.is_empty() {
+            out += "\nAt equal time against the first pattern of each backend (both curves \
+                    interpolated log-log at the shorter of their last runs' times):\n\n";
+            out += "| curve | wall ms | RMSE | first pattern's RMSE | ratio |\n";
+            out += "|---|---|---|---|---|\n";
+            for (curve, e) in equal_time {
+                let _ = writeln!(
+                    out,
+                    "| {} | {:.1} | {:.4e} | {:.4e} | {:.2}x |",
+                    curve.label(),
+                    e.wall_ms,
+                    e.rmse,
+                    e.first_rmse,
+                    e.rmse / e.first_rmse
+                );
+            }
         }
         let gains = self.adaptive_gains();
         if gains.is_empty() {
@@ -609,6 +660,29 @@ fn at_same_error(uniform: &[&Run], value: f64, error: impl Fn(&Run) -> f64) -> O
     })
 }
 
+/// Two curves' RMSE at the same wall time (`Study::equal_time_ratios`).
+#[derive(Clone, Copy, Debug)]
+pub struct EqualTime {
+    /// The time compared at (ms).
+    pub wall_ms: f64,
+    /// This curve's RMSE then.
+    pub rmse: f64,
+    /// The first curve's RMSE then.
+    pub first_rmse: f64,
+}
+
+/// The y of the polyline `points` (sorted by x) at `x`, interpolated log-log; none outside it.
+fn log_log_at(points: &[(f64, f64)], x: f64) -> Option<f64> {
+    points.windows(2).find_map(|pair| {
+        let ((xa, ya), (xb, yb)) = (pair[0], pair[1]);
+        if !(xa.min(xb)..=xa.max(xb)).contains(&x) || xa == xb {
+            return None;
+        }
+        let t = (x.ln() - xa.ln()) / (xb.ln() - xa.ln());
+        Some((ya.ln() + t * (yb.ln() - ya.ln())).exp())
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -630,6 +704,17 @@ mod tests {
         assert_eq!(rmse(&r, &r), 0.0);
         assert_eq!(flip(&flat(0.3, 16), &flat(0.3, 16)), 0.0);
         assert!(flip(&flat(1.0, 16), &flat(0.0, 16)) > 0.5);
+    }
+
+    #[test]
+    fn log_log_interpolation_follows_a_power_law_and_stays_inside() {
+        let points: Vec<(f64, f64)> = [1.0, 4.0, 16.0]
+            .map(|x: f64| (x, 3.0 * x.powf(-0.5)))
+            .into();
+        let y = log_log_at(&points, 8.0).unwrap();
+        assert!((y - 3.0 * 8f64.powf(-0.5)).abs() < 1e-12, "{y}");
+        assert_eq!(log_log_at(&points, 0.5), None);
+        assert_eq!(log_log_at(&points, 17.0), None);
     }
 
     #[test]

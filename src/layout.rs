@@ -74,6 +74,9 @@ pub const SAMPLER_POISSON: u32 = 2;
 pub const SAMPLER_INTERLEAVED: u32 = 3;
 /// Owen-scrambled 2-D Sobol points.
 pub const SAMPLER_SOBOL: u32 = 4;
+/// The generator matrix of Sobol dimension 1 (polynomial x + 1: v_k = v_{k-1} ^ (v_{k-1} >> 1)),
+/// the pixel pattern's second coordinate; the WGSL twin runs the recurrence in registers.
+pub const SOBOL_MATRIX_1: [u32; 32] = sobol_matrix(1, 0, [1, 0, 0]);
 /// The generator matrices (direction numbers, most significant bit first) of Sobol dimensions
 /// 2 and 3 (Joe and Kuo's table: s = 2, a = 1, m = 1 3; s = 3, a = 1, m = 1 3 1): the lens
 /// coordinates of the joint pixel x lens Sobol pattern (`sampler::sobol_owen_lens`). The WGSL

@@ -57,6 +57,12 @@ mkdir -p bench
         "$chambre" converge "scenes/converge/$scene.toml" --reference-spp 2048 --max-spp 128 \
             --samplers random,stratified,sobol --csv "bench/converge_$scene.csv"
     done
+    # The lens target: the defocus scene at equal time, medians of 3 renders.
+    echo
+    echo "converge, lens samplers at equal time: scenes/converge/defocus_tilt.toml"
+    "$chambre" converge scenes/converge/defocus_tilt.toml --reference-spp 4096 --max-spp 256 \
+        --samplers random,stratified,sobol --runs 3 --csv bench/converge_lens_defocus_tilt.csv \
+        --plot bench/converge_lens_defocus_tilt.svg
     # Adaptive against uniform sampling on the same scenes: Sobol patterns (progressive, so a
     # pixel that stops keeps a stratified prefix), medians of 3 renders.
     for scene in defocus_tilt soft_shadows mirror_corridor checkerboard; do
@@ -72,3 +78,4 @@ mkdir -p bench
 cp bench/scale.svg docs/images/scale.svg
 cp bench/converge_bokeh.svg docs/images/converge_bokeh.svg
 cp bench/converge_adaptive_defocus_tilt.svg docs/images/converge_adaptive_defocus_tilt.svg
+cp bench/converge_lens_defocus_tilt.svg docs/images/converge_lens_defocus_tilt.svg

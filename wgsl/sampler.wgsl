@@ -66,6 +66,9 @@ fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
     return reverseBits(laine_karras_permutation(reverseBits(x), seed));
 }
 
+// Sobol dimension 1 of `index` (v_k = v_{k-1} ^ (v_{k-1} >> 1) from 1 << 31). Rust twin:
+// layout::SOBOL_MATRIX_1, applied through byte tables (a CPU mispredicts this loop's branches;
+// a GPU lane runs it as selects).
 fn sobol_dimension_1(index: u32) -> u32 {
     var bits = index;
     var v = 1u << 31u;
@@ -84,7 +87,7 @@ fn sobol_dimension_1(index: u32) -> u32 {
 // numbers made by Joe and Kuo's recurrences as the bits go (in registers: a table indexed at run
 // time is slow on some drivers). Dimension 2: v_k = v_{k-2} ^ (v_{k-2} >> 2) ^ v_{k-1} from
 // 1 << 31, 3 << 30; dimension 3: v_k = v_{k-3} ^ (v_{k-3} >> 3) ^ v_{k-2} from 1 << 31, 3 << 30,
-// 1 << 29. Rust twin: layout::SOBOL_MATRIX_2 and SOBOL_MATRIX_3.
+// 1 << 29. Rust twin: layout::SOBOL_MATRIX_2 and SOBOL_MATRIX_3, as byte tables in sampler.rs.
 fn sobol_dimension_2(index: u32) -> u32 {
     var bits = index;
     var result = 0u;
