@@ -73,6 +73,14 @@ mkdir -p bench
             --csv "bench/converge_adaptive_$scene.csv" \
             --plot "bench/converge_adaptive_$scene.svg"
     done
+    # The same with a later first decision, where FLIP parity was looked for.
+    for scene in defocus_tilt checkerboard; do
+        echo
+        echo "converge, adaptive, --min-spp 64: scenes/converge/$scene.toml"
+        "$chambre" converge "scenes/converge/$scene.toml" --reference-spp 4096 --max-spp 256 \
+            --samplers sobol --noise-targets 0.005,0.002 --min-spp 64 --runs 3 \
+            --csv "bench/converge_adaptive_min64_$scene.csv"
+    done
 } | tee bench/results.md
 # The plots BENCHMARKS.md shows.
 cp bench/scale.svg docs/images/scale.svg
