@@ -8,6 +8,7 @@ use glam::Vec3;
 use obvhs::bvh2::Bvh2;
 
 use crate::accel::cwbvh::{self, CwGeometry};
+use crate::accel::wide::WideBvh;
 use crate::accel::{Motion, Primitives, build_geometry, intersect};
 use crate::layout::*;
 use crate::math::sampling::strata_columns;
@@ -53,6 +54,8 @@ pub struct FlatScene {
     /// The compressed wide BVH the GPU traverses, made on first use (CPU renders never need
     /// it) and kept for every later GPU render or ray query of the scene.
     cwbvh: std::sync::OnceLock<Result<CwGeometry, String>>,
+    /// The CPU's wide BVH (`accel::wide`), made from the CWBVH on first use.
+    wide: std::sync::OnceLock<Result<WideBvh, String>>,
 }
 
 impl FlatScene {
@@ -60,6 +63,14 @@ impl FlatScene {
     pub fn cwbvh(&self) -> Result<&CwGeometry, String> {
         self.cwbvh
             .get_or_init(|| cwbvh::build(self.primitives()))
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+
+    /// The scene's wide BVH for the CPU (`accel::wide`), built once from the CWBVH.
+    pub fn wide(&self) -> Result<&WideBvh, String> {
+        self.wide
+            .get_or_init(|| WideBvh::build(self.cwbvh()?, &self.prims, self.frame.motion_base))
             .as_ref()
             .map_err(Clone::clone)
     }
@@ -362,6 +373,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         adaptive: render.adaptive,
         aovs: false,
         cwbvh: std::sync::OnceLock::new(),
+        wide: std::sync::OnceLock::new(),
     }
 }
 

@@ -4,13 +4,14 @@
 //! both paths. Infinite planes cannot be bounded and follow the BVH's primitives, tested by
 //! brute force. Node boxes are widened by a few ULPs once here, which makes obvhs's CPU slab
 //! test and the WGSL one conservative against rounding alike. `intersect` tests rays against
-//! primitives and boxes, `traverse` walks the BVH; `pack` turns a whole scene into the arrays
+//! primitives and boxes, `traverse` walks the BVH (`wide`: the CPU's 8-wide BVH); `pack` turns a whole scene into the arrays
 //! the kernels read.
 
 pub mod build;
 pub mod cwbvh;
 pub mod intersect;
 pub mod traverse;
+pub mod wide;
 
 use std::time::Duration;
 

@@ -239,8 +239,8 @@ pub struct RaysArgs {
     /// Seed of the pixel jitter and of the incoherent rays.
     #[arg(long, default_value_t = 1)]
     pub seed: u32,
-    /// Acceleration structures to traverse, side by side.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh])]
+    /// Acceleration structures to traverse, side by side (`wide` on the CPU only).
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh, Bvh::Wide])]
     pub bvh: Vec<Bvh>,
     /// Backends to measure.
     #[command(flatten)]

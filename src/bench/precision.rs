@@ -13,7 +13,7 @@ use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::rays::{Query, RaySet, trace_cpu};
+use super::rays::{Bvh, Query, RaySet, trace_cpu};
 use crate::camera::generate_ray_f64;
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
@@ -448,7 +448,7 @@ pub fn run(
         let scene = placed_scene(mesh, p)?;
         let size = mesh_size * p.scale;
         let cpu = errors(
-            &trace_cpu(&scene, None, &set, Query::ClosestHit),
+            &trace_cpu(&scene, Bvh::Bvh2, &set, Query::ClosestHit)?,
             &rays,
             &exact,
             size,

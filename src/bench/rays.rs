@@ -72,8 +72,9 @@ pub struct RaysConfig {
     pub bvhs: Vec<Bvh>,
 }
 
-/// The acceleration structure rays traverse: the renderer's BVH2, or the compressed wide BVH
-/// made from it (`accel::cwbvh`).
+/// The acceleration structure rays traverse: the renderer's BVH2, the compressed wide BVH
+/// made from it (`accel::cwbvh`), or the CPU's uncompressed 8-wide BVH made from that
+/// (`accel::wide`, CPU only).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Bvh {
@@ -81,6 +82,8 @@ pub enum Bvh {
     Bvh2,
     /// The compressed wide BVH: eight children per node.
     Cwbvh,
+    /// The CWBVH's tree with f32 child boxes, tested eight at a time (the CPU only).
+    Wide,
 }
 
 /// Rays as structure of arrays.
@@ -183,47 +186,43 @@ impl Checksum {
 }
 
 /// Per ray: the closest-hit distance (`T_FAR` on a miss), or 0 / `T_FAR` for occluded / free;
-/// through `cwbvh` when given, else the scene's BVH2.
-pub fn trace_cpu(
-    scene: &FlatScene,
-    cwbvh: Option<&CwGeometry>,
-    rays: &RaySet,
-    query: Query,
-) -> Vec<f32> {
-    (0..rays.len())
+/// through `bvh`.
+pub fn trace_cpu(scene: &FlatScene, bvh: Bvh, rays: &RaySet, query: Query) -> Result<Vec<f32>> {
+    let cw = match bvh {
+        Bvh::Cwbvh => Some(scene.cwbvh().map_err(Error::Gpu)?),
+        _ => None,
+    };
+    let wide = match bvh {
+        Bvh::Wide => Some(scene.wide().map_err(Error::Gpu)?),
+        _ => None,
+    };
+    let distance = |ray: &RayQuery| -> f32 {
+        let closest = match (cw, wide) {
+            (Some(cw), _) => cwbvh::closest_hit(cw, ray, T_FAR),
+            (_, Some(wide)) => wide.closest_hit(ray, NONE, T_FAR),
+            _ => closest_hit::<FEATURES_ALL>(scene.primitives(), ray, NONE, T_FAR),
+        };
+        closest.map_or(T_FAR, |(_, hit)| hit.t)
+    };
+    let blocked = |ray: &RayQuery| -> bool {
+        match (cw, wide) {
+            (Some(cw), _) => cwbvh::occluded(cw, ray, T_FAR),
+            (_, Some(wide)) => wide.occluded(ray, NONE, NONE, T_FAR),
+            _ => occluded::<FEATURES_ALL>(scene.primitives(), ray, NONE, NONE, T_FAR),
+        }
+    };
+    Ok((0..rays.len())
         .into_par_iter()
         .with_min_len(1024)
         .map(|i| {
             let ray = RayQuery::new(rays.origins[i], rays.directions[i]);
-            if let Some(cw) = cwbvh {
-                return match query {
-                    Query::ClosestHit => {
-                        cwbvh::closest_hit(cw, &ray, T_FAR).map_or(T_FAR, |(_, hit)| hit.t)
-                    }
-                    Query::AnyHit => {
-                        if cwbvh::occluded(cw, &ray, T_FAR) {
-                            0.0
-                        } else {
-                            T_FAR
-                        }
-                    }
-                };
-            }
             match query {
-                Query::ClosestHit => {
-                    closest_hit::<FEATURES_ALL>(scene.primitives(), &ray, NONE, T_FAR)
-                        .map_or(T_FAR, |(_, hit)| hit.t)
-                }
-                Query::AnyHit => {
-                    if occluded::<FEATURES_ALL>(scene.primitives(), &ray, NONE, NONE, T_FAR) {
-                        0.0
-                    } else {
-                        T_FAR
-                    }
-                }
+                Query::ClosestHit => distance(&ray),
+                Query::AnyHit if blocked(&ray) => 0.0,
+                Query::AnyHit => T_FAR,
             }
         })
-        .collect()
+        .collect())
 }
 
 /// The figures of one ray set, query and backend.
@@ -359,15 +358,15 @@ const WARM_UP: Duration = Duration::from_millis(300);
 /// Traces `rays` with `query` on the CPU path, `runs` times after a warm-up.
 fn measure_cpu(
     scene: &FlatScene,
-    cwbvh: Option<&CwGeometry>,
+    bvh: Bvh,
     rays: &RaySet,
     query: Query,
     runs: u32,
 ) -> Result<(Spread, Checksum)> {
-    let checksum = Checksum::of(&trace_cpu(scene, cwbvh, rays, query));
+    let checksum = Checksum::of(&trace_cpu(scene, bvh, rays, query)?);
     let spread = measure(runs, rays.len(), || {
         let start = Instant::now();
-        trace_cpu(scene, cwbvh, rays, query);
+        trace_cpu(scene, bvh, rays, query)?;
         Ok(start.elapsed())
     })?;
     Ok((spread, checksum))
@@ -406,6 +405,9 @@ pub fn run(
         }
         for &backend in backends {
             for &bvh in &config.bvhs {
+                if bvh == Bvh::Wide && backend == Backend::Gpu {
+                    continue;
+                }
                 let cwbvh = (bvh == Bvh::Cwbvh).then_some(cw);
                 let (name, tracer) = match backend {
                     Backend::Cpu => (
@@ -421,7 +423,7 @@ pub fn run(
                 };
                 for query in [Query::ClosestHit, Query::AnyHit] {
                     let (mrays_per_s, checksum) = match &tracer {
-                        None => measure_cpu(&scene, cwbvh, rays, query, config.runs)?,
+                        None => measure_cpu(&scene, bvh, rays, query, config.runs)?,
                         Some(tracer) => measure_gpu(tracer, rays, query, config.runs)?,
                     };
                     results.push(RaysResult {
@@ -493,6 +495,7 @@ impl RaysReport {
             let bvh = match r.bvh {
                 Bvh::Bvh2 => "BVH2",
                 Bvh::Cwbvh => "CWBVH",
+                Bvh::Wide => "wide (CPU)",
             };
             let reads = self
                 .cwbvh_reads

@@ -12,7 +12,7 @@ use plotters::prelude::*;
 use serde::Serialize;
 
 use super::Spread;
-use super::rays::{Checksum, Pinhole, Query, coherent_rays, trace_cpu};
+use super::rays::{Bvh, Checksum, Pinhole, Query, coherent_rays, trace_cpu};
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
 use crate::gpu::trace::GpuTracer;
@@ -132,10 +132,10 @@ fn measure(
 ) -> Result<ScaleResult> {
     let scene = meshes_scene(meshes)?;
     let rays = coherent_rays(camera, 1, 1);
-    let checksum = Checksum::of(&trace_cpu(&scene, None, &rays, Query::ClosestHit));
+    let checksum = Checksum::of(&trace_cpu(&scene, Bvh::Bvh2, &rays, Query::ClosestHit)?);
     let cpu_mrays_per_s = mrays(runs, rays.len(), || {
         let start = Instant::now();
-        trace_cpu(&scene, None, &rays, Query::ClosestHit);
+        trace_cpu(&scene, Bvh::Bvh2, &rays, Query::ClosestHit)?;
         Ok(start.elapsed())
     })?;
     let (mut gpu_mrays_per_s, mut gpu_refused) = (None, None);

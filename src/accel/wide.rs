@@ -1,0 +1,432 @@
+//! The CPU's wide BVH: the CWBVH's tree (`cwbvh::build`) with each node's eight child boxes
+//! dequantised once into f32 planes stored lane by lane, so that one node test is a handful of
+//! 8-wide vector operations (AVX2 where the CPU has it, chosen at run time; SSE otherwise)
+//! instead of the BVH2's two scalar box tests per node and three times as many nodes.
+//! The primitive tests are the scalar ones every path uses (`intersect::intersect_primitive`),
+//! so the hits are the BVH2's: the boxes are the CWBVH's, dequantised with the very arithmetic
+//! of `cwbvh::child_hits` (`p + e * q`) and tested with `intersect::intersect_box`'s slab test
+//! (the same operations in the same order), so a child this traversal skips is one the GPU's
+//! CWBVH skips too.
+//!
+//! No GPU twin: the GPU traverses the compressed nodes (`wgsl/traverse_cwbvh.wgsl`), 80 bytes
+//! where these take 256, because its bottleneck is memory traffic; a CPU's is the node test.
+
+use glam::Vec3;
+
+use super::cwbvh::CwGeometry;
+use super::intersect::{Hit, RayQuery, SLAB_FAR_SCALE, intersect_primitive};
+use super::traverse::{closest_plane, plane_occludes};
+use crate::layout::{CWBVH_STACK_SIZE, GpuCwNode, GpuPrimitive, NONE};
+
+/// Lanes of a node: the CWBVH's eight children.
+const LANES: usize = 8;
+/// A child code with this bit is a leaf: primitives `code & LEAF_FIRST` onwards, `(code >>
+/// LEAF_COUNT_SHIFT) & 3` of them (a CWBVH leaf holds one to three).
+const LEAF: u32 = 1 << 31;
+const LEAF_COUNT_SHIFT: u32 = 29;
+const LEAF_FIRST: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
+/// Entries the traversal stack can hold: each level of the tree pushes at most seven siblings.
+const STACK_ENTRIES: usize = (LANES - 1) * CWBVH_STACK_SIZE as usize + 1;
+
+/// One node: its children's boxes as planes (`lo[axis][lane]`), and what each child is.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(64))]
+struct WideNode {
+    lo: [[f32; LANES]; 3],
+    hi: [[f32; LANES]; 3],
+    /// Per lane: an inner child's node index, or a leaf's `LEAF` code.
+    child: [u32; LANES],
+    /// Bit per lane: the lane holds a child.
+    valid: u32,
+}
+
+/// The wide BVH of a scene and the primitives its leaves index.
+pub struct WideBvh {
+    nodes: Vec<WideNode>,
+    /// Bounded primitives in leaf order, then the planes.
+    prims: Vec<GpuPrimitive>,
+    /// For each of `prims`, its index in the scene's primitives (`FlatScene::prims`).
+    ids: Vec<u32>,
+    /// For each of the scene's primitives, its index in `prims` (the inverse of `ids`).
+    slot_of: Vec<u32>,
+    /// Per bounded primitive in leaf order, its velocity; empty when nothing moves.
+    velocities: Vec<Vec3>,
+    plane_start: u32,
+    plane_count: u32,
+    /// The CPU runs the AVX2 build of the traversal.
+    avx2: bool,
+}
+
+impl WideBvh {
+    /// The wide BVH of `cw`, whose primitives were built from `scene_prims` (the scene's order;
+    /// the velocity records at `motion_base` when it is not 0). Fails when there are more
+    /// primitives than a leaf code can address.
+    pub fn build(
+        cw: &CwGeometry,
+        scene_prims: &[GpuPrimitive],
+        motion_base: u32,
+    ) -> Result<Self, String> {
+        let count = cw.plane_start as usize + cw.plane_count as usize;
+        if count > LEAF_FIRST as usize {
+            return Err(format!(
+                "{count} primitives: the CPU's wide BVH addresses at most {LEAF_FIRST}"
+            ));
+        }
+        let slot_of: Vec<u32> = (0..count as u32).map(|i| cw.new_index(i)).collect();
+        let mut ids = vec![NONE; count];
+        for (scene_index, &slot) in slot_of.iter().enumerate() {
+            ids[slot as usize] = scene_index as u32;
+        }
+        let velocities = if motion_base == 0 {
+            Vec::new()
+        } else {
+            ids[..cw.plane_start as usize]
+                .iter()
+                .map(|&i| Vec3::from(scene_prims[(motion_base + i) as usize].p0))
+                .collect()
+        };
+        Ok(WideBvh {
+            nodes: cw.nodes.iter().map(wide_node).collect(),
+            prims: cw.prims[..count].to_vec(),
+            ids,
+            slot_of,
+            velocities,
+            plane_start: cw.plane_start,
+            plane_count: cw.plane_count,
+            avx2: avx2_available(),
+        })
+    }
+
+    /// Closest intersection along `ray` before `t_max`, ignoring the scene's primitive `skip`:
+    /// (index in the scene's primitives, hit), as `traverse::closest_hit` finds it.
+    pub fn closest_hit(&self, ray: &RayQuery, skip: u32, t_max: f32) -> Option<(u32, Hit)> {
+        let skip = self.slot(skip);
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is set only where the CPU reports AVX2.
+            return unsafe { closest_hit_avx2(self, ray, skip, t_max) };
+        }
+        closest_hit_inline(self, ray, skip, t_max)
+    }
+
+    /// Whether anything but the scene's primitives `skip_a` and `skip_b` lies along `ray`
+    /// before `t_max`, as `traverse::occluded` says.
+    pub fn occluded(&self, ray: &RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
+        let skip = [self.slot(skip_a), self.slot(skip_b)];
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: as in `closest_hit`.
+            return unsafe { occluded_avx2(self, ray, skip, t_max) };
+        }
+        occluded_inline(self, ray, skip, t_max)
+    }
+
+    /// The slot in `prims` of the scene's primitive `index` (`NONE` stays `NONE`).
+    fn slot(&self, index: u32) -> u32 {
+        match index {
+            NONE => NONE,
+            i => self.slot_of[i as usize],
+        }
+    }
+
+    /// Bytes the nodes take.
+    pub fn node_bytes(&self) -> usize {
+        self.nodes.len() * std::mem::size_of::<WideNode>()
+    }
+
+    fn planes(&self) -> std::ops::Range<u32> {
+        self.plane_start..self.plane_start + self.plane_count
+    }
+
+    /// `ray` where leaf primitive `slot` is at the ray's time (itself in a static scene).
+    fn ray_for(&self, ray: &RayQuery, slot: u32) -> RayQuery {
+        match self.velocities.get(slot as usize) {
+            Some(&v) => ray.relative_to(v * ray.time),
+            None => *ray,
+        }
+    }
+}
+
+fn avx2_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Byte `i` (0..8) of a pair of little-endian words.
+fn byte(words: [u32; 2], i: usize) -> u32 {
+    (words[i / 4] >> ((i % 4) * 8)) & 0xff
+}
+
+/// A CWBVH node with its children's boxes dequantised as `cwbvh::child_hits` does.
+fn wide_node(node: &GpuCwNode) -> WideNode {
+    let scale = |shift: u32| f32::from_bits(((node.e_imask >> shift) & 0xff) << 23);
+    let e = Vec3::new(scale(0), scale(8), scale(16));
+    let p = Vec3::from(node.p);
+    let inner_mask = node.e_imask >> 24;
+    let mut wide = WideNode::default();
+    for lane in 0..LANES {
+        let meta = byte(node.child_meta, lane);
+        if meta == 0 {
+            continue;
+        }
+        let q = |words: [u32; 2]| byte(words, lane) as f32;
+        let lo = p + e * Vec3::new(q(node.q_lo_x), q(node.q_lo_y), q(node.q_lo_z));
+        let hi = p + e * Vec3::new(q(node.q_hi_x), q(node.q_hi_y), q(node.q_hi_z));
+        for axis in 0..3 {
+            wide.lo[axis][lane] = lo[axis];
+            wide.hi[axis][lane] = hi[axis];
+        }
+        wide.valid |= 1 << lane;
+        wide.child[lane] = if meta & (meta << 1) & 0x10 != 0 {
+            // An inner child: the slot in `meta`; inner children are consecutive from
+            // `child_base` in slot order.
+            let slot = (meta & 0x1f) - 24;
+            node.child_base + (inner_mask & ((1 << slot) - 1)).count_ones()
+        } else {
+            let first = node.prim_base + (meta & 0x1f);
+            LEAF | ((meta >> 5).count_ones() << LEAF_COUNT_SHIFT) | first
+        };
+    }
+    wide
+}
+
+fn min(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+fn max(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// The slab test of `intersect::intersect_box` on the eight children at once: a bit per child
+/// hit before `t_max`, and each child's entry distance. Lane loops the compiler vectorises
+/// (no NaN can arise: the reciprocals are finite and non-zero, the planes finite).
+#[inline(always)]
+fn node_hits(node: &WideNode, origin: [f32; 3], inv: [f32; 3], t_max: f32) -> (u32, [f32; LANES]) {
+    let mut near = [0.0; LANES];
+    let mut mask = 0;
+    for lane in 0..LANES {
+        let mut t_near = f32::NEG_INFINITY;
+        let mut t_far = f32::INFINITY;
+        for axis in 0..3 {
+            let t1 = (node.lo[axis][lane] - origin[axis]) * inv[axis];
+            let t2 = (node.hi[axis][lane] - origin[axis]) * inv[axis];
+            t_near = max(t_near, min(t1, t2));
+            t_far = min(t_far, max(t1, t2));
+        }
+        t_far *= SLAB_FAR_SCALE;
+        near[lane] = t_near;
+        let hit = t_far >= t_near && t_far >= 0.0 && t_near < t_max;
+        mask |= (hit as u32) << lane;
+    }
+    (mask & node.valid, near)
+}
+
+/// [`node_hits`] in AVX2 intrinsics: the same operations in the same order (the results are
+/// identical), with the hit bits taken by one `movemask` where the compiler's version of the
+/// lane loop reduced them by shuffles.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn node_hits_avx2(
+    node: &WideNode,
+    origin: [f32; 3],
+    inv: [f32; 3],
+    t_max: f32,
+) -> (u32, [f32; LANES]) {
+    use std::arch::x86_64::*;
+    let mut t_near = _mm256_set1_ps(f32::NEG_INFINITY);
+    let mut t_far = _mm256_set1_ps(f32::INFINITY);
+    for axis in 0..3 {
+        let o = _mm256_set1_ps(origin[axis]);
+        let i = _mm256_set1_ps(inv[axis]);
+        // SAFETY: `lo` and `hi` rows are eight f32s each.
+        let (lo, hi) = unsafe {
+            (
+                _mm256_loadu_ps(node.lo[axis].as_ptr()),
+                _mm256_loadu_ps(node.hi[axis].as_ptr()),
+            )
+        };
+        let t1 = _mm256_mul_ps(_mm256_sub_ps(lo, o), i);
+        let t2 = _mm256_mul_ps(_mm256_sub_ps(hi, o), i);
+        // `min(a, b)` of the generic version is `a < b ? a : b`: `_mm256_min_ps(t1, t2)`
+        // returns t2 when not t1 < t2, the same value.
+        t_near = _mm256_max_ps(_mm256_min_ps(t1, t2), t_near);
+        t_far = _mm256_min_ps(_mm256_max_ps(t1, t2), t_far);
+    }
+    t_far = _mm256_mul_ps(t_far, _mm256_set1_ps(SLAB_FAR_SCALE));
+    let hit = _mm256_and_ps(
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_GE_OQ>(t_far, t_near),
+            _mm256_cmp_ps::<_CMP_GE_OQ>(t_far, _mm256_setzero_ps()),
+        ),
+        _mm256_cmp_ps::<_CMP_LT_OQ>(t_near, _mm256_set1_ps(t_max)),
+    );
+    let mut near = [0.0; LANES];
+    // SAFETY: `near` holds eight f32s.
+    unsafe { _mm256_storeu_ps(near.as_mut_ptr(), t_near) };
+    (_mm256_movemask_ps(hit) as u32 & node.valid, near)
+}
+
+/// The node test of the build in use: AVX2 intrinsics, or the lane loop.
+#[inline(always)]
+fn test_node(
+    node: &WideNode,
+    origin: [f32; 3],
+    inv: [f32; 3],
+    t_max: f32,
+    avx2: bool,
+) -> (u32, [f32; LANES]) {
+    #[cfg(target_arch = "x86_64")]
+    if avx2 {
+        // SAFETY: `avx2` is true only where the CPU has AVX2.
+        return unsafe { node_hits_avx2(node, origin, inv, t_max) };
+    }
+    let _ = avx2;
+    node_hits(node, origin, inv, t_max)
+}
+
+/// Pushes the children of `mask` so that the nearest is popped first (insertion by distance
+/// among at most eight).
+#[inline(always)]
+fn push_nearest_last(
+    stack: &mut [(u32, f32); STACK_ENTRIES],
+    size: &mut usize,
+    node: &WideNode,
+    mut mask: u32,
+    near: &[f32; LANES],
+) {
+    let base = *size;
+    while mask != 0 {
+        let lane = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        let entry = (node.child[lane], near[lane]);
+        // Farthest first: shift nearer entries up.
+        let mut at = *size;
+        while at > base && stack[at - 1].1 < entry.1 {
+            stack[at] = stack[at - 1];
+            at -= 1;
+        }
+        stack[at] = entry;
+        *size += 1;
+    }
+}
+
+#[inline(always)]
+fn closest_hit_inline(bvh: &WideBvh, ray: &RayQuery, skip: u32, t_max: f32) -> Option<(u32, Hit)> {
+    let origin = ray.origin.to_array();
+    let inv = ray.inv_direction.to_array();
+    let mut best = Hit {
+        t: t_max,
+        b1: 0.0,
+        b2: 0.0,
+    };
+    let mut best_slot = NONE;
+    let mut stack = [(0u32, 0.0f32); STACK_ENTRIES];
+    let mut size = 0;
+    if bvh.nodes[0].valid != 0 {
+        stack[0] = (0, f32::NEG_INFINITY);
+        size = 1;
+    }
+    while size > 0 {
+        size -= 1;
+        let (code, t_near) = stack[size];
+        if t_near >= best.t {
+            continue;
+        }
+        if code & LEAF != 0 {
+            let first = code & LEAF_FIRST;
+            for slot in first..first + ((code >> LEAF_COUNT_SHIFT) & 3) {
+                if slot == skip {
+                    continue;
+                }
+                let moved = bvh.ray_for(ray, slot);
+                let prim = &bvh.prims[slot as usize];
+                let hit =
+                    intersect_primitive::<{ crate::layout::FEATURES_ALL }>(&moved, prim, best.t);
+                if hit.t < best.t {
+                    best = hit;
+                    best_slot = slot;
+                }
+            }
+            continue;
+        }
+        let node = &bvh.nodes[code as usize];
+        let (mask, near) = test_node(node, origin, inv, best.t, bvh.avx2);
+        push_nearest_last(&mut stack, &mut size, node, mask, &near);
+    }
+    closest_plane::<{ crate::layout::FEATURES_ALL }>(
+        &bvh.prims,
+        bvh.planes(),
+        ray,
+        skip,
+        &mut best,
+        &mut best_slot,
+    );
+    (best_slot != NONE).then(|| (bvh.ids[best_slot as usize], best))
+}
+
+#[inline(always)]
+fn occluded_inline(bvh: &WideBvh, ray: &RayQuery, skip: [u32; 2], t_max: f32) -> bool {
+    let origin = ray.origin.to_array();
+    let inv = ray.inv_direction.to_array();
+    let mut stack = [(0u32, 0.0f32); STACK_ENTRIES];
+    let mut size = 0;
+    if bvh.nodes[0].valid != 0 {
+        stack[0] = (0, f32::NEG_INFINITY);
+        size = 1;
+    }
+    while size > 0 {
+        size -= 1;
+        let code = stack[size].0;
+        if code & LEAF != 0 {
+            let first = code & LEAF_FIRST;
+            for slot in first..first + ((code >> LEAF_COUNT_SHIFT) & 3) {
+                if skip.contains(&slot) {
+                    continue;
+                }
+                let moved = bvh.ray_for(ray, slot);
+                let prim = &bvh.prims[slot as usize];
+                if intersect_primitive::<{ crate::layout::FEATURES_ALL }>(&moved, prim, t_max).t
+                    < t_max
+                {
+                    return true;
+                }
+            }
+            continue;
+        }
+        let node = &bvh.nodes[code as usize];
+        let (mut mask, near) = test_node(node, origin, inv, t_max, bvh.avx2);
+        while mask != 0 {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            stack[size] = (node.child[lane], near[lane]);
+            size += 1;
+        }
+    }
+    plane_occludes::<{ crate::layout::FEATURES_ALL }>(
+        &bvh.prims,
+        bvh.planes(),
+        ray,
+        skip[0],
+        skip[1],
+        t_max,
+    )
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn closest_hit_avx2(bvh: &WideBvh, ray: &RayQuery, skip: u32, t_max: f32) -> Option<(u32, Hit)> {
+    closest_hit_inline(bvh, ray, skip, t_max)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn occluded_avx2(bvh: &WideBvh, ray: &RayQuery, skip: [u32; 2], t_max: f32) -> bool {
+    occluded_inline(bvh, ray, skip, t_max)
+}
