@@ -69,6 +69,8 @@ impl<'a> CpuRenderer<'a> {
     /// no cancel flag.
     pub fn new(scene: &'a FlatScene) -> Self {
         let layout = AccumulationLayout::of(scene, false);
+        // The wide BVH, made now rather than by the first sample traced.
+        scene.tracer();
         CpuRenderer {
             scene,
             accumulation: vec![[0.0; 4]; layout.len()],

@@ -21,7 +21,6 @@ use crate::accel::intersect::{
     Hit, RayQuery, offset_ray_origin, plane_point, quad_point, shadow_ray_length,
     sphere_surface_point, triangle_point,
 };
-use crate::accel::traverse::{closest_hit, occluded};
 use crate::camera::{Ray, film_position_mm, generate_ray};
 use crate::layout::*;
 use crate::math::rng::Rng;
@@ -283,8 +282,7 @@ fn direct_light<const F: u32>(
                 let cos_light = -light_normal.dot(wi);
                 if cos_surface > 0.0 && cos_light > 0.0 && ng.dot(wi) > 0.0 {
                     stats.rays += 1;
-                    if !occluded::<F>(
-                        scene.primitives(),
+                    if !scene.tracer().occluded::<F>(
                         &RayQuery::new(origin, wi).at_time(time),
                         prim_id,
                         light.prim,
@@ -312,8 +310,7 @@ fn direct_light<const F: u32>(
             let cos_surface = n.dot(wi);
             if cos_surface > 0.0 && ng.dot(wi) > 0.0 {
                 stats.rays += 1;
-                if !occluded::<F>(
-                    scene.primitives(),
+                if !scene.tracer().occluded::<F>(
                     &RayQuery::new(origin, wi).at_time(time),
                     prim_id,
                     NONE,
@@ -348,7 +345,7 @@ pub fn trace_path<const F: u32>(
     let mut skip = NONE;
     for depth in 0..=frame.max_depth {
         stats.rays += 1;
-        let Some((prim_id, hit)) = closest_hit::<F>(scene.primitives(), &ray, skip, T_FAR) else {
+        let Some((prim_id, hit)) = scene.tracer().closest_hit::<F>(&ray, skip, T_FAR) else {
             if first {
                 radiance += throughput * Vec3::from(frame.background);
             }

@@ -8,6 +8,7 @@ use glam::Vec3;
 use obvhs::bvh2::Bvh2;
 
 use crate::accel::cwbvh::{self, CwGeometry};
+use crate::accel::traverse::Tracer;
 use crate::accel::wide::WideBvh;
 use crate::accel::{Motion, Primitives, build_geometry, intersect};
 use crate::layout::*;
@@ -69,10 +70,24 @@ impl FlatScene {
 
     /// The scene's wide BVH for the CPU (`accel::wide`), built once from the CWBVH.
     pub fn wide(&self) -> Result<&WideBvh, String> {
+        self.tracer();
         self.wide
-            .get_or_init(|| WideBvh::build(self.cwbvh()?, &self.prims, self.frame.motion_base))
+            .get()
+            .expect("tracer() made it")
             .as_ref()
             .map_err(Clone::clone)
+    }
+
+    /// What the CPU path traverses: the wide BVH, built on first use, or the BVH2 where the
+    /// scene has no CWBVH.
+    pub fn tracer(&self) -> Tracer<'_> {
+        let wide = self
+            .wide
+            .get_or_init(|| WideBvh::build(self.cwbvh()?, &self.prims, self.frame.motion_base));
+        match wide {
+            Ok(wide) => Tracer::Wide(wide),
+            Err(_) => Tracer::Bvh2(self.primitives()),
+        }
     }
 
     /// What a traversal reads.

@@ -1,10 +1,51 @@
 //! Closest-hit and any-hit queries on the CPU: obvhs's BVH2 traversal with our primitive tests,
-//! then the unbounded planes by brute force.
+//! then the unbounded planes by brute force; [`Tracer`] picks between it and the wide BVH.
 //! Twin: `wgsl/traverse.wgsl`, which mirrors obvhs's `Bvh2::ray_traverse_dynamic` node order.
 
 use super::Primitives;
 use super::intersect::{Hit, RayQuery, intersect_primitive};
+use super::wide::WideBvh;
 use crate::layout::{FEATURE_PLANES, GpuPrimitive, NONE, has};
+
+/// What the CPU path traverses: the scene's wide BVH (`accel::wide`, 1.4–1.6x faster than the
+/// BVH2 on the dragon's rays, `BENCHMARKS.md`), or the BVH2 where the scene has none (a tree
+/// deeper than the CWBVH's stack). Both find the same hits.
+#[derive(Clone, Copy)]
+pub enum Tracer<'a> {
+    /// The wide BVH.
+    Wide(&'a WideBvh),
+    /// obvhs's BVH2.
+    Bvh2(Primitives<'a>),
+}
+
+impl Tracer<'_> {
+    /// [`closest_hit`] through the tracer's BVH.
+    pub fn closest_hit<const F: u32>(
+        &self,
+        ray: &RayQuery,
+        skip: u32,
+        t_max: f32,
+    ) -> Option<(u32, Hit)> {
+        match self {
+            Tracer::Wide(wide) => wide.closest_hit::<F>(ray, skip, t_max),
+            Tracer::Bvh2(geometry) => closest_hit::<F>(*geometry, ray, skip, t_max),
+        }
+    }
+
+    /// [`occluded`] through the tracer's BVH.
+    pub fn occluded<const F: u32>(
+        &self,
+        ray: &RayQuery,
+        skip_a: u32,
+        skip_b: u32,
+        t_max: f32,
+    ) -> bool {
+        match self {
+            Tracer::Wide(wide) => wide.occluded::<F>(ray, skip_a, skip_b, t_max),
+            Tracer::Bvh2(geometry) => occluded::<F>(*geometry, ray, skip_a, skip_b, t_max),
+        }
+    }
+}
 
 /// Closest intersection along `ray` before `t_max`, ignoring primitive `skip` (the planar
 /// primitive a secondary ray leaves, which it can never hit again). Returns (primitive, hit).

@@ -199,7 +199,7 @@ pub fn trace_cpu(scene: &FlatScene, bvh: Bvh, rays: &RaySet, query: Query) -> Re
     let distance = |ray: &RayQuery| -> f32 {
         let closest = match (cw, wide) {
             (Some(cw), _) => cwbvh::closest_hit(cw, ray, T_FAR),
-            (_, Some(wide)) => wide.closest_hit(ray, NONE, T_FAR),
+            (_, Some(wide)) => wide.closest_hit::<FEATURES_ALL>(ray, NONE, T_FAR),
             _ => closest_hit::<FEATURES_ALL>(scene.primitives(), ray, NONE, T_FAR),
         };
         closest.map_or(T_FAR, |(_, hit)| hit.t)
@@ -207,7 +207,7 @@ pub fn trace_cpu(scene: &FlatScene, bvh: Bvh, rays: &RaySet, query: Query) -> Re
     let blocked = |ray: &RayQuery| -> bool {
         match (cw, wide) {
             (Some(cw), _) => cwbvh::occluded(cw, ray, T_FAR),
-            (_, Some(wide)) => wide.occluded(ray, NONE, NONE, T_FAR),
+            (_, Some(wide)) => wide.occluded::<FEATURES_ALL>(ray, NONE, NONE, T_FAR),
             _ => occluded::<FEATURES_ALL>(scene.primitives(), ray, NONE, NONE, T_FAR),
         }
     };
