@@ -70,12 +70,27 @@ enum Command {
     Preview {
         /// Scene file (TOML or glTF; see docs/scene-format.md).
         scene: PathBuf,
-        /// Image to write: .png, .exr or .pfm.
-        #[arg(short, long)]
-        output: PathBuf,
+        /// Image to write: .png, .exr or .pfm (required without --window).
+        #[arg(short, long, required_unless_present = "window")]
+        output: Option<PathBuf>,
         /// Timed frames after a warm-up; the median is reported.
         #[arg(long, default_value_t = 5)]
         frames: u32,
+        /// Open a window to compose the shot: arrows tilt and swing the film, i/k and j/l
+        /// shift it, a/d pan and w/x pitch the camera, r resets, s saves the scene, q quits.
+        #[arg(long)]
+        window: bool,
+        /// With --window: keys to replay after the first frame, then close (e.g. "up,up,l,s"):
+        /// up, down, left, right, escape, or one character.
+        #[arg(long, value_delimiter = ',', requires = "window")]
+        keys: Vec<String>,
+        /// With --window: write the last frame shown here when the window closes.
+        #[arg(long, requires = "window")]
+        screenshot: Option<PathBuf>,
+        /// With --window: where `s` saves the composed scene (default: beside the scene,
+        /// NAME.composed.toml, so its relative mesh paths still hold).
+        #[arg(long, requires = "window")]
+        save: Option<PathBuf>,
         /// Override any scene field, e.g. --set camera.film_tilt=10 (also -D).
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -324,8 +339,16 @@ fn main() -> ExitCode {
             scene,
             output,
             frames,
+            window,
+            keys,
+            screenshot,
+            save,
             set,
-        } => run_preview(&scene, &output, frames, &set),
+        } => match (window, output) {
+            (true, _) => run_window(&scene, &set, &keys, screenshot, save),
+            (false, Some(output)) => run_preview(&scene, &output, frames, &set),
+            (false, None) => unreachable!("clap requires --output without --window"),
+        },
         Command::Info => run_info(),
         Command::Merge { manifests, output } => run_merge(&manifests, &output),
     };
@@ -733,6 +756,57 @@ fn run_preview(
         frame.frame_time.as_secs_f64() * 1e3,
         context.adapter_description
     );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `chambre preview --window`: the interactive preview until the window closes.
+fn run_window(
+    path: &Path,
+    overrides: &[String],
+    keys: &[String],
+    screenshot: Option<PathBuf>,
+    save: Option<PathBuf>,
+) -> anyhow::Result<ExitCode> {
+    let keys = keys
+        .iter()
+        .map(|k| {
+            chambre::preview::ComposeKey::parse(k).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--keys: `{k}` is not a key (up, down, left, right, escape, or one character)"
+                )
+            })
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    if !path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+    {
+        anyhow::bail!(
+            "--window composes a TOML scene, saving the composition into a copy of it; {} is not \
+             one",
+            path.display()
+        );
+    }
+    let save = save.unwrap_or_else(|| path.with_extension("composed.toml"));
+    let scene = load_and_note(path, overrides)?;
+    for omission in chambre::preview::omissions(&scene) {
+        note!("note: {omission}");
+    }
+    let flat = flatten(&scene);
+    let options = chambre::gpu::window::WindowOptions {
+        keys,
+        screenshot: screenshot.clone(),
+        save,
+    };
+    let report = chambre::gpu::window::run(path, overrides, &scene, &flat, options)?;
+    note!(
+        "{} frames shown; composition: {}",
+        report.frames,
+        report.overrides.join(" ")
+    );
+    if let Some(screenshot) = screenshot {
+        note!("{}: the last frame shown", screenshot.display());
+    }
     Ok(ExitCode::SUCCESS)
 }
 

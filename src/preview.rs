@@ -10,8 +10,9 @@
 //! centres with their power's cosine falloff.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{DMat4, DVec4, Vec3};
+use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 
+use crate::camera::CameraSpec;
 use crate::layout::{GpuPrimitive, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
 use crate::pack::FlatScene;
 use crate::scene::Scene;
@@ -165,10 +166,10 @@ pub fn bounded_radius(scene: &FlatScene) -> f32 {
     ((hi - lo).length() / 2.0).max(1e-6)
 }
 
-/// The clip matrix of the scene's camera for wgpu (depth in [0, 1]), with the far plane `far`
+/// The clip matrix of `camera` for wgpu (depth in [0, 1]), with the far plane `far`
 /// scene units away: `CameraSpec::raster_projection`'s OpenGL matrix with its depth remapped.
-pub fn clip_matrix(scene: &Scene, far: f64) -> DMat4 {
-    let gl = scene.camera.raster_projection(far).matrix();
+pub fn clip_matrix(camera: &CameraSpec, far: f64) -> DMat4 {
+    let gl = camera.raster_projection(far).matrix();
     // z' = (z + w) / 2: OpenGL's [-w, w] depth to wgpu's [0, w].
     let depth = DMat4::from_cols(
         DVec4::new(1.0, 0.0, 0.0, 0.0),
@@ -199,4 +200,237 @@ pub fn omissions(scene: &Scene) -> Vec<String> {
         notes.push("the preview shows moving shapes where they stand at time 0, unblurred".into());
     }
     notes
+}
+
+/// A key of the interactive preview (`chambre preview --window`), from the keyboard or from a
+/// `--keys` script.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ComposeKey {
+    /// Arrow up: film tilt up by `TURN_STEP_DEG`.
+    Up,
+    /// Arrow down: film tilt down.
+    Down,
+    /// Arrow left: film swing left.
+    Left,
+    /// Arrow right: film swing right.
+    Right,
+    /// A character key (see [`Composer::apply`]).
+    Char(char),
+    /// Escape: quit.
+    Escape,
+}
+
+impl ComposeKey {
+    /// A key named in a `--keys` script: `up`, `down`, `left`, `right`, `escape`, or one
+    /// character.
+    pub fn parse(name: &str) -> Option<ComposeKey> {
+        Some(match name {
+            "up" => ComposeKey::Up,
+            "down" => ComposeKey::Down,
+            "left" => ComposeKey::Left,
+            "right" => ComposeKey::Right,
+            "escape" | "esc" => ComposeKey::Escape,
+            _ => {
+                let mut chars = name.chars();
+                match (chars.next(), chars.next()) {
+                    (Some(c), None) => ComposeKey::Char(c.to_ascii_lowercase()),
+                    _ => return None,
+                }
+            }
+        })
+    }
+}
+
+/// What a key asks of the window.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ComposeAction {
+    /// The camera changed: draw again.
+    Changed,
+    /// Save the composed scene.
+    Save,
+    /// Close the window.
+    Quit,
+    /// Nothing (a key without a meaning).
+    Nothing,
+}
+
+/// Degrees a tilt, swing, pan or pitch key turns.
+pub const TURN_STEP_DEG: f64 = 1.0;
+/// Millimetres a shift key moves the film.
+pub const SHIFT_STEP_MM: f64 = 1.0;
+
+/// The camera a user composes in the interactive preview: the scene's camera with film tilt,
+/// swing and shift, and the camera turned (panned and pitched about its position). Keys:
+/// arrows tilt and swing the film, `i`/`k` shift it up/down, `j`/`l` left/right, `a`/`d` pan
+/// the camera, `w`/`x` pitch it, `r` resets, `s` saves, `q` or Escape quits.
+#[derive(Clone, Debug)]
+pub struct Composer {
+    base: CameraSpec,
+    /// Film tilt, swing (degrees) and shift (mm), as the scene fields are.
+    pub film_tilt: f64,
+    /// Film swing (degrees).
+    pub film_swing: f64,
+    /// Film shift [right, up] (mm).
+    pub film_shift: [f64; 2],
+    /// The camera turned right about its up direction (degrees).
+    pub pan: f64,
+    /// The camera turned up about its right direction (degrees).
+    pub pitch: f64,
+}
+
+impl Composer {
+    /// Starts from `camera` as the scene has it.
+    pub fn new(camera: &CameraSpec) -> Composer {
+        let m = &camera.movements;
+        Composer {
+            base: camera.clone(),
+            film_tilt: m.film_tilt,
+            film_swing: m.film_swing,
+            film_shift: m.film_shift,
+            pan: 0.0,
+            pitch: 0.0,
+        }
+    }
+
+    /// Applies one key; film tilt and swing stay inside the scene format's (−90°, 90°).
+    pub fn apply(&mut self, key: ComposeKey) -> ComposeAction {
+        let limit = 89.0;
+        let turn = |v: &mut f64, d: f64| *v = (*v + d).clamp(-limit, limit);
+        match key {
+            ComposeKey::Up => turn(&mut self.film_tilt, TURN_STEP_DEG),
+            ComposeKey::Down => turn(&mut self.film_tilt, -TURN_STEP_DEG),
+            ComposeKey::Left => turn(&mut self.film_swing, -TURN_STEP_DEG),
+            ComposeKey::Right => turn(&mut self.film_swing, TURN_STEP_DEG),
+            ComposeKey::Char('i') => self.film_shift[1] += SHIFT_STEP_MM,
+            ComposeKey::Char('k') => self.film_shift[1] -= SHIFT_STEP_MM,
+            ComposeKey::Char('j') => self.film_shift[0] -= SHIFT_STEP_MM,
+            ComposeKey::Char('l') => self.film_shift[0] += SHIFT_STEP_MM,
+            ComposeKey::Char('a') => self.pan -= TURN_STEP_DEG,
+            ComposeKey::Char('d') => self.pan += TURN_STEP_DEG,
+            ComposeKey::Char('w') => turn(&mut self.pitch, TURN_STEP_DEG),
+            ComposeKey::Char('x') => turn(&mut self.pitch, -TURN_STEP_DEG),
+            ComposeKey::Char('r') => *self = Composer::new(&self.base),
+            ComposeKey::Char('s') => return ComposeAction::Save,
+            ComposeKey::Char('q') | ComposeKey::Escape => return ComposeAction::Quit,
+            ComposeKey::Char(_) => return ComposeAction::Nothing,
+        }
+        ComposeAction::Changed
+    }
+
+    /// The point the turned camera looks at: the scene's `look_at` rotated about the camera's
+    /// position, by `pan` about the scene's up and `pitch` about the camera's right.
+    pub fn look_at(&self) -> DVec3 {
+        let c = &self.base;
+        let view = c.look_at - c.position;
+        let up = c.up.normalize();
+        let panned = DQuat::from_axis_angle(up, -self.pan.to_radians()) * view;
+        let right = panned.cross(up).normalize();
+        let pitched = DQuat::from_axis_angle(right, self.pitch.to_radians()) * panned;
+        c.position + pitched
+    }
+
+    /// The scene's camera as composed. A focus solved from `focus_points` is kept as it was
+    /// (the preview draws a pinhole; the saved scene solves it again).
+    pub fn camera(&self) -> CameraSpec {
+        let mut camera = self.base.clone();
+        camera.look_at = self.look_at();
+        camera.movements.film_tilt = self.film_tilt;
+        camera.movements.film_swing = self.film_swing;
+        camera.movements.film_shift = self.film_shift;
+        camera
+    }
+
+    /// The scene overrides (`--set` syntax) that give a scene this composition.
+    pub fn overrides(&self) -> Vec<String> {
+        // `{:?}` writes 1.0 as `1.0`, which TOML reads as a float, as the fields are.
+        let [x, y, z] = self.look_at().to_array();
+        vec![
+            format!("camera.film_tilt={:?}", self.film_tilt),
+            format!("camera.film_swing={:?}", self.film_swing),
+            format!(
+                "camera.film_shift=[{:?}, {:?}]",
+                self.film_shift[0], self.film_shift[1]
+            ),
+            format!("camera.look_at=[{x:?}, {y:?}, {z:?}]"),
+        ]
+    }
+
+    /// The movements and turns, for the window's title and the terminal.
+    pub fn figures(&self) -> String {
+        format!(
+            "film tilt {:+.1}°, swing {:+.1}°, shift [{:+.1}, {:+.1}] mm; camera pan {:+.1}°, \
+             pitch {:+.1}°",
+            self.film_tilt,
+            self.film_swing,
+            self.film_shift[0],
+            self.film_shift[1],
+            self.pan,
+            self.pitch
+        )
+    }
+}
+
+#[cfg(test)]
+mod composer_tests {
+    use super::*;
+    use std::path::Path;
+
+    fn camera() -> CameraSpec {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/architecture.toml");
+        Scene::load(&path, &[]).unwrap().camera
+    }
+
+    #[test]
+    fn keys_move_the_film_and_turn_the_camera_by_their_steps() {
+        let start = camera();
+        let mut composer = Composer::new(&start);
+        for key in ["up", "up", "left", "i", "l", "l", "d", "w"] {
+            let key = ComposeKey::parse(key).unwrap();
+            assert_eq!(composer.apply(key), ComposeAction::Changed);
+        }
+        let m = &start.movements;
+        assert_eq!(composer.film_tilt, m.film_tilt + 2.0);
+        assert_eq!(composer.film_swing, m.film_swing - 1.0);
+        assert_eq!(
+            composer.film_shift,
+            [m.film_shift[0] + 2.0, m.film_shift[1] + 1.0]
+        );
+        // Turning keeps the distance to the point looked at, and turns by the angle asked.
+        let before = start.look_at - start.position;
+        let after = composer.look_at() - start.position;
+        assert!((after.length() - before.length()).abs() < 1e-9 * before.length());
+        let angle = before.angle_between(after).to_degrees();
+        assert!(angle > 1.0 && angle < 2.0, "{angle}");
+        assert_eq!(composer.apply(ComposeKey::Char('s')), ComposeAction::Save);
+        assert_eq!(composer.apply(ComposeKey::Escape), ComposeAction::Quit);
+        assert_eq!(
+            composer.apply(ComposeKey::Char('z')),
+            ComposeAction::Nothing
+        );
+        composer.apply(ComposeKey::Char('r'));
+        assert_eq!(composer.film_tilt, m.film_tilt);
+        assert!((composer.look_at() - start.look_at).length() < 1e-12);
+    }
+
+    #[test]
+    fn film_tilt_stops_short_of_a_right_angle() {
+        let mut composer = Composer::new(&camera());
+        for _ in 0..200 {
+            composer.apply(ComposeKey::Up);
+        }
+        assert_eq!(composer.film_tilt, 89.0);
+    }
+
+    #[test]
+    fn the_overrides_give_the_composed_camera() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/architecture.toml");
+        let mut composer = Composer::new(&camera());
+        for key in ["down", "down", "right", "k", "a", "x"] {
+            composer.apply(ComposeKey::parse(key).unwrap());
+        }
+        let reloaded = Scene::load(&path, &composer.overrides()).unwrap().camera;
+        let composed = composer.camera();
+        assert_eq!(reloaded.movements, composed.movements);
+        assert!((reloaded.look_at - composed.look_at).length() < 1e-9);
+    }
 }

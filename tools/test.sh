@@ -21,6 +21,16 @@ if ! command -v c++ >/dev/null 2>&1; then
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq g++ >/dev/null
 fi
 
+# The interactive preview's test (tests/window.rs) opens its window on Xvfb and types into it
+# with xdotool.
+if ! command -v Xvfb >/dev/null 2>&1 || ! command -v xdotool >/dev/null 2>&1; then
+    echo "== installing Xvfb and xdotool"
+    SUDO=""
+    [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+    $SUDO apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq xvfb xdotool >/dev/null
+fi
+
 export CHAMBRE_REQUIRE_GPU=1
 # The loader's complaint about a missing XDG_RUNTIME_DIR on headless machines is noise.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"

@@ -8,6 +8,7 @@ pub mod kernels;
 pub mod preview;
 pub mod render;
 pub mod trace;
+pub mod window;
 
 pub use render::GpuRenderer;
 
@@ -86,6 +87,10 @@ pub(crate) type Mapped = Arc<Mutex<Option<std::result::Result<(), wgpu::BufferAs
 /// render stopped finding any adapter partway through, and each device costs milliseconds).
 #[derive(Clone)]
 pub struct GpuContext {
+    /// The instance the adapter came from: a window's surface must come from it too.
+    pub instance: wgpu::Instance,
+    /// The adapter the device was opened on.
+    pub adapter: wgpu::Adapter,
     /// The device, its errors caught by our handler rather than wgpu's panicking one.
     pub device: wgpu::Device,
     /// The device's queue, which every submission goes to.
@@ -104,12 +109,12 @@ impl GpuContext {
     /// Opens the high-performance adapter (Vulkan, Metal or DX12) with its largest storage
     /// limits, and timestamp queries where it has them.
     pub fn new() -> Result<GpuContext> {
-        let adapter =
-            pollster::block_on(instance().request_adapter(&wgpu::RequestAdapterOptions {
-                power_preference: wgpu::PowerPreference::HighPerformance,
-                ..Default::default()
-            }))
-            .map_err(|e| Error::NoAdapter(e.to_string()))?;
+        let instance = instance();
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        }))
+        .map_err(|e| Error::NoAdapter(e.to_string()))?;
         let adapter_limits = adapter.limits();
         let required_limits = wgpu::Limits {
             max_storage_buffer_binding_size: adapter_limits.max_storage_buffer_binding_size,
@@ -136,11 +141,13 @@ impl GpuContext {
             }
         }));
         Ok(GpuContext {
+            instance,
             device,
             queue,
             adapter_description: describe_adapter(&adapter),
             adapter_name: adapter.get_info().name,
             is_cpu_adapter: adapter.get_info().device_type == wgpu::DeviceType::Cpu,
+            adapter,
             uncaptured,
         })
     }

@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use wgpu::util::DeviceExt;
 
 use super::{GpuContext, wgpu_error_text};
+use crate::camera::CameraSpec;
 use crate::error::{Error, Result};
 use crate::layout::wgsl_prelude;
 use crate::pack::FlatScene;
@@ -52,146 +53,213 @@ pub fn draw(
     flat: &FlatScene,
     frames: u32,
 ) -> Result<PreviewFrame> {
-    let device = &context.device;
-    let (width, height) = (flat.frame.width, flat.frame.height);
-    let radius = bounded_radius(flat);
-    let eye = scene
-        .camera
-        .raster_projection(1.0)
-        .view
-        .inverse()
-        .w_axis
-        .truncate();
-    // Planes reach 100 scene radii; the far plane lies beyond them from anywhere near.
-    let extent = 100.0 * (radius + eye.length() as f32);
-    let vertices = tessellate(flat, extent);
-    let uniforms = PreviewUniforms {
-        clip: clip_matrix(scene, 3.0 * extent as f64)
-            .as_mat4()
-            .to_cols_array_2d(),
-        light_count: flat.frame.light_count,
-        ambient: [
-            flat.frame.ambient[0],
-            flat.frame.ambient[1],
-            flat.frame.ambient[2],
-            0.0,
-        ],
-        eye: [eye.x as f32, eye.y as f32, eye.z as f32, 0.0],
-        ..Default::default()
-    };
-    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("preview"),
-        source: wgpu::ShaderSource::Wgsl(shader_source().into()),
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("preview"),
-        layout: None,
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("preview_vertex"),
-            compilation_options: Default::default(),
-            buffers: &[Some(wgpu::VertexBufferLayout {
-                array_stride: size_of::<PreviewVertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &wgpu::vertex_attr_array![
-                    0 => Float32x3, 1 => Uint32, 2 => Float32x3
-                ],
-            })],
-        },
-        primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("preview_fragment"),
-            compilation_options: Default::default(),
-            targets: &[Some(COLOR_FORMAT.into())],
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
-    let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("preview vertices"),
-        contents: bytemuck::cast_slice(&vertices),
-        usage: wgpu::BufferUsages::VERTEX,
-    });
-    let uniform_buffer = context.uniform_buffer("preview uniforms", bytemuck::bytes_of(&uniforms));
-    let materials = context.storage_buffer("materials", bytemuck::cast_slice(&flat.materials))?;
-    let lights = context.storage_buffer("lights", bytemuck::cast_slice(&flat.lights))?;
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("preview"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: uniform_buffer.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: materials.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: lights.as_entire_binding(),
-            },
-        ],
-    });
-    let size = wgpu::Extent3d {
-        width,
-        height,
-        depth_or_array_layers: 1,
-    };
-    let target = |format, usage| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("preview target"),
-            size,
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage,
-            view_formats: &[],
-        })
-    };
-    let color = target(
-        COLOR_FORMAT,
-        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-    );
-    let depth = target(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
-    let (color_view, depth_view) = (
-        color.create_view(&Default::default()),
-        depth.create_view(&Default::default()),
-    );
-    if let Some(e) = pollster::block_on(scope.pop()) {
-        return Err(Error::Gpu(format!(
-            "creating the preview pipeline: {}",
-            wgpu_error_text(&e)
-        )));
+    let renderer = PreviewRenderer::new(context, scene, flat)?;
+    renderer.draw()?;
+    let mut times = Vec::new();
+    for _ in 0..frames.max(1) {
+        let start = Instant::now();
+        renderer.draw()?;
+        times.push(start.elapsed());
     }
-    let [r, g, b] = flat.frame.background.map(f64::from);
-    let draw_once = || {
-        let mut encoder = device.create_command_encoder(&Default::default());
+    times.sort();
+    Ok(PreviewFrame {
+        image: renderer.image()?,
+        triangles: renderer.triangles(),
+        frame_time: times[times.len() / 2],
+    })
+}
+
+/// The preview's pipeline, its buffers and its targets: draws a scene's triangles through a
+/// camera (set again with [`PreviewRenderer::set_camera`] as a user composes a shot) into a
+/// linear float image.
+pub struct PreviewRenderer {
+    context: GpuContext,
+    pipeline: wgpu::RenderPipeline,
+    vertex_buffer: wgpu::Buffer,
+    vertex_count: u32,
+    uniform_buffer: wgpu::Buffer,
+    uniforms: PreviewUniforms,
+    far: f64,
+    bind_group: wgpu::BindGroup,
+    color: wgpu::Texture,
+    color_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+    background: wgpu::Color,
+}
+
+impl PreviewRenderer {
+    /// The pipeline and buffers of `scene` (flattened as `flat`), drawn through its camera.
+    pub fn new(context: &GpuContext, scene: &Scene, flat: &FlatScene) -> Result<PreviewRenderer> {
+        let device = &context.device;
+        let (width, height) = (flat.frame.width, flat.frame.height);
+        let radius = bounded_radius(flat);
+        let eye = eye_of(&scene.camera);
+        // Planes reach 100 scene radii; the far plane lies beyond them from anywhere near.
+        let extent = 100.0 * (radius + eye.length());
+        let far = 3.0 * extent as f64;
+        let vertices = tessellate(flat, extent);
+        let uniforms = PreviewUniforms {
+            clip: clip_matrix(&scene.camera, far).as_mat4().to_cols_array_2d(),
+            light_count: flat.frame.light_count,
+            ambient: [
+                flat.frame.ambient[0],
+                flat.frame.ambient[1],
+                flat.frame.ambient[2],
+                0.0,
+            ],
+            eye: [eye.x, eye.y, eye.z, 0.0],
+            ..Default::default()
+        };
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("preview"),
+            source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("preview"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("preview_vertex"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: size_of::<PreviewVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![
+                        0 => Float32x3, 1 => Uint32, 2 => Float32x3
+                    ],
+                })],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("preview_fragment"),
+                compilation_options: Default::default(),
+                targets: &[Some(COLOR_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("preview vertices"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let uniform_buffer =
+            context.uniform_buffer("preview uniforms", bytemuck::bytes_of(&uniforms));
+        let materials =
+            context.storage_buffer("materials", bytemuck::cast_slice(&flat.materials))?;
+        let lights = context.storage_buffer("lights", bytemuck::cast_slice(&flat.lights))?;
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("preview"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniform_buffer.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: materials.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: lights.as_entire_binding(),
+                },
+            ],
+        });
+        let size = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        let target = |format, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("preview target"),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        // Sampled too: the interactive window shows it (`gpu::window`).
+        let color = target(
+            COLOR_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let depth = target(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
+        let (color_view, depth_view) = (
+            color.create_view(&Default::default()),
+            depth.create_view(&Default::default()),
+        );
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu(format!(
+                "creating the preview pipeline: {}",
+                wgpu_error_text(&e)
+            )));
+        }
+        let [r, g, b] = flat.frame.background.map(f64::from);
+        Ok(PreviewRenderer {
+            context: context.clone(),
+            pipeline,
+            vertex_buffer,
+            vertex_count: vertices.len() as u32,
+            uniform_buffer,
+            uniforms,
+            far,
+            bind_group,
+            color,
+            color_view,
+            depth_view,
+            background: wgpu::Color { r, g, b, a: 1.0 },
+        })
+    }
+
+    /// Draws through `camera` from now on (the scene's geometry and lights stay).
+    pub fn set_camera(&mut self, camera: &CameraSpec) {
+        let eye = eye_of(camera);
+        self.uniforms.clip = clip_matrix(camera, self.far).as_mat4().to_cols_array_2d();
+        self.uniforms.eye = [eye.x, eye.y, eye.z, 0.0];
+        self.context.queue.write_buffer(
+            &self.uniform_buffer,
+            0,
+            bytemuck::bytes_of(&self.uniforms),
+        );
+    }
+
+    /// Draws one frame into the image and waits for the device.
+    pub fn draw(&self) -> Result<()> {
+        let mut encoder = self
+            .context
+            .device
+            .create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("preview"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &color_view,
+                    view: &self.color_view,
                     depth_slice: None,
                     resolve_target: None,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
+                        load: wgpu::LoadOp::Clear(self.background),
                         store: wgpu::StoreOp::Store,
                     },
                 })],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_view,
+                    view: &self.depth_view,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(1.0),
                         store: wgpu::StoreOp::Store,
@@ -202,27 +270,47 @@ pub fn draw(
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.set_vertex_buffer(0, vertex_buffer.slice(..));
-            pass.draw(0..vertices.len() as u32, 0..1);
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
+            pass.draw(0..self.vertex_count, 0..1);
         }
-        context.wait(context.queue.submit([encoder.finish()]))
-    };
-    draw_once()?;
-    let mut times = Vec::new();
-    for _ in 0..frames.max(1) {
-        let start = Instant::now();
-        draw_once()?;
-        times.push(start.elapsed());
+        self.context
+            .wait(self.context.queue.submit([encoder.finish()]))
     }
-    times.sort();
-    let image = read_back(context, &color, width, height)?;
-    Ok(PreviewFrame {
-        image,
-        triangles: vertices.len() / 3,
-        frame_time: times[times.len() / 2],
-    })
+
+    /// The image (linear radiance) as last drawn, read back.
+    pub fn image(&self) -> Result<Image> {
+        let size = self.color.size();
+        read_back(&self.context, &self.color, size.width, size.height)
+    }
+
+    /// The image's width and height in pixels.
+    pub fn image_size(&self) -> (u32, u32) {
+        let size = self.color.size();
+        (size.width, size.height)
+    }
+
+    /// The image as a texture view (linear radiance, `Rgba32Float`).
+    pub fn view(&self) -> &wgpu::TextureView {
+        &self.color_view
+    }
+
+    /// Triangles drawn a frame.
+    pub fn triangles(&self) -> usize {
+        self.vertex_count as usize / 3
+    }
+}
+
+/// The camera's centre of projection (the lens centre), in scene units.
+fn eye_of(camera: &CameraSpec) -> glam::Vec3 {
+    camera
+        .raster_projection(1.0)
+        .view
+        .inverse()
+        .w_axis
+        .truncate()
+        .as_vec3()
 }
 
 /// The colour target's pixels, rows padded to wgpu's 256-byte copy alignment on the way.

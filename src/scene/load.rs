@@ -47,6 +47,28 @@ pub fn parse_scene_file(path: &Path, overrides: &[String]) -> Result<ParsedScene
     parse_scene_text(path, text, overrides)
 }
 
+/// The scene file at `path` with `overrides` applied, as TOML text (its comments and layout are
+/// not kept: the text is the merged table written out).
+pub fn merged_scene_text(path: &Path, overrides: &[String]) -> Result<String> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let text = std::str::from_utf8(&bytes).map_err(|e| invalid_utf8(path, &bytes, e))?;
+    // Parsing first places a syntax error in the file at its line.
+    let parsed = parse_scene_text(path, text, &[])?;
+    let mut table: toml::Table =
+        toml::from_str(text).map_err(|e| parsed.error("", e.message().trim()))?;
+    for item in overrides {
+        let (key, value) = parse_override(item)?;
+        set_path(&mut table, &key, value).map_err(|message| Error::Override {
+            key: key.clone(),
+            message,
+        })?;
+    }
+    toml::to_string(&table).map_err(|e| Error::Override {
+        key: overrides.join(" "),
+        message: e.to_string(),
+    })
+}
+
 /// The line and column (in bytes) of the first byte that is not UTF-8.
 fn invalid_utf8(path: &Path, bytes: &[u8], e: std::str::Utf8Error) -> Error {
     let offset = e.valid_up_to();

@@ -20,7 +20,7 @@ use crate::adaptive::AdaptiveSettings;
 pub use crate::camera::CameraSpec;
 pub use crate::sampler::SamplerName;
 pub use builder::SceneBuilder;
-pub use load::parse_override;
+pub use load::{merged_scene_text, parse_override};
 pub use mesh::TriangleMesh;
 
 use crate::error::{Error, Result};
