@@ -432,9 +432,10 @@ impl Study {
                 let at_same_flip = at_same_error(&uniform, run.flip, |r| r.flip);
                 AdaptiveGain {
                     run,
-                    uniform_wall_ms: at_same_rmse.map(|(w, _)| w),
-                    uniform_flip: at_same_rmse.map(|(_, f)| f),
-                    uniform_wall_ms_same_flip: at_same_flip.map(|(w, _)| w),
+                    uniform_wall_ms: at_same_rmse.map(|u| u.wall_ms),
+                    uniform_flip: at_same_rmse.map(|u| u.flip),
+                    uniform_wall_ms_same_flip: at_same_flip.map(|u| u.wall_ms),
+                    uniform_rmse_same_flip: at_same_flip.map(|u| u.rmse),
                 }
             })
             .collect()
@@ -546,8 +547,8 @@ impl Study {
         out += "\nAdaptive against uniform sampling at the same RMSE (uniform interpolated log-log \
                 between its runs):\n\n";
         out += "| curve | noise target | mean spp | RMSE | FLIP | wall ms | uniform wall ms | \
-                time ratio | uniform FLIP | time ratio at equal FLIP |\n";
-        out += "|---|---|---|---|---|---|---|---|---|---|\n";
+                time ratio | uniform FLIP | time ratio at equal FLIP | uniform RMSE at equal FLIP |\n";
+        out += "|---|---|---|---|---|---|---|---|---|---|---|\n";
         for gain in gains {
             let r = gain.run;
             let (uniform_ms, ratio, uniform_flip) = match (gain.uniform_wall_ms, gain.uniform_flip)
@@ -555,17 +556,20 @@ impl Study {
                 (Some(ms), Some(flip)) => (
                     format!("{ms:.1}"),
                     format!("{:.2}x", r.wall_ms / ms),
-                    format!("{flip:.4}"),
+                    format!("{flip:.3e}"),
                 ),
                 _ => ("beyond the uniform runs".into(), "-".into(), "-".into()),
             };
             let flip_ratio = gain
                 .uniform_wall_ms_same_flip
                 .map_or("-".into(), |ms| format!("{:.2}x", r.wall_ms / ms));
+            let flip_rmse = gain
+                .uniform_rmse_same_flip
+                .map_or("-".into(), |e| format!("{e:.3e}"));
             let _ = writeln!(
                 out,
-                "| {} | {} | {:.1} | {:.4e} | {:.4} | {:.1} | {uniform_ms} | {ratio} | \
-                 {uniform_flip} | {flip_ratio} |",
+                "| {} | {} | {:.1} | {:.4e} | {:.3e} | {:.1} | {uniform_ms} | {ratio} | \
+                 {uniform_flip} | {flip_ratio} | {flip_rmse} |",
                 r.curve().label(),
                 r.noise_target.unwrap_or_default(),
                 r.mean_spp,
@@ -640,11 +644,27 @@ pub struct AdaptiveGain<'a> {
     pub uniform_flip: Option<f64>,
     /// The uniform runs' wall time at the adaptive run's FLIP.
     pub uniform_wall_ms_same_flip: Option<f64>,
+    /// The uniform runs' RMSE at the adaptive run's FLIP: above the adaptive run's, uniform
+    /// sampling needs more time for an image worse by both measures.
+    pub uniform_rmse_same_flip: Option<f64>,
 }
 
-/// The wall time and FLIP of the uniform runs (by increasing samples) where `error` reaches
-/// `value`: interpolated log-log between the two runs around it; none beyond them.
-fn at_same_error(uniform: &[&Run], value: f64, error: impl Fn(&Run) -> f64) -> Option<(f64, f64)> {
+/// The uniform runs where an error measure reaches a value (`at_same_error`).
+#[derive(Clone, Copy, Debug)]
+struct Interpolated {
+    wall_ms: f64,
+    flip: f64,
+    rmse: f64,
+}
+
+/// The wall time, FLIP and RMSE of the uniform runs (by increasing samples) where `error`
+/// reaches `value`: interpolated between the two runs around it (log-log, FLIP linearly); none
+/// beyond them.
+fn at_same_error(
+    uniform: &[&Run],
+    value: f64,
+    error: impl Fn(&Run) -> f64,
+) -> Option<Interpolated> {
     uniform.windows(2).find_map(|pair| {
         let (a, b) = (pair[0], pair[1]);
         let (ea, eb) = (error(a), error(b));
@@ -653,10 +673,11 @@ fn at_same_error(uniform: &[&Run], value: f64, error: impl Fn(&Run) -> f64) -> O
         }
         let t = (value.ln() - ea.ln()) / (eb.ln() - ea.ln());
         let log_lerp = |x: f64, y: f64| (x.ln() + t * (y.ln() - x.ln())).exp();
-        Some((
-            log_lerp(a.wall_ms, b.wall_ms),
-            a.flip + t * (b.flip - a.flip),
-        ))
+        Some(Interpolated {
+            wall_ms: log_lerp(a.wall_ms, b.wall_ms),
+            flip: a.flip + t * (b.flip - a.flip),
+            rmse: log_lerp(a.rmse, b.rmse),
+        })
     })
 }
 

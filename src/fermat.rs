@@ -14,8 +14,9 @@
 //! triangle that is not flat (a quarter of AB off its middle). A sphere is parametrised with its
 //! poles on the normal of the plane through E, V and its centre (`Sphere::facing`): the
 //! reflection lies on that plane's great circle, the equator, where the parametrisation is
-//! regular. This is the CPU version; the GPU's vertex stage, the other reflectors and the
-//! rasterisation of the reflected triangles are to come (docs/fermat.md).
+//! regular. This is the CPU version (f64); `wgsl/fermat.wgsl` is the GPU's (the `fermat`
+//! kernel, `gpu::fermat`). The other reflectors and the rasterisation of the reflected
+//! triangles are to come (docs/fermat.md).
 
 use glam::{DVec2, DVec3};
 

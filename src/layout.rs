@@ -498,6 +498,38 @@ pub struct GpuRay {
     pub _pad0: u32,
 }
 
+/// A Fermat solve's reflector and eye (`wgsl/fermat.wgsl`): a sphere, and how many vertices
+/// the `fermat_vertices` buffer holds.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuReflector {
+    /// The sphere's centre (scene units).
+    pub center: [f32; 3],
+    /// The sphere's radius (scene units).
+    pub radius: f32,
+    /// The eye E (scene units).
+    pub eye: [f32; 3],
+    /// Vertices to solve.
+    pub count: u32,
+}
+
+/// One vertex's reflection point, as the Fermat kernel finds it (`fermat::Solver` is its CPU
+/// twin).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuReflection {
+    /// P, on the sphere (scene units).
+    pub point: [f32; 3],
+    /// Steps taken.
+    pub steps: u32,
+    /// P's parameters (u, v) in the vertex's facing frame (`fermat::Sphere::facing`).
+    pub uv: [f32; 2],
+    /// |P − V|, the reflected point's depth for hidden-surface removal among reflections.
+    pub depth: f32,
+    /// 1 where the step system was singular (the search stopped there).
+    pub degenerate: u32,
+}
+
 impl GpuLight {
     /// An area light, parallelogram or triangle: sampled with `samples` shadow rays.
     pub fn is_area(&self) -> bool {
@@ -506,6 +538,8 @@ impl GpuLight {
 }
 
 const _: () = assert!(size_of::<GpuRay>() == 32);
+const _: () = assert!(size_of::<GpuReflector>() == 32);
+const _: () = assert!(size_of::<GpuReflection>() == 32);
 const _: () = assert!(size_of::<GpuBvhNode>() == 32);
 const _: () = assert!(size_of::<GpuCwNode>() == 80);
 const _: () = assert!(size_of::<GpuPrimitive>() == 48);

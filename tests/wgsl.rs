@@ -239,6 +239,25 @@ fn shared_structs_have_identical_layouts() {
     );
     layout!(
         module,
+        GpuReflector {
+            center,
+            radius,
+            eye,
+            count
+        }
+    );
+    layout!(
+        module,
+        GpuReflection {
+            point,
+            steps,
+            uv,
+            depth,
+            degenerate
+        }
+    );
+    layout!(
+        module,
         GpuMaterial {
             diffuse,
             model,

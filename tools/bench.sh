@@ -74,11 +74,11 @@ mkdir -p bench
             --plot "bench/converge_adaptive_$scene.svg"
     done
     # The same with a later first decision, where FLIP parity was looked for.
-    for scene in defocus_tilt checkerboard; do
+    for scene in defocus_tilt mirror_corridor checkerboard; do
         echo
         echo "converge, adaptive, --min-spp 64: scenes/converge/$scene.toml"
         "$chambre" converge "scenes/converge/$scene.toml" --reference-spp 4096 --max-spp 256 \
-            --samplers sobol --noise-targets 0.005,0.002 --min-spp 64 --runs 3 \
+            --samplers sobol --noise-targets 0.005,0.002,0.001 --min-spp 64 --runs 3 \
             --csv "bench/converge_adaptive_min64_$scene.csv"
     done
 } | tee bench/results.md

@@ -23,3 +23,8 @@
 @group(0) @binding(13) var<storage, read> cw_nodes: array<GpuCwNode>;
 // The pixels an adaptive pass samples (`y * width + x`), when `pass_info.listed_pixels` is not 0.
 @group(0) @binding(14) var<storage, read> pixel_list: array<u32>;
+// The Fermat kernel's reflector and eye, the vertices it solves (xyz, w unused) and their
+// reflection points (wgsl/fermat.wgsl).
+@group(0) @binding(15) var<uniform> reflector: GpuReflector;
+@group(0) @binding(16) var<storage, read> fermat_vertices: array<vec4<f32>>;
+@group(0) @binding(17) var<storage, read_write> reflections: array<GpuReflection>;

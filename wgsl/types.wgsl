@@ -129,3 +129,18 @@ struct GpuRay {
     direction: vec3<f32>,
     _pad0: u32,
 }
+
+struct GpuReflector {
+    center: vec3<f32>,
+    radius: f32,
+    eye: vec3<f32>,
+    count: u32,
+}
+
+struct GpuReflection {
+    point: vec3<f32>,
+    steps: u32,
+    uv: vec2<f32>,
+    depth: f32,
+    degenerate: u32,
+}

@@ -46,7 +46,7 @@ const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
 }
 
 /// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
-pub const BINDINGS: [Binding; 15] = [
+pub const BINDINGS: [Binding; 18] = [
     binding(0, "camera", Access::Uniform),
     binding(1, "frame", Access::Uniform),
     // One GpuPass per dispatch of a batch, each at its own dynamic offset.
@@ -66,6 +66,9 @@ pub const BINDINGS: [Binding; 15] = [
     binding(12, "distances", Access::StorageReadWrite),
     binding(13, "cw_nodes", Access::StorageRead),
     binding(14, "pixel_list", Access::StorageRead),
+    binding(15, "reflector", Access::Uniform),
+    binding(16, "fermat_vertices", Access::StorageRead),
+    binding(17, "reflections", Access::StorageReadWrite),
 ];
 
 /// The bindings of the render kernel: nine storage buffers, one more than WebGPU's baseline
@@ -107,8 +110,11 @@ const TRACE_CW_BINDINGS: [Binding; 7] = [
     BINDINGS[13],
 ];
 
+/// The bindings of the Fermat kernel.
+const FERMAT_BINDINGS: [Binding; 3] = [BINDINGS[15], BINDINGS[16], BINDINGS[17]];
+
 /// (file name, source) of every WGSL module a kernel may compose.
-pub const MODULES: [(&str, &str); 13] = [
+pub const MODULES: [(&str, &str); 14] = [
     ("types.wgsl", include_str!("../../wgsl/types.wgsl")),
     ("bindings.wgsl", include_str!("../../wgsl/bindings.wgsl")),
     ("status.wgsl", include_str!("../../wgsl/status.wgsl")),
@@ -128,6 +134,7 @@ pub const MODULES: [(&str, &str); 13] = [
     ),
     ("render.wgsl", include_str!("../../wgsl/render.wgsl")),
     ("trace.wgsl", include_str!("../../wgsl/trace.wgsl")),
+    ("fermat.wgsl", include_str!("../../wgsl/fermat.wgsl")),
 ];
 
 /// A compute kernel: what it is made of and what it reads.
@@ -213,13 +220,23 @@ pub const TRACE_ANY_CW: Kernel = Kernel {
     bindings: &TRACE_CW_BINDINGS,
 };
 
+/// Reflection points of vertices on a sphere by Fermat's principle, one invocation per vertex
+/// (`gpu::fermat`; CPU twin `fermat::Solver`).
+pub const FERMAT: Kernel = Kernel {
+    name: "fermat",
+    modules: &["types.wgsl", "bindings.wgsl", "fermat.wgsl"],
+    entry_point: "fermat",
+    bindings: &FERMAT_BINDINGS,
+};
+
 /// Every kernel chambre builds.
-pub const KERNELS: [&Kernel; 5] = [
+pub const KERNELS: [&Kernel; 6] = [
     &RENDER,
     &TRACE_CLOSEST,
     &TRACE_ANY,
     &TRACE_CLOSEST_CW,
     &TRACE_ANY_CW,
+    &FERMAT,
 ];
 
 /// The complete source of `kernel`, with a marker comment where each module starts.

@@ -4,6 +4,7 @@
 //! Errors never panic: wgpu's default uncaptured-error handler panics, so a handler of ours
 //! records them, and every wait on the device has a timeout (lavapipe has no watchdog).
 
+pub mod fermat;
 pub mod kernels;
 pub mod preview;
 pub mod render;
