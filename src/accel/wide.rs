@@ -207,6 +207,12 @@ fn wide_node(node: &GpuCwNode) -> WideNode {
     wide
 }
 
+/// The primitive slots of a leaf's code.
+fn leaf_slots(code: u32) -> std::ops::Range<u32> {
+    let first = code & LEAF_FIRST;
+    first..first + ((code >> LEAF_COUNT_SHIFT) & 3)
+}
+
 fn min(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
 }
@@ -374,8 +380,7 @@ fn closest_hit_inline<const F: u32>(
             continue;
         }
         if code & LEAF != 0 {
-            let first = code & LEAF_FIRST;
-            for slot in first..first + ((code >> LEAF_COUNT_SHIFT) & 3) {
+            for slot in leaf_slots(code) {
                 if slot == skip {
                     continue;
                 }
@@ -423,8 +428,7 @@ fn occluded_inline<const F: u32>(
         size -= 1;
         let code = stack[size].0;
         if code & LEAF != 0 {
-            let first = code & LEAF_FIRST;
-            for slot in first..first + ((code >> LEAF_COUNT_SHIFT) & 3) {
+            for slot in leaf_slots(code) {
                 if skip.contains(&slot) {
                     continue;
                 }

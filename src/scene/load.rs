@@ -56,13 +56,7 @@ pub fn merged_scene_text(path: &Path, overrides: &[String]) -> Result<String> {
     let parsed = parse_scene_text(path, text, &[])?;
     let mut table: toml::Table =
         toml::from_str(text).map_err(|e| parsed.error("", e.message().trim()))?;
-    for item in overrides {
-        let (key, value) = parse_override(item)?;
-        set_path(&mut table, &key, value).map_err(|message| Error::Override {
-            key: key.clone(),
-            message,
-        })?;
-    }
+    apply_overrides(&mut table, overrides)?;
     toml::to_string(&table).map_err(|e| Error::Override {
         key: overrides.join(" "),
         message: e.to_string(),
@@ -117,15 +111,7 @@ pub fn parse_scene_text(path: &Path, text: &str, overrides: &[String]) -> Result
         });
     }
     let mut table: toml::Table = toml::from_str(text).map_err(syntax_error)?;
-    let mut overridden = Vec::new();
-    for item in overrides {
-        let (key, value) = parse_override(item)?;
-        set_path(&mut table, &key, value).map_err(|message| Error::Override {
-            key: key.clone(),
-            message,
-        })?;
-        overridden.push(normalise_path(&key));
-    }
+    let overridden = apply_overrides(&mut table, overrides)?;
     let mut parsed = ParsedScene {
         file,
         path: path.to_path_buf(),
@@ -134,6 +120,20 @@ pub fn parse_scene_text(path: &Path, text: &str, overrides: &[String]) -> Result
     };
     parsed.file = parse_with_overrides(&parsed, &table)?;
     Ok(parsed)
+}
+
+/// Sets each `key=value` of `overrides` in `table`; returns the keys, normalised.
+fn apply_overrides(table: &mut toml::Table, overrides: &[String]) -> Result<Vec<String>> {
+    let mut keys = Vec::with_capacity(overrides.len());
+    for item in overrides {
+        let (key, value) = parse_override(item)?;
+        set_path(table, &key, value).map_err(|message| Error::Override {
+            key: key.clone(),
+            message,
+        })?;
+        keys.push(normalise_path(&key));
+    }
+    Ok(keys)
 }
 
 /// The scene with its overrides applied, read back from TOML text so that an error in an
