@@ -124,6 +124,13 @@ pub fn rel_mse(image: &Image, reference: &Image) -> f64 {
 /// Mean FLIP error of the two images shown as sRGB 8-bit (clamped), at FLIP's default viewing
 /// distance (67 pixels per degree): 0 for identical images, 1 at most.
 pub fn flip(image: &Image, reference: &Image) -> f64 {
+    let map = flip_map(image, reference);
+    map.iter().map(|&v| v as f64).sum::<f64>() / map.len().max(1) as f64
+}
+
+/// FLIP's per-pixel error map (row-major, row 0 at the top) of the two images shown as sRGB
+/// 8-bit, at FLIP's default viewing distance.
+pub fn flip_map(image: &Image, reference: &Image) -> Vec<f32> {
     let rgb8 = |i: &Image| {
         let bytes: Vec<u8> = i
             .pixels
@@ -137,7 +144,7 @@ pub fn flip(image: &Image, reference: &Image) -> f64 {
         rgb8(image),
         nv_flip::DEFAULT_PIXELS_PER_DEGREE,
     );
-    nv_flip::FlipPool::from_image(&map).mean() as f64
+    map.to_vec()
 }
 
 /// Least-squares slope of log(error) against log(x): -0.5 for error falling as 1/sqrt(x).

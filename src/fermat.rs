@@ -254,6 +254,14 @@ pub fn seen_from_outside(p: DVec3, n: DVec3, eye: DVec3, vertex: DVec3) -> bool 
     (eye - p).dot(n) > 0.0 && (vertex - p).dot(n) > 0.0
 }
 
+/// Whether the raster preview draws a reflection found at `p` (outward unit normal `n`):
+/// seen from outside, with the law of reflection holding to `layout::REFLECTION_TOLERANCE`
+/// (the CPU twin of `reflection_holds` in wgsl/preview_reflect.wgsl).
+pub fn drawn_in_preview(p: DVec3, n: DVec3, eye: DVec3, vertex: DVec3) -> bool {
+    seen_from_outside(p, n, eye, vertex)
+        && reflection_error(p, n, eye, vertex) < f64::from(crate::layout::REFLECTION_TOLERANCE)
+}
+
 /// Alhazen's problem on a sphere in f64, independently of the solver: the reflection point lies
 /// on the great circle of the plane through E, V and the centre, where d(φ) is extremal; found
 /// by a dense scan of the arc facing E and V and bisection on d'(φ).

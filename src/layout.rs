@@ -550,6 +550,13 @@ const _: () = assert!(size_of::<GpuCamera>() == 144);
 const _: () = assert!(size_of::<GpuFrame>() == 96);
 const _: () = assert!(size_of::<GpuPass>() == 64);
 
+/// The raster preview draws a vertex's Fermat reflection only where the law of reflection holds
+/// at its point to this angle (radians): a search that stopped short leaves its triangles out
+/// rather than drawing them displaced. 1e-2 rad moves a point of a sphere of radius R seen
+/// from distance D by about 1e-2 R / D radians of view, a fraction of a pixel for the preview's
+/// scenes; 2e-3 rejects many points f32's search cannot refine further.
+pub const REFLECTION_TOLERANCE: f32 = 1e-2;
+
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
 pub fn wgsl_prelude() -> String {
     let u32s = [
@@ -601,6 +608,7 @@ pub fn wgsl_prelude() -> String {
         out += &format!("const {name}: u32 = {value}u;\n");
     }
     out += &format!("const T_FAR: f32 = {T_FAR:e};\n");
+    out += &format!("const REFLECTION_TOLERANCE: f32 = {REFLECTION_TOLERANCE:e};\n");
     for (name, _) in FEATURES {
         out += &format!("override {name}: bool = true;\n");
     }

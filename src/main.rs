@@ -65,8 +65,9 @@ enum Command {
         set: Vec<String>,
     },
     /// Draw a scene fast with the GPU's raster pipeline through the view camera's projection
-    /// (film tilt, swing and shift as the ray tracer has them; no shadows, reflections or depth
-    /// of field) and report the frame time.
+    /// (film tilt, swing and shift as the ray tracer has them; mirror spheres reflect by
+    /// Fermat's principle; no shadows, other reflections or depth of field) and report the
+    /// frame time.
     Preview {
         /// Scene file (TOML or glTF; see docs/scene-format.md).
         scene: PathBuf,
@@ -91,6 +92,13 @@ enum Command {
         /// NAME.composed.toml, so its relative mesh paths still hold).
         #[arg(long, requires = "window")]
         save: Option<PathBuf>,
+        /// Mirror spheres' Fermat reflections: pieces each reflected triangle's edge is cut
+        /// into (default: enough that none is longer than 1/16 of the scene's radius).
+        #[arg(long)]
+        subdivision: Option<u32>,
+        /// Mirror spheres' Fermat reflections: the search's steps at most.
+        #[arg(long, default_value_t = chambre::gpu::preview::ReflectionOptions::default().steps)]
+        fermat_steps: u32,
         /// Override any scene field, e.g. --set camera.film_tilt=10 (also -D).
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -343,12 +351,20 @@ fn main() -> ExitCode {
             keys,
             screenshot,
             save,
+            subdivision,
+            fermat_steps,
             set,
-        } => match (window, output) {
-            (true, _) => run_window(&scene, &set, &keys, screenshot, save),
-            (false, Some(output)) => run_preview(&scene, &output, frames, &set),
-            (false, None) => unreachable!("clap requires --output without --window"),
-        },
+        } => {
+            let reflections = chambre::gpu::preview::ReflectionOptions {
+                subdivision,
+                steps: fermat_steps,
+            };
+            match (window, output) {
+                (true, _) => run_window(&scene, &set, &keys, screenshot, save, reflections),
+                (false, Some(output)) => run_preview(&scene, &output, frames, &set, reflections),
+                (false, None) => unreachable!("clap requires --output without --window"),
+            }
+        }
         Command::Info => run_info(),
         Command::Merge { manifests, output } => run_merge(&manifests, &output),
     };
@@ -736,6 +752,7 @@ fn run_preview(
     output: &Path,
     frames: u32,
     overrides: &[String],
+    reflections: chambre::gpu::preview::ReflectionOptions,
 ) -> anyhow::Result<ExitCode> {
     let target = OutputTarget::prepare(output)?;
     let scene = load_and_note(path, overrides)?;
@@ -744,11 +761,15 @@ fn run_preview(
     }
     let flat = flatten(&scene);
     let context = chambre::gpu::GpuContext::new()?;
-    let frame = chambre::gpu::preview::draw(&context, &scene, &flat, frames)?;
+    let frame = chambre::gpu::preview::draw_with(&context, &scene, &flat, frames, reflections)?;
     target.write(&frame.image)?;
+    let reflected = match frame.reflected_triangles {
+        0 => String::new(),
+        n => format!(" and {n} reflected"),
+    };
     note!(
-        "{}: {}x{}, {} triangles in {:.2} ms a frame (median of {frames}, drawn and finished on \
-         the device, read-back excluded) on {}",
+        "{}: {}x{}, {} triangles{reflected} in {:.2} ms a frame (median of {frames}, drawn and \
+         finished on the device, read-back excluded) on {}",
         output.display(),
         frame.image.width,
         frame.image.height,
@@ -766,6 +787,7 @@ fn run_window(
     keys: &[String],
     screenshot: Option<PathBuf>,
     save: Option<PathBuf>,
+    reflections: chambre::gpu::preview::ReflectionOptions,
 ) -> anyhow::Result<ExitCode> {
     let keys = keys
         .iter()
@@ -797,6 +819,7 @@ fn run_window(
         keys,
         screenshot: screenshot.clone(),
         save,
+        reflections,
     };
     let report = chambre::gpu::window::run(path, overrides, &scene, &flat, options)?;
     note!(

@@ -4,8 +4,9 @@
 //! swing and shift are a rotation of the view and an off-axis frustum). The GPU side is
 //! `gpu::preview`, its shader `wgsl/preview.wgsl`.
 //!
-//! What the preview leaves out, by design (it trades accuracy for speed): shadows, mirror
-//! reflections, specular lobes and depth of field (a lens is drawn as a pinhole at its centre;
+//! What the preview leaves out, by design (it trades accuracy for speed): shadows, specular
+//! lobes, reflections other than mirror spheres' (drawn by Fermat's principle, seed 004:
+//! `reflectors`, `reflected_triangles`) and depth of field (a lens is drawn as a pinhole at its centre;
 //! lens tilt and swing do not move a pinhole's rays). Area lights light it as points at their
 //! centres with their power's cosine falloff.
 
@@ -27,8 +28,10 @@ pub struct PreviewVertex {
     pub material: u32,
     /// Shading normal (world, unit).
     pub normal: [f32; 3],
-    /// Unused: keeps the vertex 32 bytes.
-    pub _pad: u32,
+    /// 0, or 1 + the index of the reflector (`reflectors`) this vertex belongs to: the main pass
+    /// writes it to its id target so that reflections are drawn only where their reflector is
+    /// visible (the Fermat pass's second level of hidden-surface removal).
+    pub reflector: u32,
 }
 
 /// Segments around a tessellated sphere (and half as many from pole to pole).
@@ -50,13 +53,30 @@ pub struct PreviewUniforms {
     pub eye: [f32; 4],
 }
 
+/// The uniforms of one reflector's reflection pass (`ReflectorPass` in
+/// wgsl/preview_reflect.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ReflectorPass {
+    /// The sphere: centre and radius (w).
+    pub sphere: [f32; 4],
+    /// Reflected depths |P − V| are divided by this to land in [0, 1].
+    pub far: f32,
+    /// 1 + the reflector's index: the id the main pass wrote where it is seen.
+    pub id: u32,
+    /// Padding to the WGSL layout.
+    pub _pad: [u32; 2],
+}
+
 /// Every bounded primitive and plane of `scene` as triangles; `extent` sizes the planes (they
 /// reach `extent` from their point each way).
 pub fn tessellate(scene: &FlatScene, extent: f32) -> Vec<PreviewVertex> {
     let end = (scene.frame.plane_start + scene.frame.plane_count) as usize;
+    let reflectors = reflectors(scene);
     let mut vertices = Vec::new();
     for (i, p) in scene.prims[..end].iter().enumerate() {
         let normals = scene.normals.get(p.normals as usize);
+        let first = vertices.len();
         match p.kind {
             PRIM_TRIANGLE => triangle(&mut vertices, p, normals.map(|n| n.n)),
             PRIM_QUAD => quad(&mut vertices, p),
@@ -64,8 +84,102 @@ pub fn tessellate(scene: &FlatScene, extent: f32) -> Vec<PreviewVertex> {
             PRIM_PLANE => plane(&mut vertices, p, extent),
             _ => unreachable!("primitive {i} of kind {}", p.kind),
         }
+        if let Some(r) = reflectors.iter().position(|r| r.prim == i) {
+            for v in &mut vertices[first..] {
+                v.reflector = r as u32 + 1;
+            }
+        }
     }
     vertices
+}
+
+/// A sphere the preview shows Fermat reflections on: one whose material has a mirror term.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reflector {
+    /// Its primitive's index in the flattened scene.
+    pub prim: usize,
+    /// Centre (scene units).
+    pub center: Vec3,
+    /// Radius (scene units).
+    pub radius: f32,
+    /// Its material's mirror reflectance per channel.
+    pub mirror: Vec3,
+}
+
+/// The scene's mirror spheres, in primitive order (flat mirrors, mirror triangles and quads
+/// are drawn with their diffuse term only: the seed's method is for curved reflectors).
+pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
+    let bounded = &scene.prims[..scene.frame.plane_start as usize];
+    bounded
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.kind == PRIM_SPHERE)
+        .filter_map(|(prim, p)| {
+            let mirror = Vec3::from(scene.materials[p.material as usize].mirror);
+            (mirror.max_element() > 0.0).then_some(Reflector {
+                prim,
+                center: Vec3::from(p.p0),
+                radius: p.p1[0],
+                mirror,
+            })
+        })
+        .collect()
+}
+
+/// The triangles the reflectors reflect: every triangle of `tessellate` that is not on a
+/// reflector, each cut into n² triangles (n pieces along each edge): n = `subdivision`, or
+/// where it is `None`, the fewest pieces that leave no edge longer than `AUTO_PIECE` of the
+/// scene's radius (at most `MAX_AUTO_PIECES`). The raster pipeline draws a reflected triangle
+/// straight between its vertices' reflection points, where the true reflection of a straight
+/// edge is curved: subdividing is what keeps the error small (the seed subdivides its floor
+/// 16x16).
+pub fn reflected_triangles(
+    scene: &FlatScene,
+    extent: f32,
+    subdivision: Option<u32>,
+) -> Vec<PreviewVertex> {
+    let longest = AUTO_PIECE * bounded_radius(scene);
+    let mut out = Vec::new();
+    for t in tessellate(scene, extent).chunks_exact(3) {
+        if t[0].reflector != 0 {
+            continue;
+        }
+        let [a, b, c] = [t[0], t[1], t[2]].map(|v| Vec3::from(v.position));
+        let edge = a.distance(b).max(b.distance(c)).max(c.distance(a));
+        let n = subdivision
+            .unwrap_or_else(|| ((edge / longest).ceil() as u32).clamp(1, MAX_AUTO_PIECES));
+        subdivide(&mut out, [t[0], t[1], t[2]], n.max(1));
+    }
+    out
+}
+
+/// The automatic subdivision's longest edge, in scene radii (`bounded_radius`).
+pub const AUTO_PIECE: f32 = 1.0 / 16.0;
+/// The automatic subdivision's most pieces along an edge (planes, which reach far, stop there).
+pub const MAX_AUTO_PIECES: u32 = 32;
+
+/// Cuts triangle `t` into `n`² triangles on the barycentric grid of step 1/n, normals
+/// interpolated.
+fn subdivide(out: &mut Vec<PreviewVertex>, t: [PreviewVertex; 3], n: u32) {
+    let at = |i: u32, j: u32| {
+        // Barycentric (1 - a - b, a, b) with a = i / n, b = j / n.
+        let (a, b) = (i as f32 / n as f32, j as f32 / n as f32);
+        let mix = |f: fn(&PreviewVertex) -> [f32; 3]| {
+            Vec3::from(f(&t[0])) * (1.0 - a - b)
+                + Vec3::from(f(&t[1])) * a
+                + Vec3::from(f(&t[2])) * b
+        };
+        let normal = mix(|v| v.normal).normalize_or(Vec3::from(t[0].normal));
+        vertex(mix(|v| v.position), normal, t[0].material)
+    };
+    for j in 0..n {
+        for i in 0..n - j {
+            out.extend([at(i, j), at(i + 1, j), at(i, j + 1)]);
+            if i + j + 1 < n {
+                out.extend([at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]);
+            }
+        }
+    }
 }
 
 fn vertex(position: Vec3, normal: Vec3, material: u32) -> PreviewVertex {
@@ -73,7 +187,7 @@ fn vertex(position: Vec3, normal: Vec3, material: u32) -> PreviewVertex {
         position: position.to_array(),
         material,
         normal: normal.to_array(),
-        _pad: 0,
+        reflector: 0,
     }
 }
 
@@ -183,7 +297,12 @@ pub fn clip_matrix(camera: &CameraSpec, far: f64) -> DMat4 {
 /// What the preview cannot show of `scene`'s camera, one sentence each (said to the user).
 pub fn omissions(scene: &Scene) -> Vec<String> {
     let camera = &scene.camera;
-    let mut notes = vec!["the preview has no shadows, mirror reflections or specular lobes".into()];
+    let mut notes = vec![
+        "the preview has no shadows or specular lobes; mirror spheres reflect the scene by \
+         Fermat's principle (without the other reflectors), other mirrors show their diffuse \
+         term only"
+            .into(),
+    ];
     if !camera.is_pinhole() {
         notes.push(format!(
             "the preview shows no depth of field: the f/{} lens is drawn as a pinhole at its \
@@ -432,5 +551,35 @@ mod composer_tests {
         let composed = composer.camera();
         assert_eq!(reloaded.movements, composed.movements);
         assert!((reloaded.look_at - composed.look_at).length() < 1e-9);
+    }
+
+    /// A triangle cut n times along each edge gives n² triangles of the same orientation that
+    /// tile it: their areas sum to its area, and every corner lies in its plane.
+    #[test]
+    fn subdividing_tiles_the_triangle() {
+        let corners = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(2.0, 0.0, 0.5),
+            Vec3::new(0.3, 1.5, -0.2),
+        ];
+        let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+        let t = corners.map(|p| vertex(p, normal.normalize(), 3));
+        for n in [1, 2, 5, 16] {
+            let mut out = Vec::new();
+            subdivide(&mut out, t, n);
+            assert_eq!(out.len(), 3 * (n * n) as usize);
+            let mut area = 0.0;
+            for piece in out.chunks_exact(3) {
+                let [a, b, c] = [0, 1, 2].map(|k| Vec3::from(piece[k].position));
+                let cross = (b - a).cross(c - a);
+                assert!(cross.dot(normal) > 0.0, "n = {n}: a piece is flipped");
+                area += cross.length() / 2.0;
+                assert!(piece.iter().all(|v| v.material == 3 && v.reflector == 0));
+            }
+            assert!(
+                (area - normal.length() / 2.0).abs() < 1e-5,
+                "n = {n}: {area}"
+            );
+        }
     }
 }

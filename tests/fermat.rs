@@ -112,6 +112,7 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points() {
         sphere.radius as f32,
         eye.as_vec3(),
         &vertices.iter().map(|v| v.as_vec3()).collect::<Vec<_>>(),
+        chambre::gpu::fermat::SEED_STEPS,
     )
     .unwrap();
     let solver = Solver::default();
@@ -154,4 +155,51 @@ fn alhazens_point_obeys_the_law_of_reflection() {
         DVec3::new(3.0, -1.0, 0.0),
     );
     assert!((p - DVec3::X).length() < 1e-12, "{p}");
+}
+
+/// The raster preview's Fermat reflections against the ray tracer (`chambre bench fermat` on
+/// the sample scene, made small): corners (vertices) land where Alhazen's f64 points put them;
+/// points between them move as the seed says (straight reflected edges) and come within a
+/// pixel once the floor is cut 16x16; FLIP over the sphere's pixels falls with the
+/// subdivision; and the report's JSON carries its figures.
+#[test]
+fn preview_reflections_land_where_the_ray_tracer_puts_them() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fermat_sphere.toml");
+    let subdivisions = [1, 4];
+    let overrides = ["render.width=160".to_string(), "render.height=120".into()];
+    let config = chambre::bench::fermat::FermatConfig {
+        scene: &scene,
+        overrides: &overrides,
+        subdivisions: &subdivisions,
+        steps: chambre::gpu::preview::ReflectionOptions::default().steps,
+        runs: 1,
+        reference_spp: 32,
+    };
+    let report = chambre::bench::fermat::run(&config, &context).unwrap();
+    eprintln!("{}", report.to_markdown());
+    let [coarse, fine] = [&report.rows[0], &report.rows[1]];
+    for row in [coarse, fine] {
+        assert!(row.features > 300, "{row:?}");
+        assert!(row.corner_max_px < 0.05, "{row:?}");
+        assert!(row.preview_ms.median > 0.0);
+    }
+    // The scene's floor is 4x4 quads: subdivision 4 cuts it 16x16, as the seed's.
+    assert!(fine.drawn as f64 >= 0.9 * fine.features as f64, "{fine:?}");
+    assert!(fine.displacement_p99_px < 1.0, "{fine:?}");
+    assert!(
+        fine.displacement_median_px < coarse.displacement_median_px,
+        "{report:?}"
+    );
+    assert!(coarse.displacement_max_px > 1.0, "{coarse:?}");
+    assert!(fine.flip_reflector < coarse.flip_reflector, "{report:?}");
+    assert!(fine.flip_reflector < 0.08, "{fine:?}");
+    assert!(report.ray_traced_gpu_ms.median > 0.0 && report.ray_traced_cpu_ms.median > 0.0);
+    let json = serde_json::to_value(&report).unwrap();
+    for field in ["ray_traced_gpu_ms", "reference_spp", "rows"] {
+        assert!(json.get(field).is_some(), "{field}");
+    }
+    assert_eq!(json["rows"][1]["subdivision"], 4);
 }

@@ -403,3 +403,44 @@ fn each_kernel_lists_exactly_the_bindings_it_uses() {
         assert_eq!(used, listed, "{}", kernel.name);
     }
 }
+
+/// The raster preview's structs (its vertex, uniforms and reflection pass) have the Rust
+/// layouts, and its shaders validate.
+#[test]
+fn preview_structs_have_identical_layouts() {
+    use chambre::preview::{PreviewUniforms, PreviewVertex, ReflectorPass};
+    let module = parse_and_validate(&chambre::gpu::preview::shader_source());
+    parse_and_validate(chambre::gpu::preview::composite_source());
+    layout!(
+        module,
+        PreviewVertex {
+            position,
+            material,
+            normal,
+            reflector
+        }
+    );
+    let uniforms = [
+        ("clip", offset_of!(PreviewUniforms, clip)),
+        ("light_count", offset_of!(PreviewUniforms, light_count)),
+        ("_pad0", offset_of!(PreviewUniforms, _pad)),
+        ("_pad1", offset_of!(PreviewUniforms, _pad) + 4),
+        ("_pad2", offset_of!(PreviewUniforms, _pad) + 8),
+        ("ambient", offset_of!(PreviewUniforms, ambient)),
+        ("eye", offset_of!(PreviewUniforms, eye)),
+    ];
+    check_struct(
+        &module,
+        "PreviewUniforms",
+        size_of::<PreviewUniforms>(),
+        &uniforms,
+    );
+    let pass = [
+        ("sphere", offset_of!(ReflectorPass, sphere)),
+        ("far", offset_of!(ReflectorPass, far)),
+        ("id", offset_of!(ReflectorPass, id)),
+        ("_pad0", offset_of!(ReflectorPass, _pad)),
+        ("_pad1", offset_of!(ReflectorPass, _pad) + 4),
+    ];
+    check_struct(&module, "ReflectorPass", size_of::<ReflectorPass>(), &pass);
+}

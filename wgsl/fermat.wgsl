@@ -3,7 +3,8 @@
 // search on a triangle in the (u, v) plane (see src/fermat.rs for the method), in f32.
 // Mirrors: src/fermat.rs (Sphere::facing, initial_triangle, Solver::solve), step for step.
 
-const FERMAT_STEPS: u32 = 5u;
+// Steps at most: the seed's 5 unless the pipeline overrides it (`gpu::fermat::FermatPass`).
+override FERMAT_STEPS: u32 = 5u;
 const FERMAT_MIN_SIZE: f32 = 1e-7;
 const FERMAT_C_OFFSET: f32 = 0.25;
 const FERMAT_SPREAD: f32 = 1e-3;

@@ -2,6 +2,8 @@
 // matrix (film tilt, swing and shift as the ray tracer defines them), shaded per fragment with
 // Lambert's BRDF, the ambient term, emission, and every light without shadows (area lights as
 // points at their centres with their cosine falloff).
+// Mirror spheres show Fermat reflections: this pass writes each pixel's reflector id, and
+// wgsl/preview_reflect.wgsl draws the reflected triangles where their reflector is seen.
 // Mirrors: src/preview.rs (tessellation, the clip matrix), src/gpu/preview.rs (the pipeline).
 
 struct PreviewUniforms {
@@ -19,10 +21,21 @@ struct PreviewUniforms {
 @group(0) @binding(1) var<storage, read> preview_materials: array<GpuMaterial>;
 @group(0) @binding(2) var<storage, read> preview_lights: array<GpuLight>;
 
+// One vertex of the triangle list (`preview::PreviewVertex`); the reflection pass reads them
+// from a storage buffer.
+struct PreviewVertex {
+    position: vec3<f32>,
+    material: u32,
+    normal: vec3<f32>,
+    // 0, or 1 + the index of the reflector the vertex lies on.
+    reflector: u32,
+}
+
 struct VertexIn {
     @location(0) position: vec3<f32>,
     @location(1) material: u32,
     @location(2) normal: vec3<f32>,
+    @location(3) reflector: u32,
 }
 
 struct VertexOut {
@@ -30,11 +43,19 @@ struct VertexOut {
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) @interpolate(flat) material: u32,
+    @location(3) @interpolate(flat) reflector: u32,
+}
+
+// The main pass's targets: radiance, and which reflector (1 + index, 0 for none) each pixel sees.
+struct PreviewOut {
+    @location(0) color: vec4<f32>,
+    @location(1) reflector: u32,
 }
 
 @vertex
 fn preview_vertex(v: VertexIn) -> VertexOut {
-    return VertexOut(preview.clip * vec4<f32>(v.position, 1.0), v.position, v.normal, v.material);
+    let clip = preview.clip * vec4<f32>(v.position, 1.0);
+    return VertexOut(clip, v.position, v.normal, v.material, v.reflector);
 }
 
 // Irradiance-like factor (W/m^2 per unit BRDF) at `p` with normal `n` from light `light`.
@@ -67,14 +88,14 @@ fn light_at(light: GpuLight, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return power * max(dot(n, wi), 0.0) * falloff;
 }
 
-@fragment
-fn preview_fragment(f: VertexOut) -> @location(0) vec4<f32> {
-    let material = preview_materials[f.material];
-    var n = normalize(f.normal);
-    let facing = dot(n, preview.eye.xyz - f.world) > 0.0;
+// Radiance leaving `world` (normal `normal`) toward `eye` under the preview's lighting.
+fn shade(material_index: u32, world: vec3<f32>, normal: vec3<f32>, eye: vec3<f32>) -> vec3<f32> {
+    let material = preview_materials[material_index];
+    var n = normalize(normal);
+    let facing = dot(n, eye - world) > 0.0;
     if (material.model == MODEL_EMITTER) {
         // One-sided, as the ray tracer shows it.
-        return vec4<f32>(select(vec3<f32>(0.0), material.emission, facing), 1.0);
+        return select(vec3<f32>(0.0), material.emission, facing);
     }
     // Two-sided shading: the normal faces the eye.
     if (!facing) {
@@ -82,7 +103,14 @@ fn preview_fragment(f: VertexOut) -> @location(0) vec4<f32> {
     }
     var radiance = material.diffuse * preview.ambient.xyz;
     for (var i = 0u; i < preview.light_count; i += 1u) {
-        radiance += material.diffuse / 3.14159265 * light_at(preview_lights[i], f.world, n);
+        radiance += material.diffuse / 3.14159265 * light_at(preview_lights[i], world, n);
     }
-    return vec4<f32>(radiance, 1.0);
+    return radiance;
+}
+
+// A reflector's own fragment carries its diffuse term here; the composite adds its mirror term.
+@fragment
+fn preview_fragment(f: VertexOut) -> PreviewOut {
+    return PreviewOut(vec4<f32>(shade(f.material, f.world, f.normal, preview.eye.xyz), 1.0),
+        f.reflector);
 }

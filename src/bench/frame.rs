@@ -76,7 +76,7 @@ pub struct FrameReport {
 
 /// How one run renders: the backend and the feature set its code was built for.
 #[derive(Clone, Copy)]
-enum Way {
+pub(super) enum Way {
     Cpu {
         features: u32,
     },
@@ -87,7 +87,11 @@ enum Way {
     },
 }
 
-fn render_once(scene: &FlatScene, way: Way, gpu: Option<&GpuContext>) -> Result<RenderOutput> {
+pub(super) fn render_once(
+    scene: &FlatScene,
+    way: Way,
+    gpu: Option<&GpuContext>,
+) -> Result<RenderOutput> {
     let cancel = AtomicBool::new(false);
     match way {
         Way::Cpu { features } => {

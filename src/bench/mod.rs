@@ -15,6 +15,7 @@
 //! in one process: machines here are noisy, so only ratios within one run are compared.
 
 pub mod build;
+pub mod fermat;
 pub mod frame;
 pub mod motion;
 pub mod precision;
@@ -52,6 +53,35 @@ pub enum BenchCommand {
     /// Motion blur's BVH: one over boxes swept over the whole shutter against one per time
     /// slice; build time and Mrays/s of the same timed rays, CPU path.
     Motion(MotionArgs),
+    /// Fermat reflections in the raster preview against the ray tracer on a mirror sphere: frame
+    /// times, displacement of reflected features in pixels and FLIP, by subdivision.
+    Fermat(FermatArgs),
+}
+
+/// Arguments of `chambre bench fermat`.
+#[derive(Debug, clap::Args)]
+pub struct FermatArgs {
+    /// Scene with a mirror sphere (the first one is measured).
+    #[arg(long, default_value = "scenes/fermat_sphere.toml")]
+    pub scene: PathBuf,
+    /// Subdivisions of the reflected triangles to compare.
+    #[arg(long, value_delimiter = ',', default_values_t = [1, 2, 4, 8, 16, 32])]
+    pub subdivisions: Vec<u32>,
+    /// The Fermat search's steps at most.
+    #[arg(long, default_value_t = crate::gpu::preview::ReflectionOptions::default().steps)]
+    pub steps: u32,
+    /// Timed runs after a warm-up.
+    #[arg(long, default_value_t = 5)]
+    pub runs: u32,
+    /// Samples per pixel of the ray-traced reference for FLIP.
+    #[arg(long, default_value_t = 256)]
+    pub reference_spp: u32,
+    /// Override any scene field, e.g. --set render.width=640 (also -D).
+    #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Where the report goes.
+    #[command(flatten)]
+    pub output: Output,
 }
 
 /// Arguments of `chambre bench motion`.
@@ -377,6 +407,24 @@ pub fn run(command: &BenchCommand) -> Result<String> {
         }
         BenchCommand::Motion(args) => {
             let report = motion::run(&args.mesh, args.travel, &args.slices, args.size, args.runs)?;
+            finish(
+                &command_line,
+                &machine,
+                report.to_markdown(),
+                &report,
+                &args.output,
+            )
+        }
+        BenchCommand::Fermat(args) => {
+            let config = fermat::FermatConfig {
+                scene: &args.scene,
+                overrides: &args.set,
+                subdivisions: &args.subdivisions,
+                steps: args.steps,
+                runs: args.runs,
+                reference_spp: args.reference_spp,
+            };
+            let report = fermat::run(&config, usable(&context)?)?;
             finish(
                 &command_line,
                 &machine,

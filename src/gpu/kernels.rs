@@ -293,6 +293,17 @@ fn layout_entry(b: &Binding) -> wgpu::BindGroupLayoutEntry {
 /// Builds `kernel` specialised to `features`. Validation errors come back through the
 /// device's error handling (see `GpuContext`), not as panics.
 pub fn build_pipeline(device: &wgpu::Device, kernel: &'static Kernel, features: u32) -> Pipeline {
+    build_pipeline_with(device, kernel, features, &[])
+}
+
+/// [`build_pipeline`], with values for the kernel's own override constants too (e.g. the
+/// fermat kernel's `FERMAT_STEPS`).
+pub fn build_pipeline_with(
+    device: &wgpu::Device,
+    kernel: &'static Kernel,
+    features: u32,
+    overrides: &[(&'static str, f64)],
+) -> Pipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(kernel.name),
         source: wgpu::ShaderSource::Wgsl(kernel_source(kernel).into()),
@@ -307,7 +318,8 @@ pub fn build_pipeline(device: &wgpu::Device, kernel: &'static Kernel, features: 
         bind_group_layouts: &[Some(&bind_group_layout)],
         immediate_size: 0,
     });
-    let constants = feature_constants(features);
+    let mut constants = feature_constants(features);
+    constants.extend_from_slice(overrides);
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(kernel.name),
         layout: Some(&layout),

@@ -2,23 +2,56 @@
 //! that draws `preview::tessellate`'s triangles through the view camera's clip matrix into a
 //! float target with a depth buffer, and reads the image back. Shader: `wgsl/preview.wgsl`,
 //! composed after the generated constants and the shared struct types, as the kernels are.
+//!
+//! Mirror spheres show reflections by Fermat's principle (seed 004), all in one submission a
+//! frame: the `fermat` kernel finds each reflected vertex's point on each sphere, the main pass
+//! writes which reflector each pixel sees, a reflection pass per sphere rasterises the reflected
+//! triangles (`wgsl/preview_reflect.wgsl`) and a composite pass adds them, times the mirror
+//! reflectance, to the sphere's pixels (`wgsl/preview_composite.wgsl`).
 
 use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
 
+use super::fermat::{FermatPass, FermatSolve};
 use super::{GpuContext, wgpu_error_text};
 use crate::camera::CameraSpec;
 use crate::error::{Error, Result};
-use crate::layout::wgsl_prelude;
+use crate::layout::{GpuReflector, wgsl_prelude};
 use crate::pack::FlatScene;
-use crate::preview::{PreviewUniforms, PreviewVertex, bounded_radius, clip_matrix, tessellate};
+use crate::preview::{
+    PreviewUniforms, PreviewVertex, Reflector, ReflectorPass, bounded_radius, clip_matrix,
+    reflected_triangles, reflectors, tessellate,
+};
 use crate::render::Image;
 use crate::scene::Scene;
 
 /// The colour target: linear radiance, as the ray tracer's accumulation.
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Which reflector each pixel sees (1 + its index; 0 for none).
+const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+
+/// How the preview draws the reflections of mirror spheres.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ReflectionOptions {
+    /// Pieces each edge of a reflected triangle is cut into; `None`: as many as keep every
+    /// piece under 1/16 of the scene's radius (`preview::reflected_triangles`).
+    pub subdivision: Option<u32>,
+    /// The Fermat search's steps at most (the seed: 4–5).
+    pub steps: u32,
+}
+
+impl Default for ReflectionOptions {
+    /// Automatic subdivision; 12 steps, where the seed's 5 leave 13% of a fine floor's
+    /// vertices unconverged (holes in the reflection) and 12 leave 0.5% (docs/fermat.md).
+    fn default() -> ReflectionOptions {
+        ReflectionOptions {
+            subdivision: None,
+            steps: 12,
+        }
+    }
+}
 
 /// A preview frame and how long drawing it took.
 pub struct PreviewFrame {
@@ -29,20 +62,31 @@ pub struct PreviewFrame {
     /// Median time of the timed frames: the draw submitted and finished on the device, without
     /// the read-back.
     pub frame_time: Duration,
+    /// Every timed frame's time, milliseconds.
+    pub frame_times_ms: Vec<f64>,
+    /// Reflected triangles drawn a frame (Fermat reflections on mirror spheres).
+    pub reflected_triangles: usize,
 }
 
-/// The shader's source: constants, the shared types, the preview's stages.
-fn shader_source() -> String {
+/// The shader's source: constants, the shared types, the preview's stages and its reflection
+/// stages.
+pub fn shader_source() -> String {
     let types = super::kernels::MODULES
         .iter()
         .find(|(name, _)| *name == "types.wgsl")
         .expect("types.wgsl is a module")
         .1;
     format!(
-        "{}\n{types}\n{}",
+        "{}\n{types}\n{}\n{}",
         wgsl_prelude(),
-        include_str!("../../wgsl/preview.wgsl")
+        include_str!("../../wgsl/preview.wgsl"),
+        include_str!("../../wgsl/preview_reflect.wgsl")
     )
+}
+
+/// The composite pass's source.
+pub fn composite_source() -> &'static str {
+    include_str!("../../wgsl/preview_composite.wgsl")
 }
 
 /// Draws `scene` (flattened as `flat`) `frames` times after one warm-up and returns the last
@@ -53,7 +97,18 @@ pub fn draw(
     flat: &FlatScene,
     frames: u32,
 ) -> Result<PreviewFrame> {
-    let renderer = PreviewRenderer::new(context, scene, flat)?;
+    draw_with(context, scene, flat, frames, ReflectionOptions::default())
+}
+
+/// [`draw`], with reflections drawn as `options` say.
+pub fn draw_with(
+    context: &GpuContext,
+    scene: &Scene,
+    flat: &FlatScene,
+    frames: u32,
+    options: ReflectionOptions,
+) -> Result<PreviewFrame> {
+    let renderer = PreviewRenderer::new(context, scene, flat, options)?;
     renderer.draw()?;
     let mut times = Vec::new();
     for _ in 0..frames.max(1) {
@@ -61,11 +116,14 @@ pub fn draw(
         renderer.draw()?;
         times.push(start.elapsed());
     }
+    let frame_times_ms = times.iter().map(|t| t.as_secs_f64() * 1e3).collect();
     times.sort();
     Ok(PreviewFrame {
         image: renderer.image()?,
         triangles: renderer.triangles(),
         frame_time: times[times.len() / 2],
+        frame_times_ms,
+        reflected_triangles: renderer.reflected_triangles(),
     })
 }
 
@@ -84,19 +142,24 @@ pub struct PreviewRenderer {
     color: wgpu::Texture,
     color_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
+    id_view: wgpu::TextureView,
     background: wgpu::Color,
+    reflections: Option<Reflections>,
 }
 
 impl PreviewRenderer {
-    /// The pipeline and buffers of `scene` (flattened as `flat`), drawn through its camera.
-    pub fn new(context: &GpuContext, scene: &Scene, flat: &FlatScene) -> Result<PreviewRenderer> {
+    /// The pipeline and buffers of `scene` (flattened as `flat`), drawn through its camera;
+    /// mirror spheres' reflections drawn as `options` say.
+    pub fn new(
+        context: &GpuContext,
+        scene: &Scene,
+        flat: &FlatScene,
+        options: ReflectionOptions,
+    ) -> Result<PreviewRenderer> {
         let device = &context.device;
         let (width, height) = (flat.frame.width, flat.frame.height);
-        let radius = bounded_radius(flat);
         let eye = eye_of(&scene.camera);
-        // Planes reach 100 scene radii; the far plane lies beyond them from anywhere near.
-        let extent = 100.0 * (radius + eye.length());
-        let far = 3.0 * extent as f64;
+        let (extent, far) = extent_and_far(scene, flat);
         let vertices = tessellate(flat, extent);
         let uniforms = PreviewUniforms {
             clip: clip_matrix(&scene.camera, far).as_mat4().to_cols_array_2d(),
@@ -126,7 +189,7 @@ impl PreviewRenderer {
                     array_stride: size_of::<PreviewVertex>() as u64,
                     step_mode: wgpu::VertexStepMode::Vertex,
                     attributes: &wgpu::vertex_attr_array![
-                        0 => Float32x3, 1 => Uint32, 2 => Float32x3
+                        0 => Float32x3, 1 => Uint32, 2 => Float32x3, 3 => Uint32
                     ],
                 })],
             },
@@ -143,7 +206,7 @@ impl PreviewRenderer {
                 module: &module,
                 entry_point: Some("preview_fragment"),
                 compilation_options: Default::default(),
-                targets: &[Some(COLOR_FORMAT.into())],
+                targets: &[Some(COLOR_FORMAT.into()), Some(ID_FORMAT.into())],
             }),
             multiview_mask: None,
             cache: None,
@@ -201,10 +264,34 @@ impl PreviewRenderer {
                 | wgpu::TextureUsages::TEXTURE_BINDING,
         );
         let depth = target(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
-        let (color_view, depth_view) = (
+        let id = target(
+            ID_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let (color_view, depth_view, id_view) = (
             color.create_view(&Default::default()),
             depth.create_view(&Default::default()),
+            id.create_view(&Default::default()),
         );
+        let [r, g, b] = flat.frame.background;
+        let reflections = Reflections::new(
+            context,
+            &ReflectionSetup {
+                module: &module,
+                uniforms: &uniform_buffer,
+                materials: &materials,
+                lights: &lights,
+                color_view: &color_view,
+                id_view: &id_view,
+                eye,
+                far,
+                background: [r, g, b, 0.0],
+                size,
+            },
+            reflectors(flat),
+            &reflected_triangles(flat, extent, options.subdivision),
+            options.steps,
+        )?;
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
                 "creating the preview pipeline: {}",
@@ -224,7 +311,9 @@ impl PreviewRenderer {
             color,
             color_view,
             depth_view,
+            id_view,
             background: wgpu::Color { r, g, b, a: 1.0 },
+            reflections,
         })
     }
 
@@ -238,6 +327,9 @@ impl PreviewRenderer {
             0,
             bytemuck::bytes_of(&self.uniforms),
         );
+        if let Some(reflections) = &self.reflections {
+            reflections.set_eye(&self.context, eye);
+        }
     }
 
     /// Draws one frame into the image and waits for the device.
@@ -246,18 +338,32 @@ impl PreviewRenderer {
             .context
             .device
             .create_command_encoder(&Default::default());
+        if let Some(reflections) = &self.reflections {
+            reflections.solve(&mut encoder);
+        }
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("preview"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.color_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(self.background),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
+                color_attachments: &[
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: &self.color_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(self.background),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    }),
+                    Some(wgpu::RenderPassColorAttachment {
+                        view: &self.id_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    }),
+                ],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &self.depth_view,
                     depth_ops: Some(wgpu::Operations {
@@ -275,6 +381,9 @@ impl PreviewRenderer {
             pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
             pass.draw(0..self.vertex_count, 0..1);
         }
+        if let Some(reflections) = &self.reflections {
+            reflections.draw(&mut encoder);
+        }
         self.context
             .wait(self.context.queue.submit([encoder.finish()]))
     }
@@ -282,7 +391,8 @@ impl PreviewRenderer {
     /// The image (linear radiance) as last drawn, read back.
     pub fn image(&self) -> Result<Image> {
         let size = self.color.size();
-        read_back(&self.context, &self.color, size.width, size.height)
+        let shown = self.reflections.as_ref().map_or(&self.color, |r| &r.output);
+        read_back(&self.context, shown, size.width, size.height)
     }
 
     /// The image's width and height in pixels.
@@ -293,17 +403,316 @@ impl PreviewRenderer {
 
     /// The image as a texture view (linear radiance, `Rgba32Float`).
     pub fn view(&self) -> &wgpu::TextureView {
-        &self.color_view
+        self.reflections
+            .as_ref()
+            .map_or(&self.color_view, |r| &r.output_view)
     }
 
     /// Triangles drawn a frame.
     pub fn triangles(&self) -> usize {
         self.vertex_count as usize / 3
     }
+
+    /// Reflected triangles drawn a frame, summed over the mirror spheres.
+    pub fn reflected_triangles(&self) -> usize {
+        self.reflections
+            .as_ref()
+            .map_or(0, |r| r.vertex_count as usize / 3 * r.solves.len())
+    }
+}
+
+/// What the reflection passes share with the main pass.
+struct ReflectionSetup<'a> {
+    module: &'a wgpu::ShaderModule,
+    uniforms: &'a wgpu::Buffer,
+    materials: &'a wgpu::Buffer,
+    lights: &'a wgpu::Buffer,
+    color_view: &'a wgpu::TextureView,
+    id_view: &'a wgpu::TextureView,
+    eye: glam::Vec3,
+    far: f64,
+    background: [f32; 4],
+    size: wgpu::Extent3d,
+}
+
+/// The reflection passes of the mirror spheres: the Fermat solves, the reflected triangles'
+/// pipeline with its own radiance and depth targets, and the composite into `output`.
+struct Reflections {
+    fermat: FermatPass,
+    solves: Vec<FermatSolve>,
+    reflectors: Vec<Reflector>,
+    pipeline: wgpu::RenderPipeline,
+    shared_group: wgpu::BindGroup,
+    reflector_groups: Vec<wgpu::BindGroup>,
+    vertex_count: u32,
+    radiance_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+    composite: wgpu::RenderPipeline,
+    composite_group: wgpu::BindGroup,
+    output: wgpu::Texture,
+    output_view: wgpu::TextureView,
+}
+
+impl Reflections {
+    /// `None` where the scene has no mirror sphere or nothing to reflect.
+    fn new(
+        context: &GpuContext,
+        setup: &ReflectionSetup,
+        reflectors: Vec<Reflector>,
+        triangles: &[PreviewVertex],
+        steps: u32,
+    ) -> Result<Option<Reflections>> {
+        if reflectors.is_empty() || triangles.is_empty() {
+            return Ok(None);
+        }
+        let device = &context.device;
+        let fermat = FermatPass::new(context, steps);
+        let positions: Vec<glam::Vec3> = triangles
+            .iter()
+            .map(|v| glam::Vec3::from(v.position))
+            .collect();
+        let fermat_vertices = super::fermat::vertex_buffer(context, &positions)?;
+        let vertices =
+            context.storage_buffer("reflected vertices", bytemuck::cast_slice(triangles))?;
+        let solves = reflectors
+            .iter()
+            .map(|r| {
+                let reflector = GpuReflector {
+                    center: r.center.to_array(),
+                    radius: r.radius,
+                    eye: setup.eye.to_array(),
+                    count: triangles.len() as u32,
+                };
+                fermat.solve(context, reflector, &fermat_vertices)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("preview reflections"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: setup.module,
+                entry_point: Some("reflected_vertex"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: setup.module,
+                entry_point: Some("reflected_fragment"),
+                compilation_options: Default::default(),
+                targets: &[Some(COLOR_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let shared_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("preview reflections"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[
+                buffer_entry(0, setup.uniforms),
+                buffer_entry(1, setup.materials),
+                buffer_entry(2, setup.lights),
+            ],
+        });
+        let reflector_groups = reflectors
+            .iter()
+            .zip(&solves)
+            .enumerate()
+            .map(|(k, (r, solve))| {
+                let pass = ReflectorPass {
+                    sphere: r.center.extend(r.radius).to_array(),
+                    far: setup.far as f32,
+                    id: k as u32 + 1,
+                    _pad: [0; 2],
+                };
+                let uniforms = context.uniform_buffer("reflector pass", bytemuck::bytes_of(&pass));
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("reflector"),
+                    layout: &pipeline.get_bind_group_layout(1),
+                    entries: &[
+                        buffer_entry(0, &vertices),
+                        buffer_entry(1, &solve.output),
+                        buffer_entry(2, &uniforms),
+                        texture_entry(3, setup.id_view),
+                    ],
+                })
+            })
+            .collect();
+        let target = |format, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("preview reflections"),
+                size: setup.size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let radiance = target(
+            COLOR_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let depth = target(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
+        let output = target(
+            COLOR_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let radiance_view = radiance.create_view(&Default::default());
+        let composite_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("preview composite"),
+            source: wgpu::ShaderSource::Wgsl(composite_source().into()),
+        });
+        let composite = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("preview composite"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &composite_module,
+                entry_point: Some("composite_vertex"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &composite_module,
+                entry_point: Some("composite_fragment"),
+                compilation_options: Default::default(),
+                targets: &[Some(COLOR_FORMAT.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let mirrors: Vec<[f32; 4]> = std::iter::once(setup.background)
+            .chain(reflectors.iter().map(|r| r.mirror.extend(0.0).to_array()))
+            .collect();
+        let mirrors = context.storage_buffer("mirrors", bytemuck::cast_slice(&mirrors))?;
+        let composite_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("preview composite"),
+            layout: &composite.get_bind_group_layout(0),
+            entries: &[
+                texture_entry(0, setup.color_view),
+                texture_entry(1, &radiance_view),
+                texture_entry(2, setup.id_view),
+                buffer_entry(3, &mirrors),
+            ],
+        });
+        Ok(Some(Reflections {
+            fermat,
+            solves,
+            reflectors,
+            pipeline,
+            shared_group,
+            reflector_groups,
+            vertex_count: triangles.len() as u32,
+            radiance_view,
+            depth_view: depth.create_view(&Default::default()),
+            composite,
+            composite_group,
+            output_view: output.create_view(&Default::default()),
+            output,
+        }))
+    }
+
+    /// Every reflector's solves see the eye at `eye` from the next frame on.
+    fn set_eye(&self, context: &GpuContext, eye: glam::Vec3) {
+        for (solve, r) in self.solves.iter().zip(&self.reflectors) {
+            let reflector = GpuReflector {
+                center: r.center.to_array(),
+                radius: r.radius,
+                eye: eye.to_array(),
+                count: self.vertex_count,
+            };
+            context
+                .queue
+                .write_buffer(&solve.reflector, 0, bytemuck::bytes_of(&reflector));
+        }
+    }
+
+    /// Records the Fermat solves of every reflector.
+    fn solve(&self, encoder: &mut wgpu::CommandEncoder) {
+        for solve in &self.solves {
+            self.fermat.encode(encoder, solve);
+        }
+    }
+
+    /// Records the reflection passes (after the main pass) and the composite.
+    fn draw(&self, encoder: &mut wgpu::CommandEncoder) {
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("preview reflections"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &self.radiance_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                // One depth buffer serves every reflector: a pixel shows one reflector only.
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.shared_group, &[]);
+            for group in &self.reflector_groups {
+                pass.set_bind_group(1, group, &[]);
+                pass.draw(0..self.vertex_count, 0..1);
+            }
+        }
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("preview composite"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.output_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.composite);
+        pass.set_bind_group(0, &self.composite_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}
+
+/// How far the preview's planes reach from their point (`tessellate`'s `extent`) and its far
+/// plane: planes reach 100 scene radii, and the far plane lies beyond them from anywhere near.
+pub fn extent_and_far(scene: &Scene, flat: &FlatScene) -> (f32, f64) {
+    let extent = 100.0 * (bounded_radius(flat) + eye_of(&scene.camera).length());
+    (extent, 3.0 * extent as f64)
 }
 
 /// The camera's centre of projection (the lens centre), in scene units.
-fn eye_of(camera: &CameraSpec) -> glam::Vec3 {
+pub fn eye_of(camera: &CameraSpec) -> glam::Vec3 {
     camera
         .raster_projection(1.0)
         .view
@@ -358,4 +767,18 @@ fn read_back(
         height,
         pixels,
     })
+}
+
+fn buffer_entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}
+
+fn texture_entry(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: wgpu::BindingResource::TextureView(view),
+    }
 }

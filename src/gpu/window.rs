@@ -19,7 +19,7 @@ use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use super::GpuContext;
-use super::preview::PreviewRenderer;
+use super::preview::{PreviewRenderer, ReflectionOptions};
 use crate::error::{Error, Result};
 use crate::output::OutputTarget;
 use crate::pack::FlatScene;
@@ -35,6 +35,8 @@ pub struct WindowOptions {
     pub screenshot: Option<PathBuf>,
     /// Where `s` saves the composed scene.
     pub save: PathBuf,
+    /// How mirror spheres' reflections are drawn.
+    pub reflections: ReflectionOptions,
 }
 
 /// What happened in the window.
@@ -82,6 +84,7 @@ pub fn run(
         script: options.keys.into_iter().rev().collect(),
         scripted: false,
         save: options.save,
+        reflections: options.reflections,
         screen: None,
         report: WindowReport::default(),
         error: None,
@@ -123,6 +126,7 @@ struct App<'a> {
     /// A script was given: the window closes when it ends.
     scripted: bool,
     save: PathBuf,
+    reflections: ReflectionOptions,
     screen: Option<Screen>,
     report: WindowReport,
     error: Option<Error>,
@@ -254,7 +258,7 @@ impl App<'_> {
             config.format = srgb;
         }
         surface.configure(&context.device, &config);
-        let mut preview = PreviewRenderer::new(&context, self.scene, self.flat)?;
+        let mut preview = PreviewRenderer::new(&context, self.scene, self.flat, self.reflections)?;
         preview.set_camera(&self.composer.camera());
         let (present, present_layout) = present_pipeline(&context, config.format);
         let present_uniforms = context.uniform_buffer(

@@ -1,0 +1,420 @@
+//! The Fermat comparison: the raster preview's reflections on a mirror sphere (seed 004)
+//! against the ray tracer's, by the subdivision of the reflected triangles. For each
+//! subdivision: the preview's frame time; how far reflected features land from where the ray
+//! tracer puts them, in pixels; and FLIP over the sphere's pixels against a ray-traced
+//! reference. Once: the ray-traced frame time at 1 sample per pixel on the same device.
+//!
+//! Features are points along every edge of the reflected triangles: their corners, and eight
+//! points between that no subdivision makes vertices (there a straight reflected edge departs
+//! from the true curved one). The
+//! ray tracer's position of a feature X is the projection of Alhazen's point for X (f64,
+//! `fermat::alhazen_sphere`); the preview's is where its rasteriser draws X: the projection of
+//! the barycentric mix, over the sub-triangle holding X, of the GPU's Fermat points of that
+//! sub-triangle's corners (a reflected triangle is drawn flat between its corners' points).
+
+use std::path::Path;
+
+use glam::{DMat4, DVec2, DVec3, DVec4, Vec3};
+use serde::Serialize;
+
+use super::Spread;
+use super::frame::{Way, render_once};
+use crate::error::{Error, Location, Result};
+use crate::fermat::{Sphere, alhazen_sphere, drawn_in_preview, seen_from_outside};
+use crate::gpu::GpuContext;
+use crate::gpu::preview::{ReflectionOptions, draw_with, extent_and_far};
+use crate::pack::flatten;
+use crate::preview::{Reflector, clip_matrix, reflectors, tessellate};
+use crate::render::Image;
+use crate::scene::Scene;
+
+/// Points along each edge of the reflected triangles, besides its corner.
+const POINTS_PER_EDGE: u32 = 8;
+/// Where the points sit in each 1/POINTS_PER_EDGE of an edge: off every grid of step 1/2^k,
+/// so that no subdivision makes them vertices (where the preview is exact by construction).
+const POINT_OFFSET: f32 = 0.382;
+
+/// The figures of one subdivision.
+#[derive(Clone, Debug, Serialize)]
+pub struct FermatRow {
+    /// Pieces each reflected triangle's edge is cut into.
+    pub subdivision: u32,
+    /// Reflected triangles drawn a frame.
+    pub reflected_triangles: usize,
+    /// The preview's frame time (Fermat solves, passes, composite), milliseconds.
+    pub preview_ms: Spread,
+    /// Features whose true reflection is in the frame.
+    pub features: usize,
+    /// Of those, the ones the preview draws (every corner of their sub-triangle converged).
+    pub drawn: usize,
+    /// Distance from the ray tracer's position of the drawn corners (vertices of the scene's
+    /// triangles), pixels: largest.
+    pub corner_max_px: f64,
+    /// Distance from the ray tracer's position of every drawn feature, pixels: median.
+    pub displacement_median_px: f64,
+    /// 99th percentile.
+    pub displacement_p99_px: f64,
+    /// Largest.
+    pub displacement_max_px: f64,
+    /// Mean FLIP over the sphere's pixels against the ray-traced reference.
+    pub flip_reflector: f64,
+}
+
+/// The comparison's report.
+#[derive(Clone, Debug, Serialize)]
+pub struct FermatReport {
+    /// The scene file.
+    pub scene: String,
+    /// Image size.
+    pub width: u32,
+    /// Image size.
+    pub height: u32,
+    /// The Fermat search's steps at most.
+    pub steps: u32,
+    /// The ray-traced frame at 1 sample per pixel on the GPU (the preview's device),
+    /// milliseconds.
+    pub ray_traced_gpu_ms: Spread,
+    /// The same on the CPU path.
+    pub ray_traced_cpu_ms: Spread,
+    /// Samples per pixel of the ray-traced reference the FLIP column compares with.
+    pub reference_spp: u32,
+    /// One row per subdivision.
+    pub rows: Vec<FermatRow>,
+}
+
+/// What the comparison is asked.
+pub struct FermatConfig<'a> {
+    /// The scene: its first mirror sphere is the reflector measured.
+    pub scene: &'a Path,
+    /// Overrides of the scene's fields (`--set`), e.g. a smaller image.
+    pub overrides: &'a [String],
+    /// Subdivisions to compare.
+    pub subdivisions: &'a [u32],
+    /// The Fermat search's steps at most.
+    pub steps: u32,
+    /// Timed runs (preview frames and ray-traced frames) after a warm-up.
+    pub runs: u32,
+    /// Samples per pixel of the ray-traced reference.
+    pub reference_spp: u32,
+}
+
+/// Runs the comparison on `context`'s device.
+pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> {
+    let load = |extra: Option<String>| {
+        let overrides: Vec<String> = config.overrides.iter().cloned().chain(extra).collect();
+        Scene::load(config.scene, &overrides)
+    };
+    let scene = load(None)?;
+    let flat = flatten(&scene);
+    let reflector = *reflectors(&flat).first().ok_or_else(|| Error::Scene {
+        location: Location {
+            file: config.scene.to_path_buf(),
+            line: 0,
+            column: 0,
+            field: "shapes".into(),
+        },
+        message: "the Fermat comparison needs a sphere with a mirror material".into(),
+    })?;
+    let (width, height) = (flat.frame.width, flat.frame.height);
+    let one_spp = load(Some("render.spp=1".into()))?;
+    let one_spp = flatten(&one_spp);
+    let mut gpu_ms = Vec::new();
+    let mut cpu_ms = Vec::new();
+    let features = flat.features();
+    for run in 0..=config.runs.max(1) {
+        let gpu = render_once(
+            &one_spp,
+            Way::Gpu {
+                features,
+                budgets: None,
+            },
+            Some(context),
+        )?;
+        let cpu = render_once(&one_spp, Way::Cpu { features }, None)?;
+        if run > 0 {
+            gpu_ms.push(gpu.elapsed.as_secs_f64() * 1e3);
+            cpu_ms.push(cpu.elapsed.as_secs_f64() * 1e3);
+        }
+    }
+    let reference = load(Some(format!("render.spp={}", config.reference_spp)))?;
+    let reference = render_once(&flatten(&reference), Way::Cpu { features }, None)?.image;
+    let clip = clip_matrix(&scene.camera, extent_and_far(&scene, &flat).1);
+    let mask = reflector_mask(&clip, &reflector, width, height);
+    let mut rows = Vec::new();
+    for &subdivision in config.subdivisions {
+        let options = ReflectionOptions {
+            subdivision: Some(subdivision),
+            steps: config.steps,
+        };
+        let frame = draw_with(context, &scene, &flat, config.runs.max(1), options)?;
+        let placed = displacements(context, &scene, &flat, &reflector, &clip, options)?;
+        let corner_max_px = placed
+            .iter()
+            .filter(|(corner, _)| *corner)
+            .filter_map(|(_, d)| *d)
+            .fold(0.0, f64::max);
+        let mut drawn: Vec<f64> = placed.iter().filter_map(|(_, d)| *d).collect();
+        drawn.sort_by(f64::total_cmp);
+        let quantile = |q: f64| {
+            drawn
+                .get(((drawn.len() as f64 - 1.0) * q).round() as usize)
+                .copied()
+                .unwrap_or(f64::NAN)
+        };
+        rows.push(FermatRow {
+            subdivision,
+            reflected_triangles: frame.reflected_triangles,
+            preview_ms: Spread::of(&frame.frame_times_ms),
+            features: placed.len(),
+            drawn: drawn.len(),
+            corner_max_px,
+            displacement_median_px: quantile(0.5),
+            displacement_p99_px: quantile(0.99),
+            displacement_max_px: quantile(1.0),
+            flip_reflector: masked_flip(&frame.image, &reference, &mask),
+        });
+    }
+    Ok(FermatReport {
+        scene: config.scene.display().to_string(),
+        width,
+        height,
+        steps: config.steps,
+        ray_traced_gpu_ms: Spread::of(&gpu_ms),
+        ray_traced_cpu_ms: Spread::of(&cpu_ms),
+        reference_spp: config.reference_spp,
+        rows,
+    })
+}
+
+/// Pixel position (x right, y down, pixel centres at +0.5) of world point `p`, if in front.
+fn project(clip: &DMat4, p: DVec3, width: u32, height: u32) -> Option<DVec2> {
+    let c = *clip * p.extend(1.0);
+    (c.w > 0.0).then(|| {
+        DVec2::new(
+            (c.x / c.w + 1.0) / 2.0 * width as f64,
+            (1.0 - c.y / c.w) / 2.0 * height as f64,
+        )
+    })
+}
+
+/// For every feature whose true reflection lands in the frame: whether it is a corner of a
+/// scene triangle, and its distance in pixels from where the preview draws it (`None` where
+/// the preview does not draw it).
+fn displacements(
+    context: &GpuContext,
+    scene: &Scene,
+    flat: &crate::pack::FlatScene,
+    reflector: &Reflector,
+    clip: &DMat4,
+    options: ReflectionOptions,
+) -> Result<Vec<(bool, Option<f64>)>> {
+    let (width, height) = (flat.frame.width, flat.frame.height);
+    let eye = crate::gpu::preview::eye_of(&scene.camera);
+    let sphere = Sphere::new(reflector.center.as_dvec3(), reflector.radius as f64);
+    let n = options.subdivision.unwrap_or(1).max(1);
+    // Each feature: its position and its sub-triangle's corners with the weights mixing them.
+    let mut features = Vec::new();
+    let mut corners = Vec::new();
+    let (extent, _) = extent_and_far(scene, flat);
+    for t in tessellate(flat, extent).chunks_exact(3) {
+        if t[0].reflector != 0 {
+            continue;
+        }
+        let [a, b, c] = [t[0], t[1], t[2]].map(|v| Vec3::from(v.position));
+        for (from, to) in [(0, 1), (1, 2), (2, 0)] {
+            for k in 0..=POINTS_PER_EDGE {
+                // k = 0: the corner; then the points between.
+                let s = match k {
+                    0 => 0.0,
+                    k => (k as f32 - 1.0 + POINT_OFFSET) / POINTS_PER_EDGE as f32,
+                };
+                let mut w = [0.0f32; 3];
+                w[from] += 1.0 - s;
+                w[to] += s;
+                let (sub, weights) = sub_triangle(w[1], w[2], n);
+                let point = |(i, j): (u32, u32)| {
+                    let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
+                    a * (1.0 - u - v) + b * u + c * v
+                };
+                features.push((a * w[0] + b * w[1] + c * w[2], weights, k == 0));
+                corners.extend(sub.map(point));
+            }
+        }
+    }
+    let found = crate::gpu::fermat::reflections(
+        context,
+        reflector.center,
+        reflector.radius,
+        eye,
+        &corners,
+        options.steps,
+    )?;
+    let eye = eye.as_dvec3();
+    let mut out = Vec::new();
+    for (k, (x, weights, corner)) in features.iter().enumerate() {
+        let x = x.as_dvec3();
+        let truth = alhazen_sphere(&sphere, eye, x);
+        let normal = (truth - sphere.center) / sphere.radius;
+        if !seen_from_outside(truth, normal, eye, x) {
+            continue;
+        }
+        let Some(truth_px) = project(clip, truth, width, height)
+            .filter(|p| p.x >= 0.0 && p.y >= 0.0 && p.x < width as f64 && p.y < height as f64)
+        else {
+            continue;
+        };
+        let corners_found = &found[3 * k..3 * k + 3];
+        let all_drawn = corners_found
+            .iter()
+            .zip(&corners[3 * k..3 * k + 3])
+            .all(|(r, v)| {
+                let p = Vec3::from(r.point).as_dvec3();
+                let n = (p - sphere.center) / sphere.radius;
+                drawn_in_preview(p, n, eye, v.as_dvec3())
+            });
+        let drawn_at = corners_found
+            .iter()
+            .zip(weights)
+            .map(|(r, &w)| Vec3::from(r.point).as_dvec3() * w as f64)
+            .sum::<DVec3>();
+        out.push((
+            *corner,
+            all_drawn
+                .then(|| project(clip, drawn_at, width, height))
+                .flatten()
+                .map(|p| p.distance(truth_px)),
+        ));
+    }
+    Ok(out)
+}
+
+/// The sub-triangle of a triangle cut `n` times along each edge (as
+/// `preview::reflected_triangles` cuts it) holding the point of barycentrics (1 − a − b, a, b):
+/// its corners on the grid of step 1/n and the point's weights on them.
+fn sub_triangle(a: f32, b: f32, n: u32) -> ([(u32, u32); 3], [f32; 3]) {
+    let (x, y) = (a * n as f32, b * n as f32);
+    let i = (x.floor() as u32).min(n - 1);
+    let j = (y.floor() as u32).min(n - 1 - i);
+    let (fa, fb) = (x - i as f32, y - j as f32);
+    if fa + fb <= 1.0 {
+        ([(i, j), (i + 1, j), (i, j + 1)], [1.0 - fa - fb, fa, fb])
+    } else {
+        (
+            [(i + 1, j), (i + 1, j + 1), (i, j + 1)],
+            [1.0 - fb, fa + fb - 1.0, 1.0 - fa],
+        )
+    }
+}
+
+/// The pixels whose centre's camera ray meets the reflector's sphere.
+fn reflector_mask(clip: &DMat4, reflector: &Reflector, width: u32, height: u32) -> Vec<bool> {
+    let inverse = clip.inverse();
+    let centre = reflector.center.as_dvec3();
+    let radius = reflector.radius as f64;
+    let unproject = |x: f64, y: f64, z: f64| {
+        let p = inverse * DVec4::new(x, y, z, 1.0);
+        p.truncate() / p.w
+    };
+    (0..height)
+        .flat_map(|py| (0..width).map(move |px| (px, py)))
+        .map(|(px, py)| {
+            let x = (px as f64 + 0.5) / width as f64 * 2.0 - 1.0;
+            let y = 1.0 - (py as f64 + 0.5) / height as f64 * 2.0;
+            let (near, far) = (unproject(x, y, 0.0), unproject(x, y, 1.0));
+            let d = (far - near).normalize();
+            // The ray near + t d meets the sphere where the discriminant is non-negative.
+            let oc = near - centre;
+            let b = oc.dot(d);
+            b * b - (oc.length_squared() - radius * radius) >= 0.0
+        })
+        .collect()
+}
+
+/// Mean FLIP of `image` against `reference` over the pixels of `mask`.
+fn masked_flip(image: &Image, reference: &Image, mask: &[bool]) -> f64 {
+    let map = crate::converge::flip_map(image, reference);
+    let (sum, count) = map
+        .iter()
+        .zip(mask)
+        .filter(|(_, m)| **m)
+        .fold((0.0, 0usize), |(s, c), (v, _)| (s + *v as f64, c + 1));
+    if count == 0 {
+        f64::NAN
+    } else {
+        sum / count as f64
+    }
+}
+
+impl FermatReport {
+    /// The report as Markdown tables.
+    pub fn to_markdown(&self) -> String {
+        let gpu = self.ray_traced_gpu_ms.median;
+        let mut out = format!(
+            "Fermat reflections against the ray tracer: {} ({}x{}), at most {} steps\n\n\
+             Ray-traced frame, 1 spp: GPU {:.2} ms, CPU {:.2} ms (median of runs)\n\n\
+             | subdivision | reflected triangles | preview (ms) | ray-traced GPU / preview | \
+             features drawn | corners: max (px) | all features: median (px) | p99 (px) | \
+             max (px) | FLIP of the sphere's pixels vs {} spp |\n\
+             |---|---|---|---|---|---|---|---|---|---|\n",
+            self.scene,
+            self.width,
+            self.height,
+            self.steps,
+            gpu,
+            self.ray_traced_cpu_ms.median,
+            self.reference_spp
+        );
+        for r in &self.rows {
+            out += &format!(
+                "| {} | {} | {:.2} | {:.1}x | {}/{} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} |\n",
+                r.subdivision,
+                r.reflected_triangles,
+                r.preview_ms.median,
+                gpu / r.preview_ms.median,
+                r.drawn,
+                r.features,
+                r.corner_max_px,
+                r.displacement_median_px,
+                r.displacement_p99_px,
+                r.displacement_max_px,
+                r.flip_reflector
+            );
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sub_triangle;
+
+    /// Every point of the triangle falls in a sub-triangle with non-negative weights summing
+    /// to 1 that put it back where it was.
+    #[test]
+    fn a_point_is_the_mix_of_its_sub_triangles_corners() {
+        for n in [1, 2, 3, 16] {
+            for (a, b) in [
+                (0.0, 0.0),
+                (1.0, 0.0),
+                (0.0, 1.0),
+                (0.3, 0.7),
+                (0.41, 0.2),
+                (0.9, 0.05),
+            ] {
+                let (corners, w) = sub_triangle(a, b, n);
+                assert!(w.iter().all(|&w| w >= -1e-6), "{n} {a} {b}: {w:?}");
+                assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+                let mix = |f: fn((u32, u32)) -> u32| {
+                    corners
+                        .iter()
+                        .zip(w)
+                        .map(|(&c, w)| f(c) as f32 / n as f32 * w)
+                        .sum::<f32>()
+                };
+                assert!((mix(|c| c.0) - a).abs() < 1e-5, "{n} {a} {b}");
+                assert!((mix(|c| c.1) - b).abs() < 1e-5, "{n} {a} {b}");
+                assert!(corners.iter().all(|&(i, j)| i + j <= n));
+            }
+        }
+    }
+}
