@@ -31,6 +31,9 @@ mkdir -p bench
     echo
     "$chambre" bench motion --size 768 --runs "$runs" --json bench/motion.json
     echo
+    # Fermat reflections in the preview against the ray tracer, by subdivision.
+    "$chambre" bench fermat --json bench/fermat.json
+    echo
     "$chambre" bench rays --runs "$runs" --json bench/rays.json
     echo
     # The throughput issue's real-GPU target is stated at 1920x1080.
