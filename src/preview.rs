@@ -51,6 +51,9 @@ pub struct PreviewUniforms {
     pub ambient: [f32; 4],
     /// The eye (the lens centre), world space; `w` unused.
     pub eye: [f32; 4],
+    /// The background radiance (`w` unused): what a mirror sphere's pixel reflects where no
+    /// reflected triangle lands.
+    pub background: [f32; 4],
 }
 
 /// The uniforms of one reflector's reflection pass (`ReflectorPass` in
@@ -64,8 +67,10 @@ pub struct ReflectorPass {
     pub far: f32,
     /// 1 + the reflector's index: the id the main pass wrote where it is seen.
     pub id: u32,
+    /// The reflector's material.
+    pub material: u32,
     /// Padding to the WGSL layout.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 
 /// Every bounded primitive and plane of `scene` as triangles; `extent` sizes the planes (they
@@ -102,6 +107,8 @@ pub struct Reflector {
     pub center: Vec3,
     /// Radius (scene units).
     pub radius: f32,
+    /// Its material's index.
+    pub material: u32,
     /// Its material's mirror reflectance per channel.
     pub mirror: Vec3,
 }
@@ -120,6 +127,7 @@ pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
                 prim,
                 center: Vec3::from(p.p0),
                 radius: p.p1[0],
+                material: p.material,
                 mirror,
             })
         })

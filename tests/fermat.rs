@@ -176,6 +176,7 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
         subdivisions: &subdivisions,
         steps: chambre::gpu::preview::ReflectionOptions::default().steps,
         runs: 1,
+        frames: 2,
         reference_spp: 32,
     };
     let report = chambre::bench::fermat::run(&config, &context).unwrap();

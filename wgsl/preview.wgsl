@@ -15,6 +15,8 @@ struct PreviewUniforms {
     ambient: vec4<f32>,
     // The eye (the lens centre), world space; w unused.
     eye: vec4<f32>,
+    // The background radiance; w unused.
+    background: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> preview: PreviewUniforms;
@@ -108,9 +110,13 @@ fn shade(material_index: u32, world: vec3<f32>, normal: vec3<f32>, eye: vec3<f32
     return radiance;
 }
 
-// A reflector's own fragment carries its diffuse term here; the composite adds its mirror term.
+// A mirror sphere's fragment reflects the background here; its reflection pass draws the
+// reflected scene over it.
 @fragment
 fn preview_fragment(f: VertexOut) -> PreviewOut {
-    return PreviewOut(vec4<f32>(shade(f.material, f.world, f.normal, preview.eye.xyz), 1.0),
-        f.reflector);
+    var radiance = shade(f.material, f.world, f.normal, preview.eye.xyz);
+    if (f.reflector != 0u) {
+        radiance += preview_materials[f.material].mirror * preview.background.xyz;
+    }
+    return PreviewOut(vec4<f32>(radiance, 1.0), f.reflector);
 }

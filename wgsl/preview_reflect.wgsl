@@ -3,7 +3,9 @@
 // depth |P - V|, so the nearest reflected surface along each reflected ray wins (first level of
 // hidden-surface removal, in a depth buffer of its own); a fragment lands only where the main
 // pass saw this reflector (second level: reflections behind the reflector, or behind whatever
-// hides it, are discarded). Lit as if the eye were at P.
+// hides it, are discarded). Lit as if the eye were at P. A fragment replaces the main pass's
+// colour of the pixel (the sphere reflecting the background) with the sphere's own shading plus
+// its mirror reflectance times the reflected radiance; the depth test leaves the nearest.
 // Composed after wgsl/preview.wgsl. Mirrors: src/gpu/preview.rs (Reflections),
 // src/preview.rs (reflected_triangles), src/fermat.rs (the solver and its validity tests).
 
@@ -15,8 +17,9 @@ struct ReflectorPass {
     far: f32,
     // 1 + the reflector's index: the id the main pass wrote where it is seen.
     id: u32,
+    // The reflector's material.
+    material: u32,
     _pad0: u32,
-    _pad1: u32,
 }
 
 @group(1) @binding(0) var<storage, read> reflected_vertices: array<PreviewVertex>;
@@ -68,5 +71,9 @@ fn reflected_fragment(f: ReflectedOut) -> @location(0) vec4<f32> {
     if (textureLoad(reflector_ids, vec2<i32>(f.clip.xy), 0).r != reflector_pass.id) {
         discard;
     }
-    return vec4<f32>(shade(f.material, f.world, f.normal, f.mirror_point), 1.0);
+    let sphere = reflector_pass.sphere;
+    let own = shade(reflector_pass.material, f.mirror_point, f.mirror_point - sphere.xyz,
+        preview.eye.xyz);
+    let reflected = shade(f.material, f.world, f.normal, f.mirror_point);
+    return vec4<f32>(own + preview_materials[reflector_pass.material].mirror * reflected, 1.0);
 }

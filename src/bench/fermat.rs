@@ -41,7 +41,7 @@ pub struct FermatRow {
     pub subdivision: u32,
     /// Reflected triangles drawn a frame.
     pub reflected_triangles: usize,
-    /// The preview's frame time (Fermat solves, passes, composite), milliseconds.
+    /// The preview's frame time (Fermat solves, main and reflection passes), milliseconds.
     pub preview_ms: Spread,
     /// Features whose true reflection is in the frame.
     pub features: usize,
@@ -92,8 +92,11 @@ pub struct FermatConfig<'a> {
     pub subdivisions: &'a [u32],
     /// The Fermat search's steps at most.
     pub steps: u32,
-    /// Timed runs (preview frames and ray-traced frames) after a warm-up.
+    /// Timed ray-traced frames after a warm-up.
     pub runs: u32,
+    /// Timed preview frames per subdivision after a warm-up (a preview frame is short, and
+    /// lavapipe's first few after a pipeline is built are slower).
+    pub frames: u32,
     /// Samples per pixel of the ray-traced reference.
     pub reference_spp: u32,
 }
@@ -146,7 +149,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             subdivision: Some(subdivision),
             steps: config.steps,
         };
-        let frame = draw_with(context, &scene, &flat, config.runs.max(1), options)?;
+        let frame = draw_with(context, &scene, &flat, config.frames.max(1), options)?;
         let placed = displacements(context, &scene, &flat, &reflector, &clip, options)?;
         let corner_max_px = placed
             .iter()

@@ -70,9 +70,12 @@ pub struct FermatArgs {
     /// The Fermat search's steps at most.
     #[arg(long, default_value_t = crate::gpu::preview::ReflectionOptions::default().steps)]
     pub steps: u32,
-    /// Timed runs after a warm-up.
+    /// Timed ray-traced frames after a warm-up.
     #[arg(long, default_value_t = 5)]
     pub runs: u32,
+    /// Timed preview frames per subdivision after a warm-up.
+    #[arg(long, default_value_t = 21)]
+    pub frames: u32,
     /// Samples per pixel of the ray-traced reference for FLIP.
     #[arg(long, default_value_t = 256)]
     pub reference_spp: u32,
@@ -422,6 +425,7 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 subdivisions: &args.subdivisions,
                 steps: args.steps,
                 runs: args.runs,
+                frames: args.frames,
                 reference_spp: args.reference_spp,
             };
             let report = fermat::run(&config, usable(&context)?)?;

@@ -5,9 +5,9 @@
 //!
 //! Mirror spheres show reflections by Fermat's principle (seed 004), all in one submission a
 //! frame: the `fermat` kernel finds each reflected vertex's point on each sphere, the main pass
-//! writes which reflector each pixel sees, a reflection pass per sphere rasterises the reflected
-//! triangles (`wgsl/preview_reflect.wgsl`) and a composite pass adds them, times the mirror
-//! reflectance, to the sphere's pixels (`wgsl/preview_composite.wgsl`).
+//! writes which reflector each pixel sees (and the sphere's colour as if it reflected the
+//! background), and a reflection pass per sphere rasterises the reflected triangles over the
+//! sphere's pixels (`wgsl/preview_reflect.wgsl`).
 
 use std::time::{Duration, Instant};
 
@@ -82,11 +82,6 @@ pub fn shader_source() -> String {
         include_str!("../../wgsl/preview.wgsl"),
         include_str!("../../wgsl/preview_reflect.wgsl")
     )
-}
-
-/// The composite pass's source.
-pub fn composite_source() -> &'static str {
-    include_str!("../../wgsl/preview_composite.wgsl")
 }
 
 /// Draws `scene` (flattened as `flat`) `frames` times after one warm-up and returns the last
@@ -171,6 +166,12 @@ impl PreviewRenderer {
                 0.0,
             ],
             eye: [eye.x, eye.y, eye.z, 0.0],
+            background: [
+                flat.frame.background[0],
+                flat.frame.background[1],
+                flat.frame.background[2],
+                0.0,
+            ],
             ..Default::default()
         };
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -273,7 +274,6 @@ impl PreviewRenderer {
             depth.create_view(&Default::default()),
             id.create_view(&Default::default()),
         );
-        let [r, g, b] = flat.frame.background;
         let reflections = Reflections::new(
             context,
             &ReflectionSetup {
@@ -285,7 +285,6 @@ impl PreviewRenderer {
                 id_view: &id_view,
                 eye,
                 far,
-                background: [r, g, b, 0.0],
                 size,
             },
             reflectors(flat),
@@ -391,8 +390,7 @@ impl PreviewRenderer {
     /// The image (linear radiance) as last drawn, read back.
     pub fn image(&self) -> Result<Image> {
         let size = self.color.size();
-        let shown = self.reflections.as_ref().map_or(&self.color, |r| &r.output);
-        read_back(&self.context, shown, size.width, size.height)
+        read_back(&self.context, &self.color, size.width, size.height)
     }
 
     /// The image's width and height in pixels.
@@ -403,9 +401,7 @@ impl PreviewRenderer {
 
     /// The image as a texture view (linear radiance, `Rgba32Float`).
     pub fn view(&self) -> &wgpu::TextureView {
-        self.reflections
-            .as_ref()
-            .map_or(&self.color_view, |r| &r.output_view)
+        &self.color_view
     }
 
     /// Triangles drawn a frame.
@@ -431,12 +427,11 @@ struct ReflectionSetup<'a> {
     id_view: &'a wgpu::TextureView,
     eye: glam::Vec3,
     far: f64,
-    background: [f32; 4],
     size: wgpu::Extent3d,
 }
 
 /// The reflection passes of the mirror spheres: the Fermat solves, the reflected triangles'
-/// pipeline with its own radiance and depth targets, and the composite into `output`.
+/// pipeline and its own depth buffer (|P − V|); it draws over the main pass's colour target.
 struct Reflections {
     fermat: FermatPass,
     solves: Vec<FermatSolve>,
@@ -445,12 +440,8 @@ struct Reflections {
     shared_group: wgpu::BindGroup,
     reflector_groups: Vec<wgpu::BindGroup>,
     vertex_count: u32,
-    radiance_view: wgpu::TextureView,
+    color_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
-    composite: wgpu::RenderPipeline,
-    composite_group: wgpu::BindGroup,
-    output: wgpu::Texture,
-    output_view: wgpu::TextureView,
 }
 
 impl Reflections {
@@ -531,7 +522,8 @@ impl Reflections {
                     sphere: r.center.extend(r.radius).to_array(),
                     far: setup.far as f32,
                     id: k as u32 + 1,
-                    _pad: [0; 2],
+                    material: r.material,
+                    _pad: 0,
                 };
                 let uniforms = context.uniform_buffer("reflector pass", bytemuck::bytes_of(&pass));
                 device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -558,57 +550,7 @@ impl Reflections {
                 view_formats: &[],
             })
         };
-        let radiance = target(
-            COLOR_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-        );
         let depth = target(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
-        let output = target(
-            COLOR_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::TEXTURE_BINDING,
-        );
-        let radiance_view = radiance.create_view(&Default::default());
-        let composite_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("preview composite"),
-            source: wgpu::ShaderSource::Wgsl(composite_source().into()),
-        });
-        let composite = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("preview composite"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &composite_module,
-                entry_point: Some("composite_vertex"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &composite_module,
-                entry_point: Some("composite_fragment"),
-                compilation_options: Default::default(),
-                targets: &[Some(COLOR_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let mirrors: Vec<[f32; 4]> = std::iter::once(setup.background)
-            .chain(reflectors.iter().map(|r| r.mirror.extend(0.0).to_array()))
-            .collect();
-        let mirrors = context.storage_buffer("mirrors", bytemuck::cast_slice(&mirrors))?;
-        let composite_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("preview composite"),
-            layout: &composite.get_bind_group_layout(0),
-            entries: &[
-                texture_entry(0, setup.color_view),
-                texture_entry(1, &radiance_view),
-                texture_entry(2, setup.id_view),
-                buffer_entry(3, &mirrors),
-            ],
-        });
         Ok(Some(Reflections {
             fermat,
             solves,
@@ -617,12 +559,8 @@ impl Reflections {
             shared_group,
             reflector_groups,
             vertex_count: triangles.len() as u32,
-            radiance_view,
+            color_view: setup.color_view.clone(),
             depth_view: depth.create_view(&Default::default()),
-            composite,
-            composite_group,
-            output_view: output.create_view(&Default::default()),
-            output,
         }))
     }
 
@@ -648,59 +586,39 @@ impl Reflections {
         }
     }
 
-    /// Records the reflection passes (after the main pass) and the composite.
+    /// Records the reflection passes, after the main pass: reflected fragments replace the
+    /// colour of the sphere's pixels they land on (the nearest |P − V| last).
     fn draw(&self, encoder: &mut wgpu::CommandEncoder) {
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("preview reflections"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.radiance_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                // One depth buffer serves every reflector: a pixel shows one reflector only.
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &self.shared_group, &[]);
-            for group in &self.reflector_groups {
-                pass.set_bind_group(1, group, &[]);
-                pass.draw(0..self.vertex_count, 0..1);
-            }
-        }
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("preview composite"),
+            label: Some("preview reflections"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.output_view,
+                view: &self.color_view,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    load: wgpu::LoadOp::Load,
                     store: wgpu::StoreOp::Store,
                 },
             })],
-            depth_stencil_attachment: None,
+            // One depth buffer serves every reflector: a pixel shows one reflector only.
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.composite);
-        pass.set_bind_group(0, &self.composite_group, &[]);
-        pass.draw(0..3, 0..1);
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.shared_group, &[]);
+        for group in &self.reflector_groups {
+            pass.set_bind_group(1, group, &[]);
+            pass.draw(0..self.vertex_count, 0..1);
+        }
     }
 }
 
