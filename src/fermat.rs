@@ -15,8 +15,9 @@
 //! poles on the normal of the plane through E, V and its centre (`Sphere::facing`): the
 //! reflection lies on that plane's great circle, the equator, where the parametrisation is
 //! regular. This is the CPU version (f64); `wgsl/fermat.wgsl` is the GPU's (the `fermat`
-//! kernel, `gpu::fermat`). The other reflectors and the rasterisation of the reflected
-//! triangles are to come (docs/fermat.md).
+//! kernel, `gpu::fermat`). The ellipsoid, cylinder, torus and bicubic Bézier patch are
+//! reflectors of the CPU search only so far: the raster preview reflects in spheres
+//! (docs/fermat.md).
 
 use glam::{DVec2, DVec3};
 
@@ -26,11 +27,15 @@ pub trait Reflector {
     fn point(&self, uv: DVec2) -> DVec3;
     /// ∂f/∂u and ∂f/∂v at (u, v).
     fn tangents(&self, uv: DVec2) -> (DVec3, DVec3);
-    /// A point inside the reflector (O).
-    fn inside(&self) -> DVec3;
-    /// The parameters of the surface point where the segment from `outside` to `inside()`
-    /// crosses the surface.
+    /// The point O inside the reflector that the initial corner for `outside` aims at (a
+    /// sphere's or ellipsoid's centre; the point of a cylinder's axis or a torus's tube circle
+    /// nearest to `outside`).
+    fn inside(&self, outside: DVec3) -> DVec3;
+    /// The parameters of the surface point where the segment from `outside` to
+    /// `inside(outside)` crosses the surface.
     fn crossing(&self, outside: DVec3) -> DVec2;
+    /// The outward unit normal at (u, v).
+    fn outward_normal(&self, uv: DVec2) -> DVec3;
     /// The period of u, when u is an angle around the surface.
     fn u_period(&self) -> Option<f64> {
         None
@@ -109,8 +114,12 @@ impl Reflector for Sphere {
         )
     }
 
-    fn inside(&self) -> DVec3 {
+    fn inside(&self, _outside: DVec3) -> DVec3 {
         self.center
+    }
+
+    fn outward_normal(&self, uv: DVec2) -> DVec3 {
+        self.normal(uv)
     }
 
     fn crossing(&self, outside: DVec3) -> DVec2 {
@@ -119,6 +128,268 @@ impl Reflector for Sphere {
 
     fn u_period(&self) -> Option<f64> {
         Some(std::f64::consts::TAU)
+    }
+}
+
+/// An ellipsoid with semi-axes `radii` along the world axes, the image of the unit sphere s(u,
+/// v) = sin v (cos u x + sin u z) + cos v y under the scaling by `radii`: f(u, v) = c +
+/// radii ⊙ s(u, v). Its parametrisation's poles are on ±y of the frame (x, y, z); as for the
+/// sphere, [`Ellipsoid::facing`] turns them away from a reflection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ellipsoid {
+    /// Centre (scene units).
+    pub center: DVec3,
+    /// Semi-axes along x, y and z, > 0.
+    pub radii: DVec3,
+    /// The unit sphere's parametrisation frame: x, y (the poles' axis), z.
+    pub frame: [DVec3; 3],
+}
+
+impl Ellipsoid {
+    /// An ellipsoid parametrised about the world axes.
+    pub fn new(center: DVec3, radii: DVec3) -> Ellipsoid {
+        Ellipsoid {
+            center,
+            radii,
+            frame: [DVec3::X, DVec3::Y, DVec3::Z],
+        }
+    }
+
+    /// The same ellipsoid with the poles of its unit sphere on the normal of the plane through
+    /// E, V and the centre, mapped to the unit sphere: the reflection lies near that plane, far
+    /// from the poles where f_u vanishes (and a search there stalls without the law holding).
+    pub fn facing(&self, eye: DVec3, vertex: DVec3) -> Ellipsoid {
+        let unit = Sphere::new(DVec3::ZERO, 1.0).facing(
+            (eye - self.center) / self.radii,
+            (vertex - self.center) / self.radii,
+        );
+        Ellipsoid {
+            frame: unit.frame,
+            ..*self
+        }
+    }
+
+    fn unit(&self) -> Sphere {
+        Sphere {
+            center: DVec3::ZERO,
+            radius: 1.0,
+            frame: self.frame,
+        }
+    }
+}
+
+impl Reflector for Ellipsoid {
+    fn point(&self, uv: DVec2) -> DVec3 {
+        self.center + self.radii * self.unit().point(uv)
+    }
+
+    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
+        let (su, sv) = self.unit().tangents(uv);
+        (self.radii * su, self.radii * sv)
+    }
+
+    fn inside(&self, _outside: DVec3) -> DVec3 {
+        self.center
+    }
+
+    fn crossing(&self, outside: DVec3) -> DVec2 {
+        // In the unit sphere's coordinates the crossing is the direction itself.
+        self.unit()
+            .parameters_of((outside - self.center) / self.radii)
+    }
+
+    fn outward_normal(&self, uv: DVec2) -> DVec3 {
+        // The gradient of |(x − c) / r|²: (x − c) / r².
+        let p = self.point(uv) - self.center;
+        (p / (self.radii * self.radii)).normalize()
+    }
+
+    fn u_period(&self) -> Option<f64> {
+        Some(std::f64::consts::TAU)
+    }
+}
+
+/// A cylinder of radius `radius` around the vertical line through `center`: f(u, v) =
+/// c + r (cos u, 0, sin u) + v y (unbounded in v: the search does not know the caps).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cylinder {
+    /// A point of the axis (scene units).
+    pub center: DVec3,
+    /// Radius, > 0.
+    pub radius: f64,
+}
+
+impl Reflector for Cylinder {
+    fn point(&self, uv: DVec2) -> DVec3 {
+        let (su, cu) = uv.x.sin_cos();
+        self.center + DVec3::new(self.radius * cu, uv.y, self.radius * su)
+    }
+
+    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
+        let (su, cu) = uv.x.sin_cos();
+        (
+            DVec3::new(-self.radius * su, 0.0, self.radius * cu),
+            DVec3::Y,
+        )
+    }
+
+    fn inside(&self, outside: DVec3) -> DVec3 {
+        DVec3::new(self.center.x, outside.y, self.center.z)
+    }
+
+    fn crossing(&self, outside: DVec3) -> DVec2 {
+        let d = outside - self.center;
+        DVec2::new(d.z.atan2(d.x), d.y)
+    }
+
+    fn outward_normal(&self, uv: DVec2) -> DVec3 {
+        let (su, cu) = uv.x.sin_cos();
+        DVec3::new(cu, 0.0, su)
+    }
+
+    fn u_period(&self) -> Option<f64> {
+        Some(std::f64::consts::TAU)
+    }
+}
+
+/// A torus around the vertical line through `center`: f(u, v) = c + (R + r cos v)(cos u, 0,
+/// sin u) + r sin v y, u around the axis, v around the tube.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Torus {
+    /// Centre (scene units).
+    pub center: DVec3,
+    /// R: the tube circle's radius.
+    pub major: f64,
+    /// r: the tube's radius, below R.
+    pub minor: f64,
+}
+
+impl Torus {
+    /// The point of the tube circle below or above `outside`'s azimuth.
+    fn tube_centre(&self, outside: DVec3) -> DVec3 {
+        let d = outside - self.center;
+        let radial = DVec3::new(d.x, 0.0, d.z).normalize_or(DVec3::X);
+        self.center + self.major * radial
+    }
+}
+
+impl Reflector for Torus {
+    fn point(&self, uv: DVec2) -> DVec3 {
+        let (su, cu) = uv.x.sin_cos();
+        let (sv, cv) = uv.y.sin_cos();
+        let ring = self.major + self.minor * cv;
+        self.center + DVec3::new(ring * cu, self.minor * sv, ring * su)
+    }
+
+    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
+        let (su, cu) = uv.x.sin_cos();
+        let (sv, cv) = uv.y.sin_cos();
+        let ring = self.major + self.minor * cv;
+        (
+            DVec3::new(-ring * su, 0.0, ring * cu),
+            self.minor * DVec3::new(-sv * cu, cv, -sv * su),
+        )
+    }
+
+    fn inside(&self, outside: DVec3) -> DVec3 {
+        self.tube_centre(outside)
+    }
+
+    fn crossing(&self, outside: DVec3) -> DVec2 {
+        let d = outside - self.center;
+        let u = d.z.atan2(d.x);
+        let w = outside - self.tube_centre(outside);
+        let radial = DVec3::new(u.cos(), 0.0, u.sin());
+        DVec2::new(u, w.y.atan2(w.dot(radial)))
+    }
+
+    fn outward_normal(&self, uv: DVec2) -> DVec3 {
+        let (su, cu) = uv.x.sin_cos();
+        let (sv, cv) = uv.y.sin_cos();
+        DVec3::new(cv * cu, sv, cv * su)
+    }
+
+    fn u_period(&self) -> Option<f64> {
+        Some(std::f64::consts::TAU)
+    }
+}
+
+/// A bicubic Bézier patch (as the Newell teapot's): f(u, v) = Σ B_i(u) B_j(v) P_ij over
+/// (u, v) in [0, 1]², with Bernstein polynomials B. Its outward side is the one f_u × f_v
+/// points to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BezierPatch {
+    /// Control points, `points[i][j]` weighted by B_i(u) B_j(v).
+    pub points: [[DVec3; 4]; 4],
+}
+
+/// The cubic Bernstein polynomials at t and their derivatives.
+fn bernstein(t: f64) -> ([f64; 4], [f64; 4]) {
+    let s = 1.0 - t;
+    (
+        [s * s * s, 3.0 * t * s * s, 3.0 * t * t * s, t * t * t],
+        [
+            -3.0 * s * s,
+            3.0 * s * s - 6.0 * t * s,
+            6.0 * t * s - 3.0 * t * t,
+            3.0 * t * t,
+        ],
+    )
+}
+
+impl BezierPatch {
+    /// Σ a_i(u) b_j(v) P_ij.
+    fn mix(&self, a: [f64; 4], b: [f64; 4]) -> DVec3 {
+        let mut sum = DVec3::ZERO;
+        for (i, row) in self.points.iter().enumerate() {
+            for (j, p) in row.iter().enumerate() {
+                sum += a[i] * b[j] * *p;
+            }
+        }
+        sum
+    }
+}
+
+impl Reflector for BezierPatch {
+    fn point(&self, uv: DVec2) -> DVec3 {
+        self.mix(bernstein(uv.x).0, bernstein(uv.y).0)
+    }
+
+    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
+        let ((bu, du), (bv, dv)) = (bernstein(uv.x), bernstein(uv.y));
+        (self.mix(du, bv), self.mix(bu, dv))
+    }
+
+    /// A patch has no inside: O is taken a patch-size behind its centre, against the normal.
+    fn inside(&self, _outside: DVec3) -> DVec3 {
+        let centre = DVec2::splat(0.5);
+        let size = (self.points[3][3] - self.points[0][0]).length();
+        self.point(centre) - size * self.outward_normal(centre)
+    }
+
+    /// Where the segment from `outside` to O crosses the patch, by a few Newton steps on
+    /// f(u, v) = O + t (outside − O) from the patch's centre (clamped to the patch).
+    fn crossing(&self, outside: DVec3) -> DVec2 {
+        let o = self.inside(outside);
+        let d = outside - o;
+        let mut uvt = DVec3::new(0.5, 0.5, 0.5);
+        for _ in 0..8 {
+            let uv = uvt.truncate();
+            let r = self.point(uv) - (o + uvt.z * d);
+            let (fu, fv) = self.tangents(uv);
+            let jacobian = glam::DMat3::from_cols(fu, fv, -d);
+            if jacobian.determinant().abs() < 1e-300 {
+                break;
+            }
+            uvt -= jacobian.inverse() * r;
+            uvt = uvt.clamp(DVec3::new(0.0, 0.0, 0.0), DVec3::new(1.0, 1.0, 1.0));
+        }
+        uvt.truncate()
+    }
+
+    fn outward_normal(&self, uv: DVec2) -> DVec3 {
+        let (fu, fv) = self.tangents(uv);
+        fu.cross(fv).normalize_or_zero()
     }
 }
 

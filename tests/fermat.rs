@@ -5,7 +5,8 @@
 //! a floor this test keeps.
 
 use chambre::fermat::{
-    Reflector, Solver, Sphere, alhazen_sphere, reflection_error, seen_from_outside,
+    BezierPatch, Cylinder, Ellipsoid, Reflector, Solver, Sphere, Torus, alhazen_sphere,
+    reflection_error, seen_from_outside,
 };
 use chambre::math::rng::Rng;
 use glam::DVec3;
@@ -203,4 +204,167 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
         assert!(json.get(field).is_some(), "{field}");
     }
     assert_eq!(json["rows"][1]["subdivision"], 4);
+}
+
+/// How the search went on one reflector over random configurations.
+#[derive(Debug, Default)]
+struct Tally {
+    /// Configurations tried.
+    tried: u32,
+    /// The search says it converged (its triangle shrank below the stopping size).
+    claimed: u32,
+    /// Of those, where the law of reflection holds to 1e-4 rad.
+    lawful: u32,
+    /// Of those, on the side E and V both see.
+    seen: u32,
+    /// The law holds (and seen) within the seed's 5 steps.
+    within_five: u32,
+}
+
+/// `reflector` for an eye and a vertex: the reflector itself, or a reparametrisation facing them.
+fn tally<R: Reflector>(
+    reflector: impl Fn(DVec3, DVec3) -> R,
+    mut configuration: impl FnMut() -> (DVec3, DVec3),
+) -> Tally {
+    let (five, long) = (
+        Solver::default(),
+        Solver {
+            max_steps: 30,
+            ..Solver::default()
+        },
+    );
+    let mut t = Tally::default();
+    let holds = |reflector: &R, uv, eye, vertex| {
+        let p = reflector.point(uv);
+        let n = reflector.outward_normal(uv);
+        (
+            reflection_error(p, n, eye, vertex) < 1e-4,
+            seen_from_outside(p, n, eye, vertex),
+        )
+    };
+    for _ in 0..400 {
+        let (eye, vertex) = configuration();
+        let reflector = reflector(eye, vertex);
+        t.tried += 1;
+        let s = long.solve(&reflector, eye, vertex);
+        if !s.degenerate && s.steps < long.max_steps {
+            t.claimed += 1;
+            let (lawful, seen) = holds(&reflector, s.uv, eye, vertex);
+            t.lawful += lawful as u32;
+            t.seen += (lawful && seen) as u32;
+        }
+        let s = five.solve(&reflector, eye, vertex);
+        let (lawful, seen) = holds(&reflector, s.uv, eye, vertex);
+        t.within_five += (lawful && seen) as u32;
+    }
+    t
+}
+
+/// The other reflectors (ellipsoid, cylinder, torus, a bicubic Bézier dome), 400 random
+/// configurations each: how often the search says it converged (its triangle shrank below 1e-9
+/// within 30 steps) and how often the law of reflection then holds at its point to 1e-4 rad.
+/// Measured (seeded, so these counts are what this test sees): ellipsoid 393 of 399, cylinder
+/// 380 of 400, torus 363 of 377, dome 399 of 399. The search's own stopping rule is fooled a
+/// few times in a hundred on the curved-in-one-direction surfaces (it shrinks onto a point
+/// where the gradient has not vanished); the floors below keep these rates, and the dome, a
+/// single smooth convex patch, has no false convergence at all.
+#[test]
+fn the_other_reflectors_obey_the_law_of_reflection_where_the_search_converged() {
+    let mut rng = Rng::new(23, 0, 0);
+    let mut uniform = move || rng.next_f32() as f64;
+    let ellipsoid = Ellipsoid::new(DVec3::new(0.2, 0.1, -0.3), DVec3::new(1.0, 0.6, 1.4));
+    let cylinder = Cylinder {
+        center: DVec3::new(-0.1, 0.0, 0.2),
+        radius: 0.8,
+    };
+    let torus = Torus {
+        center: DVec3::ZERO,
+        major: 1.5,
+        minor: 0.5,
+    };
+    // A dome over [-1, 1]²: the inner control points raised.
+    let mut points = [[DVec3::ZERO; 4]; 4];
+    for (i, row) in points.iter_mut().enumerate() {
+        for (j, p) in row.iter_mut().enumerate() {
+            let inner = (1..3).contains(&i) && (1..3).contains(&j);
+            *p = DVec3::new(
+                -1.0 + 2.0 * j as f64 / 3.0,
+                if inner { 0.6 } else { 0.0 },
+                -1.0 + 2.0 * i as f64 / 3.0,
+            );
+        }
+    }
+    let dome = BezierPatch { points };
+    let mut around = |centre: DVec3, near: f64, far: f64| {
+        let d = DVec3::new(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).normalize();
+        centre + d * (near + (far - near) * uniform())
+    };
+    let mut results = Vec::new();
+    // E and V outside each reflector, at most 150 degrees apart seen from its centre.
+    let mut pair = |centre: DVec3, near: f64, far: f64| loop {
+        let (e, v) = (around(centre, near, far), around(centre, near, far));
+        if (e - centre).angle_between(v - centre).to_degrees() < 150.0 {
+            return (e, v);
+        }
+    };
+    results.push((
+        "ellipsoid",
+        tally(
+            |e, v| ellipsoid.facing(e, v),
+            || pair(ellipsoid.center, 2.0, 5.0),
+        ),
+    ));
+    results.push((
+        "cylinder",
+        tally(
+            |_, _| cylinder,
+            || {
+                let (mut e, mut v) = pair(cylinder.center, 1.6, 4.0);
+                // Outside the cylinder, not only its bounding sphere.
+                for p in [&mut e, &mut v] {
+                    let radial = DVec3::new(p.x - cylinder.center.x, 0.0, p.z - cylinder.center.z);
+                    if radial.length() < 1.2 * cylinder.radius {
+                        *p += radial.normalize_or(DVec3::X) * 1.2 * cylinder.radius;
+                    }
+                }
+                (e, v)
+            },
+        ),
+    ));
+    results.push((
+        "torus",
+        tally(|_, _| torus, || pair(torus.center, 2.5, 6.0)),
+    ));
+    let mut above = {
+        let mut rng = Rng::new(29, 0, 0);
+        move || {
+            let [a, b] = rng.next_2d();
+            let [c, _] = rng.next_2d();
+            DVec3::new(
+                3.0 * a as f64 - 1.5,
+                1.0 + 2.0 * c as f64,
+                3.0 * b as f64 - 1.5,
+            )
+        }
+    };
+    results.push(("Bézier dome", tally(|_, _| dome, || (above(), above()))));
+    for (name, t) in &results {
+        eprintln!(
+            "{name}: {} configurations, the search claims convergence for {} (30 steps), the \
+             law of reflection holds at {} of them ({} on the side E and V see); within 5 \
+             steps: {}",
+            t.tried, t.claimed, t.lawful, t.seen, t.within_five
+        );
+        assert!(t.claimed as f64 >= 0.9 * t.tried as f64, "{name}: {t:?}");
+        assert!(t.lawful as f64 >= 0.95 * t.claimed as f64, "{name}: {t:?}");
+    }
+    let (_, dome) = &results[3];
+    assert_eq!(dome.lawful, dome.claimed, "{dome:?}");
+    assert!(
+        dome.within_five as f64 >= 0.95 * dome.tried as f64,
+        "{dome:?}"
+    );
+    for (name, t) in &results {
+        assert!(t.seen > 0 && t.within_five > 0, "{name}: {t:?}");
+    }
 }
