@@ -179,39 +179,20 @@ impl PreviewRenderer {
             label: Some("preview"),
             source: wgpu::ShaderSource::Wgsl(shader_source().into()),
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("preview"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("preview_vertex"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: size_of::<PreviewVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![
-                        0 => Float32x3, 1 => Uint32, 2 => Float32x3, 3 => Uint32
-                    ],
-                })],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("preview_fragment"),
-                compilation_options: Default::default(),
-                targets: &[Some(COLOR_FORMAT.into()), Some(ID_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let vertex_layout = wgpu::VertexBufferLayout {
+            array_stride: size_of::<PreviewVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![
+                0 => Float32x3, 1 => Uint32, 2 => Float32x3, 3 => Uint32
+            ],
+        };
+        let pipeline = render_pipeline(
+            device,
+            &module,
+            ("preview_vertex", "preview_fragment"),
+            &[Some(vertex_layout)],
+            &[Some(COLOR_FORMAT.into()), Some(ID_FORMAT.into())],
+        );
         let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("preview vertices"),
             contents: bytemuck::cast_slice(&vertices),
@@ -344,33 +325,10 @@ impl PreviewRenderer {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("preview"),
                 color_attachments: &[
-                    Some(wgpu::RenderPassColorAttachment {
-                        view: &self.color_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(self.background),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    }),
-                    Some(wgpu::RenderPassColorAttachment {
-                        view: &self.id_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    }),
+                    color_attachment(&self.color_view, wgpu::LoadOp::Clear(self.background)),
+                    color_attachment(&self.id_view, wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)),
                 ],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: depth_attachment(&self.depth_view, wgpu::StoreOp::Store),
                 timestamp_writes: None,
                 occlusion_query_set: None,
                 multiview_mask: None,
@@ -477,33 +435,13 @@ impl Reflections {
                 fermat.solve(context, reflector, &fermat_vertices)
             })
             .collect::<Result<Vec<_>>>()?;
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("preview reflections"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: setup.module,
-                entry_point: Some("reflected_vertex"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: setup.module,
-                entry_point: Some("reflected_fragment"),
-                compilation_options: Default::default(),
-                targets: &[Some(COLOR_FORMAT.into())],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = render_pipeline(
+            device,
+            setup.module,
+            ("reflected_vertex", "reflected_fragment"),
+            &[],
+            &[Some(COLOR_FORMAT.into())],
+        );
         let shared_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("preview reflections"),
             layout: &pipeline.get_bind_group_layout(0),
@@ -591,24 +529,9 @@ impl Reflections {
     fn draw(&self, encoder: &mut wgpu::CommandEncoder) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("preview reflections"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &self.color_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
+            color_attachments: &[color_attachment(&self.color_view, wgpu::LoadOp::Load)],
             // One depth buffer serves every reflector: a pixel shows one reflector only.
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &self.depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: None,
-            }),
+            depth_stencil_attachment: depth_attachment(&self.depth_view, wgpu::StoreOp::Discard),
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
@@ -684,6 +607,76 @@ fn read_back(
         width,
         height,
         pixels,
+    })
+}
+
+/// A render pipeline of the preview's module: `entry_points` (vertex, fragment), a depth test
+/// against `DEPTH_FORMAT` that keeps the nearest, the bind group layouts derived from the
+/// stages.
+fn render_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    (vertex, fragment): (&str, &str),
+    buffers: &[Option<wgpu::VertexBufferLayout>],
+    targets: &[Option<wgpu::ColorTargetState>],
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(vertex),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(vertex),
+            compilation_options: Default::default(),
+            buffers,
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(fragment),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// A colour attachment loaded as `load` and stored.
+fn color_attachment(
+    view: &wgpu::TextureView,
+    load: wgpu::LoadOp<wgpu::Color>,
+) -> Option<wgpu::RenderPassColorAttachment<'_>> {
+    Some(wgpu::RenderPassColorAttachment {
+        view,
+        depth_slice: None,
+        resolve_target: None,
+        ops: wgpu::Operations {
+            load,
+            store: wgpu::StoreOp::Store,
+        },
+    })
+}
+
+/// A depth attachment cleared to the far plane.
+fn depth_attachment(
+    view: &wgpu::TextureView,
+    store: wgpu::StoreOp,
+) -> Option<wgpu::RenderPassDepthStencilAttachment<'_>> {
+    Some(wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations {
+            load: wgpu::LoadOp::Clear(1.0),
+            store,
+        }),
+        stencil_ops: None,
     })
 }
 
