@@ -215,6 +215,11 @@ struct Tally {
     claimed: u32,
     /// Of those, where the law of reflection holds to 1e-4 rad.
     lawful: u32,
+    /// Of those, where the point lies on the segment E → V instead (to 1e-6 of |EV|): d's
+    /// global minimum |EV|, a stationary point that is no reflection.
+    through: u32,
+    /// Of those, neither a reflection nor on the segment: a false convergence.
+    neither: u32,
     /// Of those, on the side E and V both see.
     seen: u32,
     /// The law holds (and seen) within the seed's 5 steps.
@@ -251,6 +256,11 @@ fn tally<R: Reflector>(
             t.claimed += 1;
             let (lawful, seen) = holds(&reflector, s.uv, eye, vertex);
             t.lawful += lawful as u32;
+            let p = reflector.point(s.uv);
+            let straight = (eye - p).length() + (vertex - p).length() - (eye - vertex).length();
+            let through = straight < 1e-6 * (eye - vertex).length();
+            t.through += through as u32;
+            t.neither += (!lawful && !through) as u32;
             t.seen += (lawful && seen) as u32;
         }
         let s = five.solve(&reflector, eye, vertex);
@@ -261,13 +271,13 @@ fn tally<R: Reflector>(
 }
 
 /// The other reflectors (ellipsoid, cylinder, torus, a bicubic Bézier dome), 400 random
-/// configurations each: how often the search says it converged (its triangle shrank below 1e-9
-/// within 30 steps) and how often the law of reflection then holds at its point to 1e-4 rad.
-/// Measured (seeded, so these counts are what this test sees): ellipsoid 393 of 399, cylinder
-/// 380 of 400, torus 363 of 377, dome 399 of 399. The search's own stopping rule is fooled a
-/// few times in a hundred on the curved-in-one-direction surfaces (it shrinks onto a point
-/// where the gradient has not vanished); the floors below keep these rates, and the dome, a
-/// single smooth convex patch, has no false convergence at all.
+/// configurations each: where the search says it converged (its triangle shrank below 1e-9
+/// within 30 steps), its point is a reflection (the law of reflection holds to 1e-4 rad) or the
+/// point where the segment E → V crosses the surface, d's other stationary point (its global
+/// minimum |EV|: V hidden behind the reflector, no reflection). Measured (seeded): ellipsoid
+/// 393 reflections + 5 crossings of 399, one neither; cylinder 380 + 21 of 400 (one both);
+/// torus 363 + 14 of 377; dome 399 of 399. How often it converges within the seed's 5 steps is
+/// printed and kept above floors, not promised.
 #[test]
 fn the_other_reflectors_obey_the_law_of_reflection_where_the_search_converged() {
     let mut rng = Rng::new(23, 0, 0);
@@ -351,12 +361,16 @@ fn the_other_reflectors_obey_the_law_of_reflection_where_the_search_converged() 
     for (name, t) in &results {
         eprintln!(
             "{name}: {} configurations, the search claims convergence for {} (30 steps), the \
-             law of reflection holds at {} of them ({} on the side E and V see); within 5 \
-             steps: {}",
-            t.tried, t.claimed, t.lawful, t.seen, t.within_five
+             law of reflection holds at {} of them ({} on the side E and V see), {} lie on \
+             the segment E-V, {} neither; within 5 steps: {}",
+            t.tried, t.claimed, t.lawful, t.seen, t.through, t.neither, t.within_five
         );
         assert!(t.claimed as f64 >= 0.9 * t.tried as f64, "{name}: {t:?}");
-        assert!(t.lawful as f64 >= 0.95 * t.claimed as f64, "{name}: {t:?}");
+        assert!(t.lawful as f64 >= 0.94 * t.claimed as f64, "{name}: {t:?}");
+        assert!(
+            t.neither as f64 <= 0.005 * t.claimed as f64,
+            "{name}: {t:?}"
+        );
     }
     let (_, dome) = &results[3];
     assert_eq!(dome.lawful, dome.claimed, "{dome:?}");
