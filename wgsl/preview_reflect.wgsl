@@ -26,6 +26,8 @@ struct ReflectorPass {
 @group(1) @binding(1) var<storage, read> reflected_points: array<GpuReflection>;
 @group(1) @binding(2) var<uniform> reflector_pass: ReflectorPass;
 @group(1) @binding(3) var reflector_ids: texture_2d<u32>;
+// Per reflected vertex, the index of its Fermat solve (vertices at one position share one).
+@group(1) @binding(4) var<storage, read> solve_of: array<u32>;
 
 struct ReflectedOut {
     @builtin(position) clip: vec4<f32>,
@@ -41,7 +43,7 @@ struct ReflectedOut {
 // reflection holds at P. (A search whose triangle shrank below f32's resolution reports its
 // step system singular; its point still counts if the law holds there.)
 fn reflection_holds(i: u32) -> bool {
-    let r = reflected_points[i];
+    let r = reflected_points[solve_of[i]];
     let n = normalize(r.point - reflector_pass.sphere.xyz);
     let to_eye = normalize(preview.eye.xyz - r.point);
     let to_vertex = normalize(reflected_vertices[i].position - r.point);
@@ -53,7 +55,7 @@ fn reflection_holds(i: u32) -> bool {
 @vertex
 fn reflected_vertex(@builtin(vertex_index) i: u32) -> ReflectedOut {
     let v = reflected_vertices[i];
-    let r = reflected_points[i];
+    let r = reflected_points[solve_of[i]];
     var clip = preview.clip * vec4<f32>(r.point, 1.0);
     // Depth linear in |P - V| (interpolated across the triangle after the perspective divide,
     // as the seed's z-buffer does).

@@ -398,6 +398,8 @@ struct Reflections {
     shared_group: wgpu::BindGroup,
     reflector_groups: Vec<wgpu::BindGroup>,
     vertex_count: u32,
+    /// Distinct reflected vertices: one Fermat solve each.
+    solve_count: u32,
     color_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
 }
@@ -416,11 +418,9 @@ impl Reflections {
         }
         let device = &context.device;
         let fermat = FermatPass::new(context, steps);
-        let positions: Vec<glam::Vec3> = triangles
-            .iter()
-            .map(|v| glam::Vec3::from(v.position))
-            .collect();
+        let (positions, solve_of) = shared_positions(triangles);
         let fermat_vertices = super::fermat::vertex_buffer(context, &positions)?;
+        let solve_of = context.storage_buffer("solve of", bytemuck::cast_slice(&solve_of))?;
         let vertices =
             context.storage_buffer("reflected vertices", bytemuck::cast_slice(triangles))?;
         let solves = reflectors
@@ -430,7 +430,7 @@ impl Reflections {
                     center: r.center.to_array(),
                     radius: r.radius,
                     eye: setup.eye.to_array(),
-                    count: triangles.len() as u32,
+                    count: positions.len() as u32,
                 };
                 fermat.solve(context, reflector, &fermat_vertices)
             })
@@ -471,6 +471,7 @@ impl Reflections {
                         buffer_entry(0, &vertices),
                         buffer_entry(1, &solve.output),
                         buffer_entry(2, &uniforms),
+                        buffer_entry(4, &solve_of),
                         texture_entry(3, setup.id_view),
                     ],
                 })
@@ -497,6 +498,7 @@ impl Reflections {
             shared_group,
             reflector_groups,
             vertex_count: triangles.len() as u32,
+            solve_count: positions.len() as u32,
             color_view: setup.color_view.clone(),
             depth_view: depth.create_view(&Default::default()),
         }))
@@ -509,7 +511,7 @@ impl Reflections {
                 center: r.center.to_array(),
                 radius: r.radius,
                 eye: eye.to_array(),
-                count: self.vertex_count,
+                count: self.solve_count,
             };
             context
                 .queue
@@ -678,6 +680,26 @@ fn depth_attachment(
         }),
         stencil_ops: None,
     })
+}
+
+/// The distinct positions of `triangles`' vertices and, per vertex, the index of its position:
+/// a vertex shared by the triangles around it (n² pieces of a subdivided triangle share most of
+/// theirs) is solved once. Positions are equal when their bits are.
+fn shared_positions(triangles: &[PreviewVertex]) -> (Vec<glam::Vec3>, Vec<u32>) {
+    let mut index = std::collections::HashMap::new();
+    let mut positions = Vec::new();
+    let solve_of = triangles
+        .iter()
+        .map(|v| {
+            *index
+                .entry(v.position.map(f32::to_bits))
+                .or_insert_with(|| {
+                    positions.push(glam::Vec3::from(v.position));
+                    positions.len() as u32 - 1
+                })
+        })
+        .collect();
+    (positions, solve_of)
 }
 
 fn buffer_entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
