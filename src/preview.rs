@@ -169,16 +169,11 @@ pub const MAX_AUTO_PIECES: u32 = 32;
 /// Cuts triangle `t` into `n`² triangles on the barycentric grid of step 1/n, normals
 /// interpolated.
 fn subdivide(out: &mut Vec<PreviewVertex>, t: [PreviewVertex; 3], n: u32) {
+    let positions = t.map(|v| Vec3::from(v.position));
+    let normals = t.map(|v| Vec3::from(v.normal));
     let at = |i: u32, j: u32| {
-        // Barycentric (1 - a - b, a, b) with a = i / n, b = j / n.
-        let (a, b) = (i as f32 / n as f32, j as f32 / n as f32);
-        let mix = |f: fn(&PreviewVertex) -> [f32; 3]| {
-            Vec3::from(f(&t[0])) * (1.0 - a - b)
-                + Vec3::from(f(&t[1])) * a
-                + Vec3::from(f(&t[2])) * b
-        };
-        let normal = mix(|v| v.normal).normalize_or(Vec3::from(t[0].normal));
-        vertex(mix(|v| v.position), normal, t[0].material)
+        let normal = grid_point(normals, (i, j), n).normalize_or(normals[0]);
+        vertex(grid_point(positions, (i, j), n), normal, t[0].material)
     };
     for j in 0..n {
         for i in 0..n - j {
@@ -187,6 +182,31 @@ fn subdivide(out: &mut Vec<PreviewVertex>, t: [PreviewVertex; 3], n: u32) {
                 out.extend([at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]);
             }
         }
+    }
+}
+
+/// The point (or normal) of `corners` at grid corner (i, j) of a triangle cut `n` times along
+/// each edge: barycentrics (1 − i/n − j/n, i/n, j/n), as `subdivide` places its vertices.
+pub fn grid_point(corners: [Vec3; 3], (i, j): (u32, u32), n: u32) -> Vec3 {
+    let (a, b) = (i as f32 / n as f32, j as f32 / n as f32);
+    corners[0] * (1.0 - a - b) + corners[1] * a + corners[2] * b
+}
+
+/// The sub-triangle of a triangle cut `n` times along each edge (as
+/// `subdivide` cuts it) holding the point of barycentrics (1 − a − b, a, b):
+/// its corners on the grid of step 1/n and the point's weights on them.
+pub fn sub_triangle(a: f32, b: f32, n: u32) -> ([(u32, u32); 3], [f32; 3]) {
+    let (x, y) = (a * n as f32, b * n as f32);
+    let i = (x.floor() as u32).min(n - 1);
+    let j = (y.floor() as u32).min(n - 1 - i);
+    let (fa, fb) = (x - i as f32, y - j as f32);
+    if fa + fb <= 1.0 {
+        ([(i, j), (i + 1, j), (i, j + 1)], [1.0 - fa - fb, fa, fb])
+    } else {
+        (
+            [(i + 1, j), (i + 1, j + 1), (i, j + 1)],
+            [1.0 - fb, fa + fb - 1.0, 1.0 - fa],
+        )
     }
 }
 
@@ -498,7 +518,7 @@ impl Composer {
 }
 
 #[cfg(test)]
-mod composer_tests {
+mod tests {
     use super::*;
     use std::path::Path;
 
@@ -588,6 +608,36 @@ mod composer_tests {
                 (area - normal.length() / 2.0).abs() < 1e-5,
                 "n = {n}: {area}"
             );
+        }
+    }
+
+    /// Every point of the triangle falls in a sub-triangle with non-negative weights summing
+    /// to 1 that put it back where it was.
+    #[test]
+    fn a_point_is_the_mix_of_its_sub_triangles_corners() {
+        for n in [1, 2, 3, 16] {
+            for (a, b) in [
+                (0.0, 0.0),
+                (1.0, 0.0),
+                (0.0, 1.0),
+                (0.3, 0.7),
+                (0.41, 0.2),
+                (0.9, 0.05),
+            ] {
+                let (corners, w) = sub_triangle(a, b, n);
+                assert!(w.iter().all(|&w| w >= -1e-6), "{n} {a} {b}: {w:?}");
+                assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+                let mix = |f: fn((u32, u32)) -> u32| {
+                    corners
+                        .iter()
+                        .zip(w)
+                        .map(|(&c, w)| f(c) as f32 / n as f32 * w)
+                        .sum::<f32>()
+                };
+                assert!((mix(|c| c.0) - a).abs() < 1e-5, "{n} {a} {b}");
+                assert!((mix(|c| c.1) - b).abs() < 1e-5, "{n} {a} {b}");
+                assert!(corners.iter().all(|&(i, j)| i + j <= n));
+            }
         }
     }
 }

@@ -24,7 +24,7 @@ use crate::fermat::{Sphere, alhazen_sphere, drawn_in_preview, seen_from_outside}
 use crate::gpu::GpuContext;
 use crate::gpu::preview::{ReflectionOptions, draw_with, extent_and_far};
 use crate::pack::flatten;
-use crate::preview::{Reflector, clip_matrix, reflectors, tessellate};
+use crate::preview::{Reflector, clip_matrix, grid_point, reflectors, sub_triangle, tessellate};
 use crate::render::Image;
 use crate::scene::Scene;
 
@@ -235,10 +235,7 @@ fn displacements(
                 w[from] += 1.0 - s;
                 w[to] += s;
                 let (sub, weights) = sub_triangle(w[1], w[2], n);
-                let point = |(i, j): (u32, u32)| {
-                    let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
-                    a * (1.0 - u - v) + b * u + c * v
-                };
+                let point = |corner| grid_point([a, b, c], corner, n);
                 features.push((a * w[0] + b * w[1] + c * w[2], weights, k == 0));
                 corners.extend(sub.map(point));
             }
@@ -289,24 +286,6 @@ fn displacements(
         ));
     }
     Ok(out)
-}
-
-/// The sub-triangle of a triangle cut `n` times along each edge (as
-/// `preview::reflected_triangles` cuts it) holding the point of barycentrics (1 − a − b, a, b):
-/// its corners on the grid of step 1/n and the point's weights on them.
-fn sub_triangle(a: f32, b: f32, n: u32) -> ([(u32, u32); 3], [f32; 3]) {
-    let (x, y) = (a * n as f32, b * n as f32);
-    let i = (x.floor() as u32).min(n - 1);
-    let j = (y.floor() as u32).min(n - 1 - i);
-    let (fa, fb) = (x - i as f32, y - j as f32);
-    if fa + fb <= 1.0 {
-        ([(i, j), (i + 1, j), (i, j + 1)], [1.0 - fa - fb, fa, fb])
-    } else {
-        (
-            [(i + 1, j), (i + 1, j + 1), (i, j + 1)],
-            [1.0 - fb, fa + fb - 1.0, 1.0 - fa],
-        )
-    }
 }
 
 /// The pixels whose centre's camera ray meets the reflector's sphere.
@@ -384,40 +363,5 @@ impl FermatReport {
             );
         }
         out
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::sub_triangle;
-
-    /// Every point of the triangle falls in a sub-triangle with non-negative weights summing
-    /// to 1 that put it back where it was.
-    #[test]
-    fn a_point_is_the_mix_of_its_sub_triangles_corners() {
-        for n in [1, 2, 3, 16] {
-            for (a, b) in [
-                (0.0, 0.0),
-                (1.0, 0.0),
-                (0.0, 1.0),
-                (0.3, 0.7),
-                (0.41, 0.2),
-                (0.9, 0.05),
-            ] {
-                let (corners, w) = sub_triangle(a, b, n);
-                assert!(w.iter().all(|&w| w >= -1e-6), "{n} {a} {b}: {w:?}");
-                assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-6);
-                let mix = |f: fn((u32, u32)) -> u32| {
-                    corners
-                        .iter()
-                        .zip(w)
-                        .map(|(&c, w)| f(c) as f32 / n as f32 * w)
-                        .sum::<f32>()
-                };
-                assert!((mix(|c| c.0) - a).abs() < 1e-5, "{n} {a} {b}");
-                assert!((mix(|c| c.1) - b).abs() < 1e-5, "{n} {a} {b}");
-                assert!(corners.iter().all(|&(i, j)| i + j <= n));
-            }
-        }
     }
 }
