@@ -9,7 +9,8 @@
 //!
 //! interpolated linearly, vanish at P = (1 − α − β) A + α B + β C with
 //! (1 − α − β) G_A + α G_B + β G_C = 0 (α, β outside [0, 1] extrapolate); P replaces the corner
-//! farthest from it, until the triangle is small or the steps run out. The first two corners
+//! farthest from it (the next farthest where that would leave the triangle flat), until the
+//! triangle or the step is small or the steps run out. The first two corners
 //! are where the segments E → O and V → O cross the reflector (O inside it); the third makes a
 //! triangle that is not flat (a quarter of AB off its middle). A sphere is parametrised with its
 //! poles on the normal of the plane through E, V and its centre (`Sphere::facing`): the
@@ -19,6 +20,7 @@
 //! reflectors of the CPU search only so far: the raster preview reflects in spheres
 //! (docs/fermat.md).
 
+use crate::layout::{FERMAT_C_OFFSET, FERMAT_FLAT, FERMAT_SPREAD};
 use glam::{DVec2, DVec3};
 
 /// A smooth parametric surface a reflection is searched on.
@@ -393,15 +395,13 @@ impl Reflector for BezierPatch {
     }
 }
 
-/// How far C stands off the middle of AB, in lengths of AB.
-const C_OFFSET: f64 = 0.25;
-
 /// The solver's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Solver {
     /// Steps at most (the seed's 4–5).
     pub max_steps: u32,
-    /// The search stops when the triangle's longest side in (u, v) is below this.
+    /// The search stops when the triangle's longest side in (u, v) is below this, or its last
+    /// step moved less (the triangle keeps a far corner where it would otherwise go flat).
     pub min_size: f64,
 }
 
@@ -434,43 +434,66 @@ pub fn gradient(reflector: &impl Reflector, eye: DVec3, vertex: DVec3, uv: DVec2
 }
 
 /// The seed's initial triangle: A and B where E → O and V → O cross the reflector, C off the
-/// side AB by its length (or by `spread` when A and B coincide), so the triangle is not flat.
-pub fn initial_triangle(
-    reflector: &impl Reflector,
-    eye: DVec3,
-    vertex: DVec3,
-    spread: f64,
-) -> [DVec2; 3] {
+/// middle of AB by `FERMAT_C_OFFSET` of its length, so the triangle is not flat (or a triangle
+/// of side `FERMAT_SPREAD` at A when A and B coincide).
+pub fn initial_triangle(reflector: &impl Reflector, eye: DVec3, vertex: DVec3) -> [DVec2; 3] {
     let (a, mut b) = (reflector.crossing(eye), reflector.crossing(vertex));
     // A periodic u (an azimuth) is unwrapped so that the side AB takes the short way round.
     if let Some(period) = reflector.u_period() {
         b.x += period * ((a.x - b.x) / period).round();
     }
     let side = b - a;
-    let length = side.length();
-    let c = if length > spread {
-        (a + b) / 2.0 + side.perp() * C_OFFSET
+    let spread = f64::from(FERMAT_SPREAD);
+    if side.length() > spread {
+        [
+            a,
+            b,
+            (a + b) / 2.0 + side.perp() * f64::from(FERMAT_C_OFFSET),
+        ]
     } else {
-        a + DVec2::new(spread, spread)
+        [
+            a,
+            a + DVec2::new(spread, 0.0),
+            a + DVec2::new(spread, spread),
+        ]
+    }
+}
+
+/// The corner a step's new point `p` replaces: the farthest from it (the seed's rule), or the
+/// next farthest where replacing that one would leave a flat triangle (`FERMAT_FLAT`).
+pub fn replaced_corner(corners: &[DVec2; 3], p: DVec2) -> usize {
+    let mut by_distance = [0, 1, 2];
+    // Farthest first; among equals the later corner, as the kernel's `>=` scan picks it.
+    by_distance.sort_by(|&i, &j| {
+        (corners[j] - p)
+            .length()
+            .total_cmp(&(corners[i] - p).length())
+            .then(j.cmp(&i))
+    });
+    let flat = |k: usize| {
+        let mut t = *corners;
+        t[k] = p;
+        let longest = (0..3)
+            .map(|i| (t[i] - t[(i + 1) % 3]).length_squared())
+            .fold(0.0, f64::max);
+        (t[1] - t[0]).perp_dot(t[2] - t[0]).abs() < f64::from(FERMAT_FLAT) * longest
     };
-    let b = if length > spread {
-        b
-    } else {
-        a + DVec2::new(spread, 0.0)
-    };
-    [a, b, c]
+    by_distance
+        .into_iter()
+        .find(|&k| !flat(k))
+        .unwrap_or(by_distance[0])
 }
 
 impl Solver {
     /// Searches the reflection of `vertex` seen from `eye` on `reflector`.
     pub fn solve(&self, reflector: &impl Reflector, eye: DVec3, vertex: DVec3) -> Solution {
-        let mut corners = initial_triangle(reflector, eye, vertex, 1e-3);
-        let mut best = corners[0];
+        let mut corners = initial_triangle(reflector, eye, vertex);
+        let (mut best, mut moved) = (corners[0], f64::INFINITY);
         for step in 0..self.max_steps {
             let size = (0..3)
                 .map(|i| (corners[i] - corners[(i + 1) % 3]).length())
                 .fold(0.0, f64::max);
-            if size < self.min_size {
+            if size.min(moved) < self.min_size {
                 return Solution {
                     uv: best,
                     steps: step,
@@ -492,13 +515,8 @@ impl Solver {
             let beta = (-m0.x * ga.y + ga.x * m0.y) / det;
             let [a, b, c] = corners;
             let p = (1.0 - alpha - beta) * a + alpha * b + beta * c;
-            let farthest = (0..3)
-                .max_by(|&i, &j| {
-                    let (di, dj) = ((corners[i] - p).length(), (corners[j] - p).length());
-                    di.total_cmp(&dj)
-                })
-                .expect("three corners");
-            corners[farthest] = p;
+            corners[replaced_corner(&corners, p)] = p;
+            moved = (p - best).length();
             best = p;
         }
         Solution {

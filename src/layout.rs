@@ -557,6 +557,22 @@ const _: () = assert!(size_of::<GpuPass>() == 64);
 /// scenes; 2e-3 rejects many points f32's search cannot refine further.
 pub const REFLECTION_TOLERANCE: f32 = 1e-2;
 
+/// The Fermat search's initial corner C stands off the middle of AB by this many lengths of AB
+/// (the seed asks only for a triangle that is not flat).
+pub const FERMAT_C_OFFSET: f32 = 0.25;
+
+/// Where the crossings A and B are closer than this (radians of the parameters), the initial
+/// triangle is spread by it instead, so the search still starts from a triangle.
+pub const FERMAT_SPREAD: f32 = 1e-3;
+
+/// A step's new point replaces the corner farthest from it unless that leaves a flat triangle:
+/// twice its area below this fraction of its longest side squared (a height under 1/1000 of the
+/// side). Then the next farthest goes. On a sphere d(u, v) is separable in the facing frame:
+/// A, B and every point the search finds lie on the equator, and replacing C there left three
+/// collinear corners whose gradients' system is singular, the next step noise. The seed warns
+/// that flat triangles break the step's system.
+pub const FERMAT_FLAT: f32 = 1e-3;
+
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
 pub fn wgsl_prelude() -> String {
     let u32s = [
@@ -609,6 +625,13 @@ pub fn wgsl_prelude() -> String {
     }
     out += &format!("const T_FAR: f32 = {T_FAR:e};\n");
     out += &format!("const REFLECTION_TOLERANCE: f32 = {REFLECTION_TOLERANCE:e};\n");
+    for (name, value) in [
+        ("FERMAT_C_OFFSET", FERMAT_C_OFFSET),
+        ("FERMAT_SPREAD", FERMAT_SPREAD),
+        ("FERMAT_FLAT", FERMAT_FLAT),
+    ] {
+        out += &format!("const {name}: f32 = {value:e};\n");
+    }
     for (name, _) in FEATURES {
         out += &format!("override {name}: bool = true;\n");
     }

@@ -1,6 +1,6 @@
 //! The Fermat solver on a sphere: where it converged to the side E and V see, the law of
 //! reflection holds to 1e-4 rad and the point is Alhazen's (solved independently in f64). Within
-//! the seed's 5 steps it does so for 82% of random configurations (the issue asks 99%: not yet;
+//! the seed's 5 steps it does so for 90% of random configurations (the issue asks 99%: not yet;
 //! the rest are printed with where they are, and the rate per band of the angle of incidence),
 //! a floor this test keeps.
 
@@ -79,7 +79,7 @@ fn the_solver_finds_alhazens_point_within_five_steps() {
     );
     assert!(total > 1500, "{total} configurations kept");
     assert!(
-        converged as f64 >= 0.8 * total as f64,
+        converged as f64 >= 0.88 * total as f64,
         "{converged} of {total}"
     );
 }
@@ -271,12 +271,12 @@ fn tally<R: Reflector>(
 }
 
 /// The other reflectors (ellipsoid, cylinder, torus, a bicubic Bézier dome), 400 random
-/// configurations each: where the search says it converged (its triangle shrank below 1e-9
-/// within 30 steps), its point is a reflection (the law of reflection holds to 1e-4 rad) or the
-/// point where the segment E → V crosses the surface, d's other stationary point (its global
-/// minimum |EV|: V hidden behind the reflector, no reflection). Measured (seeded): ellipsoid
-/// 393 reflections + 5 crossings of 399, one neither; cylinder 380 + 21 of 400 (one both);
-/// torus 363 + 14 of 377; dome 399 of 399. How often it converges within the seed's 5 steps is
+/// configurations each: where the search says it converged (its triangle or its last step
+/// shrank below 1e-9 within 30 steps), its point is a reflection (the law of reflection holds
+/// to 1e-4 rad) or the point where the segment E → V crosses the surface, d's other stationary
+/// point (its global minimum |EV|: V hidden behind the reflector, no reflection). Measured
+/// (seeded): ellipsoid 395 reflections + 5 crossings of 400; cylinder 378 + 20 of 398; torus
+/// 362 + 15 of 377; dome 399 of 399. How often it converges within the seed's 5 steps is
 /// printed and kept above floors, not promised.
 #[test]
 fn the_other_reflectors_obey_the_law_of_reflection_where_the_search_converged() {

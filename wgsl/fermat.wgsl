@@ -1,13 +1,12 @@
 // Reflections on a sphere by Fermat's principle: one invocation finds, for one scene vertex V
 // and the eye E, the point P of the sphere where E -> P -> V has extremal length, by the seed's
 // search on a triangle in the (u, v) plane (see src/fermat.rs for the method), in f32.
-// Mirrors: src/fermat.rs (Sphere::facing, initial_triangle, Solver::solve), step for step.
+// Mirrors: src/fermat.rs (Sphere::facing, initial_triangle, replaced_corner, Solver::solve),
+// step for step; the search's constants come from src/layout.rs.
 
 // Steps at most: the seed's 5 unless the pipeline overrides it (`gpu::fermat::FermatPass`).
 override FERMAT_STEPS: u32 = 5u;
 const FERMAT_MIN_SIZE: f32 = 1e-7;
-const FERMAT_C_OFFSET: f32 = 0.25;
-const FERMAT_SPREAD: f32 = 1e-3;
 const TAU: f32 = 6.283185307179586;
 
 // The sphere's parametrisation frame facing E and V: x toward the bisector, y (the poles' axis)
@@ -61,6 +60,43 @@ fn fermat_gradient(f: Facing, eye: vec3<f32>, vertex: vec3<f32>, uv: vec2<f32>) 
     return vec2<f32>(-dot(fu, pull), -dot(fv, pull));
 }
 
+// Twice the area of the corners with corner k replaced by p, against its longest side squared.
+fn flat_with(corners: array<vec2<f32>, 3>, k: u32, p: vec2<f32>) -> bool {
+    var t = corners;
+    t[k] = p;
+    let longest = max(max(dot(t[1] - t[0], t[1] - t[0]), dot(t[2] - t[1], t[2] - t[1])),
+        dot(t[0] - t[2], t[0] - t[2]));
+    let e0 = t[1] - t[0];
+    let e1 = t[2] - t[0];
+    return abs(e0.x * e1.y - e0.y * e1.x) < FERMAT_FLAT * longest;
+}
+
+// The corner p replaces: the farthest from it, or the next farthest where that would leave a
+// flat triangle (src/fermat.rs `replaced_corner`; ties go to the later corner on both sides).
+fn replaced_corner(corners: array<vec2<f32>, 3>, p: vec2<f32>) -> u32 {
+    var taken = array<bool, 3>(false, false, false);
+    var farthest = 0u;
+    for (var rank = 0u; rank < 3u; rank += 1u) {
+        var pick = 0u;
+        var far = -1.0;
+        for (var k = 0u; k < 3u; k += 1u) {
+            let d = length(corners[k] - p);
+            if (!taken[k] && d >= far) {
+                far = d;
+                pick = k;
+            }
+        }
+        taken[pick] = true;
+        if (rank == 0u) {
+            farthest = pick;
+        }
+        if (!flat_with(corners, pick, p)) {
+            return pick;
+        }
+    }
+    return farthest;
+}
+
 @compute @workgroup_size(64, 1, 1)
 fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.x;
@@ -85,12 +121,13 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         corners[2] = a0 + vec2<f32>(FERMAT_SPREAD, FERMAT_SPREAD);
     }
     var best = corners[0];
+    var moved = 3.0e38;
     var steps = FERMAT_STEPS;
     var degenerate = 0u;
     for (var step = 0u; step < FERMAT_STEPS; step += 1u) {
         let size = max(max(length(corners[0] - corners[1]), length(corners[1] - corners[2])),
             length(corners[2] - corners[0]));
-        if (size < FERMAT_MIN_SIZE) {
+        if (min(size, moved) < FERMAT_MIN_SIZE) {
             steps = step;
             break;
         }
@@ -108,16 +145,8 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         let alpha = (-ga.x * m1.y + m1.x * ga.y) / det;
         let beta = (-m0.x * ga.y + ga.x * m0.y) / det;
         let p = (1.0 - alpha - beta) * corners[0] + alpha * corners[1] + beta * corners[2];
-        var farthest = 0u;
-        var far = length(corners[0] - p);
-        for (var k = 1u; k < 3u; k += 1u) {
-            let d = length(corners[k] - p);
-            if (d >= far) {
-                far = d;
-                farthest = k;
-            }
-        }
-        corners[farthest] = p;
+        corners[replaced_corner(corners, p)] = p;
+        moved = length(p - best);
         best = p;
     }
     let point = sphere_point(f, best);
