@@ -31,6 +31,11 @@ pub const PRIM_QUAD: u32 = 2;
 /// An infinite plane, tested outside the BVH.
 pub const PRIM_PLANE: u32 = 3;
 
+/// `GpuReflector::kind`: a sphere.
+pub const REFLECTOR_SPHERE: u32 = 0;
+/// `GpuReflector::kind`: a torus around the vertical axis through its centre.
+pub const REFLECTOR_TORUS: u32 = 1;
+
 /// Material models (`GpuMaterial::model`); every model also carries a perfect-mirror term.
 /// Lambert: diffuse only (BRDF diffuse / pi); the scene format's `mirror` model is Lambert too.
 pub const MODEL_LAMBERT: u32 = 0;
@@ -498,19 +503,25 @@ pub struct GpuRay {
     pub _pad0: u32,
 }
 
-/// A Fermat solve's reflector and eye (`wgsl/fermat.wgsl`): a sphere, and how many vertices
-/// the `fermat_vertices` buffer holds.
+/// A Fermat solve's reflector and eye (`wgsl/fermat.wgsl`): a sphere or a torus (around the
+/// vertical axis through its centre), and how many vertices the `fermat_vertices` buffer holds.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuReflector {
-    /// The sphere's centre (scene units).
+    /// The sphere's or torus's centre (scene units).
     pub center: [f32; 3],
-    /// The sphere's radius (scene units).
+    /// The sphere's radius, or the torus's major radius R (scene units).
     pub radius: f32,
     /// The eye E (scene units).
     pub eye: [f32; 3],
     /// Vertices to solve.
     pub count: u32,
+    /// `REFLECTOR_SPHERE` or `REFLECTOR_TORUS`.
+    pub kind: u32,
+    /// The torus's tube radius r (scene units); 0 for a sphere.
+    pub minor: f32,
+    /// Padding to the WGSL layout.
+    pub _pad: [u32; 2],
 }
 
 /// One vertex's reflection point, as the Fermat kernel finds it (`fermat::Solver` is its CPU
@@ -518,10 +529,14 @@ pub struct GpuReflector {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuReflection {
-    /// P, on the sphere (scene units).
+    /// P, on the reflector (scene units).
     pub point: [f32; 3],
     /// Steps taken.
     pub steps: u32,
+    /// The reflector's outward unit normal at P.
+    pub normal: [f32; 3],
+    /// Padding to the WGSL layout.
+    pub _pad: u32,
     /// P's parameters (u, v) in the vertex's facing frame (`fermat::Sphere::facing`).
     pub uv: [f32; 2],
     /// |P − V|, the reflected point's depth for hidden-surface removal among reflections.
@@ -538,8 +553,8 @@ impl GpuLight {
 }
 
 const _: () = assert!(size_of::<GpuRay>() == 32);
-const _: () = assert!(size_of::<GpuReflector>() == 32);
-const _: () = assert!(size_of::<GpuReflection>() == 32);
+const _: () = assert!(size_of::<GpuReflector>() == 48);
+const _: () = assert!(size_of::<GpuReflection>() == 48);
 const _: () = assert!(size_of::<GpuBvhNode>() == 32);
 const _: () = assert!(size_of::<GpuCwNode>() == 80);
 const _: () = assert!(size_of::<GpuPrimitive>() == 48);
@@ -586,6 +601,8 @@ pub fn wgsl_prelude() -> String {
         ("PRIM_SPHERE", PRIM_SPHERE),
         ("PRIM_QUAD", PRIM_QUAD),
         ("PRIM_PLANE", PRIM_PLANE),
+        ("REFLECTOR_SPHERE", REFLECTOR_SPHERE),
+        ("REFLECTOR_TORUS", REFLECTOR_TORUS),
         ("MODEL_LAMBERT", MODEL_LAMBERT),
         ("MODEL_PHONG", MODEL_PHONG),
         ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),

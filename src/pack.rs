@@ -49,6 +49,9 @@ pub struct FlatScene {
     pub crop: [u32; 4],
     /// Adaptive sampling, when the scene asks for it (`render.noise_target`).
     pub adaptive: Option<crate::adaptive::AdaptiveSettings>,
+    /// The scene's parametric surfaces (tori) with their mesh's primitives, for the raster
+    /// preview's Fermat reflections; the ray tracers see only the primitives.
+    pub surfaces: Vec<FlatSurface>,
     /// Whether renders also sum the first hits' depth, normal and albedo (`render::Aovs`);
     /// an output choice (`chambre render --aov`), false unless set.
     pub aovs: bool,
@@ -57,6 +60,15 @@ pub struct FlatScene {
     cwbvh: std::sync::OnceLock<Result<CwGeometry, String>>,
     /// The CPU's wide BVH (`accel::wide`), made from the CWBVH on first use.
     wide: std::sync::OnceLock<Result<WideBvh, String>>,
+}
+
+/// A parametric surface of the scene and its mesh's primitives in `FlatScene::prims`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlatSurface {
+    /// The surface.
+    pub torus: crate::fermat::Torus,
+    /// The indices of its triangles in `FlatScene::prims` (BVH order).
+    pub prims: Vec<u32>,
 }
 
 impl FlatScene {
@@ -168,8 +180,11 @@ pub fn flatten(scene: &Scene) -> FlatScene {
     // Each bounded primitive's velocity, in `bounded` order (filled as they are added).
     let mut velocities: Vec<Vec3> = Vec::new();
     let velocity_of = |shape: usize| scene.velocities.get(shape).copied().unwrap_or(Vec3::ZERO);
+    // Each shape's primitives in `bounded`.
+    let mut shape_prims = Vec::with_capacity(scene.shapes.len());
     for (shape_index, shape) in scene.shapes.iter().enumerate() {
         let velocity = velocity_of(shape_index);
+        let first = bounded.len();
         match shape {
             Shape::Sphere {
                 center,
@@ -240,6 +255,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             }
         }
         velocities.resize(bounded.len(), velocity);
+        shape_prims.push(first..bounded.len());
     }
     // Area lights are surfaces too: a one-sided emitting quad with a material of its own.
     let mut lights = Vec::new();
@@ -328,6 +344,17 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         shutter: camera.shutter.map(|t| t as f32),
     };
     let geometry = build_geometry(bounded, planes, &motion);
+    let surfaces = scene
+        .surfaces
+        .iter()
+        .map(|s| FlatSurface {
+            torus: s.surface,
+            prims: shape_prims[s.shape]
+                .clone()
+                .map(|i| geometry.new_index[i])
+                .collect(),
+        })
+        .collect();
     // The area lights' quads, now in BVH order.
     for light in &mut lights {
         if light.prim != NONE {
@@ -386,6 +413,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         build_time: geometry.build_time,
         crop: render.crop,
         adaptive: render.adaptive,
+        surfaces,
         aovs: false,
         cwbvh: std::sync::OnceLock::new(),
         wide: std::sync::OnceLock::new(),

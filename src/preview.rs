@@ -14,9 +14,14 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 
 use crate::camera::CameraSpec;
-use crate::layout::{GpuPrimitive, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
+use crate::fermat::Torus;
+use crate::layout::{
+    GpuPrimitive, GpuReflector, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE,
+    REFLECTOR_SPHERE, REFLECTOR_TORUS,
+};
 use crate::pack::FlatScene;
 use crate::scene::Scene;
+use crate::scene::surface::torus_mesh_of;
 
 /// One vertex of the preview's triangle list.
 #[repr(C)]
@@ -36,6 +41,10 @@ pub struct PreviewVertex {
 
 /// Segments around a tessellated sphere (and half as many from pole to pole).
 pub const SPHERE_SEGMENTS: u32 = 64;
+
+/// Quads around a torus's axis and its tube in the preview: within (R + r)(1 − cos(π/64)) ≈
+/// 1.2e-3 (R + r) of the torus, where the ray tracers' mesh has `scene::surface::TORUS_QUADS`.
+pub const PREVIEW_TORUS_QUADS: [u32; 2] = [64, 32];
 
 /// The preview's uniforms: the clip matrix and what shading needs of the frame.
 #[repr(C)]
@@ -61,8 +70,6 @@ pub struct PreviewUniforms {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ReflectorPass {
-    /// The sphere: centre and radius (w).
-    pub sphere: [f32; 4],
     /// Reflected depths |P − V| are divided by this to land in [0, 1].
     pub far: f32,
     /// 1 + the reflector's index: the id the main pass wrote where it is seen.
@@ -77,9 +84,32 @@ pub struct ReflectorPass {
 /// reach `extent` from their point each way).
 pub fn tessellate(scene: &FlatScene, extent: f32) -> Vec<PreviewVertex> {
     let end = (scene.frame.plane_start + scene.frame.plane_count) as usize;
-    let reflectors = reflectors(scene);
+    let tags = reflector_tags(scene, &reflectors(scene));
+    // A torus's fine mesh is the ray tracers'; the preview draws a coarser one of its own.
+    let mut on_surface = vec![false; scene.prims.len()];
     let mut vertices = Vec::new();
+    for s in &scene.surfaces {
+        s.prims.iter().for_each(|&p| on_surface[p as usize] = true);
+        let Some(&first) = s.prims.first() else {
+            continue;
+        };
+        let (material, tag) = (scene.prims[first as usize].material, tags[first as usize]);
+        let mesh = torus_mesh_of(&s.torus, PREVIEW_TORUS_QUADS);
+        let normals = mesh.normals.as_deref().unwrap_or_default();
+        for t in &mesh.triangles {
+            for &k in t {
+                let (p, n) = (mesh.positions[k as usize], normals[k as usize]);
+                vertices.push(PreviewVertex {
+                    reflector: tag,
+                    ..vertex(p, n, material)
+                });
+            }
+        }
+    }
     for (i, p) in scene.prims[..end].iter().enumerate() {
+        if on_surface[i] {
+            continue;
+        }
         let normals = scene.normals.get(p.normals as usize);
         let first = vertices.len();
         match p.kind {
@@ -89,49 +119,107 @@ pub fn tessellate(scene: &FlatScene, extent: f32) -> Vec<PreviewVertex> {
             PRIM_PLANE => plane(&mut vertices, p, extent),
             _ => unreachable!("primitive {i} of kind {}", p.kind),
         }
-        if let Some(r) = reflectors.iter().position(|r| r.prim == i) {
-            for v in &mut vertices[first..] {
-                v.reflector = r as u32 + 1;
-            }
+        for v in &mut vertices[first..] {
+            v.reflector = tags[i];
         }
     }
     vertices
 }
 
-/// A sphere the preview shows Fermat reflections on: one whose material has a mirror term.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A curved mirror the preview reflects in by Fermat's principle.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Reflector {
-    /// Its primitive's index in the flattened scene.
-    pub prim: usize,
-    /// Centre (scene units).
-    pub center: Vec3,
-    /// Radius (scene units).
-    pub radius: f32,
+    /// Its surface.
+    pub surface: MirrorSurface,
+    /// Its primitives' indices in the flattened scene (a sphere's one, a torus's triangles).
+    pub prims: Vec<usize>,
     /// Its material's index.
     pub material: u32,
     /// Its material's mirror reflectance per channel.
     pub mirror: Vec3,
 }
 
-/// The scene's mirror spheres, in primitive order (flat mirrors, mirror triangles and quads
-/// are drawn with their diffuse term only: the seed's method is for curved reflectors).
+/// The surfaces the Fermat kernel solves on (`wgsl/fermat.wgsl`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MirrorSurface {
+    /// A sphere (a primitive of its own).
+    Sphere {
+        /// Centre (scene units).
+        center: Vec3,
+        /// Radius (scene units).
+        radius: f32,
+    },
+    /// A torus (rendered as a mesh).
+    Torus(Torus),
+}
+
+impl MirrorSurface {
+    /// The Fermat kernel's uniforms for this surface, the eye at `eye`, `count` vertices.
+    pub fn gpu(&self, eye: Vec3, count: u32) -> GpuReflector {
+        let (kind, center, radius, minor) = match *self {
+            MirrorSurface::Sphere { center, radius } => (REFLECTOR_SPHERE, center, radius, 0.0),
+            MirrorSurface::Torus(t) => (
+                REFLECTOR_TORUS,
+                t.center.as_vec3(),
+                t.major as f32,
+                t.minor as f32,
+            ),
+        };
+        GpuReflector {
+            center: center.to_array(),
+            radius,
+            eye: eye.to_array(),
+            count,
+            kind,
+            minor,
+            _pad: [0; 2],
+        }
+    }
+}
+
+/// The scene's curved mirrors: mirror spheres in primitive order, then mirror tori (flat
+/// mirrors, mirror triangles and quads of meshes are drawn with their diffuse term only: the
+/// seed's method is for smooth curved reflectors).
 pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
+    let mirror_of = |material: u32| Vec3::from(scene.materials[material as usize].mirror);
     let bounded = &scene.prims[..scene.frame.plane_start as usize];
-    bounded
+    let spheres = bounded
         .iter()
         .enumerate()
         .filter(|(_, p)| p.kind == PRIM_SPHERE)
-        .filter_map(|(prim, p)| {
-            let mirror = Vec3::from(scene.materials[p.material as usize].mirror);
-            (mirror.max_element() > 0.0).then_some(Reflector {
-                prim,
+        .map(|(prim, p)| Reflector {
+            surface: MirrorSurface::Sphere {
                 center: Vec3::from(p.p0),
                 radius: p.p1[0],
-                material: p.material,
-                mirror,
-            })
+            },
+            prims: vec![prim],
+            material: p.material,
+            mirror: mirror_of(p.material),
+        });
+    let tori = scene.surfaces.iter().filter_map(|s| {
+        let material = scene.prims[*s.prims.first()? as usize].material;
+        Some(Reflector {
+            surface: MirrorSurface::Torus(s.torus),
+            prims: s.prims.iter().map(|&p| p as usize).collect(),
+            material,
+            mirror: mirror_of(material),
         })
+    });
+    spheres
+        .chain(tori)
+        .filter(|r| r.mirror.max_element() > 0.0)
         .collect()
+}
+
+/// Per primitive of `scene`, 1 + the index of the reflector it belongs to, or 0.
+fn reflector_tags(scene: &FlatScene, reflectors: &[Reflector]) -> Vec<u32> {
+    let mut tags = vec![0; scene.prims.len()];
+    for (r, reflector) in reflectors.iter().enumerate() {
+        for &p in &reflector.prims {
+            tags[p] = r as u32 + 1;
+        }
+    }
+    tags
 }
 
 /// The triangles the reflectors reflect: every triangle of `tessellate` that is not on a

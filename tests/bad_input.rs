@@ -638,3 +638,41 @@ fn a_spot_light_needs_its_direction_and_ordered_cones() {
     let area = spot("direction = [0.0, -1.0, 0.0]\nsamples = 4");
     expect_error(from, &area, 28, "samples", "spot light");
 }
+
+/// A torus must be a ring torus (its tube thinner than its ring), have both radii, and take
+/// none of a sphere's other fields.
+#[test]
+fn torus_fields() {
+    let sphere = "type = \"sphere\"\ncenter = [0.0, 1.0, 0.0]\nradius = 1.0";
+    let torus = |radii: &str| format!("type = \"torus\"\ncenter = [0.0, 1.0, 0.0]\n{radii}");
+    let valid = BASE.replacen(sphere, &torus("major_radius = 1.0\nminor_radius = 0.3"), 1);
+    Scene::from_str(Path::new("ok.toml"), &valid, &[]).unwrap();
+    expect_error(
+        sphere,
+        &torus("major_radius = 1.0\nminor_radius = 1.5"),
+        16,
+        "shapes[0].minor_radius",
+        "below major_radius",
+    );
+    expect_error(
+        sphere,
+        &torus("major_radius = 1.0\nminor_radius = -0.5"),
+        16,
+        "shapes[0].minor_radius",
+        "positive",
+    );
+    expect_error(
+        sphere,
+        &torus("major_radius = 1.0\nradius = 0.5"),
+        16,
+        "shapes[0].radius",
+        "does not apply to a torus",
+    );
+    expect_error(
+        sphere,
+        &torus("major_radius = 1.0"),
+        12,
+        "shapes[0].minor_radius",
+        "required",
+    );
+}

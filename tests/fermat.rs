@@ -4,11 +4,13 @@
 //! the rest are printed with where they are, and the rate per band of the angle of incidence),
 //! a floor this test keeps.
 
+use chambre::bench::fermat::{FermatConfig, FermatReport};
 use chambre::fermat::{
     BezierPatch, Cylinder, Ellipsoid, Reflector, Solver, Sphere, Torus, alhazen_sphere,
     reflection_error, seen_from_outside,
 };
 use chambre::math::rng::Rng;
+use chambre::preview::MirrorSurface;
 use glam::DVec3;
 
 mod common;
@@ -109,8 +111,10 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points() {
         .collect();
     let on_gpu = chambre::gpu::fermat::reflections(
         &context,
-        sphere.center.as_vec3(),
-        sphere.radius as f32,
+        MirrorSurface::Sphere {
+            center: sphere.center.as_vec3(),
+            radius: sphere.radius as f32,
+        },
         eye.as_vec3(),
         &vertices.iter().map(|v| v.as_vec3()).collect::<Vec<_>>(),
         chambre::gpu::fermat::SEED_STEPS,
@@ -158,37 +162,42 @@ fn alhazens_point_obeys_the_law_of_reflection() {
     assert!((p - DVec3::X).length() < 1e-12, "{p}");
 }
 
-/// The raster preview's Fermat reflections against the ray tracer (`chambre bench fermat` on
-/// the sample scene, made small): corners (vertices) land where Alhazen's f64 points put them;
-/// points between them move as the seed says (straight reflected edges) and come within a
-/// pixel once the floor is cut 16x16; FLIP over the sphere's pixels falls with the
-/// subdivision; and the report's JSON carries its figures.
-#[test]
-fn preview_reflections_land_where_the_ray_tracer_puts_them() {
-    let Some(context) = common::gpu_context() else {
-        return;
-    };
-    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fermat_sphere.toml");
-    let subdivisions = [1, 4];
+/// The Fermat comparison (`chambre bench fermat`) on `scene`, made small, at subdivisions 1
+/// and 4 (4 cuts the scenes' 4x4 floor 16x16, as the seed's).
+fn compare_small(context: &chambre::gpu::GpuContext, scene: &str) -> FermatReport {
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
     let overrides = ["render.width=160".to_string(), "render.height=120".into()];
-    let config = chambre::bench::fermat::FermatConfig {
+    let config = FermatConfig {
         scene: &scene,
         overrides: &overrides,
-        subdivisions: &subdivisions,
+        subdivisions: &[1, 4],
         steps: chambre::gpu::preview::ReflectionOptions::default().steps,
         runs: 1,
         frames: 2,
         reference_spp: 32,
     };
-    let report = chambre::bench::fermat::run(&config, &context).unwrap();
+    let report = chambre::bench::fermat::run(&config, context).unwrap();
     eprintln!("{}", report.to_markdown());
+    report
+}
+
+/// The raster preview's Fermat reflections against the ray tracer on the sphere scene:
+/// corners (vertices) land where Alhazen's f64 points put them; points between them move as
+/// the seed says (straight reflected edges) and come within a pixel once the floor is cut
+/// 16x16; FLIP over the sphere's pixels falls with the subdivision; and the report's JSON
+/// carries its figures.
+#[test]
+fn preview_reflections_land_where_the_ray_tracer_puts_them() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let report = compare_small(&context, "scenes/fermat_sphere.toml");
     let [coarse, fine] = [&report.rows[0], &report.rows[1]];
     for row in [coarse, fine] {
         assert!(row.features > 300, "{row:?}");
         assert!(row.corner_max_px < 0.05, "{row:?}");
         assert!(row.preview_ms.median > 0.0);
     }
-    // The scene's floor is 4x4 quads: subdivision 4 cuts it 16x16, as the seed's.
     assert!(fine.drawn as f64 >= 0.9 * fine.features as f64, "{fine:?}");
     assert!(fine.displacement_p99_px < 1.0, "{fine:?}");
     assert!(
@@ -204,6 +213,75 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
         assert!(json.get(field).is_some(), "{field}");
     }
     assert_eq!(json["rows"][1]["subdivision"], 4);
+}
+
+/// The same on the torus scene (the torus traced as its fine mesh): the features the preview
+/// draws land where the converged f64 search puts them, corners exactly, points between within
+/// a pixel at 16x16, and FLIP over the torus's pixels falls with the subdivision.
+#[test]
+fn preview_reflections_on_a_torus_land_where_the_ray_tracer_puts_them() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let report = compare_small(&context, "scenes/fermat_torus.toml");
+    let [coarse, fine] = [&report.rows[0], &report.rows[1]];
+    for row in [coarse, fine] {
+        assert!(row.features > 300, "{row:?}");
+        assert!(row.corner_max_px < 0.05, "{row:?}");
+    }
+    assert!(fine.drawn as f64 >= 0.85 * fine.features as f64, "{fine:?}");
+    assert!(fine.displacement_p99_px < 1.0, "{fine:?}");
+    assert!(fine.flip_reflector < coarse.flip_reflector, "{report:?}");
+}
+
+/// On a torus too, the GPU kernel (f32) runs the CPU solver's search: where the CPU found a
+/// reflection seen from outside within the seed's steps, the GPU's point and normal are the
+/// CPU's to 1e-3 of the torus's outer radius.
+#[test]
+fn the_gpu_kernel_finds_the_cpu_solvers_points_on_a_torus() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let torus = Torus {
+        center: DVec3::new(0.2, 0.3, -0.1),
+        major: 0.6,
+        minor: 0.2,
+    };
+    let eye = torus.center + DVec3::new(0.3, 1.1, 2.8);
+    let mut rng = Rng::new(17, 0, 0);
+    let vertices: Vec<DVec3> = (0..4000)
+        .map(|_| torus.center + direction(&mut rng) * (1.0 + 2.0 * rng.next_f32() as f64))
+        .collect();
+    let on_gpu = chambre::gpu::fermat::reflections(
+        &context,
+        MirrorSurface::Torus(torus),
+        eye.as_vec3(),
+        &vertices.iter().map(|v| v.as_vec3()).collect::<Vec<_>>(),
+        chambre::gpu::fermat::SEED_STEPS,
+    )
+    .unwrap();
+    let solver = Solver::default();
+    let outer = torus.major + torus.minor;
+    let (mut compared, mut agree) = (0, 0);
+    for (v, gpu) in vertices.iter().zip(&on_gpu) {
+        let uv = solver.solve(&torus, eye, *v).uv;
+        let (p, n) = (torus.point(uv), torus.outward_normal(uv));
+        if reflection_error(p, n, eye, *v) > 1e-4 || !seen_from_outside(p, n, eye, *v) {
+            continue;
+        }
+        compared += 1;
+        let gp = DVec3::from(glam::Vec3::from(gpu.point));
+        let gn = DVec3::from(glam::Vec3::from(gpu.normal));
+        if (gp - p).length() < 1e-3 * outer && (gn - n).length() < 1e-2 {
+            agree += 1;
+        }
+    }
+    eprintln!("{agree} of {compared} converged CPU points on the torus found by the GPU");
+    assert!(compared > 1000, "{compared}");
+    assert!(
+        agree as f64 >= 0.99 * compared as f64,
+        "{agree} of {compared}"
+    );
 }
 
 /// How the search went on one reflector over random configurations.

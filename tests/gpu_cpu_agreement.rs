@@ -246,3 +246,12 @@ fn a_crop_window_renders_the_full_images_pixels_there() {
     let (within, mean_abs) = common::agreement(&cropped, &gpu, 1e-3);
     assert!(within >= 0.995 && mean_abs < 1e-4, "{within} {mean_abs}");
 }
+
+/// A mirror torus (a scene's parametric surface, traced as its fine mesh) reflecting a floor.
+#[test]
+fn fermat_torus_agrees() {
+    check(
+        "scenes/fermat_torus.toml",
+        &["render.width=96", "render.height=72", "render.spp=4"],
+    );
+}

@@ -243,7 +243,10 @@ fn shared_structs_have_identical_layouts() {
             center,
             radius,
             eye,
-            count
+            count,
+            kind,
+            minor,
+            _pad
         }
     );
     layout!(
@@ -251,6 +254,8 @@ fn shared_structs_have_identical_layouts() {
         GpuReflection {
             point,
             steps,
+            normal,
+            _pad,
             uv,
             depth,
             degenerate
@@ -436,7 +441,6 @@ fn preview_structs_have_identical_layouts() {
         &uniforms,
     );
     let pass = [
-        ("sphere", offset_of!(ReflectorPass, sphere)),
         ("far", offset_of!(ReflectorPass, far)),
         ("id", offset_of!(ReflectorPass, id)),
         ("material", offset_of!(ReflectorPass, material)),

@@ -1,23 +1,25 @@
-// Reflections on a sphere by Fermat's principle: one invocation finds, for one scene vertex V
-// and the eye E, the point P of the sphere where E -> P -> V has extremal length, by the seed's
-// search on a triangle in the (u, v) plane (see src/fermat.rs for the method), in f32.
-// Mirrors: src/fermat.rs (Sphere::facing, initial_triangle, replaced_corner, Solver::solve),
-// step for step; the search's constants come from src/layout.rs.
+// Reflections on a sphere or a torus by Fermat's principle: one invocation finds, for one scene
+// vertex V and the eye E, the point P of the reflector where E -> P -> V has extremal length, by
+// the seed's search on a triangle in the (u, v) plane (see src/fermat.rs for the method), in
+// f32, step for step as its twin; the search's constants come from src/layout.rs.
+// Mirrors: src/fermat.rs (Sphere, Sphere::facing, Torus, initial_triangle, replaced_corner,
+// Solver::solve).
 
 // Steps at most: the seed's 5 unless the pipeline overrides it (`gpu::fermat::FermatPass`).
 override FERMAT_STEPS: u32 = 5u;
 const FERMAT_MIN_SIZE: f32 = 1e-7;
 const TAU: f32 = 6.283185307179586;
 
-// The sphere's parametrisation frame facing E and V: x toward the bisector, y (the poles' axis)
-// the normal of the plane through E, V and the centre.
-struct Facing {
+// The parametrisation's frame for one vertex: a sphere's faces E and V, x toward the
+// bisector, y (the poles' axis) the normal of the plane through E, V and the centre; a torus's
+// is the world's axes (its own axis vertical).
+struct Frame {
     x: vec3<f32>,
     y: vec3<f32>,
     z: vec3<f32>,
 }
 
-fn facing(e: vec3<f32>, v: vec3<f32>) -> Facing {
+fn facing(e: vec3<f32>, v: vec3<f32>) -> Frame {
     let en = normalize(e);
     var x = en + normalize(v);
     x = select(en, normalize(x), length(x) > 0.0);
@@ -32,32 +34,70 @@ fn facing(e: vec3<f32>, v: vec3<f32>) -> Facing {
         let b = x.x * x.y * a;
         y = vec3<f32>(b, sign + x.y * x.y * a, -x.y);
     }
-    return Facing(x, y, cross(x, y));
+    return Frame(x, y, cross(x, y));
 }
 
-fn sphere_point(f: Facing, uv: vec2<f32>) -> vec3<f32> {
+fn frame_for(eye: vec3<f32>, vertex: vec3<f32>) -> Frame {
+    if (reflector.kind == REFLECTOR_TORUS) {
+        return Frame(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
+    }
+    return facing(eye - reflector.center, vertex - reflector.center);
+}
+
+// f(u, v) and its tangents f_u, f_v: the sphere's `Sphere` and the torus's `Torus` in
+// src/fermat.rs, in the frame f (u around y).
+struct SurfacePoint {
+    p: vec3<f32>,
+    fu: vec3<f32>,
+    fv: vec3<f32>,
+}
+
+fn surface(f: Frame, uv: vec2<f32>) -> SurfacePoint {
     let su = sin(uv.x);
     let cu = cos(uv.x);
     let sv = sin(uv.y);
     let cv = cos(uv.y);
-    return reflector.center + reflector.radius * (sv * (cu * f.x + su * f.z) + cv * f.y);
+    let around = cu * f.x + su * f.z;
+    let along = -su * f.x + cu * f.z;
+    if (reflector.kind == REFLECTOR_TORUS) {
+        let r = reflector.minor;
+        let ring = reflector.radius + r * cv;
+        return SurfacePoint(reflector.center + ring * around + r * sv * f.y, ring * along,
+            r * (-sv * around + cv * f.y));
+    }
+    let r = reflector.radius;
+    return SurfacePoint(reflector.center + r * (sv * around + cv * f.y), r * sv * along,
+        r * (cv * around - sv * f.y));
 }
 
-fn sphere_parameters(f: Facing, d: vec3<f32>) -> vec2<f32> {
+// The outward unit normal at (u, v).
+fn surface_normal(f: Frame, uv: vec2<f32>) -> vec3<f32> {
+    let around = cos(uv.x) * f.x + sin(uv.x) * f.z;
+    if (reflector.kind == REFLECTOR_TORUS) {
+        return cos(uv.y) * around + sin(uv.y) * f.y;
+    }
+    return sin(uv.y) * around + cos(uv.y) * f.y;
+}
+
+// The parameters where the segment from `outside` to the point O inside the reflector crosses
+// it: O the sphere's centre, or the point of the torus's tube circle at `outside`'s azimuth.
+fn crossing(f: Frame, outside: vec3<f32>) -> vec2<f32> {
+    let d = outside - reflector.center;
+    let u = atan2(dot(d, f.z), dot(d, f.x));
+    if (reflector.kind == REFLECTOR_TORUS) {
+        let flat = vec3<f32>(d.x, 0.0, d.z);
+        let radial = select(vec3<f32>(1.0, 0.0, 0.0), normalize(flat), length(flat) > 0.0);
+        let w = d - reflector.radius * radial;
+        return vec2<f32>(u, atan2(w.y, dot(w, vec3<f32>(cos(u), 0.0, sin(u)))));
+    }
     let n = normalize(d);
-    return vec2<f32>(atan2(dot(n, f.z), dot(n, f.x)), acos(clamp(dot(n, f.y), -1.0, 1.0)));
+    return vec2<f32>(u, acos(clamp(dot(n, f.y), -1.0, 1.0)));
 }
 
-fn fermat_gradient(f: Facing, eye: vec3<f32>, vertex: vec3<f32>, uv: vec2<f32>) -> vec2<f32> {
-    let su = sin(uv.x);
-    let cu = cos(uv.x);
-    let sv = sin(uv.y);
-    let cv = cos(uv.y);
-    let p = reflector.center + reflector.radius * (sv * (cu * f.x + su * f.z) + cv * f.y);
-    let fu = reflector.radius * sv * (-su * f.x + cu * f.z);
-    let fv = reflector.radius * (cv * (cu * f.x + su * f.z) - sv * f.y);
-    let pull = normalize(eye - p) + normalize(vertex - p);
-    return vec2<f32>(-dot(fu, pull), -dot(fv, pull));
+fn fermat_gradient(f: Frame, eye: vec3<f32>, vertex: vec3<f32>, uv: vec2<f32>) -> vec2<f32> {
+    let s = surface(f, uv);
+    let pull = normalize(eye - s.p) + normalize(vertex - s.p);
+    return vec2<f32>(-dot(s.fu, pull), -dot(s.fv, pull));
 }
 
 // Twice the area of the corners with corner k replaced by p, against its longest side squared.
@@ -105,10 +145,10 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let eye = reflector.eye;
     let vertex = fermat_vertices[i].xyz;
-    let f = facing(eye - reflector.center, vertex - reflector.center);
-    // The initial triangle: A and B where E -> O and V -> O cross the sphere, C off AB.
-    let a0 = sphere_parameters(f, eye - reflector.center);
-    var b0 = sphere_parameters(f, vertex - reflector.center);
+    let f = frame_for(eye, vertex);
+    // The initial triangle: A and B where E -> O and V -> O cross the reflector, C off AB.
+    let a0 = crossing(f, eye);
+    var b0 = crossing(f, vertex);
     b0.x += TAU * round((a0.x - b0.x) / TAU);
     let side = b0 - a0;
     var corners: array<vec2<f32>, 3>;
@@ -149,6 +189,7 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         moved = length(p - best);
         best = p;
     }
-    let point = sphere_point(f, best);
-    reflections[i] = GpuReflection(point, steps, best, length(vertex - point), degenerate);
+    let point = surface(f, best).p;
+    reflections[i] = GpuReflection(point, steps, surface_normal(f, best), 0u, best,
+        length(vertex - point), degenerate);
 }

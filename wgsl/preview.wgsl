@@ -48,10 +48,12 @@ struct VertexOut {
     @location(3) @interpolate(flat) reflector: u32,
 }
 
-// The main pass's targets: radiance, and which reflector (1 + index, 0 for none) each pixel sees.
+// The main pass's targets: radiance, and which reflector (1 + index, 0 for none) each pixel sees
+// with the distance from the eye it sees it at (f32 bits), which tells a reflector's hidden
+// parts from its visible ones.
 struct PreviewOut {
     @location(0) color: vec4<f32>,
-    @location(1) reflector: u32,
+    @location(1) reflector: vec2<u32>,
 }
 
 @vertex
@@ -110,7 +112,7 @@ fn shade(material_index: u32, world: vec3<f32>, normal: vec3<f32>, eye: vec3<f32
     return radiance;
 }
 
-// A mirror sphere's fragment reflects the background here; its reflection pass draws the
+// A curved mirror's fragment reflects the background here; its reflection pass draws the
 // reflected scene over it.
 @fragment
 fn preview_fragment(f: VertexOut) -> PreviewOut {
@@ -118,5 +120,6 @@ fn preview_fragment(f: VertexOut) -> PreviewOut {
     if (f.reflector != 0u) {
         radiance += preview_materials[f.material].mirror * preview.background.xyz;
     }
-    return PreviewOut(vec4<f32>(radiance, 1.0), f.reflector);
+    let seen_at = bitcast<u32>(distance(f.world, preview.eye.xyz));
+    return PreviewOut(vec4<f32>(radiance, 1.0), vec2<u32>(f.reflector, seen_at));
 }

@@ -1,18 +1,21 @@
-// Fermat reflections in the raster preview (seed 004): the reflected triangles of one mirror
-// sphere, each vertex V drawn at its reflection point P (the `fermat` kernel's output) with the
-// depth |P - V|, so the nearest reflected surface along each reflected ray wins (first level of
-// hidden-surface removal, in a depth buffer of its own); a fragment lands only where the main
-// pass saw this reflector (second level: reflections behind the reflector, or behind whatever
-// hides it, are discarded). Lit as if the eye were at P. A fragment replaces the main pass's
-// colour of the pixel (the sphere reflecting the background) with the sphere's own shading plus
+// Fermat reflections in the raster preview (seed 004): the reflected triangles of one curved
+// mirror (a sphere or a torus), each vertex V drawn at its reflection point P (the `fermat`
+// kernel's output) with the depth |P - V|, so the nearest reflected surface along each
+// reflected ray wins (first level of hidden-surface removal, in a depth buffer of its own); a
+// fragment lands only where the main pass saw this reflector at P's distance (second level:
+// reflections behind the reflector, on its hidden parts, or behind whatever hides it, are
+// discarded). Lit as if the eye were at P. A fragment replaces the main pass's colour of the
+// pixel (the mirror reflecting the background) with the mirror's own shading plus
 // its mirror reflectance times the reflected radiance; the depth test leaves the nearest.
 // Composed after wgsl/preview.wgsl. Mirrors: src/gpu/preview.rs (Reflections),
 // src/preview.rs (reflected_triangles), src/fermat.rs (the solver and its validity tests).
 
+// A reflected fragment whose P lies farther from the eye than the reflector's visible point by
+// more than this fraction of its distance is on a hidden part of the reflector.
+const HIDDEN_TOLERANCE: f32 = 0.02;
+
 // What the reflection pass of one reflector needs beyond the preview's uniforms.
 struct ReflectorPass {
-    // The sphere: centre and radius (w).
-    sphere: vec4<f32>,
     // Reflected depths |P - V| are divided by this to land in [0, 1].
     far: f32,
     // 1 + the reflector's index: the id the main pass wrote where it is seen.
@@ -37,14 +40,16 @@ struct ReflectedOut {
     @location(2) @interpolate(flat) material: u32,
     // P, the point of the mirror V is seen at: the eye V's lighting is computed for.
     @location(3) mirror_point: vec3<f32>,
+    // The mirror's normal at P.
+    @location(4) mirror_normal: vec3<f32>,
 }
 
-// Vertex `i`'s reflection is drawn: E and V both see P from outside the sphere and the law of
+// Vertex `i`'s reflection is drawn: E and V both see P from outside the mirror and the law of
 // reflection holds at P. (A search whose triangle shrank below f32's resolution reports its
 // step system singular; its point still counts if the law holds there.)
 fn reflection_holds(i: u32) -> bool {
     let r = reflected_points[solve_of[i]];
-    let n = normalize(r.point - reflector_pass.sphere.xyz);
+    let n = r.normal;
     let to_eye = normalize(preview.eye.xyz - r.point);
     let to_vertex = normalize(reflected_vertices[i].position - r.point);
     let half = to_eye + to_vertex;
@@ -65,16 +70,23 @@ fn reflected_vertex(@builtin(vertex_index) i: u32) -> ReflectedOut {
         // The whole triangle collapses to one point and draws nothing.
         clip = vec4<f32>(0.0, 0.0, 0.0, 1.0);
     }
-    return ReflectedOut(clip, v.position, v.normal, v.material, r.point);
+    return ReflectedOut(clip, v.position, v.normal, v.material, r.point, r.normal);
 }
 
 @fragment
 fn reflected_fragment(f: ReflectedOut) -> @location(0) vec4<f32> {
-    if (textureLoad(reflector_ids, vec2<i32>(f.clip.xy), 0).r != reflector_pass.id) {
+    let seen = textureLoad(reflector_ids, vec2<i32>(f.clip.xy), 0);
+    if (seen.r != reflector_pass.id) {
         discard;
     }
-    let sphere = reflector_pass.sphere;
-    let own = shade(reflector_pass.material, f.mirror_point, f.mirror_point - sphere.xyz,
+    // P on a part of the reflector the eye does not see (a torus hides parts of itself): the
+    // reflector the main pass drew lies nearer the eye. The tolerance covers the flat
+    // reflected triangle's departure from the curved surface between its corners.
+    let seen_at = bitcast<f32>(seen.g);
+    if (distance(f.mirror_point, preview.eye.xyz) > seen_at * (1.0 + HIDDEN_TOLERANCE)) {
+        discard;
+    }
+    let own = shade(reflector_pass.material, f.mirror_point, normalize(f.mirror_normal),
         preview.eye.xyz);
     let reflected = shade(f.material, f.world, f.normal, f.mirror_point);
     return vec4<f32>(own + preview_materials[reflector_pass.material].mirror * reflected, 1.0);

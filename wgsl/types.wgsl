@@ -135,11 +135,16 @@ struct GpuReflector {
     radius: f32,
     eye: vec3<f32>,
     count: u32,
+    kind: u32,
+    minor: f32,
+    _pad: vec2<u32>,
 }
 
 struct GpuReflection {
     point: vec3<f32>,
     steps: u32,
+    normal: vec3<f32>,
+    _pad: u32,
     uv: vec2<f32>,
     depth: f32,
     degenerate: u32,

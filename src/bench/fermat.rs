@@ -19,12 +19,20 @@ use serde::Serialize;
 
 use super::Spread;
 use super::frame::{Way, render_once};
+use crate::accel::intersect::RayQuery;
+use crate::accel::traverse::closest_hit;
 use crate::error::{Error, Location, Result};
-use crate::fermat::{Sphere, alhazen_sphere, drawn_in_preview, seen_from_outside};
+use crate::fermat::{
+    Reflector as _, Solver, Sphere, alhazen_sphere, drawn_in_preview, reflection_error,
+    seen_from_outside,
+};
 use crate::gpu::GpuContext;
 use crate::gpu::preview::{ReflectionOptions, draw_with, extent_and_far};
-use crate::pack::flatten;
-use crate::preview::{Reflector, clip_matrix, grid_point, reflectors, sub_triangle, tessellate};
+use crate::layout::{FEATURES_ALL, NONE, T_FAR};
+use crate::pack::{FlatScene, flatten};
+use crate::preview::{
+    MirrorSurface, Reflector, clip_matrix, grid_point, reflectors, sub_triangle, tessellate,
+};
 use crate::render::Image;
 use crate::scene::Scene;
 
@@ -109,15 +117,19 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
     };
     let scene = load(None)?;
     let flat = flatten(&scene);
-    let reflector = *reflectors(&flat).first().ok_or_else(|| Error::Scene {
-        location: Location {
-            file: config.scene.to_path_buf(),
-            line: 0,
-            column: 0,
-            field: "shapes".into(),
-        },
-        message: "the Fermat comparison needs a sphere with a mirror material".into(),
-    })?;
+    let reflector = reflectors(&flat)
+        .into_iter()
+        .next()
+        .ok_or_else(|| Error::Scene {
+            location: Location {
+                file: config.scene.to_path_buf(),
+                line: 0,
+                column: 0,
+                field: "shapes".into(),
+            },
+            message: "the Fermat comparison needs a sphere or a torus with a mirror material"
+                .into(),
+        })?;
     let (width, height) = (flat.frame.width, flat.frame.height);
     let one_spp = load(Some("render.spp=1".into()))?;
     let one_spp = flatten(&one_spp);
@@ -142,7 +154,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
     let reference = load(Some(format!("render.spp={}", config.reference_spp)))?;
     let reference = render_once(&flatten(&reference), Way::Cpu { features }, None)?.image;
     let clip = clip_matrix(&scene.camera, extent_and_far(&scene, &flat).1);
-    let mask = reflector_mask(&clip, &reflector, width, height);
+    let mask = reflector_mask(&flat, &clip, &reflector);
     let mut rows = Vec::new();
     for &subdivision in config.subdivisions {
         let options = ReflectionOptions {
@@ -206,14 +218,13 @@ fn project(clip: &DMat4, p: DVec3, width: u32, height: u32) -> Option<DVec2> {
 fn displacements(
     context: &GpuContext,
     scene: &Scene,
-    flat: &crate::pack::FlatScene,
+    flat: &FlatScene,
     reflector: &Reflector,
     clip: &DMat4,
     options: ReflectionOptions,
 ) -> Result<Vec<(bool, Option<f64>)>> {
     let (width, height) = (flat.frame.width, flat.frame.height);
     let eye = crate::gpu::preview::eye_of(&scene.camera);
-    let sphere = Sphere::new(reflector.center.as_dvec3(), reflector.radius as f64);
     let n = options.subdivision.unwrap_or(1).max(1);
     // Each feature: its position and its sub-triangle's corners with the weights mixing them.
     let mut features = Vec::new();
@@ -241,23 +252,15 @@ fn displacements(
             }
         }
     }
-    let found = crate::gpu::fermat::reflections(
-        context,
-        reflector.center,
-        reflector.radius,
-        eye,
-        &corners,
-        options.steps,
-    )?;
+    let found =
+        crate::gpu::fermat::reflections(context, reflector.surface, eye, &corners, options.steps)?;
     let eye = eye.as_dvec3();
     let mut out = Vec::new();
     for (k, (x, weights, corner)) in features.iter().enumerate() {
         let x = x.as_dvec3();
-        let truth = alhazen_sphere(&sphere, eye, x);
-        let normal = (truth - sphere.center) / sphere.radius;
-        if !seen_from_outside(truth, normal, eye, x) {
+        let Some(truth) = true_reflection(&reflector.surface, eye, x) else {
             continue;
-        }
+        };
         let Some(truth_px) = project(clip, truth, width, height)
             .filter(|p| p.x >= 0.0 && p.y >= 0.0 && p.x < width as f64 && p.y < height as f64)
         else {
@@ -269,7 +272,7 @@ fn displacements(
             .zip(&corners[3 * k..3 * k + 3])
             .all(|(r, v)| {
                 let p = Vec3::from(r.point).as_dvec3();
-                let n = (p - sphere.center) / sphere.radius;
+                let n = Vec3::from(r.normal).as_dvec3();
                 drawn_in_preview(p, n, eye, v.as_dvec3())
             });
         let drawn_at = corners_found
@@ -288,11 +291,46 @@ fn displacements(
     Ok(out)
 }
 
-/// The pixels whose centre's camera ray meets the reflector's sphere.
-fn reflector_mask(clip: &DMat4, reflector: &Reflector, width: u32, height: u32) -> Vec<bool> {
+/// Where the ray tracer sees `x` reflected on `surface` from `eye`, if it does (seen from
+/// outside). On a sphere: Alhazen's point, solved independently in f64. A torus can show a
+/// point several times; the truth is the stationary point the preview's search heads for, the
+/// f64 search run to convergence (`TRUTH_STEPS`, the law of reflection to 1e-9 rad): its
+/// displacement is the preview's own error. Images the search never finds show in the FLIP.
+fn true_reflection(surface: &MirrorSurface, eye: DVec3, x: DVec3) -> Option<DVec3> {
+    let (point, normal) = match *surface {
+        MirrorSurface::Sphere { center, radius } => {
+            let sphere = Sphere::new(center.as_dvec3(), radius as f64);
+            let p = alhazen_sphere(&sphere, eye, x);
+            (p, (p - sphere.center) / sphere.radius)
+        }
+        MirrorSurface::Torus(torus) => {
+            let solver = Solver {
+                max_steps: TRUTH_STEPS,
+                min_size: 1e-12,
+            };
+            let uv = solver.solve(&torus, eye, x).uv;
+            let (p, n) = (torus.point(uv), torus.outward_normal(uv));
+            if reflection_error(p, n, eye, x) > 1e-9 {
+                return None;
+            }
+            (p, n)
+        }
+    };
+    seen_from_outside(point, normal, eye, x).then_some(point)
+}
+
+/// Steps of the f64 search that finds a torus's true reflections (`true_reflection`).
+const TRUTH_STEPS: u32 = 60;
+
+/// The pixels whose centre's camera ray first meets the reflector (the CPU ray tracer's
+/// closest hit is one of its primitives).
+fn reflector_mask(flat: &FlatScene, clip: &DMat4, reflector: &Reflector) -> Vec<bool> {
+    let (width, height) = (flat.frame.width, flat.frame.height);
+    let mut on_reflector = vec![false; flat.prims.len()];
+    for &p in &reflector.prims {
+        on_reflector[p] = true;
+    }
     let inverse = clip.inverse();
-    let centre = reflector.center.as_dvec3();
-    let radius = reflector.radius as f64;
     let unproject = |x: f64, y: f64, z: f64| {
         let p = inverse * DVec4::new(x, y, z, 1.0);
         p.truncate() / p.w
@@ -303,11 +341,9 @@ fn reflector_mask(clip: &DMat4, reflector: &Reflector, width: u32, height: u32) 
             let x = (px as f64 + 0.5) / width as f64 * 2.0 - 1.0;
             let y = 1.0 - (py as f64 + 0.5) / height as f64 * 2.0;
             let (near, far) = (unproject(x, y, 0.0), unproject(x, y, 1.0));
-            let d = (far - near).normalize();
-            // The ray near + t d meets the sphere where the discriminant is non-negative.
-            let oc = near - centre;
-            let b = oc.dot(d);
-            b * b - (oc.length_squared() - radius * radius) >= 0.0
+            let ray = RayQuery::new(near.as_vec3(), (far - near).normalize().as_vec3());
+            closest_hit::<FEATURES_ALL>(flat.primitives(), &ray, NONE, T_FAR)
+                .is_some_and(|(prim, _)| on_reflector[prim as usize])
         })
         .collect()
 }

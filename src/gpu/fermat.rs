@@ -1,7 +1,8 @@
-//! Reflection points on a sphere by Fermat's principle on the GPU: the `fermat` kernel of the
-//! registry solves one scene vertex per invocation; `fermat::Solver` is its CPU twin (f64), and
-//! `tests/fermat.rs` checks that they agree. The raster preview encodes it before its draws
-//! (`gpu::preview`), one dispatch per mirror sphere, with no host wait between them.
+//! Reflection points on a sphere or a torus by Fermat's principle on the GPU: the `fermat`
+//! kernel of the registry solves one scene vertex per invocation; `fermat::Solver` is its CPU
+//! twin (f64), and `tests/fermat.rs` checks that they agree. The raster preview encodes it
+//! before its draws (`gpu::preview`), one dispatch per curved mirror, with no host wait between
+//! them.
 
 use glam::Vec3;
 
@@ -9,6 +10,7 @@ use super::GpuContext;
 use super::kernels::{self, FERMAT};
 use crate::error::{Error, Result};
 use crate::layout::{GpuReflection, GpuReflector};
+use crate::preview::MirrorSurface;
 
 /// The seed's step count ("4–5 steps"), the kernel's default.
 pub const SEED_STEPS: u32 = 5;
@@ -23,7 +25,7 @@ pub struct FermatPass {
 
 /// One reflector's inputs and output on the device.
 pub struct FermatSolve {
-    /// The sphere, the eye and the vertex count (`GpuReflector`); the eye is rewritten as the
+    /// The reflector, the eye and the vertex count (`GpuReflector`); the eye is rewritten as the
     /// camera moves.
     pub reflector: wgpu::Buffer,
     /// One `GpuReflection` per vertex.
@@ -91,12 +93,11 @@ pub fn vertex_buffer(context: &GpuContext, vertices: &[Vec3]) -> Result<wgpu::Bu
     context.storage_buffer("fermat vertices", bytemuck::cast_slice(&points))
 }
 
-/// The reflection point of each of `vertices` seen from `eye` on the sphere of `center` and
-/// `radius`, found in at most `steps` steps.
+/// The reflection point of each of `vertices` seen from `eye` on `surface`, found in at most
+/// `steps` steps.
 pub fn reflections(
     context: &GpuContext,
-    center: Vec3,
-    radius: f32,
+    surface: MirrorSurface,
     eye: Vec3,
     vertices: &[Vec3],
     steps: u32,
@@ -108,12 +109,7 @@ pub fn reflections(
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let pass = FermatPass::new(context, steps);
     let input = vertex_buffer(context, vertices)?;
-    let reflector = GpuReflector {
-        center: center.to_array(),
-        radius,
-        eye: eye.to_array(),
-        count: vertices.len() as u32,
-    };
+    let reflector = surface.gpu(eye, vertices.len() as u32);
     let solve = pass.solve(context, reflector, &input)?;
     let mut encoder = device.create_command_encoder(&Default::default());
     pass.encode(&mut encoder, &solve);

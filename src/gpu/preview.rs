@@ -17,7 +17,7 @@ use super::fermat::{FermatPass, FermatSolve};
 use super::{GpuContext, wgpu_error_text};
 use crate::camera::CameraSpec;
 use crate::error::{Error, Result};
-use crate::layout::{GpuReflector, wgsl_prelude};
+use crate::layout::wgsl_prelude;
 use crate::pack::FlatScene;
 use crate::preview::{
     PreviewUniforms, PreviewVertex, Reflector, ReflectorPass, bounded_radius, clip_matrix,
@@ -29,8 +29,9 @@ use crate::scene::Scene;
 /// The colour target: linear radiance, as the ray tracer's accumulation.
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-/// Which reflector each pixel sees (1 + its index; 0 for none).
-const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// Which reflector each pixel sees (1 + its index; 0 for none), and the f32 bits of the distance
+/// from the eye it sees it at.
+const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 
 /// How the preview draws the reflections of mirror spheres.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -405,7 +406,7 @@ struct Reflections {
 }
 
 impl Reflections {
-    /// `None` where the scene has no mirror sphere or nothing to reflect.
+    /// `None` where the scene has no curved mirror or nothing to reflect.
     fn new(
         context: &GpuContext,
         setup: &ReflectionSetup,
@@ -426,12 +427,7 @@ impl Reflections {
         let solves = reflectors
             .iter()
             .map(|r| {
-                let reflector = GpuReflector {
-                    center: r.center.to_array(),
-                    radius: r.radius,
-                    eye: setup.eye.to_array(),
-                    count: positions.len() as u32,
-                };
+                let reflector = r.surface.gpu(setup.eye, positions.len() as u32);
                 fermat.solve(context, reflector, &fermat_vertices)
             })
             .collect::<Result<Vec<_>>>()?;
@@ -457,7 +453,6 @@ impl Reflections {
             .enumerate()
             .map(|(k, (r, solve))| {
                 let pass = ReflectorPass {
-                    sphere: r.center.extend(r.radius).to_array(),
                     far: setup.far as f32,
                     id: k as u32 + 1,
                     material: r.material,
@@ -507,12 +502,7 @@ impl Reflections {
     /// Every reflector's solves see the eye at `eye` from the next frame on.
     fn set_eye(&self, context: &GpuContext, eye: glam::Vec3) {
         for (solve, r) in self.solves.iter().zip(&self.reflectors) {
-            let reflector = GpuReflector {
-                center: r.center.to_array(),
-                radius: r.radius,
-                eye: eye.to_array(),
-                count: self.solve_count,
-            };
+            let reflector = r.surface.gpu(eye, self.solve_count);
             context
                 .queue
                 .write_buffer(&solve.reflector, 0, bytemuck::bytes_of(&reflector));

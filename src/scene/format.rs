@@ -239,6 +239,8 @@ pub enum ShapeType {
     Plane,
     /// A triangle mesh read from `file` (OBJ or PLY, optionally gzipped).
     Mesh,
+    /// A torus around the vertical axis through `center`: `major_radius`, `minor_radius`.
+    Torus,
 }
 
 /// A uniform scale factor or one per axis.
@@ -294,10 +296,15 @@ pub struct ShapeEntry {
     /// Required, except on a mesh whose file brings its own materials (OBJ `.mtl`).
     pub material: Option<String>,
     // sphere
-    /// Sphere: centre (scene units).
+    /// Sphere or torus: centre (scene units).
     pub center: Option<Vec3>,
     /// Sphere: radius (scene units), > 0.
     pub radius: Option<f64>,
+    // torus (and `center`)
+    /// Torus: the radius of its tube's centre circle (scene units), > 0.
+    pub major_radius: Option<f64>,
+    /// Torus: the tube's radius (scene units), in (0, major_radius).
+    pub minor_radius: Option<f64>,
     // quad
     /// Quad: one corner (scene units).
     pub corner: Option<Vec3>,

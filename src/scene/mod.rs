@@ -9,6 +9,7 @@ pub mod format;
 pub mod gltf;
 mod load;
 pub mod mesh;
+pub mod surface;
 mod validate;
 
 use std::path::{Path, PathBuf};
@@ -43,6 +44,8 @@ pub struct Scene {
     /// Each shape's velocity (scene units a second), in `shapes` order; empty when nothing
     /// moves.
     pub velocities: Vec<Vec3>,
+    /// The shapes declared as parametric surfaces (tori), each rendered as a mesh in `shapes`.
+    pub surfaces: Vec<surface::CurvedSurface>,
 }
 
 /// The validated `[render]` section.

@@ -7,16 +7,18 @@
 use glam::{DVec3, Vec3};
 
 use super::format::{
-    Exact, LightType, MaterialModel, Pair, RenderSection, SamplerName, Scale, SceneFile, ShapeType,
-    Vec3 as F3,
+    Exact, LightType, MaterialModel, Pair, RenderSection, SamplerName, Scale, SceneFile,
+    ShapeEntry, ShapeType, Vec3 as F3,
 };
 use super::load::ParsedScene;
 use super::mesh::{compute_vertex_normals, load_mesh, transform_mesh};
+use super::surface::{CurvedSurface, torus_mesh};
 use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
 use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, Movements};
 use crate::error::{Error, Result};
+use crate::fermat::Torus;
 use crate::layout;
 use crate::sampler::{MAX_BLADES, MAX_TABLE_SPP};
 
@@ -194,7 +196,7 @@ pub fn validate(parsed: ParsedScene) -> Result<Scene> {
     let camera = validate_camera(&check, file, &render, meters_per_unit)?;
     let materials = validate_materials(&check, file)?;
     let mut materials = materials;
-    let shapes = validate_shapes(&check, file, &mut materials)?;
+    let (shapes, surfaces) = validate_shapes(&check, file, &mut materials)?;
     let lights = validate_lights(&check, file)?;
     let velocities = validate_velocities(&check, file, &shapes, &materials)?;
     Ok(Scene {
@@ -205,6 +207,7 @@ pub fn validate(parsed: ParsedScene) -> Result<Scene> {
         shapes,
         lights,
         velocities,
+        surfaces,
     })
 }
 
@@ -714,13 +717,13 @@ fn validate_shapes(
     check: &Checker,
     file: &SceneFile,
     materials: &mut Vec<Material>,
-) -> Result<Vec<Shape>> {
+) -> Result<(Vec<Shape>, Vec<CurvedSurface>)> {
     let scene_dir = check
         .parsed
         .path
         .parent()
         .unwrap_or(std::path::Path::new("."));
-    let mut shapes = Vec::new();
+    let (mut shapes, mut surfaces) = (Vec::new(), Vec::new());
     for (i, s) in file.shapes.iter().enumerate() {
         let prefix = format!("shapes[{i}]");
         let at = |f: &str| format!("{prefix}.{f}");
@@ -734,9 +737,12 @@ fn validate_shapes(
         let required = |kind: &str| {
             material.ok_or_else(|| check.err(&at("material"), format!("is required for a {kind}")))
         };
-        let sphere_fields = [
-            ("center", s.center.is_some()),
-            ("radius", s.radius.is_some()),
+        let center_field = [("center", s.center.is_some())];
+        let radius_field = [("radius", s.radius.is_some())];
+        let sphere_fields = [&center_field[..], &radius_field].concat();
+        let torus_fields = [
+            ("major_radius", s.major_radius.is_some()),
+            ("minor_radius", s.minor_radius.is_some()),
         ];
         let quad_fields = [
             ("corner", s.corner.is_some()),
@@ -757,7 +763,7 @@ fn validate_shapes(
                 check.forbid(
                     &prefix,
                     "sphere",
-                    &[&quad_fields[..], &plane_fields, &mesh_fields].concat(),
+                    &[&quad_fields[..], &plane_fields, &mesh_fields, &torus_fields].concat(),
                 )?;
                 let center = check.point(
                     &at("center"),
@@ -780,7 +786,13 @@ fn validate_shapes(
                 check.forbid(
                     &prefix,
                     "quad",
-                    &[&sphere_fields[..], &plane_fields, &mesh_fields].concat(),
+                    &[
+                        &sphere_fields[..],
+                        &plane_fields,
+                        &mesh_fields,
+                        &torus_fields,
+                    ]
+                    .concat(),
                 )?;
                 let (corner, edge_u, edge_v) =
                     parallelogram(check, &prefix, s.corner, s.edge_u, s.edge_v, "quad")?;
@@ -795,7 +807,13 @@ fn validate_shapes(
                 check.forbid(
                     &prefix,
                     "plane",
-                    &[&sphere_fields[..], &quad_fields, &mesh_fields].concat(),
+                    &[
+                        &sphere_fields[..],
+                        &quad_fields,
+                        &mesh_fields,
+                        &torus_fields,
+                    ]
+                    .concat(),
                 )?;
                 let point =
                     check.point(&at("point"), check.require(&at("point"), s.point, "plane")?)?;
@@ -813,7 +831,13 @@ fn validate_shapes(
                 check.forbid(
                     &prefix,
                     "mesh",
-                    &[&sphere_fields[..], &quad_fields, &plane_fields].concat(),
+                    &[
+                        &sphere_fields[..],
+                        &quad_fields,
+                        &plane_fields,
+                        &torus_fields,
+                    ]
+                    .concat(),
                 )?;
                 let name = check.require(&at("file"), s.file.as_ref(), "mesh")?;
                 let path = scene_dir.join(name);
@@ -877,10 +901,66 @@ fn validate_shapes(
                 };
                 Shape::Mesh { mesh, material }
             }
+            ShapeType::Torus => {
+                check.forbid(
+                    &prefix,
+                    "torus",
+                    &[&radius_field[..], &quad_fields, &plane_fields, &mesh_fields].concat(),
+                )?;
+                let torus = torus(check, &prefix, s)?;
+                surfaces.push(CurvedSurface {
+                    shape: i,
+                    surface: torus,
+                });
+                Shape::Mesh {
+                    mesh: torus_mesh(&torus),
+                    material: required("torus")?,
+                }
+            }
         };
         shapes.push(shape);
     }
-    Ok(shapes)
+    Ok((shapes, surfaces))
+}
+
+/// A torus's fields: a centre within the coordinate limit, 0 < minor_radius < major_radius
+/// (a spindle or horn torus passes through itself and its axis) and the whole torus within
+/// the limit too.
+fn torus(check: &Checker, prefix: &str, s: &ShapeEntry) -> Result<Torus> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let center = check.point(
+        &at("center"),
+        check.require(&at("center"), s.center, "torus")?,
+    )?;
+    let major = check.positive(
+        &at("major_radius"),
+        check.require(&at("major_radius"), s.major_radius, "torus")?,
+    )?;
+    let minor = check.positive(
+        &at("minor_radius"),
+        check.require(&at("minor_radius"), s.minor_radius, "torus")?,
+    )?;
+    if minor >= major {
+        return Err(check.err(
+            &at("minor_radius"),
+            format!(
+                "must be below major_radius ({}), got {}: such a torus passes through itself",
+                num(major),
+                num(minor)
+            ),
+        ));
+    }
+    if center.abs().max_element() + major + minor > MAX_COORDINATE {
+        return Err(check.err(
+            &at("major_radius"),
+            format!("the torus reaches beyond +-{MAX_COORDINATE:e} scene units"),
+        ));
+    }
+    Ok(Torus {
+        center,
+        major,
+        minor,
+    })
 }
 
 /// NaN compares false, so finiteness is tested first and explicitly.
