@@ -23,8 +23,7 @@ use crate::accel::intersect::RayQuery;
 use crate::accel::traverse::closest_hit;
 use crate::error::{Error, Location, Result};
 use crate::fermat::{
-    Reflector as _, Solver, Sphere, alhazen_sphere, drawn_in_preview, reflection_error,
-    seen_from_outside,
+    Solver, Sphere, alhazen_sphere, drawn_in_preview, reflection_error, seen_from_outside,
 };
 use crate::gpu::GpuContext;
 use crate::gpu::preview::{ReflectionOptions, draw_with, extent_and_far};
@@ -252,13 +251,15 @@ fn displacements(
             }
         }
     }
-    let found =
-        crate::gpu::fermat::reflections(context, reflector.surface, eye, &corners, options.steps)?;
-    let eye = eye.as_dvec3();
+    let eye64 = eye.as_dvec3();
     let mut out = Vec::new();
+    let surface = reflector.surface;
+    let found = crate::gpu::fermat::reflections(context, surface, eye, &corners, options.steps)?;
     for (k, (x, weights, corner)) in features.iter().enumerate() {
         let x = x.as_dvec3();
-        let Some(truth) = true_reflection(&reflector.surface, eye, x) else {
+        let Some(truth) =
+            true_reflection(&surface, eye64, x).filter(|&p| light_path_is_clear(flat, eye64, p, x))
+        else {
             continue;
         };
         let Some(truth_px) = project(clip, truth, width, height)
@@ -273,7 +274,7 @@ fn displacements(
             .all(|(r, v)| {
                 let p = Vec3::from(r.point).as_dvec3();
                 let n = Vec3::from(r.normal).as_dvec3();
-                drawn_in_preview(p, n, eye, v.as_dvec3())
+                drawn_in_preview(p, n, eye64, v.as_dvec3())
             });
         let drawn_at = corners_found
             .iter()
@@ -291,6 +292,20 @@ fn displacements(
     Ok(out)
 }
 
+/// Whether the ray tracer sees the path E → P → X: the eye's ray toward P first meets the
+/// scene at P (a torus hides parts of itself), and nothing stands between P and X (to 1e-3 of
+/// each leg's length: the torus is traced as a mesh, within 1e-4 of its radius of the surface).
+fn light_path_is_clear(flat: &FlatScene, eye: DVec3, p: DVec3, x: DVec3) -> bool {
+    let first_hit = |from: DVec3, to: DVec3| {
+        let ray = RayQuery::new(from.as_vec3(), (to - from).normalize().as_vec3());
+        closest_hit::<FEATURES_ALL>(flat.primitives(), &ray, NONE, T_FAR)
+            .map_or(f64::INFINITY, |(_, hit)| hit.t as f64)
+    };
+    let (seen, reflected) = (p.distance(eye), x.distance(p));
+    (first_hit(eye, p) - seen).abs() < 1e-3 * seen
+        && first_hit(p + (x - p) * 1e-3, x) > reflected * (1.0 - 2e-3)
+}
+
 /// Where the ray tracer sees `x` reflected on `surface` from `eye`, if it does (seen from
 /// outside). On a sphere: Alhazen's point, solved independently in f64. A torus can show a
 /// point several times; the truth is the stationary point the preview's search heads for, the
@@ -303,20 +318,25 @@ fn true_reflection(surface: &MirrorSurface, eye: DVec3, x: DVec3) -> Option<DVec
             let p = alhazen_sphere(&sphere, eye, x);
             (p, (p - sphere.center) / sphere.radius)
         }
-        MirrorSurface::Torus(torus) => {
-            let solver = Solver {
-                max_steps: TRUTH_STEPS,
-                min_size: 1e-12,
-            };
-            let uv = solver.solve(&torus, eye, x).uv;
-            let (p, n) = (torus.point(uv), torus.outward_normal(uv));
-            if reflection_error(p, n, eye, x) > 1e-9 {
-                return None;
-            }
-            (p, n)
-        }
+        MirrorSurface::Torus(torus) => converged(&torus, eye, x)?,
     };
     seen_from_outside(point, normal, eye, x).then_some(point)
+}
+
+/// The point and normal where the f64 search on `surface` converges (the law of reflection to
+/// 1e-9 rad), if it does.
+fn converged(
+    surface: &impl crate::fermat::Reflector,
+    eye: DVec3,
+    x: DVec3,
+) -> Option<(DVec3, DVec3)> {
+    let solver = Solver {
+        max_steps: TRUTH_STEPS,
+        min_size: 1e-12,
+    };
+    let uv = solver.solve(surface, eye, x).uv;
+    let (p, n) = (surface.point(uv), surface.outward_normal(uv));
+    (reflection_error(p, n, eye, x) <= 1e-9).then_some((p, n))
 }
 
 /// Steps of the f64 search that finds a torus's true reflections (`true_reflection`).

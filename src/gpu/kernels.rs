@@ -220,7 +220,7 @@ pub const TRACE_ANY_CW: Kernel = Kernel {
     bindings: &TRACE_CW_BINDINGS,
 };
 
-/// Reflection points of vertices on a sphere by Fermat's principle, one invocation per vertex
+/// Reflection points of vertices on a sphere or a torus by Fermat's principle, one invocation per vertex
 /// (`gpu::fermat`; CPU twin `fermat::Solver`).
 pub const FERMAT: Kernel = Kernel {
     name: "fermat",
