@@ -35,6 +35,8 @@ pub const PRIM_PLANE: u32 = 3;
 pub const REFLECTOR_SPHERE: u32 = 0;
 /// `GpuReflector::kind`: a torus around the vertical axis through its centre.
 pub const REFLECTOR_TORUS: u32 = 1;
+/// `GpuReflector::kind`: a bicubic Bézier patch (`GpuReflector::control`).
+pub const REFLECTOR_PATCH: u32 = 2;
 
 /// Material models (`GpuMaterial::model`); every model also carries a perfect-mirror term.
 /// Lambert: diffuse only (BRDF diffuse / pi); the scene format's `mirror` model is Lambert too.
@@ -503,8 +505,8 @@ pub struct GpuRay {
     pub _pad0: u32,
 }
 
-/// A Fermat solve's reflector and eye (`wgsl/fermat.wgsl`): a sphere or a torus (around the
-/// vertical axis through its centre), and how many vertices the `fermat_vertices` buffer holds.
+/// A Fermat solve's reflector and eye (`wgsl/fermat.wgsl`): a sphere, a torus (around the
+/// vertical axis through its centre) or a bicubic Bézier patch, and how many vertices the `fermat_vertices` buffer holds.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuReflector {
@@ -516,12 +518,15 @@ pub struct GpuReflector {
     pub eye: [f32; 3],
     /// Vertices to solve.
     pub count: u32,
-    /// `REFLECTOR_SPHERE` or `REFLECTOR_TORUS`.
+    /// `REFLECTOR_SPHERE`, `REFLECTOR_TORUS` or `REFLECTOR_PATCH`: picks the fermat pipeline,
+    /// whose `REFLECTOR_KIND` is specialised to it.
     pub kind: u32,
     /// The torus's tube radius r (scene units); 0 for a sphere.
     pub minor: f32,
     /// Padding to the WGSL layout.
     pub _pad: [u32; 2],
+    /// A patch's control points P_ij at index 4i + j (w unused); zero for other kinds.
+    pub control: [[f32; 4]; 16],
 }
 
 /// One vertex's reflection point, as the Fermat kernel finds it (`fermat::Solver` is its CPU
@@ -553,7 +558,7 @@ impl GpuLight {
 }
 
 const _: () = assert!(size_of::<GpuRay>() == 32);
-const _: () = assert!(size_of::<GpuReflector>() == 48);
+const _: () = assert!(size_of::<GpuReflector>() == 304);
 const _: () = assert!(size_of::<GpuReflection>() == 48);
 const _: () = assert!(size_of::<GpuBvhNode>() == 32);
 const _: () = assert!(size_of::<GpuCwNode>() == 80);
@@ -588,6 +593,15 @@ pub const FERMAT_SPREAD: f32 = 1e-3;
 /// that flat triangles break the step's system.
 pub const FERMAT_FLAT: f32 = 1e-3;
 
+/// A reflection found on a Bézier patch counts where its (u, v) lies in the patch's square
+/// widened by this much: beyond, the point belongs to a neighbouring patch (whose own search
+/// finds it) or to none.
+pub const PATCH_MARGIN: f32 = 1e-4;
+
+/// A search on a Bézier patch stops once a step leaves the patch's square widened by this much
+/// (`fermat::Reflector::beyond_reach`).
+pub const PATCH_REACH: f32 = 1.0;
+
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
 pub fn wgsl_prelude() -> String {
     let u32s = [
@@ -603,6 +617,7 @@ pub fn wgsl_prelude() -> String {
         ("PRIM_PLANE", PRIM_PLANE),
         ("REFLECTOR_SPHERE", REFLECTOR_SPHERE),
         ("REFLECTOR_TORUS", REFLECTOR_TORUS),
+        ("REFLECTOR_PATCH", REFLECTOR_PATCH),
         ("MODEL_LAMBERT", MODEL_LAMBERT),
         ("MODEL_PHONG", MODEL_PHONG),
         ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),
@@ -646,6 +661,8 @@ pub fn wgsl_prelude() -> String {
         ("FERMAT_C_OFFSET", FERMAT_C_OFFSET),
         ("FERMAT_SPREAD", FERMAT_SPREAD),
         ("FERMAT_FLAT", FERMAT_FLAT),
+        ("PATCH_MARGIN", PATCH_MARGIN),
+        ("PATCH_REACH", PATCH_REACH),
     ] {
         out += &format!("const {name}: f32 = {value:e};\n");
     }

@@ -65,7 +65,7 @@ enum Command {
         set: Vec<String>,
     },
     /// Draw a scene fast with the GPU's raster pipeline through the view camera's projection
-    /// (film tilt, swing and shift as the ray tracer has them; mirror spheres reflect by
+    /// (film tilt, swing and shift as the ray tracer has them; curved mirrors reflect by
     /// Fermat's principle; no shadows, other reflections or depth of field) and report the
     /// frame time.
     Preview {

@@ -49,7 +49,7 @@ pub struct FlatScene {
     pub crop: [u32; 4],
     /// Adaptive sampling, when the scene asks for it (`render.noise_target`).
     pub adaptive: Option<crate::adaptive::AdaptiveSettings>,
-    /// The scene's parametric surfaces (tori) with their mesh's primitives, for the raster
+    /// The scene's parametric surfaces (tori, Bézier patches) with their mesh's primitives, for the raster
     /// preview's Fermat reflections; the ray tracers see only the primitives.
     pub surfaces: Vec<FlatSurface>,
     /// Whether renders also sum the first hits' depth, normal and albedo (`render::Aovs`);
@@ -66,7 +66,7 @@ pub struct FlatScene {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlatSurface {
     /// The surface.
-    pub torus: crate::fermat::Torus,
+    pub surface: crate::scene::surface::Surface,
     /// The indices of its triangles in `FlatScene::prims` (BVH order).
     pub prims: Vec<u32>,
 }
@@ -348,7 +348,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         .surfaces
         .iter()
         .map(|s| FlatSurface {
-            torus: s.surface,
+            surface: s.surface.clone(),
             prims: shape_prims[s.shape]
                 .clone()
                 .map(|i| geometry.new_index[i])

@@ -5,8 +5,9 @@
 //! `gpu::preview`, its shader `wgsl/preview.wgsl`.
 //!
 //! What the preview leaves out, by design (it trades accuracy for speed): shadows, specular
-//! lobes, reflections other than mirror spheres' (drawn by Fermat's principle, seed 004:
-//! `reflectors`, `reflected_triangles`) and depth of field (a lens is drawn as a pinhole at its centre;
+//! lobes, reflections other than curved mirrors' (spheres, tori and Bézier patches, drawn by
+//! Fermat's principle, seed 004: `reflectors`, `reflected_triangles`; a mirror reflects neither
+//! itself nor other mirrors) and depth of field (a lens is drawn as a pinhole at its centre;
 //! lens tilt and swing do not move a pinhole's rays). Area lights light it as points at their
 //! centres with their power's cosine falloff.
 
@@ -14,14 +15,14 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 
 use crate::camera::CameraSpec;
-use crate::fermat::Torus;
+use crate::fermat::{BezierPatch, Torus};
 use crate::layout::{
-    GpuPrimitive, GpuReflector, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE,
+    GpuPrimitive, GpuReflector, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE, REFLECTOR_PATCH,
     REFLECTOR_SPHERE, REFLECTOR_TORUS,
 };
 use crate::pack::FlatScene;
 use crate::scene::Scene;
-use crate::scene::surface::torus_mesh_of;
+use crate::scene::surface::{Surface, patches_mesh, torus_mesh_of};
 
 /// One vertex of the preview's triangle list.
 #[repr(C)]
@@ -45,6 +46,10 @@ pub const SPHERE_SEGMENTS: u32 = 64;
 /// Quads around a torus's axis and its tube in the preview: within (R + r)(1 − cos(π/64)) ≈
 /// 1.2e-3 (R + r) of the torus, where the ray tracers' mesh has `scene::surface::TORUS_QUADS`.
 pub const PREVIEW_TORUS_QUADS: [u32; 2] = [64, 32];
+
+/// Quads along each side of a Bézier patch in the preview (`scene::surface::PATCH_QUADS` in
+/// the ray tracers' mesh).
+pub const PREVIEW_PATCH_QUADS: u32 = 8;
 
 /// The preview's uniforms: the clip matrix and what shading needs of the frame.
 #[repr(C)]
@@ -85,7 +90,7 @@ pub struct ReflectorPass {
 pub fn tessellate(scene: &FlatScene, extent: f32) -> Vec<PreviewVertex> {
     let end = (scene.frame.plane_start + scene.frame.plane_count) as usize;
     let tags = reflector_tags(scene, &reflectors(scene));
-    // A torus's fine mesh is the ray tracers'; the preview draws a coarser one of its own.
+    // A parametric surface's fine mesh is the ray tracers'; the preview draws a coarser one.
     let mut on_surface = vec![false; scene.prims.len()];
     let mut vertices = Vec::new();
     for s in &scene.surfaces {
@@ -94,7 +99,10 @@ pub fn tessellate(scene: &FlatScene, extent: f32) -> Vec<PreviewVertex> {
             continue;
         };
         let (material, tag) = (scene.prims[first as usize].material, tags[first as usize]);
-        let mesh = torus_mesh_of(&s.torus, PREVIEW_TORUS_QUADS);
+        let mesh = match &s.surface {
+            Surface::Torus(torus) => torus_mesh_of(torus, PREVIEW_TORUS_QUADS),
+            Surface::Patches(patches) => patches_mesh(patches, PREVIEW_PATCH_QUADS),
+        };
         let normals = mesh.normals.as_deref().unwrap_or_default();
         for t in &mesh.triangles {
             for &k in t {
@@ -129,8 +137,9 @@ pub fn tessellate(scene: &FlatScene, extent: f32) -> Vec<PreviewVertex> {
 /// A curved mirror the preview reflects in by Fermat's principle.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Reflector {
-    /// Its surface.
-    pub surface: MirrorSurface,
+    /// Its Fermat searches: one per surface of the mirror (a sphere's, a torus's, each of a
+    /// teapot's patches); each can show a reflection of a point.
+    pub searches: Vec<MirrorSurface>,
     /// Its primitives' indices in the flattened scene (a sphere's one, a torus's triangles).
     pub prims: Vec<usize>,
     /// Its material's index.
@@ -140,6 +149,9 @@ pub struct Reflector {
 }
 
 /// The surfaces the Fermat kernel solves on (`wgsl/fermat.wgsl`).
+// A scene has a handful (a teapot 32): copies of a patch's 384 bytes cost nothing, and Copy
+// keeps the searches plain values.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum MirrorSurface {
     /// A sphere (a primitive of its own).
@@ -151,33 +163,49 @@ pub enum MirrorSurface {
     },
     /// A torus (rendered as a mesh).
     Torus(Torus),
+    /// A bicubic Bézier patch (rendered with its neighbours as a mesh): reflections found
+    /// outside its parameter square belong to a neighbour or to nothing.
+    Patch(BezierPatch),
 }
 
 impl MirrorSurface {
+    /// Its `layout::REFLECTOR_*` kind (the fermat pipeline that solves on it).
+    pub fn kind(&self) -> u32 {
+        match self {
+            MirrorSurface::Sphere { .. } => REFLECTOR_SPHERE,
+            MirrorSurface::Torus(_) => REFLECTOR_TORUS,
+            MirrorSurface::Patch(_) => REFLECTOR_PATCH,
+        }
+    }
+
     /// The Fermat kernel's uniforms for this surface, the eye at `eye`, `count` vertices.
     pub fn gpu(&self, eye: Vec3, count: u32) -> GpuReflector {
-        let (kind, center, radius, minor) = match *self {
-            MirrorSurface::Sphere { center, radius } => (REFLECTOR_SPHERE, center, radius, 0.0),
-            MirrorSurface::Torus(t) => (
-                REFLECTOR_TORUS,
-                t.center.as_vec3(),
-                t.major as f32,
-                t.minor as f32,
-            ),
+        let (center, radius, minor) = match *self {
+            MirrorSurface::Sphere { center, radius } => (center, radius, 0.0),
+            MirrorSurface::Torus(t) => (t.center.as_vec3(), t.major as f32, t.minor as f32),
+            MirrorSurface::Patch(_) => (Vec3::ZERO, 0.0, 0.0),
         };
+        let mut control = [[0.0; 4]; 16];
+        if let MirrorSurface::Patch(patch) = self {
+            for (k, p) in patch.points.iter().flatten().enumerate() {
+                control[k] = p.as_vec3().extend(0.0).to_array();
+            }
+        }
         GpuReflector {
             center: center.to_array(),
             radius,
             eye: eye.to_array(),
             count,
-            kind,
+            kind: self.kind(),
             minor,
             _pad: [0; 2],
+            control,
         }
     }
 }
 
-/// The scene's curved mirrors: mirror spheres in primitive order, then mirror tori (flat
+/// The scene's curved mirrors: mirror spheres in primitive order, then mirror tori and Bézier
+/// surfaces (flat
 /// mirrors, mirror triangles and quads of meshes are drawn with their diffuse term only: the
 /// seed's method is for smooth curved reflectors).
 pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
@@ -188,25 +216,30 @@ pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
         .enumerate()
         .filter(|(_, p)| p.kind == PRIM_SPHERE)
         .map(|(prim, p)| Reflector {
-            surface: MirrorSurface::Sphere {
+            searches: vec![MirrorSurface::Sphere {
                 center: Vec3::from(p.p0),
                 radius: p.p1[0],
-            },
+            }],
             prims: vec![prim],
             material: p.material,
             mirror: mirror_of(p.material),
         });
-    let tori = scene.surfaces.iter().filter_map(|s| {
+    let surfaces = scene.surfaces.iter().filter_map(|s| {
         let material = scene.prims[*s.prims.first()? as usize].material;
         Some(Reflector {
-            surface: MirrorSurface::Torus(s.torus),
+            searches: match &s.surface {
+                Surface::Torus(torus) => vec![MirrorSurface::Torus(*torus)],
+                Surface::Patches(patches) => {
+                    patches.iter().map(|&p| MirrorSurface::Patch(p)).collect()
+                }
+            },
             prims: s.prims.iter().map(|&p| p as usize).collect(),
             material,
             mirror: mirror_of(material),
         })
     });
     spheres
-        .chain(tori)
+        .chain(surfaces)
         .filter(|r| r.mirror.max_element() > 0.0)
         .collect()
 }
@@ -414,9 +447,9 @@ pub fn clip_matrix(camera: &CameraSpec, far: f64) -> DMat4 {
 pub fn omissions(scene: &Scene) -> Vec<String> {
     let camera = &scene.camera;
     let mut notes = vec![
-        "the preview has no shadows or specular lobes; mirror spheres reflect the scene by \
-         Fermat's principle (without the other reflectors), other mirrors show their diffuse \
-         term only"
+        "the preview has no shadows or specular lobes; curved mirrors (spheres, tori, Bezier \
+         patches) reflect the scene by Fermat's principle (one reflection per point and \
+         surface, not each other or themselves), other mirrors show their diffuse term only"
             .into(),
     ];
     if !camera.is_pinhole() {

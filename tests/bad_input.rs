@@ -676,3 +676,35 @@ fn torus_fields() {
         "required",
     );
 }
+
+/// A Bézier shape's patch file that cannot be read, or that is malformed, is named with the
+/// line at fault; a mesh's smoothing fields do not apply to it.
+#[test]
+fn bezier_fields() {
+    let sphere = "type = \"sphere\"\ncenter = [0.0, 1.0, 0.0]\nradius = 1.0";
+    let dir = std::env::temp_dir().join("chambre-bad-input");
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("broken.bpt"), "1\n1,2,3\n").unwrap();
+    let bezier = |rest: &str| format!("type = \"bezier\"\n{rest}");
+    expect_error(
+        sphere,
+        &bezier("file = \"missing.bpt\""),
+        14,
+        "shapes[0].file",
+        "cannot read patch file",
+    );
+    expect_error(
+        sphere,
+        &bezier("file = \"broken.bpt\""),
+        14,
+        "shapes[0].file",
+        "broken.bpt:2: expected 16 numbers",
+    );
+    expect_error(
+        sphere,
+        &bezier("file = \"broken.bpt\"\nsmooth = false"),
+        15,
+        "shapes[0].smooth",
+        "does not apply to a bezier",
+    );
+}

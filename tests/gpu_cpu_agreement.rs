@@ -255,3 +255,12 @@ fn fermat_torus_agrees() {
         &["render.width=96", "render.height=72", "render.spp=4"],
     );
 }
+
+/// A mirror teapot (Newell's Bézier patches, traced as their fine mesh) reflecting a floor.
+#[test]
+fn fermat_teapot_agrees() {
+    check(
+        "scenes/fermat_teapot.toml",
+        &["render.width=96", "render.height=72", "render.spp=4"],
+    );
+}

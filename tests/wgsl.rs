@@ -246,7 +246,8 @@ fn shared_structs_have_identical_layouts() {
             count,
             kind,
             minor,
-            _pad
+            _pad,
+            control
         }
     );
     layout!(

@@ -1,12 +1,15 @@
-// Reflections on a sphere or a torus by Fermat's principle: one invocation finds, for one scene
+// Reflections on a sphere, a torus or a Bézier patch by Fermat's principle: one invocation finds, for one scene
 // vertex V and the eye E, the point P of the reflector where E -> P -> V has extremal length, by
 // the seed's search on a triangle in the (u, v) plane (see src/fermat.rs for the method), in
 // f32, step for step as its twin; the search's constants come from src/layout.rs.
-// Mirrors: src/fermat.rs (Sphere, Sphere::facing, Torus, initial_triangle, replaced_corner,
-// Solver::solve).
+// Mirrors: src/fermat.rs (Sphere, Sphere::facing, Torus, BezierPatch, on_patch,
+// initial_triangle, replaced_corner, Solver::solve).
 
 // Steps at most: the seed's 5 unless the pipeline overrides it (`gpu::fermat::FermatPass`).
 override FERMAT_STEPS: u32 = 5u;
+// The reflector's kind (`REFLECTOR_SPHERE`, ...): a pipeline per kind, so that each carries
+// only its own surface's code (`gpu::fermat::FermatPass`).
+override REFLECTOR_KIND: u32 = 0u;
 const FERMAT_MIN_SIZE: f32 = 1e-7;
 const TAU: f32 = 6.283185307179586;
 
@@ -38,7 +41,7 @@ fn facing(e: vec3<f32>, v: vec3<f32>) -> Frame {
 }
 
 fn frame_for(eye: vec3<f32>, vertex: vec3<f32>) -> Frame {
-    if (reflector.kind == REFLECTOR_TORUS) {
+    if (REFLECTOR_KIND == REFLECTOR_TORUS) {
         return Frame(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
     }
     return facing(eye - reflector.center, vertex - reflector.center);
@@ -53,13 +56,16 @@ struct SurfacePoint {
 }
 
 fn surface(f: Frame, uv: vec2<f32>) -> SurfacePoint {
+    if (REFLECTOR_KIND == REFLECTOR_PATCH) {
+        return patch_surface(uv);
+    }
     let su = sin(uv.x);
     let cu = cos(uv.x);
     let sv = sin(uv.y);
     let cv = cos(uv.y);
     let around = cu * f.x + su * f.z;
     let along = -su * f.x + cu * f.z;
-    if (reflector.kind == REFLECTOR_TORUS) {
+    if (REFLECTOR_KIND == REFLECTOR_TORUS) {
         let r = reflector.minor;
         let ring = reflector.radius + r * cv;
         return SurfacePoint(reflector.center + ring * around + r * sv * f.y, ring * along,
@@ -70,10 +76,74 @@ fn surface(f: Frame, uv: vec2<f32>) -> SurfacePoint {
         r * (cv * around - sv * f.y));
 }
 
+// The cubic Bernstein polynomials at t (xyzw: B_0..B_3) and their derivatives.
+struct Bernstein {
+    b: vec4<f32>,
+    d: vec4<f32>,
+}
+
+fn bernstein(t: f32) -> Bernstein {
+    let s = 1.0 - t;
+    return Bernstein(vec4<f32>(s * s * s, 3.0 * t * s * s, 3.0 * t * t * s, t * t * t),
+        vec4<f32>(-3.0 * s * s, 3.0 * s * s - 6.0 * t * s, 6.0 * t * s - 3.0 * t * t,
+        3.0 * t * t));
+}
+
+// Σ a_i b_j P_ij over the patch's control points.
+fn patch_mix(a: vec4<f32>, b: vec4<f32>) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
+    for (var i = 0u; i < 4u; i += 1u) {
+        for (var j = 0u; j < 4u; j += 1u) {
+            sum += a[i] * b[j] * reflector.control[4u * i + j].xyz;
+        }
+    }
+    return sum;
+}
+
+fn patch_surface(uv: vec2<f32>) -> SurfacePoint {
+    let bu = bernstein(uv.x);
+    let bv = bernstein(uv.y);
+    return SurfacePoint(patch_mix(bu.b, bv.b), patch_mix(bu.d, bv.b), patch_mix(bu.b, bv.d));
+}
+
+// A patch has no inside: O a patch-size behind its centre, against the normal there.
+fn patch_inside() -> vec3<f32> {
+    let centre = patch_surface(vec2<f32>(0.5));
+    let size = length(reflector.control[15].xyz - reflector.control[0].xyz);
+    return centre.p - size * normalize(cross(centre.fu, centre.fv));
+}
+
+// Where the segment from `outside` to O crosses the patch: Newton steps on
+// f(u, v) = O + t (outside - O) from the patch's centre, clamped to the patch.
+fn patch_crossing(outside: vec3<f32>) -> vec2<f32> {
+    let o = patch_inside();
+    let d = outside - o;
+    var uvt = vec3<f32>(0.5);
+    for (var k = 0u; k < 8u; k += 1u) {
+        let s = patch_surface(uvt.xy);
+        let r = s.p - (o + uvt.z * d);
+        // Cramer's rule on the columns f_u, f_v, -d.
+        let c = -d;
+        let det = dot(s.fu, cross(s.fv, c));
+        if (det == 0.0) {
+            break;
+        }
+        let step = vec3<f32>(dot(r, cross(s.fv, c)), dot(s.fu, cross(r, c)),
+            dot(s.fu, cross(s.fv, r))) / det;
+        uvt = clamp(uvt - step, vec3<f32>(0.0), vec3<f32>(1.0));
+    }
+    return uvt.xy;
+}
+
 // The outward unit normal at (u, v).
 fn surface_normal(f: Frame, uv: vec2<f32>) -> vec3<f32> {
+    if (REFLECTOR_KIND == REFLECTOR_PATCH) {
+        let s = patch_surface(uv);
+        let n = cross(s.fu, s.fv);
+        return select(vec3<f32>(0.0), normalize(n), length(n) > 0.0);
+    }
     let around = cos(uv.x) * f.x + sin(uv.x) * f.z;
-    if (reflector.kind == REFLECTOR_TORUS) {
+    if (REFLECTOR_KIND == REFLECTOR_TORUS) {
         return cos(uv.y) * around + sin(uv.y) * f.y;
     }
     return sin(uv.y) * around + cos(uv.y) * f.y;
@@ -82,9 +152,12 @@ fn surface_normal(f: Frame, uv: vec2<f32>) -> vec3<f32> {
 // The parameters where the segment from `outside` to the point O inside the reflector crosses
 // it: O the sphere's centre, or the point of the torus's tube circle at `outside`'s azimuth.
 fn crossing(f: Frame, outside: vec3<f32>) -> vec2<f32> {
+    if (REFLECTOR_KIND == REFLECTOR_PATCH) {
+        return patch_crossing(outside);
+    }
     let d = outside - reflector.center;
     let u = atan2(dot(d, f.z), dot(d, f.x));
-    if (reflector.kind == REFLECTOR_TORUS) {
+    if (REFLECTOR_KIND == REFLECTOR_TORUS) {
         let flat = vec3<f32>(d.x, 0.0, d.z);
         let radial = select(vec3<f32>(1.0, 0.0, 0.0), normalize(flat), length(flat) > 0.0);
         let w = d - reflector.radius * radial;
@@ -149,7 +222,10 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     // The initial triangle: A and B where E -> O and V -> O cross the reflector, C off AB.
     let a0 = crossing(f, eye);
     var b0 = crossing(f, vertex);
-    b0.x += TAU * round((a0.x - b0.x) / TAU);
+    // An azimuthal u (sphere, torus) is unwrapped so that AB takes the short way round.
+    if (REFLECTOR_KIND != REFLECTOR_PATCH) {
+        b0.x += TAU * round((a0.x - b0.x) / TAU);
+    }
     let side = b0 - a0;
     var corners: array<vec2<f32>, 3>;
     corners[0] = a0;
@@ -159,6 +235,11 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     } else {
         corners[1] = a0 + vec2<f32>(FERMAT_SPREAD, 0.0);
         corners[2] = a0 + vec2<f32>(FERMAT_SPREAD, FERMAT_SPREAD);
+    }
+    // Each step replaces one corner: the other two keep their gradients.
+    var gradients: array<vec2<f32>, 3>;
+    for (var k = 0u; k < 3u; k += 1u) {
+        gradients[k] = fermat_gradient(f, eye, vertex, corners[k]);
     }
     var best = corners[0];
     var moved = 3.0e38;
@@ -171,9 +252,9 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
             steps = step;
             break;
         }
-        let ga = fermat_gradient(f, eye, vertex, corners[0]);
-        let gb = fermat_gradient(f, eye, vertex, corners[1]);
-        let gc = fermat_gradient(f, eye, vertex, corners[2]);
+        let ga = gradients[0];
+        let gb = gradients[1];
+        let gc = gradients[2];
         let m0 = gb - ga;
         let m1 = gc - ga;
         let det = m0.x * m1.y - m1.x * m0.y;
@@ -185,11 +266,27 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         let alpha = (-ga.x * m1.y + m1.x * ga.y) / det;
         let beta = (-m0.x * ga.y + ga.x * m0.y) / det;
         let p = (1.0 - alpha - beta) * corners[0] + alpha * corners[1] + beta * corners[2];
-        corners[replaced_corner(corners, p)] = p;
+        let replaced = replaced_corner(corners, p);
+        corners[replaced] = p;
+        gradients[replaced] = fermat_gradient(f, eye, vertex, p);
         moved = length(p - best);
         best = p;
+        // A patch's search a square's width beyond it has left it (`beyond_reach`).
+        if (REFLECTOR_KIND == REFLECTOR_PATCH
+            && (min(p.x, p.y) < -PATCH_REACH || max(p.x, p.y) > 1.0 + PATCH_REACH)) {
+            steps = step + 1u;
+            break;
+        }
     }
     let point = surface(f, best).p;
-    reflections[i] = GpuReflection(point, steps, surface_normal(f, best), 0u, best,
-        length(vertex - point), degenerate);
+    var normal = surface_normal(f, best);
+    // A patch's reflection outside its square is none of its own: a zero normal, never seen
+    // from outside, so the preview leaves it out (`fermat::on_patch`).
+    let margin = PATCH_MARGIN;
+    if (REFLECTOR_KIND == REFLECTOR_PATCH
+        && (min(best.x, best.y) < -margin || max(best.x, best.y) > 1.0 + margin)) {
+        normal = vec3<f32>(0.0);
+    }
+    reflections[i] = GpuReflection(point, steps, normal, 0u, best, length(vertex - point),
+        degenerate);
 }

@@ -138,6 +138,7 @@ struct GpuReflector {
     kind: u32,
     minor: f32,
     _pad: vec2<u32>,
+    control: array<vec4<f32>, 16>,
 }
 
 struct GpuReflection {

@@ -1,16 +1,18 @@
-//! The Fermat comparison: the raster preview's reflections on a mirror sphere (seed 004)
-//! against the ray tracer's, by the subdivision of the reflected triangles. For each
-//! subdivision: the preview's frame time; how far reflected features land from where the ray
-//! tracer puts them, in pixels; and FLIP over the sphere's pixels against a ray-traced
-//! reference. Once: the ray-traced frame time at 1 sample per pixel on the same device.
+//! The Fermat comparison: the raster preview's reflections on a curved mirror (a sphere, a
+//! torus or Bézier patches; seed 004) against the ray tracer's, by the subdivision of the
+//! reflected triangles. For each subdivision: the preview's frame time; how far reflected
+//! features land from where the ray tracer puts them, in pixels; and FLIP over the mirror's
+//! pixels against a ray-traced reference. Once: the ray-traced frame time at 1 sample per
+//! pixel on the same device.
 //!
 //! Features are points along every edge of the reflected triangles: their corners, and eight
 //! points between that no subdivision makes vertices (there a straight reflected edge departs
-//! from the true curved one). The
-//! ray tracer's position of a feature X is the projection of Alhazen's point for X (f64,
-//! `fermat::alhazen_sphere`); the preview's is where its rasteriser draws X: the projection of
-//! the barycentric mix, over the sub-triangle holding X, of the GPU's Fermat points of that
-//! sub-triangle's corners (a reflected triangle is drawn flat between its corners' points).
+//! from the true curved one). The ray tracer's position of a feature X is the projection of
+//! its true reflection point (`true_reflection`: Alhazen's point on a sphere, f64) where the
+//! ray tracer sees that light path; the preview's is where its rasteriser draws X: the
+//! projection of the barycentric mix, over the sub-triangle holding X, of the GPU's Fermat
+//! points of that sub-triangle's corners (a reflected triangle is drawn flat between its
+//! corners' points).
 
 use std::path::Path;
 
@@ -23,7 +25,7 @@ use crate::accel::intersect::RayQuery;
 use crate::accel::traverse::closest_hit;
 use crate::error::{Error, Location, Result};
 use crate::fermat::{
-    Solver, Sphere, alhazen_sphere, drawn_in_preview, reflection_error, seen_from_outside,
+    Solver, Sphere, alhazen_sphere, drawn_in_preview, on_patch, reflection_error, seen_from_outside,
 };
 use crate::gpu::GpuContext;
 use crate::gpu::preview::{ReflectionOptions, draw_with, extent_and_far};
@@ -63,7 +65,7 @@ pub struct FermatRow {
     pub displacement_p99_px: f64,
     /// Largest.
     pub displacement_max_px: f64,
-    /// Mean FLIP over the sphere's pixels against the ray-traced reference.
+    /// Mean FLIP over the mirror's pixels against the ray-traced reference.
     pub flip_reflector: f64,
 }
 
@@ -91,7 +93,7 @@ pub struct FermatReport {
 
 /// What the comparison is asked.
 pub struct FermatConfig<'a> {
-    /// The scene: its first mirror sphere is the reflector measured.
+    /// The scene: its first curved mirror is the reflector measured.
     pub scene: &'a Path,
     /// Overrides of the scene's fields (`--set`), e.g. a smaller image.
     pub overrides: &'a [String],
@@ -126,7 +128,8 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
                 column: 0,
                 field: "shapes".into(),
             },
-            message: "the Fermat comparison needs a sphere or a torus with a mirror material"
+            message: "the Fermat comparison needs a sphere, torus or Bezier shape with a mirror \
+                      material"
                 .into(),
         })?;
     let (width, height) = (flat.frame.width, flat.frame.height);
@@ -253,41 +256,43 @@ fn displacements(
     }
     let eye64 = eye.as_dvec3();
     let mut out = Vec::new();
-    let surface = reflector.surface;
-    let found = crate::gpu::fermat::reflections(context, surface, eye, &corners, options.steps)?;
-    for (k, (x, weights, corner)) in features.iter().enumerate() {
-        let x = x.as_dvec3();
-        let Some(truth) =
-            true_reflection(&surface, eye64, x).filter(|&p| light_path_is_clear(flat, eye64, p, x))
-        else {
-            continue;
-        };
-        let Some(truth_px) = project(clip, truth, width, height)
-            .filter(|p| p.x >= 0.0 && p.y >= 0.0 && p.x < width as f64 && p.y < height as f64)
-        else {
-            continue;
-        };
-        let corners_found = &found[3 * k..3 * k + 3];
-        let all_drawn = corners_found
-            .iter()
-            .zip(&corners[3 * k..3 * k + 3])
-            .all(|(r, v)| {
-                let p = Vec3::from(r.point).as_dvec3();
-                let n = Vec3::from(r.normal).as_dvec3();
-                drawn_in_preview(p, n, eye64, v.as_dvec3())
-            });
-        let drawn_at = corners_found
-            .iter()
-            .zip(weights)
-            .map(|(r, &w)| Vec3::from(r.point).as_dvec3() * w as f64)
-            .sum::<DVec3>();
-        out.push((
-            *corner,
-            all_drawn
-                .then(|| project(clip, drawn_at, width, height))
-                .flatten()
-                .map(|p| p.distance(truth_px)),
-        ));
+    for &surface in &reflector.searches {
+        let found =
+            crate::gpu::fermat::reflections(context, surface, eye, &corners, options.steps)?;
+        for (k, (x, weights, corner)) in features.iter().enumerate() {
+            let x = x.as_dvec3();
+            let Some(truth) = true_reflection(&surface, eye64, x)
+                .filter(|&p| light_path_is_clear(flat, eye64, p, x))
+            else {
+                continue;
+            };
+            let Some(truth_px) = project(clip, truth, width, height)
+                .filter(|p| p.x >= 0.0 && p.y >= 0.0 && p.x < width as f64 && p.y < height as f64)
+            else {
+                continue;
+            };
+            let corners_found = &found[3 * k..3 * k + 3];
+            let all_drawn = corners_found
+                .iter()
+                .zip(&corners[3 * k..3 * k + 3])
+                .all(|(r, v)| {
+                    let p = Vec3::from(r.point).as_dvec3();
+                    let n = Vec3::from(r.normal).as_dvec3();
+                    drawn_in_preview(p, n, eye64, v.as_dvec3())
+                });
+            let drawn_at = corners_found
+                .iter()
+                .zip(weights)
+                .map(|(r, &w)| Vec3::from(r.point).as_dvec3() * w as f64)
+                .sum::<DVec3>();
+            out.push((
+                *corner,
+                all_drawn
+                    .then(|| project(clip, drawn_at, width, height))
+                    .flatten()
+                    .map(|p| p.distance(truth_px)),
+            ));
+        }
     }
     Ok(out)
 }
@@ -318,25 +323,35 @@ fn true_reflection(surface: &MirrorSurface, eye: DVec3, x: DVec3) -> Option<DVec
             let p = alhazen_sphere(&sphere, eye, x);
             (p, (p - sphere.center) / sphere.radius)
         }
-        MirrorSurface::Torus(torus) => converged(&torus, eye, x)?,
+        MirrorSurface::Torus(torus) => {
+            let (p, n, _) = converged(&torus, eye, x)?;
+            (p, n)
+        }
+        MirrorSurface::Patch(patch) => {
+            let (p, n, uv) = converged(&patch, eye, x)?;
+            if !on_patch(uv) {
+                return None;
+            }
+            (p, n)
+        }
     };
     seen_from_outside(point, normal, eye, x).then_some(point)
 }
 
-/// The point and normal where the f64 search on `surface` converges (the law of reflection to
-/// 1e-9 rad), if it does.
+/// The point, normal and parameters where the f64 search on `surface` converges (the law of
+/// reflection to 1e-9 rad), if it does.
 fn converged(
     surface: &impl crate::fermat::Reflector,
     eye: DVec3,
     x: DVec3,
-) -> Option<(DVec3, DVec3)> {
+) -> Option<(DVec3, DVec3, DVec2)> {
     let solver = Solver {
         max_steps: TRUTH_STEPS,
         min_size: 1e-12,
     };
     let uv = solver.solve(surface, eye, x).uv;
     let (p, n) = (surface.point(uv), surface.outward_normal(uv));
-    (reflection_error(p, n, eye, x) <= 1e-9).then_some((p, n))
+    (reflection_error(p, n, eye, x) <= 1e-9).then_some((p, n, uv))
 }
 
 /// Steps of the f64 search that finds a torus's true reflections (`true_reflection`).
@@ -392,7 +407,7 @@ impl FermatReport {
              Ray-traced frame, 1 spp: GPU {:.2} ms, CPU {:.2} ms (median of runs)\n\n\
              | subdivision | reflected triangles | preview (ms) | ray-traced GPU / preview | \
              features drawn | corners: max (px) | all features: median (px) | p99 (px) | \
-             max (px) | FLIP of the sphere's pixels vs {} spp |\n\
+             max (px) | FLIP of the mirror's pixels vs {} spp |\n\
              |---|---|---|---|---|---|---|---|---|---|\n",
             self.scene,
             self.width,

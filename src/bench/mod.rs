@@ -53,7 +53,7 @@ pub enum BenchCommand {
     /// Motion blur's BVH: one over boxes swept over the whole shutter against one per time
     /// slice; build time and Mrays/s of the same timed rays, CPU path.
     Motion(MotionArgs),
-    /// Fermat reflections in the raster preview against the ray tracer on a mirror sphere: frame
+    /// Fermat reflections in the raster preview against the ray tracer on a curved mirror: frame
     /// times, displacement of reflected features in pixels and FLIP, by subdivision.
     Fermat(FermatArgs),
 }
@@ -61,7 +61,7 @@ pub enum BenchCommand {
 /// Arguments of `chambre bench fermat`.
 #[derive(Debug, clap::Args)]
 pub struct FermatArgs {
-    /// Scene with a mirror sphere (the first one is measured).
+    /// Scene with a curved mirror: a sphere, torus or Bézier shape (the first is measured).
     #[arg(long, default_value = "scenes/fermat_sphere.toml")]
     pub scene: PathBuf,
     /// Subdivisions of the reflected triangles to compare.

@@ -18,9 +18,11 @@ pub const SEED_STEPS: u32 = 5;
 /// Vertices an invocation group of the kernel takes (its `@workgroup_size`).
 const WORKGROUP: u32 = 64;
 
-/// The fermat kernel's pipeline, and the buffers of one reflector's solve.
+/// The fermat kernel's pipelines, one per kind of reflector (`layout::REFLECTOR_*`, the
+/// kernel's `REFLECTOR_KIND`): specialised, a sphere's search carries none of a patch's code
+/// (on lavapipe the general kernel took a sphere's preview frame from 4 to 12 ms).
 pub struct FermatPass {
-    pipeline: kernels::Pipeline,
+    pipelines: Vec<(u32, kernels::Pipeline)>,
 }
 
 /// One reflector's inputs and output on the device.
@@ -32,20 +34,30 @@ pub struct FermatSolve {
     pub output: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     count: u32,
+    /// Its pipeline's index in `FermatPass::pipelines`.
+    pipeline: usize,
 }
 
 impl FermatPass {
-    /// Builds the kernel to take at most `steps` steps (validation errors surface through the
-    /// caller's error scope).
-    pub fn new(context: &GpuContext, steps: u32) -> FermatPass {
-        FermatPass {
-            pipeline: kernels::build_pipeline_with(
-                &context.device,
-                &FERMAT,
-                0,
-                &[("FERMAT_STEPS", steps as f64)],
-            ),
-        }
+    /// Builds the kernel for each of `kinds` of reflector, to take at most `steps` steps
+    /// (validation errors surface through the caller's error scope).
+    pub fn new(context: &GpuContext, steps: u32, kinds: &[u32]) -> FermatPass {
+        let mut kinds = kinds.to_vec();
+        kinds.sort_unstable();
+        kinds.dedup();
+        let pipelines = kinds
+            .into_iter()
+            .map(|kind| {
+                let overrides = [
+                    ("FERMAT_STEPS", steps as f64),
+                    ("REFLECTOR_KIND", kind as f64),
+                ];
+                let pipeline =
+                    kernels::build_pipeline_with(&context.device, &FERMAT, 0, &overrides);
+                (kind, pipeline)
+            })
+            .collect();
+        FermatPass { pipelines }
     }
 
     /// The buffers that solve `vertices` (positions, w unused) for `reflector`.
@@ -62,7 +74,17 @@ impl FermatPass {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let bind_group = self.pipeline.bind_group(
+        let pipeline = self
+            .pipelines
+            .iter()
+            .position(|(kind, _)| *kind == reflector.kind)
+            .ok_or_else(|| {
+                Error::Gpu(format!(
+                    "no fermat pipeline for reflector kind {}",
+                    reflector.kind
+                ))
+            })?;
+        let bind_group = self.pipelines[pipeline].1.bind_group(
             &context.device,
             &[
                 ("reflector", &uniforms),
@@ -75,13 +97,14 @@ impl FermatPass {
             output,
             bind_group,
             count: reflector.count,
+            pipeline,
         })
     }
 
     /// Records the solve of `solve`'s vertices into `encoder`.
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, solve: &FermatSolve) {
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&self.pipeline.pipeline);
+        pass.set_pipeline(&self.pipelines[solve.pipeline].1.pipeline);
         pass.set_bind_group(0, &solve.bind_group, &[]);
         pass.dispatch_workgroups(solve.count.div_ceil(WORKGROUP), 1, 1);
     }
@@ -107,9 +130,9 @@ pub fn reflections(
     }
     let device = &context.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let pass = FermatPass::new(context, steps);
-    let input = vertex_buffer(context, vertices)?;
     let reflector = surface.gpu(eye, vertices.len() as u32);
+    let pass = FermatPass::new(context, steps, &[reflector.kind]);
+    let input = vertex_buffer(context, vertices)?;
     let solve = pass.solve(context, reflector, &input)?;
     let mut encoder = device.create_command_encoder(&Default::default());
     pass.encode(&mut encoder, &solve);

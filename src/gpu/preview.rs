@@ -20,8 +20,8 @@ use crate::error::{Error, Result};
 use crate::layout::wgsl_prelude;
 use crate::pack::FlatScene;
 use crate::preview::{
-    PreviewUniforms, PreviewVertex, Reflector, ReflectorPass, bounded_radius, clip_matrix,
-    reflected_triangles, reflectors, tessellate,
+    MirrorSurface, PreviewUniforms, PreviewVertex, Reflector, ReflectorPass, bounded_radius,
+    clip_matrix, reflected_triangles, reflectors, tessellate,
 };
 use crate::render::Image;
 use crate::scene::Scene;
@@ -33,7 +33,7 @@ const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// from the eye it sees it at.
 const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 
-/// How the preview draws the reflections of mirror spheres.
+/// How the preview draws the reflections of curved mirrors.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ReflectionOptions {
     /// Pieces each edge of a reflected triangle is cut into; `None`: as many as keep every
@@ -65,7 +65,7 @@ pub struct PreviewFrame {
     pub frame_time: Duration,
     /// Every timed frame's time, milliseconds.
     pub frame_times_ms: Vec<f64>,
-    /// Reflected triangles drawn a frame (Fermat reflections on mirror spheres).
+    /// Reflected triangles drawn a frame (Fermat reflections on curved mirrors).
     pub reflected_triangles: usize,
 }
 
@@ -145,7 +145,7 @@ pub struct PreviewRenderer {
 
 impl PreviewRenderer {
     /// The pipeline and buffers of `scene` (flattened as `flat`), drawn through its camera;
-    /// mirror spheres' reflections drawn as `options` say.
+    /// curved mirrors' reflections drawn as `options` say.
     pub fn new(
         context: &GpuContext,
         scene: &Scene,
@@ -368,7 +368,7 @@ impl PreviewRenderer {
         self.vertex_count as usize / 3
     }
 
-    /// Reflected triangles drawn a frame, summed over the mirror spheres.
+    /// Reflected triangles drawn a frame, summed over the curved mirrors' searches.
     pub fn reflected_triangles(&self) -> usize {
         self.reflections
             .as_ref()
@@ -389,12 +389,14 @@ struct ReflectionSetup<'a> {
     size: wgpu::Extent3d,
 }
 
-/// The reflection passes of the mirror spheres: the Fermat solves, the reflected triangles'
-/// pipeline and its own depth buffer (|P − V|); it draws over the main pass's colour target.
+/// The reflection passes of the curved mirrors: the Fermat solves (one per search of each
+/// mirror), the reflected triangles' pipeline and its own depth buffer (|P − V|); it draws over
+/// the main pass's colour target.
 struct Reflections {
     fermat: FermatPass,
     solves: Vec<FermatSolve>,
-    reflectors: Vec<Reflector>,
+    /// Per solve: 1 + its mirror's index (the id the main pass wrote), and the search.
+    searches: Vec<(u32, MirrorSurface)>,
     pipeline: wgpu::RenderPipeline,
     shared_group: wgpu::BindGroup,
     reflector_groups: Vec<wgpu::BindGroup>,
@@ -418,16 +420,25 @@ impl Reflections {
             return Ok(None);
         }
         let device = &context.device;
-        let fermat = FermatPass::new(context, steps);
+        let kinds: Vec<u32> = reflectors
+            .iter()
+            .flat_map(|r| r.searches.iter().map(MirrorSurface::kind))
+            .collect();
+        let fermat = FermatPass::new(context, steps, &kinds);
         let (positions, solve_of) = shared_positions(triangles);
         let fermat_vertices = super::fermat::vertex_buffer(context, &positions)?;
         let solve_of = context.storage_buffer("solve of", bytemuck::cast_slice(&solve_of))?;
         let vertices =
             context.storage_buffer("reflected vertices", bytemuck::cast_slice(triangles))?;
-        let solves = reflectors
+        let searches: Vec<(u32, MirrorSurface)> = reflectors
             .iter()
-            .map(|r| {
-                let reflector = r.surface.gpu(setup.eye, positions.len() as u32);
+            .enumerate()
+            .flat_map(|(k, r)| r.searches.iter().map(move |&s| (k as u32 + 1, s)))
+            .collect();
+        let solves = searches
+            .iter()
+            .map(|(_, search)| {
+                let reflector = search.gpu(setup.eye, positions.len() as u32);
                 fermat.solve(context, reflector, &fermat_vertices)
             })
             .collect::<Result<Vec<_>>>()?;
@@ -447,15 +458,14 @@ impl Reflections {
                 buffer_entry(2, setup.lights),
             ],
         });
-        let reflector_groups = reflectors
+        let reflector_groups = searches
             .iter()
             .zip(&solves)
-            .enumerate()
-            .map(|(k, (r, solve))| {
+            .map(|(&(id, _), solve)| {
                 let pass = ReflectorPass {
                     far: setup.far as f32,
-                    id: k as u32 + 1,
-                    material: r.material,
+                    id,
+                    material: reflectors[id as usize - 1].material,
                     _pad: 0,
                 };
                 let uniforms = context.uniform_buffer("reflector pass", bytemuck::bytes_of(&pass));
@@ -488,7 +498,7 @@ impl Reflections {
         Ok(Some(Reflections {
             fermat,
             solves,
-            reflectors,
+            searches,
             pipeline,
             shared_group,
             reflector_groups,
@@ -501,8 +511,8 @@ impl Reflections {
 
     /// Every reflector's solves see the eye at `eye` from the next frame on.
     fn set_eye(&self, context: &GpuContext, eye: glam::Vec3) {
-        for (solve, r) in self.solves.iter().zip(&self.reflectors) {
-            let reflector = r.surface.gpu(eye, self.solve_count);
+        for (solve, (_, search)) in self.solves.iter().zip(&self.searches) {
+            let reflector = search.gpu(eye, self.solve_count);
             context
                 .queue
                 .write_buffer(&solve.reflector, 0, bytemuck::bytes_of(&reflector));

@@ -35,7 +35,7 @@ pub struct WindowOptions {
     pub screenshot: Option<PathBuf>,
     /// Where `s` saves the composed scene.
     pub save: PathBuf,
-    /// How mirror spheres' reflections are drawn.
+    /// How curved mirrors' reflections are drawn.
     pub reflections: ReflectionOptions,
 }
 

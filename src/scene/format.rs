@@ -241,6 +241,8 @@ pub enum ShapeType {
     Mesh,
     /// A torus around the vertical axis through `center`: `major_radius`, `minor_radius`.
     Torus,
+    /// Bicubic Bézier patches read from `file` (Newell's format), placed as a mesh is.
+    Bezier,
 }
 
 /// A uniform scale factor or one per axis.
@@ -318,13 +320,14 @@ pub struct ShapeEntry {
     /// Plane: its normal; non-zero.
     pub normal: Option<Vec3>,
     // mesh
-    /// Mesh: the OBJ or PLY file (`.gz` too), relative to the scene file's directory.
+    /// Mesh: the OBJ or PLY file (`.gz` too), relative to the scene file's directory; Bézier
+    /// patches: the patch file.
     pub file: Option<String>,
-    /// Mesh: translation (scene units), applied last.
+    /// Mesh or Bézier patches: translation (scene units), applied last.
     pub translate: Option<Vec3>,
-    /// Mesh: rotation in degrees about x, then y, then z; applied after `scale`.
+    /// Mesh or Bézier patches: rotation in degrees about x, then y, then z; applied after `scale`.
     pub rotate: Option<Vec3>,
-    /// Mesh: scale factor, uniform or per axis; applied first.
+    /// Mesh or Bézier patches: scale factor, uniform or per axis; applied first.
     pub scale: Option<Scale>,
     /// Mesh: smooth shading with vertex normals, the file's or computed (default true).
     pub smooth: Option<bool>,

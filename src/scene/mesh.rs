@@ -563,9 +563,7 @@ pub fn compute_vertex_normals(mesh: &mut TriangleMesh, crease_deg: f32) {
 
 /// Applies scale, then rotation about x, then y, then z (degrees), then translation.
 pub fn transform_mesh(mesh: &mut TriangleMesh, scale: Vec3, rotate_deg: Vec3, translate: Vec3) {
-    let rotation = Mat3::from_rotation_z(rotate_deg.z.to_radians())
-        * Mat3::from_rotation_y(rotate_deg.y.to_radians())
-        * Mat3::from_rotation_x(rotate_deg.x.to_radians());
+    let rotation = rotation_of(rotate_deg);
     let linear = rotation * Mat3::from_diagonal(scale);
     for p in &mut mesh.positions {
         *p = linear * *p + translate;
@@ -577,6 +575,13 @@ pub fn transform_mesh(mesh: &mut TriangleMesh, scale: Vec3, rotate_deg: Vec3, tr
             *n = (normal_matrix * *n).normalize_or_zero();
         }
     }
+}
+
+/// The rotation of a shape's `rotate` (degrees about x, then y, then z).
+pub fn rotation_of(rotate_deg: Vec3) -> Mat3 {
+    Mat3::from_rotation_z(rotate_deg.z.to_radians())
+        * Mat3::from_rotation_y(rotate_deg.y.to_radians())
+        * Mat3::from_rotation_x(rotate_deg.x.to_radians())
 }
 
 #[cfg(test)]

@@ -1,24 +1,53 @@
-//! Smooth parametric surfaces a scene declares (`type = "torus"`), rendered by the ray tracers
-//! as a fine mesh with the surface's own normals at its vertices, and kept whole for the raster
-//! preview, which reflects in them by Fermat's principle (`crate::fermat`).
+//! Smooth parametric surfaces a scene declares (`type = "torus"`, `type = "bezier"`), rendered
+//! by the ray tracers as a fine mesh with the surface's own normals at its vertices, and kept
+//! whole for the raster preview, which reflects in them by Fermat's principle
+//! (`crate::fermat`).
 
-use glam::DVec2;
+use std::path::Path;
+
+use glam::{DVec2, DVec3};
 
 use super::TriangleMesh;
-use crate::fermat::{Reflector, Torus};
+use crate::fermat::{BezierPatch, Reflector, Torus};
 
 /// Quads around a torus's axis (u) and around its tube (v): the mesh lies within
 /// (R + r)(1 − cos(π/256)) ≈ 7.5e-5 (R + r) of the torus along u and r(1 − cos(π/128)) ≈
 /// 3.0e-4 r along v, and shades with the torus's normals interpolated across each triangle.
 pub const TORUS_QUADS: [u32; 2] = [256, 128];
 
+/// Quads along each side of a Bézier patch: a quarter circle cut 32 times (the teapot's body
+/// patches) lies within 1 − cos(π/128) ≈ 3.0e-4 of its radius of the mesh.
+pub const PATCH_QUADS: u32 = 32;
+
+/// Control points a patch file may hold, and patches (a bound on what a file can ask).
+const MAX_PATCH_POINTS: usize = 1 << 20;
+
 /// A scene's parametric surface and the shape that renders it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct CurvedSurface {
     /// Its index in `Scene::shapes`: a `Shape::Mesh` of its tessellation.
     pub shape: usize,
     /// The surface.
-    pub surface: Torus,
+    pub surface: Surface,
+}
+
+/// The parametric surfaces a scene can declare.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Surface {
+    /// A torus around a vertical axis.
+    Torus(Torus),
+    /// Bicubic Bézier patches (Newell's teapot), each oriented with f_u × f_v outward.
+    Patches(Vec<BezierPatch>),
+}
+
+impl Surface {
+    /// The ray tracers' mesh of the surface.
+    pub fn mesh(&self) -> TriangleMesh {
+        match self {
+            Surface::Torus(torus) => torus_mesh(torus),
+            Surface::Patches(patches) => patches_mesh(patches, PATCH_QUADS),
+        }
+    }
 }
 
 /// The torus as a closed mesh of `TORUS_QUADS` quads (two triangles each), the torus's outward
@@ -34,16 +63,15 @@ pub fn torus_mesh_of(surface: &Torus, quads: [u32; 2]) -> TriangleMesh {
     let uv = |i: u32, j: u32| {
         DVec2::new(i as f64 / nu as f64, j as f64 / nv as f64) * std::f64::consts::TAU
     };
-    let mut positions = Vec::with_capacity((nu * nv) as usize);
-    let mut normals = Vec::with_capacity((nu * nv) as usize);
+    let mut mesh = empty_mesh();
+    let normals = mesh.normals.get_or_insert_with(Vec::new);
     for i in 0..nu {
         for j in 0..nv {
-            positions.push(surface.point(uv(i, j)).as_vec3());
+            mesh.positions.push(surface.point(uv(i, j)).as_vec3());
             normals.push(surface.outward_normal(uv(i, j)).as_vec3());
         }
     }
     let index = |i: u32, j: u32| (i % nu) * nv + j % nv;
-    let mut triangles = Vec::with_capacity(2 * (nu * nv) as usize);
     for i in 0..nu {
         for j in 0..nv {
             let [a, b, c, d] = [
@@ -54,14 +82,64 @@ pub fn torus_mesh_of(surface: &Torus, quads: [u32; 2]) -> TriangleMesh {
             ];
             // f_u × f_v points into a torus: wound the other way, the geometric normal
             // points out as the vertex normals do.
-            triangles.push([a, c, b]);
-            triangles.push([a, d, c]);
+            mesh.triangles.push([a, c, b]);
+            mesh.triangles.push([a, d, c]);
         }
     }
+    mesh
+}
+
+/// Every patch as a grid of `quads` x `quads` quads, the patch's normals at the vertices;
+/// triangles that collapse at a patch's degenerate edge (the teapot's poles) are left out.
+pub fn patches_mesh(patches: &[BezierPatch], quads: u32) -> TriangleMesh {
+    let mut mesh = empty_mesh();
+    let side = quads + 1;
+    for patch in patches {
+        let first = mesh.positions.len() as u32;
+        for i in 0..side {
+            for j in 0..side {
+                let uv = DVec2::new(i as f64, j as f64) / quads as f64;
+                mesh.positions.push(patch.point(uv).as_vec3());
+                let normals = mesh.normals.get_or_insert_with(Vec::new);
+                normals.push(patch_normal(patch, uv).as_vec3());
+            }
+        }
+        let index = |i: u32, j: u32| first + i * side + j;
+        for i in 0..quads {
+            for j in 0..quads {
+                let [a, b, c, d] = [
+                    index(i, j),
+                    index(i + 1, j),
+                    index(i + 1, j + 1),
+                    index(i, j + 1),
+                ];
+                for t in [[a, b, c], [a, c, d]] {
+                    let [p, q, r] = t.map(|k| mesh.positions[k as usize]);
+                    if (q - p).cross(r - p) != glam::Vec3::ZERO {
+                        mesh.triangles.push(t);
+                    }
+                }
+            }
+        }
+    }
+    mesh
+}
+
+/// A patch's unit normal f_u × f_v at `uv`; where that vanishes (a degenerate edge), the
+/// normal a little inside the patch.
+pub fn patch_normal(patch: &BezierPatch, uv: DVec2) -> DVec3 {
+    let n = patch.outward_normal(uv);
+    if n != DVec3::ZERO {
+        return n;
+    }
+    patch.outward_normal(uv.clamp(DVec2::splat(1e-3), DVec2::splat(1.0 - 1e-3)))
+}
+
+fn empty_mesh() -> TriangleMesh {
     TriangleMesh {
-        positions,
-        normals: Some(normals),
-        triangles,
+        positions: Vec::new(),
+        normals: Some(Vec::new()),
+        triangles: Vec::new(),
         dropped_degenerate: 0,
         materials: Vec::new(),
         face_materials: Vec::new(),
@@ -69,10 +147,225 @@ pub fn torus_mesh_of(surface: &Torus, quads: [u32; 2]) -> TriangleMesh {
     }
 }
 
+/// Reads a file of bicubic Bézier patches in Newell's format (the teapot's): the patch count,
+/// one line of 16 comma-separated 1-based control-point indices per patch (row by row: index
+/// 4i + j + 1 of the line is P_ij), the point count, then one `x,y,z` line per point. Errors
+/// name the file and line.
+pub fn load_bezier_patches(path: &Path) -> Result<Vec<BezierPatch>, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("{}: cannot read patch file: {e}", path.display()))?;
+    parse_bezier_patches(&text).map_err(|(line, e)| format!("{}:{line}: {e}", path.display()))
+}
+
+/// `load_bezier_patches` on the file's text; errors carry their 1-based line.
+fn parse_bezier_patches(text: &str) -> Result<Vec<BezierPatch>, (usize, String)> {
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(k, l)| (k + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty());
+    let last = text.lines().count().max(1);
+    let mut next = |what: &str| lines.next().ok_or((last, format!("ends before {what}")));
+    let count = |(line, l): (usize, &str), what: &str| {
+        l.parse::<usize>()
+            .ok()
+            .filter(|&n| (1..=MAX_PATCH_POINTS).contains(&n))
+            .ok_or((
+                line,
+                format!("expected the {what} (1 to {MAX_PATCH_POINTS}), got `{l}`"),
+            ))
+    };
+    let numbers = |(line, l): (usize, &str), n: usize| -> Result<Vec<f64>, (usize, String)> {
+        let values: Vec<f64> = l
+            .split(',')
+            .map(|v| v.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
+            .collect::<Option<_>>()
+            .ok_or((
+                line,
+                format!("expected {n} comma-separated numbers, got `{l}`"),
+            ))?;
+        if values.len() != n {
+            return Err((line, format!("expected {n} numbers, got {}", values.len())));
+        }
+        Ok(values)
+    };
+    let patch_count = count(next("the patch count")?, "patch count")?;
+    let mut indices = Vec::with_capacity(patch_count);
+    for _ in 0..patch_count {
+        let (line, l) = next("a patch's control-point indices")?;
+        indices.push((line, numbers((line, l), 16)?));
+    }
+    let point_count = count(next("the control-point count")?, "control-point count")?;
+    let mut points = Vec::with_capacity(point_count);
+    for _ in 0..point_count {
+        let (line, l) = next("a control point")?;
+        let p = numbers((line, l), 3)?;
+        points.push(DVec3::new(p[0], p[1], p[2]));
+    }
+    indices
+        .into_iter()
+        .map(|(line, row)| {
+            let mut patch = BezierPatch {
+                points: [[DVec3::ZERO; 4]; 4],
+            };
+            for (k, &index) in row.iter().enumerate() {
+                if index.fract() != 0.0 || index < 1.0 || index > point_count as f64 {
+                    return Err((
+                        line,
+                        format!("control-point index {index} is not one of 1..={point_count}"),
+                    ));
+                }
+                patch.points[k / 4][k % 4] = points[index as usize - 1];
+            }
+            Ok(patch)
+        })
+        .collect()
+}
+
+/// Turns every patch whose normal f_u × f_v points into the surface the patches close (the
+/// teapot's) the other way round, by reversing its u order, so that all face out as the
+/// preview's test of a reflection seen from outside expects. Inward or outward is told by
+/// parity: a ray leaving the patch's centre on its normal's side crosses the other patches an
+/// odd number of times when it starts inward. Five rays (tilted 21° from the normal) vote, so that one grazing a seam or leaving through an opening (the teapot has no bottom)
+/// does not decide alone.
+pub fn orient_outward(patches: &mut [BezierPatch]) {
+    let mesh = patches_mesh(patches, ORIENTATION_QUADS);
+    let triangles: Vec<[DVec3; 3]> = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|k| mesh.positions[k as usize].as_dvec3()))
+        .collect();
+    let scale = triangles
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+    for patch in patches {
+        let centre = DVec2::splat(0.5);
+        let (p, n) = (patch.point(centre), patch_normal(patch, centre));
+        let (a, b) = n.any_orthonormal_pair();
+        // Tilted at an odd angle and azimuths, so that no ray runs exactly through a vertex or
+        // an edge of the grids (where a crossing would count twice).
+        let inward_votes = (0..5)
+            .map(|k| {
+                let azimuth = 0.3 + k as f64 * std::f64::consts::TAU / 5.0;
+                let side = a * azimuth.cos() + b * azimuth.sin();
+                (n * TILT.cos() + side * TILT.sin()).normalize()
+            })
+            .filter(|&d| {
+                let origin = p + d * 1e-4 * scale.max(1e-30);
+                triangles.iter().filter(|t| crosses(origin, d, t)).count() % 2 == 1
+            })
+            .count();
+        if inward_votes >= 3 {
+            patch.points.reverse();
+        }
+    }
+}
+
+/// How far `orient_outward`'s rays lean from the normal (radians).
+const TILT: f64 = 0.37;
+
+/// Quads per patch side of the mesh `orient_outward` casts its rays against.
+const ORIENTATION_QUADS: u32 = 8;
+
+/// Whether the ray origin + t d, t > 0, crosses triangle `t` (Möller–Trumbore, f64).
+fn crosses(origin: DVec3, d: DVec3, [a, b, c]: &[DVec3; 3]) -> bool {
+    let (e1, e2) = (*b - *a, *c - *a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-300 {
+        return false;
+    }
+    let s = origin - *a;
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let v = d.dot(q) / det;
+    let t = e2.dot(q) / det;
+    (0.0..=1.0).contains(&u) && v >= 0.0 && u + v <= 1.0 && t > 0.0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::DVec3;
+
+    /// A one-patch file: the flat unit square z = 0, control points on a 4 x 4 grid.
+    const FLAT_PATCH: &str = "1\n1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16\n16\n\
+        0,0,0\n0,1,0\n0,2,0\n0,3,0\n1,0,0\n1,1,0\n1,2,0\n1,3,0\n\
+        2,0,0\n2,1,0\n2,2,0\n2,3,0\n3,0,0\n3,1,0\n3,2,0\n3,3,0\n";
+
+    #[test]
+    fn a_patch_file_reads_row_by_row() {
+        let patches = parse_bezier_patches(FLAT_PATCH).unwrap();
+        assert_eq!(patches.len(), 1);
+        let p = patches[0];
+        assert_eq!(p.points[1][2], DVec3::new(1.0, 2.0, 0.0));
+        // A bilinear grid: the patch is the plane itself, f(u, v) = 3 (u, v, 0).
+        let uv = DVec2::new(0.3, 0.8);
+        assert!((p.point(uv) - DVec3::new(0.9, 2.4, 0.0)).length() < 1e-12);
+        assert!((patch_normal(&p, uv) - DVec3::Z).length() < 1e-12);
+    }
+
+    #[test]
+    fn a_bad_patch_file_names_its_line() {
+        let cases = [
+            (
+                FLAT_PATCH.replacen("1,2,3,4,", "1,2,3,", 1),
+                2,
+                "expected 16 numbers",
+            ),
+            (
+                FLAT_PATCH.replacen(",16\n16", ",17\n16", 1),
+                2,
+                "is not one of 1..=16",
+            ),
+            (
+                FLAT_PATCH.replacen("1,1,0", "1,x,0", 1),
+                9,
+                "comma-separated numbers",
+            ),
+            (
+                FLAT_PATCH.replacen("\n16\n", "\n-3\n", 1),
+                3,
+                "control-point count",
+            ),
+            (
+                FLAT_PATCH[..FLAT_PATCH.len() - 7].to_string(),
+                18,
+                "ends before a control point",
+            ),
+        ];
+        for (text, line, says) in cases {
+            let (at, message) = parse_bezier_patches(&text).unwrap_err();
+            assert_eq!(at, line, "{message}");
+            assert!(message.contains(says), "{message}");
+        }
+    }
+
+    /// A closed box of six flat patches, half of them wound inward, all turn out.
+    #[test]
+    fn patches_closing_a_box_are_turned_outward() {
+        let flat = parse_bezier_patches(FLAT_PATCH).unwrap()[0];
+        // The square [0, 3]² at z = 0 (facing +z), moved onto each face of the cube [0, 3]³.
+        let face = |map: &dyn Fn(DVec3) -> DVec3| BezierPatch {
+            points: flat.points.map(|row| row.map(map)),
+        };
+        // Three faces wound inward (normals into the cube), three outward.
+        let mut patches = vec![
+            face(&|p| p),
+            face(&|p| DVec3::new(p.y, p.x, 3.0)),
+            face(&|p| DVec3::new(p.z, p.x, p.y)),
+            face(&|p| DVec3::new(3.0, p.y, p.x)),
+            face(&|p| DVec3::new(p.y, p.z, p.x)),
+            face(&|p| DVec3::new(p.x, 3.0, p.y)),
+        ];
+        orient_outward(&mut patches);
+        let centre = DVec3::splat(1.5);
+        for (k, patch) in patches.iter().enumerate() {
+            let uv = DVec2::splat(0.5);
+            let out = patch.point(uv) - centre;
+            assert!(patch_normal(patch, uv).dot(out) > 0.0, "face {k} faces in");
+        }
+    }
 
     #[test]
     fn the_torus_mesh_lies_on_the_torus_within_its_sagitta() {

@@ -11,14 +11,14 @@ use super::format::{
     ShapeEntry, ShapeType, Vec3 as F3,
 };
 use super::load::ParsedScene;
-use super::mesh::{compute_vertex_normals, load_mesh, transform_mesh};
-use super::surface::{CurvedSurface, torus_mesh};
+use super::mesh::{compute_vertex_normals, load_mesh, rotation_of, transform_mesh};
+use super::surface::{CurvedSurface, Surface, load_bezier_patches, orient_outward};
 use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
 use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, Movements};
 use crate::error::{Error, Result};
-use crate::fermat::Torus;
+use crate::fermat::{BezierPatch, Torus};
 use crate::layout;
 use crate::sampler::{MAX_BLADES, MAX_TABLE_SPP};
 
@@ -907,20 +907,83 @@ fn validate_shapes(
                     "torus",
                     &[&radius_field[..], &quad_fields, &plane_fields, &mesh_fields].concat(),
                 )?;
-                let torus = torus(check, &prefix, s)?;
-                surfaces.push(CurvedSurface {
-                    shape: i,
-                    surface: torus,
-                });
+                let surface = Surface::Torus(torus(check, &prefix, s)?);
+                let mesh = surface.mesh();
+                surfaces.push(CurvedSurface { shape: i, surface });
                 Shape::Mesh {
-                    mesh: torus_mesh(&torus),
+                    mesh,
                     material: required("torus")?,
+                }
+            }
+            ShapeType::Bezier => {
+                let smooth_fields = &mesh_fields[4..];
+                check.forbid(
+                    &prefix,
+                    "bezier",
+                    &[
+                        &sphere_fields[..],
+                        &quad_fields,
+                        &plane_fields,
+                        &torus_fields,
+                        smooth_fields,
+                    ]
+                    .concat(),
+                )?;
+                let surface = Surface::Patches(bezier_patches(check, &prefix, s, scene_dir)?);
+                let mesh = surface.mesh();
+                surfaces.push(CurvedSurface { shape: i, surface });
+                Shape::Mesh {
+                    mesh,
+                    material: required("bezier")?,
                 }
             }
         };
         shapes.push(shape);
     }
     Ok((shapes, surfaces))
+}
+
+/// A `bezier` shape's patches: read from `file`, scaled, rotated and translated as a mesh is
+/// (an affine map moves a Bézier patch exactly by its control points), each oriented outward
+/// (`surface::orient_outward`).
+fn bezier_patches(
+    check: &Checker,
+    prefix: &str,
+    s: &ShapeEntry,
+    scene_dir: &std::path::Path,
+) -> Result<Vec<BezierPatch>> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let name = check.require(&at("file"), s.file.as_ref(), "bezier")?;
+    let mut patches =
+        load_bezier_patches(&scene_dir.join(name)).map_err(|e| check.err(&at("file"), e))?;
+    let scale = match s.scale.unwrap_or(Scale::Uniform(1.0)) {
+        Scale::Uniform(k) => DVec3::splat(check.finite(&at("scale"), k)?),
+        Scale::PerAxis(v) => check.vector(&at("scale"), v)?,
+    };
+    if scale.abs().min_element() == 0.0 {
+        return Err(check.err(&at("scale"), "a zero scale flattens the patches"));
+    }
+    let rotate = check.vector(&at("rotate"), s.rotate.unwrap_or_default())?;
+    let translate = check.point(&at("translate"), s.translate.unwrap_or_default())?;
+    let linear = rotation_of(rotate.as_vec3()).as_dmat3() * glam::DMat3::from_diagonal(scale);
+    for p in patches
+        .iter_mut()
+        .flat_map(|p| p.points.iter_mut().flatten())
+    {
+        *p = linear * *p + translate;
+        if p.abs().max_element() > MAX_COORDINATE {
+            return Err(check.err(
+                &at("file"),
+                format!(
+                    "a control point lies at {} after transformation, beyond \
+                     +-{MAX_COORDINATE:e} scene units",
+                    nums(&p.to_array())
+                ),
+            ));
+        }
+    }
+    orient_outward(&mut patches);
+    Ok(patches)
 }
 
 /// A torus's fields: a centre within the coordinate limit, 0 < minor_radius < major_radius
