@@ -31,8 +31,12 @@ mkdir -p bench
     echo
     "$chambre" bench motion --size 768 --runs "$runs" --json bench/motion.json
     echo
-    # Fermat reflections in the preview against the ray tracer, by subdivision.
+    # Fermat reflections in the preview against the ray tracer, by subdivision: a sphere, a
+    # torus and the teapot's 32 Bézier patches.
     "$chambre" bench fermat --json bench/fermat.json
+    for mirror in torus teapot; do
+        "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --json "bench/fermat_$mirror.json"
+    done
     echo
     "$chambre" bench rays --runs "$runs" --json bench/rays.json
     echo
