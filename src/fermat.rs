@@ -336,6 +336,13 @@ pub fn on_patch(uv: DVec2) -> bool {
     uv.min_element() >= -margin && uv.max_element() <= 1.0 + margin
 }
 
+/// Whether the height `v` of a point of a cylinder lies on one `height` tall: in [0, height],
+/// widened by `PATCH_MARGIN` of it.
+pub fn on_cylinder(v: f64, height: f64) -> bool {
+    let margin = f64::from(crate::layout::PATCH_MARGIN) * height;
+    (-margin..=height + margin).contains(&v)
+}
+
 /// The cubic Bernstein polynomials at t and their derivatives.
 fn bernstein(t: f64) -> ([f64; 4], [f64; 4]) {
     let s = 1.0 - t;

@@ -37,6 +37,11 @@ pub const REFLECTOR_SPHERE: u32 = 0;
 pub const REFLECTOR_TORUS: u32 = 1;
 /// `GpuReflector::kind`: a bicubic Bézier patch (`GpuReflector::control`).
 pub const REFLECTOR_PATCH: u32 = 2;
+/// `GpuReflector::kind`: an ellipsoid with semi-axes `GpuReflector::radii` along the world axes.
+pub const REFLECTOR_ELLIPSOID: u32 = 3;
+/// `GpuReflector::kind`: a cylinder around the vertical axis through its centre, of
+/// `GpuReflector::height` above it.
+pub const REFLECTOR_CYLINDER: u32 = 4;
 
 /// Material models (`GpuMaterial::model`); every model also carries a perfect-mirror term.
 /// Lambert: diffuse only (BRDF diffuse / pi); the scene format's `mirror` model is Lambert too.
@@ -506,25 +511,30 @@ pub struct GpuRay {
 }
 
 /// A Fermat solve's reflector and eye (`wgsl/fermat.wgsl`): a sphere, a torus (around the
-/// vertical axis through its centre) or a bicubic Bézier patch, and how many vertices the `fermat_vertices` buffer holds.
+/// vertical axis through its centre), a bicubic Bézier patch, an ellipsoid or a cylinder, and how many vertices the `fermat_vertices` buffer holds.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuReflector {
-    /// The sphere's or torus's centre (scene units).
+    /// The sphere's, torus's or ellipsoid's centre, the centre of a cylinder's base circle
+    /// (scene units).
     pub center: [f32; 3],
-    /// The sphere's radius, or the torus's major radius R (scene units).
+    /// The sphere's or cylinder's radius, or the torus's major radius R (scene units).
     pub radius: f32,
     /// The eye E (scene units).
     pub eye: [f32; 3],
     /// Vertices to solve.
     pub count: u32,
-    /// `REFLECTOR_SPHERE`, `REFLECTOR_TORUS` or `REFLECTOR_PATCH`: picks the fermat pipeline,
+    /// One of `REFLECTOR_*`: picks the fermat pipeline,
     /// whose `REFLECTOR_KIND` is specialised to it.
     pub kind: u32,
     /// The torus's tube radius r (scene units); 0 for a sphere.
     pub minor: f32,
+    /// A cylinder's height (scene units); 0 for the others.
+    pub height: f32,
     /// Padding to the WGSL layout.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
+    /// An ellipsoid's semi-axes along x, y, z (w unused); zero for the others.
+    pub radii: [f32; 4],
     /// A patch's control points P_ij at index 4i + j (w unused); zero for other kinds.
     pub control: [[f32; 4]; 16],
 }
@@ -558,7 +568,7 @@ impl GpuLight {
 }
 
 const _: () = assert!(size_of::<GpuRay>() == 32);
-const _: () = assert!(size_of::<GpuReflector>() == 304);
+const _: () = assert!(size_of::<GpuReflector>() == 320);
 const _: () = assert!(size_of::<GpuReflection>() == 48);
 const _: () = assert!(size_of::<GpuBvhNode>() == 32);
 const _: () = assert!(size_of::<GpuCwNode>() == 80);
@@ -595,7 +605,8 @@ pub const FERMAT_FLAT: f32 = 1e-3;
 
 /// A reflection found on a Bézier patch counts where its (u, v) lies in the patch's square
 /// widened by this much: beyond, the point belongs to a neighbouring patch (whose own search
-/// finds it) or to none.
+/// finds it) or to none. On a cylinder, where its height lies within [0, height] widened by
+/// this fraction of the height.
 pub const PATCH_MARGIN: f32 = 1e-4;
 
 /// A search on a Bézier patch stops once a step leaves the patch's square widened by this much
@@ -618,6 +629,8 @@ pub fn wgsl_prelude() -> String {
         ("REFLECTOR_SPHERE", REFLECTOR_SPHERE),
         ("REFLECTOR_TORUS", REFLECTOR_TORUS),
         ("REFLECTOR_PATCH", REFLECTOR_PATCH),
+        ("REFLECTOR_ELLIPSOID", REFLECTOR_ELLIPSOID),
+        ("REFLECTOR_CYLINDER", REFLECTOR_CYLINDER),
         ("MODEL_LAMBERT", MODEL_LAMBERT),
         ("MODEL_PHONG", MODEL_PHONG),
         ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),

@@ -15,14 +15,14 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 
 use crate::camera::CameraSpec;
-use crate::fermat::{BezierPatch, Torus};
+use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use crate::layout::{
-    GpuPrimitive, GpuReflector, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE, REFLECTOR_PATCH,
-    REFLECTOR_SPHERE, REFLECTOR_TORUS,
+    GpuPrimitive, GpuReflector, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE,
+    REFLECTOR_CYLINDER, REFLECTOR_ELLIPSOID, REFLECTOR_PATCH, REFLECTOR_SPHERE, REFLECTOR_TORUS,
 };
 use crate::pack::FlatScene;
 use crate::scene::Scene;
-use crate::scene::surface::{Surface, patches_mesh, torus_mesh_of};
+use crate::scene::surface::Surface;
 
 /// One vertex of the preview's triangle list.
 #[repr(C)]
@@ -43,9 +43,10 @@ pub struct PreviewVertex {
 /// Segments around a tessellated sphere (and half as many from pole to pole).
 pub const SPHERE_SEGMENTS: u32 = 64;
 
-/// Quads around a torus's axis and its tube in the preview: within (R + r)(1 − cos(π/64)) ≈
-/// 1.2e-3 (R + r) of the torus, where the ray tracers' mesh has `scene::surface::TORUS_QUADS`.
-pub const PREVIEW_TORUS_QUADS: [u32; 2] = [64, 32];
+/// Quads around a torus's axis and its tube (an ellipsoid's or cylinder's axis and meridian)
+/// in the preview: a torus within (R + r)(1 − cos(π/64)) ≈ 1.2e-3 (R + r), where the ray
+/// tracers' mesh has `scene::surface::ROUND_QUADS`.
+pub const PREVIEW_ROUND_QUADS: [u32; 2] = [64, 32];
 
 /// Quads along each side of a Bézier patch in the preview (`scene::surface::PATCH_QUADS` in
 /// the ray tracers' mesh).
@@ -99,10 +100,7 @@ pub fn tessellate(scene: &FlatScene, extent: f32) -> Vec<PreviewVertex> {
             continue;
         };
         let (material, tag) = (scene.prims[first as usize].material, tags[first as usize]);
-        let mesh = match &s.surface {
-            Surface::Torus(torus) => torus_mesh_of(torus, PREVIEW_TORUS_QUADS),
-            Surface::Patches(patches) => patches_mesh(patches, PREVIEW_PATCH_QUADS),
-        };
+        let mesh = s.surface.mesh_of(PREVIEW_ROUND_QUADS, PREVIEW_PATCH_QUADS);
         let normals = mesh.normals.as_deref().unwrap_or_default();
         for t in &mesh.triangles {
             for &k in t {
@@ -166,6 +164,15 @@ pub enum MirrorSurface {
     /// A bicubic Bézier patch (rendered with its neighbours as a mesh): reflections found
     /// outside its parameter square belong to a neighbour or to nothing.
     Patch(BezierPatch),
+    /// An ellipsoid (rendered as a mesh), its axes along the world's.
+    Ellipsoid(Ellipsoid),
+    /// A cylinder `height` tall above its base circle (rendered as a mesh, open at both ends).
+    Cylinder {
+        /// Its base circle's centre and radius (the axis vertical).
+        cylinder: Cylinder,
+        /// Its height (scene units).
+        height: f64,
+    },
 }
 
 impl MirrorSurface {
@@ -175,32 +182,45 @@ impl MirrorSurface {
             MirrorSurface::Sphere { .. } => REFLECTOR_SPHERE,
             MirrorSurface::Torus(_) => REFLECTOR_TORUS,
             MirrorSurface::Patch(_) => REFLECTOR_PATCH,
+            MirrorSurface::Ellipsoid(_) => REFLECTOR_ELLIPSOID,
+            MirrorSurface::Cylinder { .. } => REFLECTOR_CYLINDER,
         }
     }
 
     /// The Fermat kernel's uniforms for this surface, the eye at `eye`, `count` vertices.
     pub fn gpu(&self, eye: Vec3, count: u32) -> GpuReflector {
-        let (center, radius, minor) = match *self {
-            MirrorSurface::Sphere { center, radius } => (center, radius, 0.0),
-            MirrorSurface::Torus(t) => (t.center.as_vec3(), t.major as f32, t.minor as f32),
-            MirrorSurface::Patch(_) => (Vec3::ZERO, 0.0, 0.0),
-        };
-        let mut control = [[0.0; 4]; 16];
-        if let MirrorSurface::Patch(patch) = self {
-            for (k, p) in patch.points.iter().flatten().enumerate() {
-                control[k] = p.as_vec3().extend(0.0).to_array();
-            }
-        }
-        GpuReflector {
-            center: center.to_array(),
-            radius,
+        let mut reflector = GpuReflector {
             eye: eye.to_array(),
             count,
             kind: self.kind(),
-            minor,
-            _pad: [0; 2],
-            control,
+            ..Default::default()
+        };
+        match *self {
+            MirrorSurface::Sphere { center, radius } => {
+                reflector.center = center.to_array();
+                reflector.radius = radius;
+            }
+            MirrorSurface::Torus(t) => {
+                reflector.center = t.center.as_vec3().to_array();
+                reflector.radius = t.major as f32;
+                reflector.minor = t.minor as f32;
+            }
+            MirrorSurface::Patch(patch) => {
+                for (k, p) in patch.points.iter().flatten().enumerate() {
+                    reflector.control[k] = p.as_vec3().extend(0.0).to_array();
+                }
+            }
+            MirrorSurface::Ellipsoid(e) => {
+                reflector.center = e.center.as_vec3().to_array();
+                reflector.radii = e.radii.as_vec3().extend(0.0).to_array();
+            }
+            MirrorSurface::Cylinder { cylinder, height } => {
+                reflector.center = cylinder.center.as_vec3().to_array();
+                reflector.radius = cylinder.radius as f32;
+                reflector.height = height as f32;
+            }
         }
+        reflector
     }
 }
 
@@ -232,6 +252,11 @@ pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
                 Surface::Patches(patches) => {
                     patches.iter().map(|&p| MirrorSurface::Patch(p)).collect()
                 }
+                Surface::Ellipsoid(e) => vec![MirrorSurface::Ellipsoid(*e)],
+                Surface::Cylinder { cylinder, height } => vec![MirrorSurface::Cylinder {
+                    cylinder: *cylinder,
+                    height: *height,
+                }],
             },
             prims: s.prims.iter().map(|&p| p as usize).collect(),
             material,

@@ -708,3 +708,51 @@ fn bezier_fields() {
         "does not apply to a bezier",
     );
 }
+
+/// An ellipsoid needs positive semi-axes; a cylinder a positive height; neither takes the
+/// other's fields.
+#[test]
+fn ellipsoid_and_cylinder_fields() {
+    let sphere = "type = \"sphere\"\ncenter = [0.0, 1.0, 0.0]\nradius = 1.0";
+    let shape = |rest: &str| format!("{rest}\ncenter = [0.0, 1.0, 0.0]");
+    let valid = BASE.replacen(
+        sphere,
+        &shape("type = \"ellipsoid\"\nradii = [1.0, 0.5, 2.0]"),
+        1,
+    );
+    Scene::from_str(Path::new("ok.toml"), &valid, &[]).unwrap();
+    let valid = BASE.replacen(
+        sphere,
+        &shape("type = \"cylinder\"\nradius = 0.5\nheight = 2.0"),
+        1,
+    );
+    Scene::from_str(Path::new("ok.toml"), &valid, &[]).unwrap();
+    expect_error(
+        sphere,
+        &shape("type = \"ellipsoid\"\nradii = [1.0, 0.0, 2.0]"),
+        14,
+        "shapes[0].radii",
+        "positive",
+    );
+    expect_error(
+        sphere,
+        &shape("type = \"cylinder\"\nradius = 0.5\nheight = -1.0"),
+        15,
+        "shapes[0].height",
+        "positive",
+    );
+    expect_error(
+        sphere,
+        &shape("type = \"ellipsoid\"\nradii = [1.0, 1.0, 1.0]\nheight = 2.0"),
+        15,
+        "shapes[0].height",
+        "does not apply to an ellipsoid",
+    );
+    expect_error(
+        sphere,
+        &shape("type = \"torus\"\nmajor_radius = 1.0\nminor_radius = 0.2\nradii = [1.0, 1.0, 1.0]"),
+        16,
+        "shapes[0].radii",
+        "does not apply to a torus",
+    );
+}

@@ -6,8 +6,8 @@
 
 use chambre::bench::fermat::{FermatConfig, FermatReport};
 use chambre::fermat::{
-    BezierPatch, Cylinder, Ellipsoid, Reflector, Solver, Sphere, Torus, alhazen_sphere, on_patch,
-    reflection_error, seen_from_outside,
+    BezierPatch, Cylinder, Ellipsoid, Reflector, Solver, Sphere, Torus, alhazen_sphere,
+    on_cylinder, on_patch, reflection_error, seen_from_outside,
 };
 use chambre::math::rng::Rng;
 use chambre::preview::MirrorSurface;
@@ -216,6 +216,35 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
     assert_eq!(json["rows"][1]["subdivision"], 4);
 }
 
+/// The same on the ellipsoid and cylinder scenes: corners exactly, points between within a
+/// pixel at 16x16, FLIP falling with the subdivision.
+#[test]
+fn preview_reflections_on_an_ellipsoid_and_a_cylinder_land_where_the_ray_tracer_puts_them() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    for scene in [
+        "scenes/fermat_ellipsoid.toml",
+        "scenes/fermat_cylinder.toml",
+    ] {
+        let report = compare_small(&context, scene);
+        let [coarse, fine] = [&report.rows[0], &report.rows[1]];
+        for row in [coarse, fine] {
+            assert!(row.features > 300, "{scene}: {row:?}");
+            assert!(row.corner_max_px < 0.05, "{scene}: {row:?}");
+        }
+        assert!(
+            fine.drawn as f64 >= 0.9 * fine.features as f64,
+            "{scene}: {fine:?}"
+        );
+        assert!(fine.displacement_p99_px < 1.0, "{scene}: {fine:?}");
+        assert!(
+            fine.flip_reflector < coarse.flip_reflector,
+            "{scene}: {report:?}"
+        );
+    }
+}
+
 /// The same on the teapot scene, whose 32 patches are searched one by one: the features drawn
 /// land where the converged f64 search puts them on their patch, corners exactly, points
 /// between within a pixel at 16x16 at this size; FLIP falls with the subdivision.
@@ -303,6 +332,73 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points_on_a_torus() {
         agree as f64 >= 0.99 * compared as f64,
         "{agree} of {compared}"
     );
+}
+
+/// The ellipsoid (solved in its facing frame) and the cylinder (its reflections within its
+/// height) as well: the GPU's points and normals are the CPU's where the CPU found a
+/// reflection seen from outside within the seed's steps.
+#[test]
+fn the_gpu_kernel_finds_the_cpu_solvers_points_on_an_ellipsoid_and_a_cylinder() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let center = DVec3::new(0.2, 0.3, -0.1);
+    let ellipsoid = Ellipsoid::new(center, DVec3::new(0.8, 0.45, 0.5));
+    let cylinder = Cylinder {
+        center,
+        radius: 0.45,
+    };
+    let height = 1.0;
+    let eye = center + DVec3::new(0.3, 1.1, 2.8);
+    let mut rng = Rng::new(29, 0, 0);
+    let vertices: Vec<DVec3> = (0..3000)
+        .map(|_| center + direction(&mut rng) * (1.0 + 2.0 * rng.next_f32() as f64))
+        .collect();
+    let solver = Solver::default();
+    let surfaces = [
+        MirrorSurface::Ellipsoid(ellipsoid),
+        MirrorSurface::Cylinder { cylinder, height },
+    ];
+    for surface in surfaces {
+        let on_gpu = chambre::gpu::fermat::reflections(
+            &context,
+            surface,
+            eye.as_vec3(),
+            &vertices.iter().map(|v| v.as_vec3()).collect::<Vec<_>>(),
+            chambre::gpu::fermat::SEED_STEPS,
+        )
+        .unwrap();
+        let (mut compared, mut agree) = (0, 0);
+        for (v, gpu) in vertices.iter().zip(&on_gpu) {
+            let (p, n) = match surface {
+                MirrorSurface::Ellipsoid(e) => {
+                    let e = e.facing(eye, *v);
+                    let uv = solver.solve(&e, eye, *v).uv;
+                    (e.point(uv), e.outward_normal(uv))
+                }
+                _ => {
+                    let uv = solver.solve(&cylinder, eye, *v).uv;
+                    if !on_cylinder(uv.y, height) {
+                        continue;
+                    }
+                    (cylinder.point(uv), cylinder.outward_normal(uv))
+                }
+            };
+            if reflection_error(p, n, eye, *v) > 1e-4 || !seen_from_outside(p, n, eye, *v) {
+                continue;
+            }
+            compared += 1;
+            let gp = DVec3::from(glam::Vec3::from(gpu.point));
+            let gn = DVec3::from(glam::Vec3::from(gpu.normal));
+            agree += ((gp - p).length() < 1e-3 && (gn - n).length() < 1e-2) as u32;
+        }
+        eprintln!("{surface:?}: {agree} of {compared} converged CPU points found by the GPU");
+        assert!(compared > 500, "{compared}");
+        assert!(
+            agree as f64 >= 0.99 * compared as f64,
+            "{agree} of {compared}"
+        );
+    }
 }
 
 /// The sample teapot, its patches as the scene places them (Y-up, scaled, oriented outward).

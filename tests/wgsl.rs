@@ -246,7 +246,9 @@ fn shared_structs_have_identical_layouts() {
             count,
             kind,
             minor,
+            height,
             _pad,
+            radii,
             control
         }
     );

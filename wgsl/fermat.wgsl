@@ -1,9 +1,9 @@
-// Reflections on a sphere, a torus or a Bézier patch by Fermat's principle: one invocation finds, for one scene
+// Reflections on a sphere, torus, Bézier patch, ellipsoid or cylinder by Fermat's principle: one invocation finds, for one scene
 // vertex V and the eye E, the point P of the reflector where E -> P -> V has extremal length, by
 // the seed's search on a triangle in the (u, v) plane (see src/fermat.rs for the method), in
 // f32, step for step as its twin; the search's constants come from src/layout.rs.
-// Mirrors: src/fermat.rs (Sphere, Sphere::facing, Torus, BezierPatch, on_patch,
-// initial_triangle, replaced_corner, Solver::solve).
+// Mirrors: src/fermat.rs (Sphere, Sphere::facing, Torus, BezierPatch, on_patch, Ellipsoid,
+// Cylinder, on_cylinder, initial_triangle, replaced_corner, Solver::solve).
 
 // Steps at most: the seed's 5 unless the pipeline overrides it (`gpu::fermat::FermatPass`).
 override FERMAT_STEPS: u32 = 5u;
@@ -41,14 +41,19 @@ fn facing(e: vec3<f32>, v: vec3<f32>) -> Frame {
 }
 
 fn frame_for(eye: vec3<f32>, vertex: vec3<f32>) -> Frame {
-    if (REFLECTOR_KIND == REFLECTOR_TORUS) {
-        return Frame(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
+    if (REFLECTOR_KIND == REFLECTOR_SPHERE) {
+        return facing(eye - reflector.center, vertex - reflector.center);
     }
-    return facing(eye - reflector.center, vertex - reflector.center);
+    if (REFLECTOR_KIND == REFLECTOR_ELLIPSOID) {
+        // The unit sphere's frame facing E and V mapped into it (`Ellipsoid::facing`).
+        let radii = reflector.radii.xyz;
+        return facing((eye - reflector.center) / radii, (vertex - reflector.center) / radii);
+    }
+    return Frame(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
 }
 
-// f(u, v) and its tangents f_u, f_v: the sphere's `Sphere` and the torus's `Torus` in
-// src/fermat.rs, in the frame f (u around y).
+// f(u, v) and its tangents f_u, f_v: `Sphere`, `Torus`, `Ellipsoid`, `Cylinder` and
+// `BezierPatch` in src/fermat.rs, in the frame f (u around y).
 struct SurfacePoint {
     p: vec3<f32>,
     fu: vec3<f32>,
@@ -70,6 +75,15 @@ fn surface(f: Frame, uv: vec2<f32>) -> SurfacePoint {
         let ring = reflector.radius + r * cv;
         return SurfacePoint(reflector.center + ring * around + r * sv * f.y, ring * along,
             r * (-sv * around + cv * f.y));
+    }
+    if (REFLECTOR_KIND == REFLECTOR_CYLINDER) {
+        let r = reflector.radius;
+        return SurfacePoint(reflector.center + r * around + uv.y * f.y, r * along, f.y);
+    }
+    if (REFLECTOR_KIND == REFLECTOR_ELLIPSOID) {
+        let a = reflector.radii.xyz;
+        return SurfacePoint(reflector.center + a * (sv * around + cv * f.y), a * (sv * along),
+            a * (cv * around - sv * f.y));
     }
     let r = reflector.radius;
     return SurfacePoint(reflector.center + r * (sv * around + cv * f.y), r * sv * along,
@@ -146,17 +160,33 @@ fn surface_normal(f: Frame, uv: vec2<f32>) -> vec3<f32> {
     if (REFLECTOR_KIND == REFLECTOR_TORUS) {
         return cos(uv.y) * around + sin(uv.y) * f.y;
     }
-    return sin(uv.y) * around + cos(uv.y) * f.y;
+    if (REFLECTOR_KIND == REFLECTOR_CYLINDER) {
+        return around;
+    }
+    let unit = sin(uv.y) * around + cos(uv.y) * f.y;
+    if (REFLECTOR_KIND == REFLECTOR_ELLIPSOID) {
+        // The gradient of |(x - c) / a|^2: (x - c) / a^2, with x - c = a * unit.
+        return normalize(unit / reflector.radii.xyz);
+    }
+    return unit;
 }
 
 // The parameters where the segment from `outside` to the point O inside the reflector crosses
-// it: O the sphere's centre, or the point of the torus's tube circle at `outside`'s azimuth.
+// it: O the sphere's or ellipsoid's centre, the point of the torus's tube circle at
+// `outside`'s azimuth, or the cylinder's axis point at `outside`'s height.
 fn crossing(f: Frame, outside: vec3<f32>) -> vec2<f32> {
     if (REFLECTOR_KIND == REFLECTOR_PATCH) {
         return patch_crossing(outside);
     }
-    let d = outside - reflector.center;
+    var d = outside - reflector.center;
+    if (REFLECTOR_KIND == REFLECTOR_ELLIPSOID) {
+        // In the unit sphere's coordinates the crossing is the direction itself.
+        d /= reflector.radii.xyz;
+    }
     let u = atan2(dot(d, f.z), dot(d, f.x));
+    if (REFLECTOR_KIND == REFLECTOR_CYLINDER) {
+        return vec2<f32>(u, d.y);
+    }
     if (REFLECTOR_KIND == REFLECTOR_TORUS) {
         let flat = vec3<f32>(d.x, 0.0, d.z);
         let radial = select(vec3<f32>(1.0, 0.0, 0.0), normalize(flat), length(flat) > 0.0);
@@ -285,6 +315,12 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     let margin = PATCH_MARGIN;
     if (REFLECTOR_KIND == REFLECTOR_PATCH
         && (min(best.x, best.y) < -margin || max(best.x, best.y) > 1.0 + margin)) {
+        normal = vec3<f32>(0.0);
+    }
+    // So is a cylinder's beyond its height (`fermat::on_cylinder`).
+    let h = reflector.height;
+    if (REFLECTOR_KIND == REFLECTOR_CYLINDER
+        && (best.y < -margin * h || best.y > (1.0 + margin) * h)) {
         normal = vec3<f32>(0.0);
     }
     reflections[i] = GpuReflection(point, steps, normal, 0u, best, length(vertex - point),

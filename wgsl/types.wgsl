@@ -137,7 +137,9 @@ struct GpuReflector {
     count: u32,
     kind: u32,
     minor: f32,
-    _pad: vec2<u32>,
+    height: f32,
+    _pad: u32,
+    radii: vec4<f32>,
     control: array<vec4<f32>, 16>,
 }
 

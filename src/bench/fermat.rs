@@ -25,7 +25,8 @@ use crate::accel::intersect::RayQuery;
 use crate::accel::traverse::closest_hit;
 use crate::error::{Error, Location, Result};
 use crate::fermat::{
-    Solver, Sphere, alhazen_sphere, drawn_in_preview, on_patch, reflection_error, seen_from_outside,
+    Solver, Sphere, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, reflection_error,
+    seen_from_outside,
 };
 use crate::gpu::GpuContext;
 use crate::gpu::preview::{ReflectionOptions, draw_with, extent_and_far};
@@ -330,6 +331,17 @@ fn true_reflection(surface: &MirrorSurface, eye: DVec3, x: DVec3) -> Option<DVec
         MirrorSurface::Patch(patch) => {
             let (p, n, uv) = converged(&patch, eye, x)?;
             if !on_patch(uv) {
+                return None;
+            }
+            (p, n)
+        }
+        MirrorSurface::Ellipsoid(e) => {
+            let (p, n, _) = converged(&e.facing(eye, x), eye, x)?;
+            (p, n)
+        }
+        MirrorSurface::Cylinder { cylinder, height } => {
+            let (p, n, uv) = converged(&cylinder, eye, x)?;
+            if !on_cylinder(uv.y, height) {
                 return None;
             }
             (p, n)

@@ -243,6 +243,11 @@ pub enum ShapeType {
     Torus,
     /// Bicubic Bézier patches read from `file` (Newell's format), placed as a mesh is.
     Bezier,
+    /// An ellipsoid: `center`, semi-axes `radii` along the world's axes.
+    Ellipsoid,
+    /// A cylinder around the vertical axis through `center` (its base circle's centre):
+    /// `radius`, `height`; open at both ends.
+    Cylinder,
 }
 
 /// A uniform scale factor or one per axis.
@@ -298,15 +303,19 @@ pub struct ShapeEntry {
     /// Required, except on a mesh whose file brings its own materials (OBJ `.mtl`).
     pub material: Option<String>,
     // sphere
-    /// Sphere or torus: centre (scene units).
+    /// Sphere, torus or ellipsoid: centre; cylinder: its base circle's centre (scene units).
     pub center: Option<Vec3>,
-    /// Sphere: radius (scene units), > 0.
+    /// Sphere or cylinder: radius (scene units), > 0.
     pub radius: Option<f64>,
     // torus (and `center`)
     /// Torus: the radius of its tube's centre circle (scene units), > 0.
     pub major_radius: Option<f64>,
     /// Torus: the tube's radius (scene units), in (0, major_radius).
     pub minor_radius: Option<f64>,
+    /// Ellipsoid: semi-axes along x, y and z (scene units), each > 0.
+    pub radii: Option<Vec3>,
+    /// Cylinder: height above its base circle (scene units), > 0.
+    pub height: Option<f64>,
     // quad
     /// Quad: one corner (scene units).
     pub corner: Option<Vec3>,

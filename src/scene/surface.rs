@@ -8,12 +8,15 @@ use std::path::Path;
 use glam::{DVec2, DVec3};
 
 use super::TriangleMesh;
-use crate::fermat::{BezierPatch, Reflector, Torus};
+use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Reflector, Torus};
 
-/// Quads around a torus's axis (u) and around its tube (v): the mesh lies within
-/// (R + r)(1 − cos(π/256)) ≈ 7.5e-5 (R + r) of the torus along u and r(1 − cos(π/128)) ≈
-/// 3.0e-4 r along v, and shades with the torus's normals interpolated across each triangle.
-pub const TORUS_QUADS: [u32; 2] = [256, 128];
+/// Quads around a round surface's axis (u) and across it (v): a torus's tube, an ellipsoid's
+/// meridian, a cylinder's height. The torus's mesh lies within (R + r)(1 − cos(π/256)) ≈
+/// 7.5e-5 (R + r) of it along u and r(1 − cos(π/128)) ≈ 3.0e-4 r along v, an ellipsoid's
+/// within 3.0e-4 of its longest semi-axis; each shades with the surface's normals interpolated
+/// across each triangle. (A cylinder is straight along v: one quad would do; the grid keeps
+/// its triangles from growing long and thin.)
+pub const ROUND_QUADS: [u32; 2] = [256, 128];
 
 /// Quads along each side of a Bézier patch: a quarter circle cut 32 times (the teapot's body
 /// patches) lies within 1 − cos(π/128) ≈ 3.0e-4 of its radius of the mesh.
@@ -38,40 +41,71 @@ pub enum Surface {
     Torus(Torus),
     /// Bicubic Bézier patches (Newell's teapot), each oriented with f_u × f_v outward.
     Patches(Vec<BezierPatch>),
+    /// An ellipsoid, its semi-axes along the world's axes.
+    Ellipsoid(Ellipsoid),
+    /// A cylinder around a vertical axis, `height` tall above its base circle, open at both
+    /// ends.
+    Cylinder {
+        /// The base circle's centre and radius.
+        cylinder: Cylinder,
+        /// Its height (scene units), > 0.
+        height: f64,
+    },
 }
 
 impl Surface {
     /// The ray tracers' mesh of the surface.
     pub fn mesh(&self) -> TriangleMesh {
+        self.mesh_of(ROUND_QUADS, PATCH_QUADS)
+    }
+
+    /// The surface as a mesh of `round` quads around and across a round surface, `patch`
+    /// quads along each side of a patch.
+    pub fn mesh_of(&self, round: [u32; 2], patch: u32) -> TriangleMesh {
+        use std::f64::consts::{PI, TAU};
         match self {
-            Surface::Torus(torus) => torus_mesh(torus),
-            Surface::Patches(patches) => patches_mesh(patches, PATCH_QUADS),
+            Surface::Torus(torus) => grid_mesh(torus, round, Across::Around(TAU), true),
+            Surface::Patches(patches) => patches_mesh(patches, patch),
+            Surface::Ellipsoid(e) => grid_mesh(e, round, Across::Span(0.0, PI), false),
+            Surface::Cylinder { cylinder, height } => {
+                grid_mesh(cylinder, round, Across::Span(0.0, *height), true)
+            }
         }
     }
 }
 
-/// The torus as a closed mesh of `TORUS_QUADS` quads (two triangles each), the torus's outward
-/// normals at the vertices.
-pub fn torus_mesh(torus: &Torus) -> TriangleMesh {
-    torus_mesh_of(torus, TORUS_QUADS)
+/// How a round surface's v runs: around a closed curve of this period, or over a span.
+enum Across {
+    Around(f64),
+    Span(f64, f64),
 }
 
-/// The torus, periodic in u and v over [0, 2π)², as a closed grid of `quads` quads around its
-/// axis and its tube.
-pub fn torus_mesh_of(surface: &Torus, quads: [u32; 2]) -> TriangleMesh {
+/// A surface whose u runs once around its axis (period 2π) as a grid of `quads` quads, its
+/// outward normals at the vertices; triangles that collapse (an ellipsoid's poles) are left
+/// out. `inward` says that f_u × f_v points into the surface: the triangles are then wound the
+/// other way, so that their geometric normals point out as the vertex normals do.
+fn grid_mesh(surface: &impl Reflector, quads: [u32; 2], v: Across, inward: bool) -> TriangleMesh {
     let [nu, nv] = quads;
+    let rows = match v {
+        Across::Around(_) => nv,
+        Across::Span(..) => nv + 1,
+    };
     let uv = |i: u32, j: u32| {
-        DVec2::new(i as f64 / nu as f64, j as f64 / nv as f64) * std::f64::consts::TAU
+        let u = i as f64 / nu as f64 * std::f64::consts::TAU;
+        match v {
+            Across::Around(period) => DVec2::new(u, j as f64 / nv as f64 * period),
+            Across::Span(from, to) => DVec2::new(u, from + (to - from) * j as f64 / nv as f64),
+        }
     };
     let mut mesh = empty_mesh();
     let normals = mesh.normals.get_or_insert_with(Vec::new);
     for i in 0..nu {
-        for j in 0..nv {
+        for j in 0..rows {
             mesh.positions.push(surface.point(uv(i, j)).as_vec3());
             normals.push(surface.outward_normal(uv(i, j)).as_vec3());
         }
     }
-    let index = |i: u32, j: u32| (i % nu) * nv + j % nv;
+    let index = |i: u32, j: u32| (i % nu) * rows + j % rows;
     for i in 0..nu {
         for j in 0..nv {
             let [a, b, c, d] = [
@@ -80,10 +114,16 @@ pub fn torus_mesh_of(surface: &Torus, quads: [u32; 2]) -> TriangleMesh {
                 index(i + 1, j + 1),
                 index(i, j + 1),
             ];
-            // f_u × f_v points into a torus: wound the other way, the geometric normal
-            // points out as the vertex normals do.
-            mesh.triangles.push([a, c, b]);
-            mesh.triangles.push([a, d, c]);
+            let pair = match inward {
+                true => [[a, c, b], [a, d, c]],
+                false => [[a, b, c], [a, c, d]],
+            };
+            for t in pair {
+                let [p, q, r] = t.map(|k| mesh.positions[k as usize]);
+                if (q - p).cross(r - p) != glam::Vec3::ZERO {
+                    mesh.triangles.push(t);
+                }
+            }
         }
     }
     mesh
@@ -374,8 +414,8 @@ mod tests {
             major: 0.6,
             minor: 0.2,
         };
-        let mesh = torus_mesh(&torus);
-        let [nu, nv] = TORUS_QUADS;
+        let mesh = Surface::Torus(torus).mesh();
+        let [nu, nv] = ROUND_QUADS;
         assert_eq!(mesh.triangles.len() as u32, 2 * nu * nv);
         // |distance to the tube circle − r| is the distance to the torus.
         let off_surface = |p: DVec3| {

@@ -18,7 +18,7 @@ use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
 use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, Movements};
 use crate::error::{Error, Result};
-use crate::fermat::{BezierPatch, Torus};
+use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use crate::layout;
 use crate::sampler::{MAX_BLADES, MAX_TABLE_SPP};
 
@@ -178,10 +178,18 @@ impl Checker<'_> {
         match present.iter().find(|(_, p)| *p) {
             Some((name, _)) => Err(self.err(
                 &format!("{prefix}.{name}"),
-                format!("does not apply to a {kind}"),
+                format!("does not apply to {} {kind}", article(kind)),
             )),
             None => Ok(()),
         }
+    }
+}
+
+/// "a" or "an" before `word`.
+fn article(word: &str) -> &'static str {
+    match word.chars().next() {
+        Some('a' | 'e' | 'i' | 'o' | 'u') => "an",
+        _ => "a",
     }
 }
 
@@ -743,6 +751,8 @@ fn validate_shapes(
         let torus_fields = [
             ("major_radius", s.major_radius.is_some()),
             ("minor_radius", s.minor_radius.is_some()),
+            ("radii", s.radii.is_some()),
+            ("height", s.height.is_some()),
         ];
         let quad_fields = [
             ("corner", s.corner.is_some()),
@@ -907,12 +917,43 @@ fn validate_shapes(
                     "torus",
                     &[&radius_field[..], &quad_fields, &plane_fields, &mesh_fields].concat(),
                 )?;
+                check.forbid(
+                    &prefix,
+                    "torus",
+                    &[("radii", s.radii.is_some()), ("height", s.height.is_some())],
+                )?;
                 let surface = Surface::Torus(torus(check, &prefix, s)?);
                 let mesh = surface.mesh();
                 surfaces.push(CurvedSurface { shape: i, surface });
                 Shape::Mesh {
                     mesh,
                     material: required("torus")?,
+                }
+            }
+            ShapeType::Ellipsoid | ShapeType::Cylinder => {
+                let (kind, own) = match s.kind {
+                    ShapeType::Ellipsoid => ("ellipsoid", ["radii"].as_slice()),
+                    _ => ("cylinder", ["radius", "height"].as_slice()),
+                };
+                let present = [
+                    &sphere_fields[..],
+                    &quad_fields,
+                    &plane_fields,
+                    &mesh_fields,
+                    &torus_fields,
+                ]
+                .concat();
+                let foreign: Vec<_> = present
+                    .into_iter()
+                    .filter(|(name, _)| *name != "center" && !own.contains(name))
+                    .collect();
+                check.forbid(&prefix, kind, &foreign)?;
+                let surface = round_surface(check, &prefix, s)?;
+                let mesh = surface.mesh();
+                surfaces.push(CurvedSurface { shape: i, surface });
+                Shape::Mesh {
+                    mesh,
+                    material: required(kind)?,
                 }
             }
             ShapeType::Bezier => {
@@ -984,6 +1025,48 @@ fn bezier_patches(
     }
     orient_outward(&mut patches);
     Ok(patches)
+}
+
+/// An ellipsoid's fields (centre, positive semi-axes) or a cylinder's (base centre, positive
+/// radius and height), each within the coordinate limit.
+fn round_surface(check: &Checker, prefix: &str, s: &ShapeEntry) -> Result<Surface> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let (kind, field) = match s.kind {
+        ShapeType::Ellipsoid => ("ellipsoid", "radii"),
+        _ => ("cylinder", "height"),
+    };
+    let center = check.point(&at("center"), check.require(&at("center"), s.center, kind)?)?;
+    let positive = |name: &str, value: Option<f64>| -> Result<f64> {
+        check.positive(&at(name), check.require(&at(name), value, kind)?)
+    };
+    let (surface, reach) = match s.kind {
+        ShapeType::Ellipsoid => {
+            let radii = check.vector(&at("radii"), check.require(&at("radii"), s.radii, kind)?)?;
+            if radii.min_element() <= 0.0 {
+                return Err(check.err(
+                    &at("radii"),
+                    format!("must all be positive, got {}", nums(&radii.to_array())),
+                ));
+            }
+            (
+                Surface::Ellipsoid(Ellipsoid::new(center, radii)),
+                radii.max_element(),
+            )
+        }
+        _ => {
+            let radius = positive("radius", s.radius)?;
+            let height = positive("height", s.height)?;
+            let cylinder = Cylinder { center, radius };
+            (Surface::Cylinder { cylinder, height }, radius + height)
+        }
+    };
+    if center.abs().max_element() + reach > MAX_COORDINATE {
+        return Err(check.err(
+            &at(field),
+            format!("the {kind} reaches beyond +-{MAX_COORDINATE:e} scene units"),
+        ));
+    }
+    Ok(surface)
 }
 
 /// A torus's fields: a centre within the coordinate limit, 0 < minor_radius < major_radius
