@@ -5,9 +5,9 @@
 //! `gpu::preview`, its shader `wgsl/preview.wgsl`.
 //!
 //! What the preview leaves out, by design (it trades accuracy for speed): shadows, specular
-//! lobes, reflections other than curved mirrors' (spheres, tori and Bézier patches, drawn by
-//! Fermat's principle, seed 004: `reflectors`, `reflected_triangles`; a mirror reflects neither
-//! itself nor other mirrors) and depth of field (a lens is drawn as a pinhole at its centre;
+//! lobes, reflections other than curved mirrors' (spheres, tori, ellipsoids, cylinders and
+//! Bézier patches, drawn by Fermat's principle, seed 004: `reflectors`, `reflected_triangles`;
+//! a mirror reflects neither itself nor other mirrors) and depth of field (a lens is drawn as a pinhole at its centre;
 //! lens tilt and swing do not move a pinhole's rays). Area lights light it as points at their
 //! centres with their power's cosine falloff.
 
@@ -224,8 +224,8 @@ impl MirrorSurface {
     }
 }
 
-/// The scene's curved mirrors: mirror spheres in primitive order, then mirror tori and Bézier
-/// surfaces (flat
+/// The scene's curved mirrors: mirror spheres in primitive order, then the scene's mirror
+/// parametric surfaces (tori, ellipsoids, cylinders, Bézier shapes; flat
 /// mirrors, mirror triangles and quads of meshes are drawn with their diffuse term only: the
 /// seed's method is for smooth curved reflectors).
 pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
@@ -472,8 +472,8 @@ pub fn clip_matrix(camera: &CameraSpec, far: f64) -> DMat4 {
 pub fn omissions(scene: &Scene) -> Vec<String> {
     let camera = &scene.camera;
     let mut notes = vec![
-        "the preview has no shadows or specular lobes; curved mirrors (spheres, tori, Bezier \
-         patches) reflect the scene by Fermat's principle (one reflection per point and \
+        "the preview has no shadows or specular lobes; curved mirrors (spheres, tori, \
+         ellipsoids, cylinders, Bezier patches) reflect the scene by Fermat's principle (one reflection per point and \
          surface, not each other or themselves), other mirrors show their diffuse term only"
             .into(),
     ];

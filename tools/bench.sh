@@ -32,9 +32,9 @@ mkdir -p bench
     "$chambre" bench motion --size 768 --runs "$runs" --json bench/motion.json
     echo
     # Fermat reflections in the preview against the ray tracer, by subdivision: a sphere, a
-    # torus and the teapot's 32 Bézier patches.
+    # torus, an ellipsoid, a cylinder and the teapot's 32 Bézier patches.
     "$chambre" bench fermat --json bench/fermat.json
-    for mirror in torus teapot; do
+    for mirror in torus ellipsoid cylinder teapot; do
         "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --json "bench/fermat_$mirror.json"
     done
     echo

@@ -129,8 +129,8 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
                 column: 0,
                 field: "shapes".into(),
             },
-            message: "the Fermat comparison needs a sphere, torus or Bezier shape with a mirror \
-                      material"
+            message: "the Fermat comparison needs a sphere, torus, ellipsoid, cylinder or Bezier \
+                      shape with a mirror material"
                 .into(),
         })?;
     let (width, height) = (flat.frame.width, flat.frame.height);

@@ -61,7 +61,8 @@ pub enum BenchCommand {
 /// Arguments of `chambre bench fermat`.
 #[derive(Debug, clap::Args)]
 pub struct FermatArgs {
-    /// Scene with a curved mirror: a sphere, torus or Bézier shape (the first is measured).
+    /// Scene with a curved mirror: a sphere, torus, ellipsoid, cylinder or Bézier shape (the
+    /// first is measured).
     #[arg(long, default_value = "scenes/fermat_sphere.toml")]
     pub scene: PathBuf,
     /// Subdivisions of the reflected triangles to compare.
