@@ -108,25 +108,37 @@ fn grid_mesh(surface: &impl Reflector, quads: [u32; 2], v: Across, inward: bool)
     let index = |i: u32, j: u32| (i % nu) * rows + j % rows;
     for i in 0..nu {
         for j in 0..nv {
-            let [a, b, c, d] = [
-                index(i, j),
-                index(i + 1, j),
-                index(i + 1, j + 1),
-                index(i, j + 1),
-            ];
-            let pair = match inward {
-                true => [[a, c, b], [a, d, c]],
-                false => [[a, b, c], [a, c, d]],
-            };
-            for t in pair {
-                let [p, q, r] = t.map(|k| mesh.positions[k as usize]);
-                if (q - p).cross(r - p) != glam::Vec3::ZERO {
-                    mesh.triangles.push(t);
-                }
-            }
+            push_quad(&mut mesh, index, (i, j), inward);
         }
     }
     mesh
+}
+
+/// The grid quad (i, j) to (i + 1, j + 1) of `mesh`'s vertices (`index` numbers them) as two
+/// triangles, wound the other way where `reversed`, leaving out a triangle that collapses (at
+/// a pole or a degenerate edge).
+fn push_quad(
+    mesh: &mut TriangleMesh,
+    index: impl Fn(u32, u32) -> u32,
+    (i, j): (u32, u32),
+    reversed: bool,
+) {
+    let [a, b, c, d] = [
+        index(i, j),
+        index(i + 1, j),
+        index(i + 1, j + 1),
+        index(i, j + 1),
+    ];
+    let pair = match reversed {
+        true => [[a, c, b], [a, d, c]],
+        false => [[a, b, c], [a, c, d]],
+    };
+    for t in pair {
+        let [p, q, r] = t.map(|k| mesh.positions[k as usize]);
+        if (q - p).cross(r - p) != glam::Vec3::ZERO {
+            mesh.triangles.push(t);
+        }
+    }
 }
 
 /// Every patch as a grid of `quads` x `quads` quads, the patch's normals at the vertices;
@@ -147,18 +159,7 @@ pub fn patches_mesh(patches: &[BezierPatch], quads: u32) -> TriangleMesh {
         let index = |i: u32, j: u32| first + i * side + j;
         for i in 0..quads {
             for j in 0..quads {
-                let [a, b, c, d] = [
-                    index(i, j),
-                    index(i + 1, j),
-                    index(i + 1, j + 1),
-                    index(i, j + 1),
-                ];
-                for t in [[a, b, c], [a, c, d]] {
-                    let [p, q, r] = t.map(|k| mesh.positions[k as usize]);
-                    if (q - p).cross(r - p) != glam::Vec3::ZERO {
-                        mesh.triangles.push(t);
-                    }
-                }
+                push_quad(&mut mesh, index, (i, j), false);
             }
         }
     }
