@@ -7,8 +7,9 @@
 //! What the preview leaves out, by design (it trades accuracy for speed): shadows, specular
 //! lobes, reflections other than curved mirrors' (spheres, tori, ellipsoids, cylinders and
 //! Bézier patches, drawn by Fermat's principle, seed 004: `reflectors`, `reflected_triangles`;
-//! a mirror reflects neither itself nor other mirrors) and depth of field (a lens is drawn as a pinhole at its centre;
-//! lens tilt and swing do not move a pinhole's rays). Area lights light it as points at their
+//! a mirror does not reflect itself, and reflects other mirrors once, as the main pass shows
+//! them) and depth of field (a lens is drawn as a pinhole at its centre; lens tilt and swing do
+//! not move a pinhole's rays). Area lights light it as points at their
 //! centres with their power's cosine falloff.
 
 use bytemuck::{Pod, Zeroable};
@@ -281,7 +282,8 @@ fn reflector_tags(scene: &FlatScene, reflectors: &[Reflector]) -> Vec<u32> {
 }
 
 /// The triangles the reflectors reflect: every triangle of `tessellate` that is not on a
-/// reflector, each cut into n² triangles (n pieces along each edge): n = `subdivision`, or
+/// reflector, each cut into n² triangles (and, where the scene has several curved mirrors,
+/// theirs uncut: each mirror reflects the others once, showing them as the main pass does) (n pieces along each edge): n = `subdivision`, or
 /// where it is `None`, the fewest pieces that leave no edge longer than `AUTO_PIECE` of the
 /// scene's radius (at most `MAX_AUTO_PIECES`). The raster pipeline draws a reflected triangle
 /// straight between its vertices' reflection points, where the true reflection of a straight
@@ -293,9 +295,15 @@ pub fn reflected_triangles(
     subdivision: Option<u32>,
 ) -> Vec<PreviewVertex> {
     let longest = AUTO_PIECE * bounded_radius(scene);
+    let several_mirrors = reflectors(scene).len() > 1;
     let mut out = Vec::new();
     for t in tessellate(scene, extent).chunks_exact(3) {
         if t[0].reflector != 0 {
+            // A mirror's triangles, already fine, are reflected in the other mirrors as they
+            // are (its own reflection pass leaves them out); a lone mirror reflects none.
+            if several_mirrors {
+                out.extend_from_slice(t);
+            }
             continue;
         }
         let [a, b, c] = [t[0], t[1], t[2]].map(|v| Vec3::from(v.position));
@@ -473,8 +481,9 @@ pub fn omissions(scene: &Scene) -> Vec<String> {
     let camera = &scene.camera;
     let mut notes = vec![
         "the preview has no shadows or specular lobes; curved mirrors (spheres, tori, \
-         ellipsoids, cylinders, Bezier patches) reflect the scene by Fermat's principle (one reflection per point and \
-         surface, not each other or themselves), other mirrors show their diffuse term only"
+         ellipsoids, cylinders, Bezier patches) reflect the scene by Fermat's principle (one \
+         reflection per point and surface; each other once, not themselves), other mirrors \
+         show their diffuse term only"
             .into(),
     ];
     if !camera.is_pinhole() {

@@ -474,6 +474,63 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points_on_bezier_patches() {
     );
 }
 
+/// Two mirror spheres: the preview shows each in the other, once. The right one is a red
+/// mirror; where the left one is a mirror too it shows the red sphere in it (red pixels beyond
+/// those of the red sphere itself), about as many as the ray tracer shows with two bounces.
+#[test]
+fn mirrors_reflect_each_other_in_the_preview() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fermat_sphere.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let one_sphere = "center = [0.0, 0.65, 0.0]\nradius = 0.6\nmaterial = \"mirror\"";
+    assert!(text.contains(one_sphere));
+    let two = |left: &str| {
+        let spheres = format!(
+            "center = [-0.55, 0.5, 0.0]\nradius = 0.45\nmaterial = \"{left}\"\n\n\
+             [[shapes]]\ntype = \"sphere\"\ncenter = [0.55, 0.5, 0.0]\nradius = 0.45\n\
+             material = \"red_mirror\"\n\n[[materials]]\nname = \"red_mirror\"\n\
+             model = \"lambert\"\ndiffuse = [0.6, 0.05, 0.05]\nmirror = [0.3, 0.3, 0.3]"
+        );
+        let text = text
+            .replace(one_sphere, &spheres)
+            .replace("width = 320", "width = 160")
+            .replace("height = 240", "height = 120")
+            .replace("max_depth = 1", "max_depth = 2");
+        chambre::scene::Scene::from_str(&path, &text, &[]).unwrap()
+    };
+    let red = |image: &chambre::render::Image| {
+        image
+            .pixels
+            .iter()
+            .filter(|p| p.x > 0.15 && p.x > 1.8 * p.y.max(p.z))
+            .count()
+    };
+    let preview = |scene: &chambre::scene::Scene| {
+        let flat = chambre::pack::flatten(scene);
+        let options = chambre::gpu::preview::ReflectionOptions::default();
+        chambre::gpu::preview::draw_with(&context, scene, &flat, 1, options)
+            .unwrap()
+            .image
+    };
+    let (mirror, diffuse) = (two("mirror"), two("dark"));
+    let with = red(&preview(&mirror));
+    let without = red(&preview(&diffuse));
+    let ray_traced = red(&common::render_cpu(&chambre::pack::flatten(&mirror)))
+        - red(&common::render_cpu(&chambre::pack::flatten(&diffuse)));
+    eprintln!(
+        "red pixels: preview {with} with the left sphere a mirror, {without} without; the ray \
+         tracer shows {ray_traced} more with it"
+    );
+    let shown = with as f64 - without as f64;
+    assert!(ray_traced > 20, "{ray_traced}");
+    assert!(
+        (shown - ray_traced as f64).abs() < 0.35 * ray_traced as f64,
+        "the preview shows {shown} red pixels in the left mirror, the ray tracer {ray_traced}"
+    );
+}
+
 /// How the search went on one reflector over random configurations.
 #[derive(Debug, Default)]
 struct Tally {

@@ -42,6 +42,8 @@ struct ReflectedOut {
     @location(3) mirror_point: vec3<f32>,
     // The mirror's normal at P.
     @location(4) mirror_normal: vec3<f32>,
+    // 0, or 1 + the index of the mirror V lies on (another mirror reflected in this one).
+    @location(5) @interpolate(flat) reflector: u32,
 }
 
 // Vertex `i`'s reflection is drawn: E and V both see P from outside the mirror and the law of
@@ -66,11 +68,14 @@ fn reflected_vertex(@builtin(vertex_index) i: u32) -> ReflectedOut {
     // as the seed's z-buffer does).
     clip.z = clamp(r.depth / reflector_pass.far, 0.0, 1.0) * clip.w;
     let first = i - i % 3u;
-    if (!(reflection_holds(first) && reflection_holds(first + 1u) && reflection_holds(first + 2u))) {
+    // A mirror does not reflect itself here; other mirrors' triangles it does.
+    let own = v.reflector == reflector_pass.id;
+    if (own || !(reflection_holds(first) && reflection_holds(first + 1u)
+        && reflection_holds(first + 2u))) {
         // The whole triangle collapses to one point and draws nothing.
         clip = vec4<f32>(0.0, 0.0, 0.0, 1.0);
     }
-    return ReflectedOut(clip, v.position, v.normal, v.material, r.point, r.normal);
+    return ReflectedOut(clip, v.position, v.normal, v.material, r.point, r.normal, v.reflector);
 }
 
 @fragment
@@ -88,6 +93,10 @@ fn reflected_fragment(f: ReflectedOut) -> @location(0) vec4<f32> {
     }
     let own = shade(reflector_pass.material, f.mirror_point, normalize(f.mirror_normal),
         preview.eye.xyz);
-    let reflected = shade(f.material, f.world, f.normal, f.mirror_point);
+    var reflected = shade(f.material, f.world, f.normal, f.mirror_point);
+    if (f.reflector != 0u) {
+        // Another mirror, as the main pass shows one: reflecting the background.
+        reflected += preview_materials[f.material].mirror * preview.background.xyz;
+    }
     return vec4<f32>(own + preview_materials[reflector_pass.material].mirror * reflected, 1.0);
 }
