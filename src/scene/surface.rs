@@ -445,4 +445,62 @@ mod tests {
             assert!(n.dot(shading) > 0.0);
         }
     }
+
+    /// The ellipsoid's and the cylinder's meshes: vertices on the surface, normals the
+    /// surface's (the gradient of the implicit function), triangles facing out, none collapsed
+    /// at the ellipsoid's poles, and the cylinder spanning its height.
+    #[test]
+    fn the_ellipsoid_and_cylinder_meshes_lie_on_their_surfaces() {
+        let center = DVec3::new(0.2, 0.5, -0.1);
+        let radii = DVec3::new(0.8, 0.45, 0.5);
+        let ellipsoid = Surface::Ellipsoid(Ellipsoid::new(center, radii));
+        let (radius, height) = (0.45, 1.2);
+        let cylinder = Surface::Cylinder {
+            cylinder: Cylinder { center, radius },
+            height,
+        };
+        // Each surface's implicit function, zero on it, and its gradient.
+        let on_ellipsoid = |p: DVec3| {
+            let q = (p - center) / radii;
+            (q.length_squared() - 1.0, q / radii)
+        };
+        let on_cylinder = |p: DVec3| {
+            let q = p - center;
+            let flat = DVec3::new(q.x, 0.0, q.z);
+            assert!((-1e-6..=height + 1e-6).contains(&q.y), "{p} off the height");
+            (flat.length() / radius - 1.0, flat)
+        };
+        let implicit: [(&Surface, &dyn Fn(DVec3) -> (f64, DVec3)); 2] =
+            [(&ellipsoid, &on_ellipsoid), (&cylinder, &on_cylinder)];
+        for (surface, implicit) in implicit {
+            let mesh = surface.mesh();
+            let normals = mesh.normals.as_ref().unwrap();
+            for (p, n) in mesh.positions.iter().zip(normals) {
+                let (value, gradient) = implicit(p.as_dvec3());
+                assert!(
+                    value.abs() < 1e-6,
+                    "{surface:?}: {p} off the surface by {value}"
+                );
+                let expected = gradient.normalize();
+                assert!(
+                    (n.as_dvec3() - expected).length() < 1e-5,
+                    "{surface:?}: normal at {p}"
+                );
+            }
+            for t in &mesh.triangles {
+                let [a, b, c] = t.map(|k| mesh.positions[k as usize].as_dvec3());
+                let n = (b - a).cross(c - a);
+                assert!(n.length() > 0.0, "{surface:?}: a collapsed triangle");
+                let outward = normals[t[0] as usize].as_dvec3() + normals[t[1] as usize].as_dvec3();
+                assert!(n.dot(outward) > 0.0, "{surface:?}: a triangle facing in");
+            }
+        }
+        let [nu, nv] = ROUND_QUADS;
+        // Two triangles a quad, but one at each pole of the ellipsoid.
+        assert_eq!(
+            ellipsoid.mesh().triangles.len() as u32,
+            2 * nu * nv - 2 * nu
+        );
+        assert_eq!(cylinder.mesh().triangles.len() as u32, 2 * nu * nv);
+    }
 }
