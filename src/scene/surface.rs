@@ -446,6 +446,9 @@ mod tests {
         }
     }
 
+    /// An implicit function of a surface, zero on it, with its gradient.
+    type Implicit<'a> = dyn Fn(DVec3) -> (f64, DVec3) + 'a;
+
     /// The ellipsoid's and the cylinder's meshes: vertices on the surface, normals the
     /// surface's (the gradient of the implicit function), triangles facing out, none collapsed
     /// at the ellipsoid's poles, and the cylinder spanning its height.
@@ -470,7 +473,7 @@ mod tests {
             assert!((-1e-6..=height + 1e-6).contains(&q.y), "{p} off the height");
             (flat.length() / radius - 1.0, flat)
         };
-        let implicit: [(&Surface, &dyn Fn(DVec3) -> (f64, DVec3)); 2] =
+        let implicit: [(&Surface, &Implicit<'_>); 2] =
             [(&ellipsoid, &on_ellipsoid), (&cylinder, &on_cylinder)];
         for (surface, implicit) in implicit {
             let mesh = surface.mesh();
