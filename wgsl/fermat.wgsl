@@ -1,5 +1,5 @@
-// Reflections on a sphere, torus, Bézier patch, ellipsoid or cylinder by Fermat's principle: one invocation finds, for one scene
-// vertex V and the eye E, the point P of the reflector where E -> P -> V has extremal length, by
+// Reflections on a sphere, torus, Bézier patch, ellipsoid or cylinder by Fermat's principle:
+// one invocation finds, for one scene vertex V and the eye E, the point P of the reflector where E -> P -> V has extremal length, by
 // the seed's search on a triangle in the (u, v) plane (see src/fermat.rs for the method), in
 // f32, step for step as its twin; the search's constants come from src/layout.rs.
 // Mirrors: src/fermat.rs (Sphere, Sphere::facing, Torus, BezierPatch, on_patch, Ellipsoid,
@@ -14,8 +14,8 @@ const FERMAT_MIN_SIZE: f32 = 1e-7;
 const TAU: f32 = 6.283185307179586;
 
 // The parametrisation's frame for one vertex: a sphere's faces E and V, x toward the
-// bisector, y (the poles' axis) the normal of the plane through E, V and the centre; a torus's
-// is the world's axes (its own axis vertical).
+// bisector, y (the poles' axis) the normal of the plane through E, V and the centre (an
+// ellipsoid's the same in its unit sphere's coordinates); the others' is the world's axes.
 struct Frame {
     x: vec3<f32>,
     y: vec3<f32>,
@@ -128,7 +128,9 @@ fn patch_inside() -> vec3<f32> {
 }
 
 // Where the segment from `outside` to O crosses the patch: Newton steps on
-// f(u, v) = O + t (outside - O) from the patch's centre, clamped to the patch.
+// f(u, v) = O + t (outside - O) from the patch's centre, clamped to the patch. (O and the
+// eye's crossing are the same for every vertex; computing them once per solve on the CPU
+// measured no faster on lavapipe, 17.8–19.6 against 16.0–16.9 ms for the teapot at 16x16.)
 fn patch_crossing(outside: vec3<f32>) -> vec2<f32> {
     let o = patch_inside();
     let d = outside - o;
@@ -252,7 +254,7 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     // The initial triangle: A and B where E -> O and V -> O cross the reflector, C off AB.
     let a0 = crossing(f, eye);
     var b0 = crossing(f, vertex);
-    // An azimuthal u (sphere, torus) is unwrapped so that AB takes the short way round.
+    // An azimuthal u (all but a patch's) is unwrapped so that AB takes the short way round.
     if (REFLECTOR_KIND != REFLECTOR_PATCH) {
         b0.x += TAU * round((a0.x - b0.x) / TAU);
     }

@@ -1,5 +1,6 @@
-//! Reflection points on a sphere or a torus by Fermat's principle on the GPU: the `fermat`
-//! kernel of the registry solves one scene vertex per invocation; `fermat::Solver` is its CPU
+//! Reflection points on curved mirrors (sphere, torus, ellipsoid, cylinder, Bézier patch) by
+//! Fermat's principle on the GPU: the `fermat` kernel of the registry solves one scene vertex
+//! per invocation; `fermat::Solver` is its CPU
 //! twin (f64), and `tests/fermat.rs` checks that they agree. The raster preview encodes it
 //! before its draws (`gpu::preview`), one dispatch per curved mirror, with no host wait between
 //! them.

@@ -220,8 +220,8 @@ pub const TRACE_ANY_CW: Kernel = Kernel {
     bindings: &TRACE_CW_BINDINGS,
 };
 
-/// Reflection points of vertices on a sphere or a torus by Fermat's principle, one invocation per vertex
-/// (`gpu::fermat`; CPU twin `fermat::Solver`).
+/// Reflection points of vertices on a curved mirror by Fermat's principle, one invocation per
+/// vertex, one pipeline per kind of mirror (`gpu::fermat`; CPU twin `fermat::Solver`).
 pub const FERMAT: Kernel = Kernel {
     name: "fermat",
     modules: &["types.wgsl", "bindings.wgsl", "fermat.wgsl"],
