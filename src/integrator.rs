@@ -17,6 +17,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
+use crate::accel::curved::{cylinder_surface_point, ellipsoid_surface_point, torus_surface_point};
 use crate::accel::intersect::{
     Hit, RayQuery, offset_ray_origin, plane_point, quad_point, shadow_ray_length,
     sphere_surface_point, triangle_point,
@@ -114,7 +115,15 @@ fn surface_at(scene: &FlatScene, prim: &GpuPrimitive, ray: &RayQuery, hit: Hit) 
             let normal = p1.cross(p2).normalize();
             (quad_point(p0, p1, p2, hit.b1, hit.b2), normal, normal)
         }
-        _ => (plane_point(ray, hit.t, p0, p1), p1, p1),
+        PRIM_PLANE => (plane_point(ray, hit.t, p0, p1), p1, p1),
+        _ => {
+            let (point, outward) = match prim.kind {
+                PRIM_ELLIPSOID => ellipsoid_surface_point(ray, hit.t, p0, p1),
+                PRIM_CYLINDER => cylinder_surface_point(ray, hit.t, p0, p1.x),
+                _ => torus_surface_point(ray, hit.t, p0, p1.x, p1.y),
+            };
+            (point, outward, outward)
+        }
     };
     // Two-sided shading: turn both normals towards the incoming ray.
     let front_facing = normal.dot(ray.direction) < 0.0;
@@ -218,15 +227,16 @@ fn light_dimension(frame: &GpuFrame, depth: u32, offset: u32, k: u32) -> u32 {
     LIGHT_DIMENSION.wrapping_add(index.wrapping_mul(2))
 }
 
-/// Light reflected towards `wo` from every light, with shadow rays: the area-light samples in
-/// `window`, and the point and directional lights in the first window.
+/// Light reflected towards `wo` from every light, with shadow rays (which skip primitive
+/// `own`): the area-light samples in `window`, and the point and directional lights in the
+/// first window.
 #[allow(clippy::too_many_arguments)]
 fn direct_light<const F: u32>(
     scene: &FlatScene,
     time: f32,
     surface: &Surface,
     material: &GpuMaterial,
-    prim_id: u32,
+    own: u32,
     wo: Vec3,
     depth: u32,
     window: LightWindow,
@@ -284,7 +294,7 @@ fn direct_light<const F: u32>(
                     stats.rays += 1;
                     if !scene.tracer().occluded::<F>(
                         &RayQuery::new(origin, wi).at_time(time),
-                        prim_id,
+                        own,
                         light.prim,
                         shadow_ray_length(distance),
                     ) {
@@ -312,7 +322,7 @@ fn direct_light<const F: u32>(
                 stats.rays += 1;
                 if !scene.tracer().occluded::<F>(
                     &RayQuery::new(origin, wi).at_time(time),
-                    prim_id,
+                    own,
                     NONE,
                     shadow_ray_length(distance),
                 ) {
@@ -368,9 +378,11 @@ pub fn trace_path<const F: u32>(
         if first {
             radiance += throughput * Vec3::from(material.diffuse) * Vec3::from(frame.ambient);
         }
+        // Rays leaving a flat primitive skip it; a curved one may shadow or reflect itself.
+        let own = if is_curved(prim.kind) { NONE } else { prim_id };
         radiance += throughput
             * direct_light::<F>(
-                scene, time, &surface, material, prim_id, wo, depth, window, rng, stats,
+                scene, time, &surface, material, own, wo, depth, window, rng, stats,
             );
         // Perfect mirror bounce.
         let mirror = Vec3::from(material.mirror);
@@ -398,11 +410,7 @@ pub fn trace_path<const F: u32>(
             reflected.normalize(),
         )
         .at_time(time);
-        skip = if prim.kind == PRIM_SPHERE {
-            NONE
-        } else {
-            prim_id
-        };
+        skip = own;
     }
     radiance
 }

@@ -30,6 +30,20 @@ pub const PRIM_SPHERE: u32 = 1;
 pub const PRIM_QUAD: u32 = 2;
 /// An infinite plane, tested outside the BVH.
 pub const PRIM_PLANE: u32 = 3;
+/// An ellipsoid with semi-axes along the world's axes.
+pub const PRIM_ELLIPSOID: u32 = 4;
+/// An open cylinder around the vertical axis through its base centre.
+pub const PRIM_CYLINDER: u32 = 5;
+/// A torus around the vertical axis through its centre.
+pub const PRIM_TORUS: u32 = 6;
+
+/// Whether a primitive of `kind` is curved: a ray leaving it may meet it again (a torus's
+/// inner ring, the inside of a cylinder), so rays from it never skip it. Flat ones skip
+/// themselves; spheres and ellipsoids need not, but testing them again costs one quadratic and
+/// keeps light inside them honest.
+pub const fn is_curved(kind: u32) -> bool {
+    kind == PRIM_SPHERE || kind >= PRIM_ELLIPSOID
+}
 
 /// `GpuReflector::kind`: a sphere.
 pub const REFLECTOR_SPHERE: u32 = 0;
@@ -158,8 +172,10 @@ pub const FEATURE_PUNCTUAL_LIGHTS: u32 = 8;
 pub const FEATURE_TRIANGLES: u32 = 16;
 /// Infinite planes (tested outside the BVH).
 pub const FEATURE_PLANES: u32 = 32;
+/// Ellipsoids, cylinders or tori (`accel::curved`), intersected exactly.
+pub const FEATURE_CURVED: u32 = 64;
 /// Every feature: the general kernel.
-pub const FEATURES_ALL: u32 = 63;
+pub const FEATURES_ALL: u32 = 127;
 /// Whether the feature set `features` has `bit` (a `FEATURE_*`); const, for the CPU
 /// integrator's const generic.
 pub const fn has(features: u32, bit: u32) -> bool {
@@ -167,13 +183,14 @@ pub const fn has(features: u32, bit: u32) -> bool {
 }
 
 /// (WGSL override name, bit) of every feature.
-pub const FEATURES: [(&str, u32); 6] = [
+pub const FEATURES: [(&str, u32); 7] = [
     ("FEATURE_LENS", FEATURE_LENS),
     ("FEATURE_MIRRORS", FEATURE_MIRRORS),
     ("FEATURE_AREA_LIGHTS", FEATURE_AREA_LIGHTS),
     ("FEATURE_PUNCTUAL_LIGHTS", FEATURE_PUNCTUAL_LIGHTS),
     ("FEATURE_TRIANGLES", FEATURE_TRIANGLES),
     ("FEATURE_PLANES", FEATURE_PLANES),
+    ("FEATURE_CURVED", FEATURE_CURVED),
 ];
 
 /// Bits of the status word: a kernel loop hit its cap (a traversal took more than
@@ -257,6 +274,8 @@ pub struct GpuCwNode {
 /// One primitive. Triangle: `p0, p1, p2` are its vertices, `normals` indexes `GpuNormals` or is
 /// `NONE`. Sphere: `p0` centre, `p1.x` radius, `p1.y` |centre|^2 - radius^2 (rounded once from
 /// f64). Quad: `p0` corner, `p1` edge_u, `p2` edge_v. Plane: `p0` a point, `p1` the unit normal.
+/// Ellipsoid: `p0` centre, `p1` semi-axes. Cylinder: `p0` base centre, `p1.x` radius, `p1.y`
+/// height. Torus: `p0` centre, `p1.x` major radius, `p1.y` minor radius.
 /// Planes are unbounded and live after the BVH's primitives (`GpuFrame::plane_start`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -495,6 +514,7 @@ const _: () = assert!(
             | FEATURE_PUNCTUAL_LIGHTS
             | FEATURE_TRIANGLES
             | FEATURE_PLANES
+            | FEATURE_CURVED
 );
 /// A ray of the ray benchmark's buffer (`wgsl/trace.wgsl`).
 #[repr(C)]
@@ -626,6 +646,9 @@ pub fn wgsl_prelude() -> String {
         ("PRIM_SPHERE", PRIM_SPHERE),
         ("PRIM_QUAD", PRIM_QUAD),
         ("PRIM_PLANE", PRIM_PLANE),
+        ("PRIM_ELLIPSOID", PRIM_ELLIPSOID),
+        ("PRIM_CYLINDER", PRIM_CYLINDER),
+        ("PRIM_TORUS", PRIM_TORUS),
         ("REFLECTOR_SPHERE", REFLECTOR_SPHERE),
         ("REFLECTOR_TORUS", REFLECTOR_TORUS),
         ("REFLECTOR_PATCH", REFLECTOR_PATCH),

@@ -14,7 +14,7 @@ use crate::accel::{Motion, Primitives, build_geometry, intersect};
 use crate::layout::*;
 use crate::math::sampling::strata_columns;
 use crate::sampler::SampleTable;
-use crate::scene::{Light, Scene, Shape};
+use crate::scene::{CurvedPrimitive, Light, Scene, Shape};
 
 /// Everything the kernels (and the CPU reference) read, ready to upload.
 pub struct FlatScene {
@@ -49,8 +49,9 @@ pub struct FlatScene {
     pub crop: [u32; 4],
     /// Adaptive sampling, when the scene asks for it (`render.noise_target`).
     pub adaptive: Option<crate::adaptive::AdaptiveSettings>,
-    /// The scene's parametric surfaces (tori, Bézier patches) with their mesh's primitives, for the raster
-    /// preview's Fermat reflections; the ray tracers see only the primitives.
+    /// The scene's parametric surfaces with their primitives (one exact primitive, or a Bézier
+    /// shape's mesh triangles), for the raster preview's Fermat reflections; the ray tracers
+    /// see only the primitives.
     pub surfaces: Vec<FlatSurface>,
     /// Whether renders also sum the first hits' depth, normal and albedo (`render::Aovs`);
     /// an output choice (`chambre render --aov`), false unless set.
@@ -146,6 +147,10 @@ impl FlatScene {
             FEATURE_TRIANGLES,
         );
         add(self.frame.plane_count > 0, FEATURE_PLANES);
+        add(
+            self.prims.iter().any(|p| p.kind >= PRIM_ELLIPSOID),
+            FEATURE_CURVED,
+        );
         features
     }
 }
@@ -210,6 +215,25 @@ pub fn flatten(scene: &Scene) -> FlatScene {
                 edge_v,
                 material,
             } => bounded.push((prim(PRIM_QUAD, *material, *corner, *edge_u, *edge_v), None)),
+            Shape::Curved {
+                primitive,
+                material,
+            } => {
+                let (kind, p0, p1) = match *primitive {
+                    CurvedPrimitive::Ellipsoid { center, radii } => (PRIM_ELLIPSOID, center, radii),
+                    CurvedPrimitive::Cylinder {
+                        base,
+                        radius,
+                        height,
+                    } => (PRIM_CYLINDER, base, Vec3::new(radius, height, 0.0)),
+                    CurvedPrimitive::Torus {
+                        center,
+                        major,
+                        minor,
+                    } => (PRIM_TORUS, center, Vec3::new(major, minor, 0.0)),
+                };
+                bounded.push((prim(kind, *material, p0, p1, Vec3::ZERO), None));
+            }
             Shape::Plane {
                 point,
                 normal,

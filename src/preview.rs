@@ -45,8 +45,8 @@ pub struct PreviewVertex {
 pub const SPHERE_SEGMENTS: u32 = 64;
 
 /// Quads around a torus's axis and its tube (an ellipsoid's or cylinder's axis and meridian)
-/// in the preview: a torus within (R + r)(1 − cos(π/64)) ≈ 1.2e-3 (R + r), where the ray
-/// tracers' mesh has `scene::surface::ROUND_QUADS`.
+/// in the preview: a torus within (R + r)(1 − cos(π/64)) ≈ 1.2e-3 (R + r) (the ray tracers
+/// intersect it exactly).
 pub const PREVIEW_ROUND_QUADS: [u32; 2] = [64, 32];
 
 /// Quads along each side of a Bézier patch in the preview (`scene::surface::PATCH_QUADS` in
@@ -441,20 +441,9 @@ fn plane(out: &mut Vec<PreviewVertex>, p: &GpuPrimitive, extent: f32) {
 /// The radius of the scene's bounded primitives around their centre (at least 1e-6).
 pub fn bounded_radius(scene: &FlatScene) -> f32 {
     let bounded = &scene.prims[..scene.frame.plane_start as usize];
-    let points = bounded.iter().flat_map(|p| match p.kind {
-        PRIM_SPHERE => {
-            let (c, r) = (Vec3::from(p.p0), p.p1[0]);
-            vec![c - Vec3::splat(r), c + Vec3::splat(r)]
-        }
-        PRIM_QUAD => {
-            let [c, u, v] = [p.p0, p.p1, p.p2].map(Vec3::from);
-            vec![c, c + u, c + v, c + u + v]
-        }
-        _ => vec![Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2)],
-    });
-    let (lo, hi) = points.fold(
+    let (lo, hi) = bounded.iter().map(crate::accel::primitive_bounds).fold(
         (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), q| (lo.min(q), hi.max(q)),
+        |(lo, hi), b| (lo.min(b.min.into()), hi.max(b.max.into())),
     );
     if lo.x > hi.x {
         return 1.0;

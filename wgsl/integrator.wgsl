@@ -51,10 +51,23 @@ fn surface_at(prim: GpuPrimitive, ray: RayQuery, hit: Hit) -> Surface {
             point = quad_point(prim.p0, prim.p1, prim.p2, hit.b1, hit.b2);
             shading = normal;
         }
-        default: {
+        case PRIM_PLANE: {
             point = plane_point(ray, hit.t, prim.p0, prim.p1);
             normal = prim.p1;
             shading = prim.p1;
+        }
+        default: {
+            var curved: CurvedPoint;
+            if (prim.kind == PRIM_ELLIPSOID) {
+                curved = ellipsoid_surface_point(ray, hit.t, prim.p0, prim.p1);
+            } else if (prim.kind == PRIM_CYLINDER) {
+                curved = cylinder_surface_point(ray, hit.t, prim.p0, prim.p1.x);
+            } else {
+                curved = torus_surface_point(ray, hit.t, prim.p0, prim.p1.x, prim.p1.y);
+            }
+            point = curved.point;
+            normal = curved.outward;
+            shading = curved.outward;
         }
     }
     // Two-sided shading: turn both normals towards the incoming ray.
@@ -104,7 +117,7 @@ fn light_dimension(depth: u32, offset: u32, k: u32) -> u32 {
     return LIGHT_DIMENSION + 2u * (depth * frame.light_samples_per_vertex + offset + k);
 }
 
-fn direct_light(time: f32, surface: Surface, material: GpuMaterial, prim_id: u32, wo: vec3<f32>,
+fn direct_light(time: f32, surface: Surface, material: GpuMaterial, own: u32, wo: vec3<f32>,
                 depth: u32, window: LightWindow,
                 rng: ptr<function, Rng>, counters: ptr<function, PathCounters>) -> vec3<f32> {
     let n = surface.shading_normal;
@@ -141,7 +154,7 @@ fn direct_light(time: f32, surface: Surface, material: GpuMaterial, prim_id: u32
                 let cos_light = -dot(light_normal, wi);
                 if (cos_surface > 0.0 && cos_light > 0.0 && dot(ng, wi) > 0.0) {
                     (*counters).rays += 1u;
-                    if (!cw_occluded(ray_at_time(ray_query_new(origin, wi), time), prim_id, light.prim, shadow_ray_length(distance))) {
+                    if (!cw_occluded(ray_at_time(ray_query_new(origin, wi), time), own, light.prim, shadow_ray_length(distance))) {
                         sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance);
                     }
                 }
@@ -164,7 +177,7 @@ fn direct_light(time: f32, surface: Surface, material: GpuMaterial, prim_id: u32
             let cos_surface = dot(n, wi);
             if (cos_surface > 0.0 && dot(ng, wi) > 0.0) {
                 (*counters).rays += 1u;
-                if (!cw_occluded(ray_at_time(ray_query_new(origin, wi), time), prim_id, NONE, shadow_ray_length(distance))) {
+                if (!cw_occluded(ray_at_time(ray_query_new(origin, wi), time), own, NONE, shadow_ray_length(distance))) {
                     total += eval_brdf(material, n, wo, wi) * light.color * (cos_surface * falloff);
                 }
             }
@@ -234,7 +247,9 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, time: f32, window: LightW
         if (first) {
             radiance += throughput * material.diffuse * frame.ambient;
         }
-        radiance += throughput * direct_light(time, surface, material, found.prim, wo, depth, window, rng, counters);
+        // Rays leaving a flat primitive skip it; a curved one may shadow or reflect itself.
+        let own = select(found.prim, NONE, is_curved(prim.kind));
+        radiance += throughput * direct_light(time, surface, material, own, wo, depth, window, rng, counters);
         // Perfect mirror bounce.
         if (!FEATURE_MIRRORS || max(max(material.mirror.x, material.mirror.y), material.mirror.z) <= 0.0) {
             break;
@@ -252,10 +267,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, time: f32, window: LightW
         }
         throughput *= material.mirror;
         ray = ray_at_time(ray_query_new(offset_ray_origin(surface.position, surface.position_error, surface.geometric_normal), normalize(reflected)), time);
-        skip = found.prim;
-        if (prim.kind == PRIM_SPHERE) {
-            skip = NONE;
-        }
+        skip = own;
     }
     return radiance;
 }

@@ -252,6 +252,24 @@ fn intersect_primitive(ray: RayQuery, prim: GpuPrimitive, t_max: f32) -> Hit {
         case PRIM_SPHERE: { return intersect_sphere(ray, prim.p0, prim.p1.x, prim.p1.y, t_max); }
         case PRIM_QUAD: { return intersect_quad(ray, prim.p0, prim.p1, prim.p2, t_max); }
         case PRIM_PLANE: { return intersect_plane(ray, prim.p0, prim.p1, t_max); }
+        case PRIM_ELLIPSOID: {
+            if (FEATURE_CURVED) {
+                return intersect_ellipsoid(ray, prim.p0, prim.p1, t_max);
+            }
+            return miss();
+        }
+        case PRIM_CYLINDER: {
+            if (FEATURE_CURVED) {
+                return intersect_cylinder(ray, prim.p0, prim.p1.x, prim.p1.y, t_max);
+            }
+            return miss();
+        }
+        case PRIM_TORUS: {
+            if (FEATURE_CURVED) {
+                return intersect_torus(ray, prim.p0, prim.p1.x, prim.p1.y, t_max);
+            }
+            return miss();
+        }
         default: { return miss(); }
     }
 }
@@ -329,13 +347,14 @@ fn plane_point(ray: RayQuery, t: f32, point: vec3<f32>, normal: vec3<f32>) -> Su
     return SurfacePoint(position, vec3<f32>(gamma(5.0) * max(max(size.x, size.y), size.z)) + gamma(1.0) * abs(position));
 }
 
-struct SphereSurface {
+// A point on a curved primitive and the surface's outward normal there.
+struct CurvedPoint {
     point: SurfacePoint,
     outward: vec3<f32>,
 }
 
 // The ray's point or the re-projection onto the sphere, whichever has the smaller error bound.
-fn sphere_surface_point(ray: RayQuery, hit: Hit, center: vec3<f32>, radius: f32) -> SphereSurface {
+fn sphere_surface_point(ray: RayQuery, hit: Hit, center: vec3<f32>, radius: f32) -> CurvedPoint {
     let along = hit.t * ray.direction;
     let on_ray = ray.origin + along;
     let outward = normalize((ray.origin - center) + along);
@@ -346,9 +365,9 @@ fn sphere_surface_point(ray: RayQuery, hit: Hit, center: vec3<f32>, radius: f32)
     let projected_error = gamma(4.0) * abs(scaled_normal) + gamma(1.0) * abs(projected);
     let normal_size = abs(outward);
     if (dot(normal_size, on_ray_error) < dot(normal_size, projected_error)) {
-        return SphereSurface(SurfacePoint(on_ray, on_ray_error), outward);
+        return CurvedPoint(SurfacePoint(on_ray, on_ray_error), outward);
     }
-    return SphereSurface(SurfacePoint(projected, projected_error), outward);
+    return CurvedPoint(SurfacePoint(projected, projected_error), outward);
 }
 
 fn next_float_up(v: f32) -> f32 {

@@ -21,8 +21,10 @@
 
 use glam::{Vec3, Vec3A};
 
+use super::curved::{intersect_cylinder, intersect_ellipsoid, intersect_torus};
 use crate::layout::{
-    FEATURE_TRIANGLES, GpuPrimitive, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE, T_FAR, has,
+    FEATURE_CURVED, FEATURE_TRIANGLES, GpuPrimitive, PRIM_CYLINDER, PRIM_ELLIPSOID, PRIM_PLANE,
+    PRIM_QUAD, PRIM_SPHERE, PRIM_TORUS, PRIM_TRIANGLE, T_FAR, has,
 };
 
 /// Smallest direction magnitude used for the slab reciprocals: with coordinates below 1e9
@@ -135,7 +137,7 @@ pub struct Hit {
     pub b2: f32,
 }
 
-const MISS: Hit = Hit {
+pub(crate) const MISS: Hit = Hit {
     t: T_FAR,
     b1: 0.0,
     b2: 0.0,
@@ -343,7 +345,8 @@ pub fn intersect_plane(ray: &RayQuery, point: Vec3, normal: Vec3, t_max: f32) ->
 
 /// Intersect any primitive; `t == T_FAR` means a miss.
 /// `F` is the scene's `layout::FEATURE_*` set: without `FEATURE_TRIANGLES` the triangle test
-/// is compiled out, as in the specialised kernel.
+/// is compiled out, without `FEATURE_CURVED` the ellipsoid's, cylinder's and torus's, as in the
+/// specialised kernel.
 pub fn intersect_primitive<const F: u32>(ray: &RayQuery, prim: &GpuPrimitive, t_max: f32) -> Hit {
     let p0 = Vec3::from(prim.p0);
     let p1 = Vec3::from(prim.p1);
@@ -353,6 +356,9 @@ pub fn intersect_primitive<const F: u32>(ray: &RayQuery, prim: &GpuPrimitive, t_
         PRIM_SPHERE => intersect_sphere(ray, p0, p1.x, p1.y, t_max),
         PRIM_QUAD => intersect_quad(ray, p0, p1, p2, t_max),
         PRIM_PLANE => intersect_plane(ray, p0, p1, t_max),
+        PRIM_ELLIPSOID if has(F, FEATURE_CURVED) => intersect_ellipsoid(ray, p0, p1, t_max),
+        PRIM_CYLINDER if has(F, FEATURE_CURVED) => intersect_cylinder(ray, p0, p1.x, p1.y, t_max),
+        PRIM_TORUS if has(F, FEATURE_CURVED) => intersect_torus(ray, p0, p1.x, p1.y, t_max),
         _ => MISS,
     }
 }

@@ -8,6 +8,7 @@
 //! the kernels read.
 
 pub mod build;
+pub mod curved;
 pub mod cwbvh;
 pub mod intersect;
 pub mod traverse;
@@ -201,10 +202,18 @@ pub fn build_geometry(
     }
 }
 
-fn primitive_bounds(p: &GpuPrimitive) -> Aabb {
+/// The box around primitive `p` (planes excepted: they are unbounded).
+pub(crate) fn primitive_bounds(p: &GpuPrimitive) -> Aabb {
     let [a, b, c] = [p.p0, p.p1, p.p2].map(Vec3A::from);
     match p.kind {
         PRIM_SPHERE => Aabb::new(a - Vec3A::splat(b.x), a + Vec3A::splat(b.x)),
+        PRIM_ELLIPSOID => Aabb::new(a - b, a + b),
+        PRIM_CYLINDER => Aabb::new(a - Vec3A::new(b.x, 0.0, b.x), a + Vec3A::new(b.x, b.y, b.x)),
+        PRIM_TORUS => {
+            let reach = b.x + b.y;
+            let half = Vec3A::new(reach, b.y, reach);
+            Aabb::new(a - half, a + half)
+        }
         PRIM_QUAD => Aabb::from_points(&[a, a + b, a + c, a + b + c]),
         _ => Aabb::from_points(&[a, b, c]),
     }

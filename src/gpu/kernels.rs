@@ -114,7 +114,7 @@ const TRACE_CW_BINDINGS: [Binding; 7] = [
 const FERMAT_BINDINGS: [Binding; 3] = [BINDINGS[15], BINDINGS[16], BINDINGS[17]];
 
 /// (file name, source) of every WGSL module a kernel may compose.
-pub const MODULES: [(&str, &str); 14] = [
+pub const MODULES: [(&str, &str); 15] = [
     ("types.wgsl", include_str!("../../wgsl/types.wgsl")),
     ("bindings.wgsl", include_str!("../../wgsl/bindings.wgsl")),
     ("status.wgsl", include_str!("../../wgsl/status.wgsl")),
@@ -122,6 +122,7 @@ pub const MODULES: [(&str, &str); 14] = [
     ("sampling.wgsl", include_str!("../../wgsl/sampling.wgsl")),
     ("camera.wgsl", include_str!("../../wgsl/camera.wgsl")),
     ("intersect.wgsl", include_str!("../../wgsl/intersect.wgsl")),
+    ("curved.wgsl", include_str!("../../wgsl/curved.wgsl")),
     ("traverse.wgsl", include_str!("../../wgsl/traverse.wgsl")),
     (
         "traverse_cwbvh.wgsl",
@@ -169,6 +170,7 @@ pub const RENDER: Kernel = Kernel {
         "sampling.wgsl",
         "camera.wgsl",
         "intersect.wgsl",
+        "curved.wgsl",
         "traverse_cwbvh.wgsl",
         "sampler.wgsl",
         "integrator.wgsl",
@@ -183,6 +185,7 @@ const TRACE_MODULES: &[&str] = &[
     "bindings.wgsl",
     "status.wgsl",
     "intersect.wgsl",
+    "curved.wgsl",
     "traverse.wgsl",
     "traverse_cwbvh.wgsl",
     "trace.wgsl",

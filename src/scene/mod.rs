@@ -44,7 +44,8 @@ pub struct Scene {
     /// Each shape's velocity (scene units a second), in `shapes` order; empty when nothing
     /// moves.
     pub velocities: Vec<Vec3>,
-    /// The shapes declared as parametric surfaces (tori), each rendered as a mesh in `shapes`.
+    /// The shapes declared as parametric surfaces (tori, ellipsoids, cylinders, Bézier patches),
+    /// each also in `shapes` as the ray tracers trace it (`surface::Surface::traced_shape`).
     pub surfaces: Vec<surface::CurvedSurface>,
 }
 
@@ -125,12 +126,50 @@ pub enum Shape {
         /// Index into the materials.
         material: u32,
     },
+    /// An ellipsoid, cylinder or torus, intersected exactly (`accel::curved`); its surface,
+    /// in double precision, is also among `Scene::surfaces`.
+    Curved {
+        /// The surface.
+        primitive: CurvedPrimitive,
+        /// Index into the materials.
+        material: u32,
+    },
     /// A triangle mesh, already in world space.
     Mesh {
         /// Its triangles and vertex normals.
         mesh: TriangleMesh,
         /// Index into the materials of faces whose own material the mesh does not give.
         material: u32,
+    },
+}
+
+/// A curved surface the ray tracers intersect exactly, in the precision they trace in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CurvedPrimitive {
+    /// An ellipsoid with semi-axes along the world's axes.
+    Ellipsoid {
+        /// Centre (scene units).
+        center: Vec3,
+        /// Semi-axes along x, y and z, > 0.
+        radii: Vec3,
+    },
+    /// An open cylinder around the vertical axis.
+    Cylinder {
+        /// The centre of its base circle (scene units).
+        base: Vec3,
+        /// Radius, > 0.
+        radius: f32,
+        /// Height above the base, > 0.
+        height: f32,
+    },
+    /// A torus around the vertical axis through its centre.
+    Torus {
+        /// Centre (scene units).
+        center: Vec3,
+        /// R: the radius of the tube's centre circle.
+        major: f32,
+        /// r: the tube's radius, below R.
+        minor: f32,
     },
 }
 

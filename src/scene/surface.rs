@@ -1,22 +1,14 @@
-//! Smooth parametric surfaces a scene declares (`type = "torus"`, `type = "bezier"`), rendered
-//! by the ray tracers as a fine mesh with the surface's own normals at its vertices, and kept
-//! whole for the raster preview, which reflects in them by Fermat's principle
-//! (`crate::fermat`).
+//! Smooth parametric surfaces a scene declares (`type = "torus"`, `"ellipsoid"`, `"cylinder"`,
+//! `"bezier"`): the ray tracers intersect the first three exactly and trace Bézier patches as a
+//! fine mesh with the patches' own normals at its vertices; the raster preview draws a coarse
+//! mesh of each and reflects in them by Fermat's principle (`crate::fermat`).
 
 use std::path::Path;
 
 use glam::{DVec2, DVec3};
 
-use super::TriangleMesh;
+use super::{CurvedPrimitive, Shape, TriangleMesh};
 use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Reflector, Torus};
-
-/// Quads around a round surface's axis (u) and across it (v): a torus's tube, an ellipsoid's
-/// meridian, a cylinder's height. The torus's mesh lies within (R + r)(1 − cos(π/256)) ≈
-/// 7.5e-5 (R + r) of it along u and r(1 − cos(π/128)) ≈ 3.0e-4 r along v, an ellipsoid's
-/// within 3.0e-4 of its longest semi-axis; each shades with the surface's normals interpolated
-/// across each triangle. (A cylinder is straight along v: one quad would do; the grid keeps
-/// its triangles from growing long and thin.)
-pub const ROUND_QUADS: [u32; 2] = [256, 128];
 
 /// Quads along each side of a Bézier patch: a quarter circle cut 32 times (the teapot's body
 /// patches) lies within 1 − cos(π/128) ≈ 3.0e-4 of its radius of the mesh.
@@ -28,7 +20,7 @@ const MAX_PATCH_POINTS: usize = 1 << 20;
 /// A scene's parametric surface and the shape that renders it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CurvedSurface {
-    /// Its index in `Scene::shapes`: a `Shape::Mesh` of its tessellation.
+    /// Its index in `Scene::shapes` (`Surface::traced_shape`).
     pub shape: usize,
     /// The surface.
     pub surface: Surface,
@@ -54,9 +46,36 @@ pub enum Surface {
 }
 
 impl Surface {
-    /// The ray tracers' mesh of the surface.
-    pub fn mesh(&self) -> TriangleMesh {
-        self.mesh_of(ROUND_QUADS, PATCH_QUADS)
+    /// The shape the ray tracers trace, with `material`: a torus, ellipsoid or cylinder as
+    /// itself, intersected exactly (`accel::curved`); Bézier patches as a mesh of
+    /// `PATCH_QUADS` quads along each side, with the patches' normals at its vertices.
+    pub fn traced_shape(&self, material: u32) -> Shape {
+        let primitive = match self {
+            Surface::Patches(patches) => {
+                return Shape::Mesh {
+                    mesh: patches_mesh(patches, PATCH_QUADS),
+                    material,
+                };
+            }
+            Surface::Torus(t) => CurvedPrimitive::Torus {
+                center: t.center.as_vec3(),
+                major: t.major as f32,
+                minor: t.minor as f32,
+            },
+            Surface::Ellipsoid(e) => CurvedPrimitive::Ellipsoid {
+                center: e.center.as_vec3(),
+                radii: e.radii.as_vec3(),
+            },
+            Surface::Cylinder { cylinder, height } => CurvedPrimitive::Cylinder {
+                base: cylinder.center.as_vec3(),
+                radius: cylinder.radius as f32,
+                height: *height as f32,
+            },
+        };
+        Shape::Curved {
+            primitive,
+            material,
+        }
     }
 
     /// The surface as a mesh of `round` quads around and across a round surface, `patch`
@@ -329,6 +348,10 @@ fn crosses(origin: DVec3, d: DVec3, [a, b, c]: &[DVec3; 3]) -> bool {
 mod tests {
     use super::*;
 
+    /// A fine mesh of a round surface: a torus's lies within (R + r)(1 − cos(π/256)) ≈
+    /// 7.5e-5 (R + r) of it along u and r(1 − cos(π/128)) ≈ 3.0e-4 r along v.
+    const FINE: [u32; 2] = [256, 128];
+
     /// A one-patch file: the flat unit square z = 0, control points on a 4 x 4 grid.
     const FLAT_PATCH: &str = "1\n1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16\n16\n\
         0,0,0\n0,1,0\n0,2,0\n0,3,0\n1,0,0\n1,1,0\n1,2,0\n1,3,0\n\
@@ -415,8 +438,8 @@ mod tests {
             major: 0.6,
             minor: 0.2,
         };
-        let mesh = Surface::Torus(torus).mesh();
-        let [nu, nv] = ROUND_QUADS;
+        let mesh = Surface::Torus(torus).mesh_of(FINE, PATCH_QUADS);
+        let [nu, nv] = FINE;
         assert_eq!(mesh.triangles.len() as u32, 2 * nu * nv);
         // |distance to the tube circle − r| is the distance to the torus.
         let off_surface = |p: DVec3| {
@@ -476,7 +499,7 @@ mod tests {
         let implicit: [(&Surface, &Implicit<'_>); 2] =
             [(&ellipsoid, &on_ellipsoid), (&cylinder, &on_cylinder)];
         for (surface, implicit) in implicit {
-            let mesh = surface.mesh();
+            let mesh = surface.mesh_of(FINE, PATCH_QUADS);
             let normals = mesh.normals.as_ref().unwrap();
             for (p, n) in mesh.positions.iter().zip(normals) {
                 let (value, gradient) = implicit(p.as_dvec3());
@@ -498,12 +521,15 @@ mod tests {
                 assert!(n.dot(outward) > 0.0, "{surface:?}: a triangle facing in");
             }
         }
-        let [nu, nv] = ROUND_QUADS;
+        let [nu, nv] = FINE;
         // Two triangles a quad, but one at each pole of the ellipsoid.
         assert_eq!(
-            ellipsoid.mesh().triangles.len() as u32,
+            ellipsoid.mesh_of(FINE, PATCH_QUADS).triangles.len() as u32,
             2 * nu * nv - 2 * nu
         );
-        assert_eq!(cylinder.mesh().triangles.len() as u32, 2 * nu * nv);
+        assert_eq!(
+            cylinder.mesh_of(FINE, PATCH_QUADS).triangles.len() as u32,
+            2 * nu * nv
+        );
     }
 }

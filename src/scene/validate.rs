@@ -264,9 +264,9 @@ fn validate_velocities(
                         .iter()
                         .any(|m| m.emission.max_element() > 0.0),
             ),
-            Shape::Sphere { material, .. } | Shape::Quad { material, .. } => {
-                (false, emits(*material))
-            }
+            Shape::Sphere { material, .. }
+            | Shape::Quad { material, .. }
+            | Shape::Curved { material, .. } => (false, emits(*material)),
         };
         if v != Vec3::ZERO && moves_plane {
             return Err(check.err(&field, "an infinite plane cannot move"));
@@ -923,12 +923,7 @@ fn validate_shapes(
                     &[("radii", s.radii.is_some()), ("height", s.height.is_some())],
                 )?;
                 let surface = Surface::Torus(torus(check, &prefix, s)?);
-                let mesh = surface.mesh();
-                surfaces.push(CurvedSurface { shape: i, surface });
-                Shape::Mesh {
-                    mesh,
-                    material: required("torus")?,
-                }
+                curved_shape(i, surface, required("torus")?, &mut surfaces)
             }
             ShapeType::Ellipsoid | ShapeType::Cylinder => {
                 let (kind, own) = match s.kind {
@@ -949,12 +944,7 @@ fn validate_shapes(
                     .collect();
                 check.forbid(&prefix, kind, &foreign)?;
                 let surface = round_surface(check, &prefix, s)?;
-                let mesh = surface.mesh();
-                surfaces.push(CurvedSurface { shape: i, surface });
-                Shape::Mesh {
-                    mesh,
-                    material: required(kind)?,
-                }
+                curved_shape(i, surface, required(kind)?, &mut surfaces)
             }
             ShapeType::Bezier => {
                 let smooth_fields = &mesh_fields[4..];
@@ -971,17 +961,28 @@ fn validate_shapes(
                     .concat(),
                 )?;
                 let surface = Surface::Patches(bezier_patches(check, &prefix, s, scene_dir)?);
-                let mesh = surface.mesh();
-                surfaces.push(CurvedSurface { shape: i, surface });
-                Shape::Mesh {
-                    mesh,
-                    material: required("bezier")?,
-                }
+                curved_shape(i, surface, required("bezier")?, &mut surfaces)
             }
         };
         shapes.push(shape);
     }
     Ok((shapes, surfaces))
+}
+
+/// Shape `index`, the curved `surface` as the ray tracers trace it, the surface kept in
+/// `surfaces` for the preview.
+fn curved_shape(
+    index: usize,
+    surface: Surface,
+    material: u32,
+    surfaces: &mut Vec<CurvedSurface>,
+) -> Shape {
+    let shape = surface.traced_shape(material);
+    surfaces.push(CurvedSurface {
+        shape: index,
+        surface,
+    });
+    shape
 }
 
 /// A `bezier` shape's patches: read from `file`, scaled, rotated and translated as a mesh is

@@ -1,0 +1,335 @@
+//! Exact ray intersection with the curved surfaces a scene declares besides spheres: ellipsoids
+//! (semi-axes along the world's axes), open cylinders and tori (around the vertical axis).
+//! Twin: `wgsl/curved.wgsl`.
+//!
+//! - Ellipsoids and cylinders are quadrics: a t^2 + 2 b t + c = 0, solved without cancellation
+//!   (the discriminant b^2 - a c from a cross product, as `intersect_sphere` does, and the
+//!   second root as c / q).
+//! - A torus is a quartic in t. Its roots are isolated, not taken from Ferrari's formula (which
+//!   loses every digit in f32 near double roots): the roots of F'' split the ray's span inside
+//!   the torus's bounding sphere where F' is monotone, F''s roots found there split it where F
+//!   is monotone, and each sign change of F is a root, found by Newton's method kept inside
+//!   its bracket. The quartic is set up in units of R + r from where the ray enters the
+//!   bounding sphere, so its coefficients are of order one whatever the torus's size and the
+//!   ray's length.
+//! - Each hit is rejected when it is no farther than the bound on its own error (it may lie
+//!   behind the origin: the ray's own surface, left from an offset origin), as the triangle
+//!   test does.
+//! - The shading point is the ray's point re-projected onto the surface (as pbrt-v4 does for
+//!   its quadrics), so its error is a few ULPs of the shape's size, whatever the ray's length.
+
+use glam::Vec3;
+
+use super::intersect::{Hit, MISS, RayQuery, SurfacePoint, gamma};
+
+/// Newton steps (each falling back to bisection when it would leave its bracket) that find a
+/// torus root: 24 bisections alone narrow a bracket of the span (at most 2 in units of R + r)
+/// to f32's resolution, so the root is as precise as f32 allows when the cap is reached.
+pub const ROOT_STEPS: u32 = 24;
+
+/// The roots of a t^2 + 2 b t + c = 0 given its reduced discriminant b^2 - a c (computed by
+/// the caller without cancellation), in increasing order, and a bound on their absolute error:
+/// q = -(b + sign(b) sqrt(disc)) has no cancellation, the roots are q / a and c / q; `c_size`
+/// bounds the terms of c.
+fn quadratic_roots(a: f32, b: f32, c: f32, discriminant: f32, c_size: f32) -> Option<[f32; 3]> {
+    if discriminant < 0.0 || a == 0.0 {
+        return None;
+    }
+    let root = discriminant.sqrt();
+    let q = if b >= 0.0 { -b - root } else { -b + root };
+    if q == 0.0 {
+        return None;
+    }
+    let (t0, t1) = (q / a, c / q);
+    let error = gamma(8) * (c_size / q.abs() + q.abs() / a);
+    Some([t0.min(t1), t0.max(t1), error])
+}
+
+/// The ellipsoid with `center` and semi-axes `radii`: in coordinates scaled by 1 / radii it is
+/// the unit sphere, and t is the same in both.
+pub fn intersect_ellipsoid(ray: &RayQuery, center: Vec3, radii: Vec3, t_max: f32) -> Hit {
+    let f = (ray.origin - center) / radii;
+    let e = ray.direction / radii;
+    let a = e.dot(e);
+    let f2 = f.dot(f);
+    let discriminant = a - f.cross(e).length_squared();
+    let Some([near, far, error]) = quadratic_roots(a, f.dot(e), f2 - 1.0, discriminant, f2 + 1.0)
+    else {
+        return MISS;
+    };
+    let t = if near > error { near } else { far };
+    if t <= error || t >= t_max {
+        return MISS;
+    }
+    hit_at(t)
+}
+
+/// The open cylinder of `radius` around the vertical axis through `base`, `height` tall.
+pub fn intersect_cylinder(ray: &RayQuery, base: Vec3, radius: f32, height: f32, t_max: f32) -> Hit {
+    let f = ray.origin - base;
+    let d = ray.direction;
+    let a = d.x * d.x + d.z * d.z;
+    let f2 = f.x * f.x + f.z * f.z;
+    let cross = f.x * d.z - f.z * d.x;
+    let discriminant = a * radius * radius - cross * cross;
+    let c_size = f2 + radius * radius;
+    let b = f.x * d.x + f.z * d.z;
+    let Some([near, far, error]) =
+        quadratic_roots(a, b, f2 - radius * radius, discriminant, c_size)
+    else {
+        return MISS;
+    };
+    for t in [near, far] {
+        let y = f.y + t * d.y;
+        if t > error && t < t_max && (0.0..=height).contains(&y) {
+            return hit_at(t);
+        }
+    }
+    MISS
+}
+
+/// The torus around the vertical axis through `center`: the circle of radius `major` swept by
+/// a disc of radius `minor` < `major`, F(p) = (|p|^2 + R^2 - r^2)^2 - 4 R^2 (p_x^2 + p_z^2) = 0.
+pub fn intersect_torus(ray: &RayQuery, center: Vec3, major: f32, minor: f32, t_max: f32) -> Hit {
+    let reach = major + minor;
+    let f = ray.origin - center;
+    let length = ray.direction.length();
+    let d = ray.direction / length;
+    // The bounding sphere, widened by a few ULPs so that rounding never cuts the torus.
+    let along = f.dot(d);
+    let perpendicular = f - along * d;
+    let bound = reach * (1.0 + gamma(4));
+    let discriminant = bound * bound - perpendicular.dot(perpendicular);
+    if discriminant < 0.0 {
+        return MISS;
+    }
+    let half_chord = discriminant.sqrt();
+    let (enter, exit) = (-along - half_chord, -along + half_chord);
+    let t_limit = t_max * length;
+    if exit <= 0.0 || enter >= t_limit {
+        return MISS;
+    }
+    // The torus's equator touches the bounding sphere: start and end a quarter of R + r
+    // beyond it, so that a hit there is not lost to rounding (nor taken for the ray's own
+    // surface, which only a start at the origin can be).
+    let margin = 0.25 * reach;
+    let start = (enter - margin).max(0.0);
+    let scale = 1.0 / reach;
+    let quartic = TorusQuartic::new((f + start * d) * scale, d, major * scale, minor * scale);
+    let span = ((exit + margin).min(t_limit) - start) * scale;
+    for s in quartic.roots(span) {
+        let t = (start + s * reach) / length;
+        if t < t_max {
+            return hit_at(t);
+        }
+    }
+    MISS
+}
+
+fn hit_at(t: f32) -> Hit {
+    Hit {
+        t,
+        b1: 0.0,
+        b2: 0.0,
+    }
+}
+
+/// F(o + s d) for a torus of radii (R, r) in units of R + r, d a unit vector, as the quartic
+/// c[0] + c[1] s + ... + c[4] s^4, and the sizes of its coefficients' terms (for error bounds).
+struct TorusQuartic {
+    c: [f32; 5],
+    size: [f32; 5],
+}
+
+impl TorusQuartic {
+    /// With G(s) = |o + s d|^2 + R^2 - r^2 = s^2 + 2 b s + e and H(s) = p_x^2 + p_z^2 =
+    /// h2 s^2 + 2 h1 s + h0: F = G^2 - 4 R^2 H.
+    fn new(o: Vec3, d: Vec3, major: f32, minor: f32) -> Self {
+        let b = o.dot(d);
+        let e = o.dot(o) + (major - minor) * (major + minor);
+        let h2 = d.x * d.x + d.z * d.z;
+        let h1 = o.x * d.x + o.z * d.z;
+        let h0 = o.x * o.x + o.z * o.z;
+        let k = 4.0 * major * major;
+        TorusQuartic {
+            c: [
+                e * e - k * h0,
+                4.0 * b * e - 2.0 * k * h1,
+                4.0 * b * b + 2.0 * e - k * h2,
+                4.0 * b,
+                1.0,
+            ],
+            size: [
+                e * e + k * h0,
+                4.0 * (b * e).abs() + 2.0 * k * h1.abs(),
+                4.0 * b * b + 2.0 * e.abs() + k * h2,
+                4.0 * b.abs(),
+                1.0,
+            ],
+        }
+    }
+
+    /// The roots in (0, span], in increasing order, each farther from 0 than the bound on its
+    /// own error (a root within it is the surface the ray leaves from).
+    fn roots(&self, span: f32) -> impl Iterator<Item = f32> + '_ {
+        let c = &self.c;
+        let derivative = [c[1], 2.0 * c[2], 3.0 * c[3], 4.0 * c[4], 0.0];
+        // F''/2 = 6 c4 s^2 + 3 c3 s + c2: its roots bound where F' is monotone.
+        let inflections = quadratic_roots(
+            6.0 * c[4],
+            1.5 * c[3],
+            c[2],
+            2.25 * c[3] * c[3] - 6.0 * c[4] * c[2],
+            c[2].abs(),
+        )
+        .map_or([0.0; 2], |[r0, r1, _]| [r0, r1]);
+        // Where F' vanishes: F is monotone between consecutive ones.
+        let mut ends = [span; 4];
+        let mut count = 0;
+        for root in monotone_roots(&derivative, inflections, span)
+            .into_iter()
+            .flatten()
+        {
+            ends[count] = root;
+            count += 1;
+        }
+        (0..=count).filter_map(move |i| {
+            let lo = if i == 0 { 0.0 } else { ends[i - 1] };
+            let root = bracketed_root(c, lo, ends[i])?;
+            let error = gamma(16) * polynomial(&self.size, root).0 / polynomial(c, root).1.abs();
+            (root > error).then_some(root)
+        })
+    }
+}
+
+/// The roots of `poly` in (0, span) between consecutive `splits` (points where its derivative
+/// vanishes, in any order; those outside (0, span) ignored): at most one per piece, where it
+/// is monotone. In increasing order.
+fn monotone_roots(poly: &[f32; 5], splits: [f32; 2], span: f32) -> [Option<f32>; 3] {
+    let (s0, s1) = (splits[0].min(splits[1]), splits[0].max(splits[1]));
+    let mut ends = [0.0, span, span, span];
+    let mut count = 1;
+    for s in [s0, s1] {
+        if s > 0.0 && s < span && s > ends[count - 1] {
+            ends[count] = s;
+            count += 1;
+        }
+    }
+    ends[count] = span;
+    let mut roots = [None; 3];
+    for i in 0..count {
+        roots[i] = bracketed_root(poly, ends[i], ends[i + 1]);
+    }
+    roots
+}
+
+/// (value, derivative) of c[0] + c[1] x + ... + c[4] x^4, by Horner's rule.
+fn polynomial(c: &[f32; 5], x: f32) -> (f32, f32) {
+    let mut value = c[4];
+    let mut derivative = 0.0;
+    for k in (0..4).rev() {
+        derivative = derivative * x + value;
+        value = value * x + c[k];
+    }
+    (value, derivative)
+}
+
+/// The root of `poly` in (lo, hi) where it changes sign there (none otherwise), by Newton's
+/// method kept inside the bracket (bisecting where a step would leave it). The caller makes
+/// `poly` monotone on the bracket, so there is at most one root.
+fn bracketed_root(poly: &[f32; 5], lo: f32, hi: f32) -> Option<f32> {
+    let (f_lo, f_hi) = (polynomial(poly, lo).0, polynomial(poly, hi).0);
+    if !(hi > lo && f_lo * f_hi < 0.0) {
+        return None;
+    }
+    let (mut lo, mut hi) = (lo, hi);
+    let mut x = 0.5 * (lo + hi);
+    for _ in 0..ROOT_STEPS {
+        let (value, slope) = polynomial(poly, x);
+        if value == 0.0 {
+            return Some(x);
+        }
+        if (value < 0.0) == (f_lo < 0.0) {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let newton = x - value / slope;
+        let next = if newton > lo && newton < hi {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        if next == x {
+            break;
+        }
+        x = next;
+    }
+    Some(x)
+}
+
+/// The hit point of `intersect_ellipsoid` and its outward normal: the ray's point, scaled to
+/// the unit sphere, normalised and scaled back, so it lies on the ellipsoid within a few ULPs
+/// of its semi-axes.
+pub fn ellipsoid_surface_point(
+    ray: &RayQuery,
+    t: f32,
+    center: Vec3,
+    radii: Vec3,
+) -> (SurfacePoint, Vec3) {
+    let unit = (((ray.origin - center) + t * ray.direction) / radii).normalize();
+    let offset = radii * unit;
+    let position = center + offset;
+    let outward = (unit / radii).normalize();
+    let point = SurfacePoint {
+        position,
+        error: gamma(6) * offset.abs() + gamma(1) * position.abs(),
+    };
+    (point, outward)
+}
+
+/// The hit point of `intersect_cylinder` and its outward normal: the ray's point moved
+/// radially onto the cylinder; its height is the ray's.
+pub fn cylinder_surface_point(
+    ray: &RayQuery,
+    t: f32,
+    base: Vec3,
+    radius: f32,
+) -> (SurfacePoint, Vec3) {
+    let along = t * ray.direction;
+    let local = (ray.origin - base) + along;
+    let outward = Vec3::new(local.x, 0.0, local.z).normalize();
+    let offset = Vec3::new(radius * outward.x, local.y, radius * outward.z);
+    let position = base + offset;
+    let height_error = gamma(3) * ((ray.origin - base).y.abs() + along.y.abs());
+    let point = SurfacePoint {
+        position,
+        error: Vec3::new(gamma(5) * radius, height_error, gamma(5) * radius)
+            + gamma(1) * position.abs(),
+    };
+    (point, outward)
+}
+
+/// The hit point of `intersect_torus` and its outward normal: the nearest point of the ring
+/// (the circle of radius R) to the ray's point, plus r along the direction to that point.
+pub fn torus_surface_point(
+    ray: &RayQuery,
+    t: f32,
+    center: Vec3,
+    major: f32,
+    minor: f32,
+) -> (SurfacePoint, Vec3) {
+    let local = (ray.origin - center) + t * ray.direction;
+    let horizontal = Vec3::new(local.x, 0.0, local.z);
+    // On the axis (impossible on the surface, as r < R) any direction of the ring will do.
+    let around = horizontal.try_normalize().unwrap_or(Vec3::X);
+    let ring = major * around;
+    let outward = (local - ring).normalize();
+    let offset = ring + minor * outward;
+    let position = center + offset;
+    let point = SurfacePoint {
+        position,
+        error: Vec3::splat(gamma(6) * (major + minor)) + gamma(1) * position.abs(),
+    };
+    (point, outward)
+}

@@ -1,0 +1,238 @@
+// Exact ray intersection with ellipsoids, open cylinders and tori, and their shading points.
+// Mirrors: src/accel/curved.rs (the method and its error bounds are explained there).
+
+// Twin of `accel::curved::ROOT_STEPS`.
+const ROOT_STEPS: u32 = 24u;
+
+// Twin of `layout::is_curved`: rays leaving a curved primitive may meet it again.
+fn is_curved(kind: u32) -> bool {
+    return kind == PRIM_SPHERE || kind >= PRIM_ELLIPSOID;
+}
+
+// The roots of a t^2 + 2 b t + c = 0 in increasing order and a bound on their error
+// (x, y, z); found = false where there are none.
+struct QuadraticRoots {
+    found: bool,
+    roots: vec3<f32>,
+}
+
+fn quadratic_roots(a: f32, b: f32, c: f32, discriminant: f32, c_size: f32) -> QuadraticRoots {
+    if (discriminant < 0.0 || a == 0.0) {
+        return QuadraticRoots(false, vec3<f32>(0.0));
+    }
+    let root = sqrt(discriminant);
+    let q = select(-b + root, -b - root, b >= 0.0);
+    if (q == 0.0) {
+        return QuadraticRoots(false, vec3<f32>(0.0));
+    }
+    let t0 = q / a;
+    let t1 = c / q;
+    let error = gamma(8.0) * (c_size / abs(q) + abs(q) / a);
+    return QuadraticRoots(true, vec3<f32>(min(t0, t1), max(t0, t1), error));
+}
+
+fn intersect_ellipsoid(ray: RayQuery, center: vec3<f32>, radii: vec3<f32>, t_max: f32) -> Hit {
+    let f = (ray.origin - center) / radii;
+    let e = ray.direction / radii;
+    let a = dot(e, e);
+    let f2 = dot(f, f);
+    let fe = cross(f, e);
+    let found = quadratic_roots(a, dot(f, e), f2 - 1.0, a - dot(fe, fe), f2 + 1.0);
+    if (!found.found) {
+        return miss();
+    }
+    let error = found.roots.z;
+    let t = select(found.roots.y, found.roots.x, found.roots.x > error);
+    if (t <= error || t >= t_max) {
+        return miss();
+    }
+    return Hit(t, 0.0, 0.0);
+}
+
+fn intersect_cylinder(ray: RayQuery, base: vec3<f32>, radius: f32, height: f32, t_max: f32) -> Hit {
+    let f = ray.origin - base;
+    let d = ray.direction;
+    let a = d.x * d.x + d.z * d.z;
+    let f2 = f.x * f.x + f.z * f.z;
+    let cross_y = f.x * d.z - f.z * d.x;
+    let discriminant = a * radius * radius - cross_y * cross_y;
+    let c_size = f2 + radius * radius;
+    let b = f.x * d.x + f.z * d.z;
+    let found = quadratic_roots(a, b, f2 - radius * radius, discriminant, c_size);
+    if (!found.found) {
+        return miss();
+    }
+    for (var k = 0; k < 2; k += 1) {
+        let t = select(found.roots.y, found.roots.x, k == 0);
+        let y = f.y + t * d.y;
+        if (t > found.roots.z && t < t_max && y >= 0.0 && y <= height) {
+            return Hit(t, 0.0, 0.0);
+        }
+    }
+    return miss();
+}
+
+// (value, derivative) of c[0] + c[1] x + ... + c[4] x^4, by Horner's rule.
+fn polynomial(c: array<f32, 5>, x: f32) -> vec2<f32> {
+    var value = c[4];
+    var derivative = 0.0;
+    derivative = derivative * x + value;
+    value = value * x + c[3];
+    derivative = derivative * x + value;
+    value = value * x + c[2];
+    derivative = derivative * x + value;
+    value = value * x + c[1];
+    derivative = derivative * x + value;
+    value = value * x + c[0];
+    return vec2<f32>(value, derivative);
+}
+
+// The root of `poly` in (lo, hi) where it changes sign there (x), found = y > 0: Newton's
+// method kept inside the bracket.
+fn bracketed_root(poly: array<f32, 5>, lo_in: f32, hi_in: f32) -> vec2<f32> {
+    let f_lo = polynomial(poly, lo_in).x;
+    let f_hi = polynomial(poly, hi_in).x;
+    if (!(hi_in > lo_in && f_lo * f_hi < 0.0)) {
+        return vec2<f32>(0.0, 0.0);
+    }
+    var lo = lo_in;
+    var hi = hi_in;
+    var x = 0.5 * (lo + hi);
+    for (var step = 0u; step < ROOT_STEPS; step += 1u) {
+        let p = polynomial(poly, x);
+        if (p.x == 0.0) {
+            return vec2<f32>(x, 1.0);
+        }
+        if ((p.x < 0.0) == (f_lo < 0.0)) {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let newton = x - p.x / p.y;
+        var next = 0.5 * (lo + hi);
+        if (newton > lo && newton < hi) {
+            next = newton;
+        }
+        if (next == x) {
+            break;
+        }
+        x = next;
+    }
+    return vec2<f32>(x, 1.0);
+}
+
+fn intersect_torus(ray: RayQuery, center: vec3<f32>, major: f32, minor: f32, t_max: f32) -> Hit {
+    let reach = major + minor;
+    let f = ray.origin - center;
+    let len = length(ray.direction);
+    let d = ray.direction / len;
+    let along = dot(f, d);
+    let perpendicular = f - along * d;
+    let bound = reach * (1.0 + gamma(4.0));
+    let discriminant = bound * bound - dot(perpendicular, perpendicular);
+    if (discriminant < 0.0) {
+        return miss();
+    }
+    let half_chord = sqrt(discriminant);
+    let enter = -along - half_chord;
+    let exit = -along + half_chord;
+    let t_limit = t_max * len;
+    if (exit <= 0.0 || enter >= t_limit) {
+        return miss();
+    }
+    // Start and end beyond the bounding sphere, which the equator touches (see the Rust twin).
+    let margin = 0.25 * reach;
+    let start = max(enter - margin, 0.0);
+    let scale = 1.0 / reach;
+    let o = (f + start * d) * scale;
+    let major_s = major * scale;
+    let minor_s = minor * scale;
+    // The quartic F(o + s d) (see TorusQuartic::new).
+    let b = dot(o, d);
+    let e = dot(o, o) + (major_s - minor_s) * (major_s + minor_s);
+    let h2 = d.x * d.x + d.z * d.z;
+    let h1 = o.x * d.x + o.z * d.z;
+    let h0 = o.x * o.x + o.z * o.z;
+    let k = 4.0 * major_s * major_s;
+    let c = array<f32, 5>(e * e - k * h0, 4.0 * b * e - 2.0 * k * h1, 4.0 * b * b + 2.0 * e - k * h2, 4.0 * b, 1.0);
+    let size = array<f32, 5>(e * e + k * h0, 4.0 * abs(b * e) + 2.0 * k * abs(h1),
+                             4.0 * b * b + 2.0 * abs(e) + k * h2, 4.0 * abs(b), 1.0);
+    let span = (min(exit + margin, t_limit) - start) * scale;
+    let derivative = array<f32, 5>(c[1], 2.0 * c[2], 3.0 * c[3], 4.0 * c[4], 0.0);
+    // F''/2 = 6 c4 s^2 + 3 c3 s + c2: its roots bound where F' is monotone.
+    var splits = vec2<f32>(0.0);
+    let inflections = quadratic_roots(6.0 * c[4], 1.5 * c[3], c[2], 2.25 * c[3] * c[3] - 6.0 * c[4] * c[2], abs(c[2]));
+    if (inflections.found) {
+        splits = inflections.roots.xy;
+    }
+    // Where F' vanishes (monotone_roots): F is monotone between consecutive ones.
+    var pieces = array<f32, 4>(0.0, span, span, span);
+    var piece_count = 1u;
+    for (var k2 = 0u; k2 < 2u; k2 += 1u) {
+        let split = splits[k2];
+        if (split > 0.0 && split < span && split > pieces[piece_count - 1u]) {
+            pieces[piece_count] = split;
+            piece_count += 1u;
+        }
+    }
+    pieces[piece_count] = span;
+    var ends = array<f32, 4>(span, span, span, span);
+    var count = 0u;
+    for (var i = 0u; i < piece_count; i += 1u) {
+        let flat_point = bracketed_root(derivative, pieces[i], pieces[i + 1u]);
+        if (flat_point.y > 0.0) {
+            ends[count] = flat_point.x;
+            count += 1u;
+        }
+    }
+    for (var i = 0u; i <= count; i += 1u) {
+        var lo = 0.0;
+        if (i > 0u) {
+            lo = ends[i - 1u];
+        }
+        let root = bracketed_root(c, lo, ends[i]);
+        if (root.y > 0.0) {
+            let s = root.x;
+            let error = gamma(16.0) * polynomial(size, s).x / abs(polynomial(c, s).y);
+            let t = (start + s * reach) / len;
+            if (s > error && t < t_max) {
+                return Hit(t, 0.0, 0.0);
+            }
+        }
+    }
+    return miss();
+}
+
+fn ellipsoid_surface_point(ray: RayQuery, t: f32, center: vec3<f32>, radii: vec3<f32>) -> CurvedPoint {
+    let unit = normalize(((ray.origin - center) + t * ray.direction) / radii);
+    let offset = radii * unit;
+    let position = center + offset;
+    let outward = normalize(unit / radii);
+    return CurvedPoint(SurfacePoint(position, gamma(6.0) * abs(offset) + gamma(1.0) * abs(position)), outward);
+}
+
+fn cylinder_surface_point(ray: RayQuery, t: f32, base: vec3<f32>, radius: f32) -> CurvedPoint {
+    let along = t * ray.direction;
+    let local = (ray.origin - base) + along;
+    let outward = normalize(vec3<f32>(local.x, 0.0, local.z));
+    let offset = vec3<f32>(radius * outward.x, local.y, radius * outward.z);
+    let position = base + offset;
+    let height_error = gamma(3.0) * (abs((ray.origin - base).y) + abs(along.y));
+    let error = vec3<f32>(gamma(5.0) * radius, height_error, gamma(5.0) * radius) + gamma(1.0) * abs(position);
+    return CurvedPoint(SurfacePoint(position, error), outward);
+}
+
+fn torus_surface_point(ray: RayQuery, t: f32, center: vec3<f32>, major: f32, minor: f32) -> CurvedPoint {
+    let local = (ray.origin - center) + t * ray.direction;
+    let horizontal = vec3<f32>(local.x, 0.0, local.z);
+    let horizontal_length = length(horizontal);
+    var around = vec3<f32>(1.0, 0.0, 0.0);
+    if (horizontal_length > 0.0) {
+        around = horizontal / horizontal_length;
+    }
+    let ring = major * around;
+    let outward = normalize(local - ring);
+    let offset = ring + minor * outward;
+    let position = center + offset;
+    return CurvedPoint(SurfacePoint(position, vec3<f32>(gamma(6.0) * (major + minor)) + gamma(1.0) * abs(position)), outward);
+}
