@@ -45,6 +45,12 @@ pub const fn is_curved(kind: u32) -> bool {
     kind == PRIM_SPHERE || kind >= PRIM_ELLIPSOID
 }
 
+/// Newton steps (each falling back to bisection when it would leave its bracket) that find a
+/// torus's root (`accel::curved`): 24 bisections alone narrow a bracket of the span (at most 2.5
+/// in units of R + r) to f32's resolution, so the root is as precise as f32 allows when the
+/// cap is reached, and reaching it is not an error to report.
+pub const TORUS_ROOT_STEPS: u32 = 24;
+
 /// `GpuReflector::kind`: a sphere.
 pub const REFLECTOR_SPHERE: u32 = 0;
 /// `GpuReflector::kind`: a torus around the vertical axis through its centre.
@@ -649,6 +655,7 @@ pub fn wgsl_prelude() -> String {
         ("PRIM_ELLIPSOID", PRIM_ELLIPSOID),
         ("PRIM_CYLINDER", PRIM_CYLINDER),
         ("PRIM_TORUS", PRIM_TORUS),
+        ("TORUS_ROOT_STEPS", TORUS_ROOT_STEPS),
         ("REFLECTOR_SPHERE", REFLECTOR_SPHERE),
         ("REFLECTOR_TORUS", REFLECTOR_TORUS),
         ("REFLECTOR_PATCH", REFLECTOR_PATCH),

@@ -1,9 +1,6 @@
 // Exact ray intersection with ellipsoids, open cylinders and tori, and their shading points.
 // Mirrors: src/accel/curved.rs (the method and its error bounds are explained there).
 
-// Twin of `accel::curved::ROOT_STEPS`.
-const ROOT_STEPS: u32 = 24u;
-
 // Twin of `layout::is_curved`: rays leaving a curved primitive may meet it again.
 fn is_curved(kind: u32) -> bool {
     return kind == PRIM_SPHERE || kind >= PRIM_ELLIPSOID;
@@ -98,7 +95,7 @@ fn bracketed_root(poly: array<f32, 5>, lo_in: f32, hi_in: f32) -> vec2<f32> {
     var lo = lo_in;
     var hi = hi_in;
     var x = 0.5 * (lo + hi);
-    for (var step = 0u; step < ROOT_STEPS; step += 1u) {
+    for (var step = 0u; step < TORUS_ROOT_STEPS; step += 1u) {
         let p = polynomial(poly, x);
         if (p.x == 0.0) {
             return vec2<f32>(x, 1.0);

@@ -21,11 +21,7 @@
 use glam::Vec3;
 
 use super::intersect::{Hit, MISS, RayQuery, SurfacePoint, gamma};
-
-/// Newton steps (each falling back to bisection when it would leave its bracket) that find a
-/// torus root: 24 bisections alone narrow a bracket of the span (at most 2 in units of R + r)
-/// to f32's resolution, so the root is as precise as f32 allows when the cap is reached.
-pub const ROOT_STEPS: u32 = 24;
+use crate::layout::TORUS_ROOT_STEPS;
 
 /// The roots of a t^2 + 2 b t + c = 0 given its reduced discriminant b^2 - a c (computed by
 /// the caller without cancellation), in increasing order, and a bound on their absolute error:
@@ -244,7 +240,7 @@ fn bracketed_root(poly: &[f32; 5], lo: f32, hi: f32) -> Option<f32> {
     }
     let (mut lo, mut hi) = (lo, hi);
     let mut x = 0.5 * (lo + hi);
-    for _ in 0..ROOT_STEPS {
+    for _ in 0..TORUS_ROOT_STEPS {
         let (value, slope) = polynomial(poly, x);
         if value == 0.0 {
             return Some(x);
