@@ -24,7 +24,7 @@ fn render_with(flat: &chambre::pack::FlatScene, features: u32) -> Option<(Image,
 
 #[test]
 fn specialised_kernels_render_the_general_kernels_image() {
-    let cases: [(&str, &[&str], u32); 5] = [
+    let cases: [(&str, &[&str], u32); 6] = [
         // mirrors, point light, plane; no lens, area lights or triangles
         (
             "scenes/spheres.toml",
@@ -58,6 +58,12 @@ fn specialised_kernels_render_the_general_kernels_image() {
             "scenes/thin_lens.toml",
             &["render.width=72", "render.height=48"],
             0x29,
+        ),
+        // a mirror torus (curved shapes) over quads, ambient light only
+        (
+            "scenes/fermat_torus.toml",
+            &["render.width=64", "render.height=48"],
+            0x42,
         ),
     ];
     for (path, overrides, expected) in cases {
@@ -123,6 +129,10 @@ fn specialised_cpu_integrators_render_the_general_integrators_image() {
         (
             "scenes/thin_lens.toml",
             &["render.width=48", "render.height=32"][..],
+        ),
+        (
+            "scenes/fermat_cylinder.toml",
+            &["render.width=48", "render.height=36"][..],
         ),
     ] {
         let flat = flatten(&common::load(
