@@ -379,7 +379,10 @@ pub fn trace_path<const F: u32>(
             radiance += throughput * Vec3::from(material.diffuse) * Vec3::from(frame.ambient);
         }
         // Rays leaving a flat primitive skip it; a curved one may shadow or reflect itself.
-        let own = if is_curved(prim.kind) { NONE } else { prim_id };
+        let own = match leaving_rays_skip(prim.kind, surface.front_facing) {
+            true => prim_id,
+            false => NONE,
+        };
         radiance += throughput
             * direct_light::<F>(
                 scene, time, &surface, material, own, wo, depth, window, rng, stats,

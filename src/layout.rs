@@ -37,12 +37,16 @@ pub const PRIM_CYLINDER: u32 = 5;
 /// A torus around the vertical axis through its centre.
 pub const PRIM_TORUS: u32 = 6;
 
-/// Whether a primitive of `kind` is curved: a ray leaving it may meet it again (a torus's
-/// inner ring, the inside of a cylinder), so rays from it never skip it. Flat ones skip
-/// themselves; spheres and ellipsoids need not, but testing them again costs one quadratic and
-/// keeps light inside them honest.
-pub const fn is_curved(kind: u32) -> bool {
-    kind == PRIM_SPHERE || kind >= PRIM_ELLIPSOID
+/// Whether the rays leaving a primitive of `kind` (shadow rays, mirror bounces) may skip it:
+/// they cannot meet it again when it is flat, nor when it is convex (a sphere, an ellipsoid)
+/// and they leave from its `outside`. A torus, a cylinder, or a convex shape's inside (a point
+/// inside a sphere, lit from outside, is shadowed by the sphere itself) must be tested again.
+pub const fn leaving_rays_skip(kind: u32, outside: bool) -> bool {
+    match kind {
+        PRIM_SPHERE | PRIM_ELLIPSOID => outside,
+        PRIM_CYLINDER | PRIM_TORUS => false,
+        _ => true,
+    }
 }
 
 /// Newton steps (each falling back to bisection when it would leave its bracket) that find a

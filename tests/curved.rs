@@ -435,3 +435,52 @@ fn gpu_kernels_find_the_cpus_curved_hits() {
         }
     }
 }
+
+/// A point on the inside of a sphere or an ellipsoid, lit by a light outside it, is shadowed by
+/// the shape itself (its shadow ray leaves through the shape), on both paths; with the light
+/// inside, the same points are lit. Rays leaving a convex shape's outside may skip it, rays
+/// leaving its inside may not (`layout::leaving_rays_skip`).
+#[test]
+fn the_inside_of_a_convex_shape_is_shadowed_by_the_shape_itself() {
+    for shape in [
+        "type = \"sphere\"\n center = [0.0, 0.0, 0.0]\n radius = 5.0",
+        "type = \"ellipsoid\"\n center = [0.0, 0.0, 0.0]\n radii = [5.0, 4.0, 6.0]",
+    ] {
+        for (light, lit) in [("[0.0, 0.0, 20.0]", false), ("[0.0, 0.0, 2.0]", true)] {
+            let text = format!(
+                r#"
+                [render]
+                width = 12
+                height = 8
+                spp = 1
+                [camera]
+                position = [0.0, 0.0, 0.0]
+                look_at = [0.0, 0.0, -1.0]
+                [[materials]]
+                name = "grey"
+                model = "lambert"
+                diffuse = [0.5, 0.5, 0.5]
+                [[shapes]]
+                {shape}
+                material = "grey"
+                [[lights]]
+                type = "point"
+                position = {light}
+                intensity = [50.0, 50.0, 50.0]
+                "#
+            );
+            let scene = Scene::from_str(std::path::Path::new("inside.toml"), &text, &[]).unwrap();
+            let flat = flatten(&scene);
+            let gpu = common::render_gpu(&flat).expect("GPU");
+            for (path, image) in [("CPU", common::render_cpu(&flat)), ("GPU", gpu)] {
+                let brightest = image
+                    .pixels
+                    .iter()
+                    .map(|p| p.max_element())
+                    .fold(0.0, f32::max);
+                eprintln!("{shape:?}, light at {light}, {path}: brightest pixel {brightest}");
+                assert_eq!(brightest > 0.0, lit, "{shape}, light at {light}, {path}");
+            }
+        }
+    }
+}

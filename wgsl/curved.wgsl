@@ -1,9 +1,14 @@
 // Exact ray intersection with ellipsoids, open cylinders and tori, and their shading points.
 // Mirrors: src/accel/curved.rs (the method and its error bounds are explained there).
 
-// Twin of `layout::is_curved`: rays leaving a curved primitive may meet it again.
-fn is_curved(kind: u32) -> bool {
-    return kind == PRIM_SPHERE || kind >= PRIM_ELLIPSOID;
+// Twin of `layout::leaving_rays_skip`: whether rays leaving a primitive (from its outside,
+// for a curved one) may skip it.
+fn leaving_rays_skip(kind: u32, outside: bool) -> bool {
+    switch kind {
+        case PRIM_SPHERE, PRIM_ELLIPSOID: { return outside; }
+        case PRIM_CYLINDER, PRIM_TORUS: { return false; }
+        default: { return true; }
+    }
 }
 
 // The roots of a t^2 + 2 b t + c = 0 in increasing order and a bound on their error

@@ -248,7 +248,7 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, time: f32, window: LightW
             radiance += throughput * material.diffuse * frame.ambient;
         }
         // Rays leaving a flat primitive skip it; a curved one may shadow or reflect itself.
-        let own = select(found.prim, NONE, is_curved(prim.kind));
+        let own = select(NONE, found.prim, leaving_rays_skip(prim.kind, surface.front_facing));
         radiance += throughput * direct_light(time, surface, material, own, wo, depth, window, rng, counters);
         // Perfect mirror bounce.
         if (!FEATURE_MIRRORS || max(max(material.mirror.x, material.mirror.y), material.mirror.z) <= 0.0) {
