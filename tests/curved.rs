@@ -18,29 +18,20 @@ use chambre::gpu::trace::GpuTracer;
 use chambre::layout::T_FAR;
 use chambre::math::rng::Rng;
 use chambre::pack::flatten;
-use chambre::scene::Scene;
+use chambre::scene::{CurvedPrimitive as Shape, Scene};
 use glam::{DVec3, Vec3};
 
-/// A shape under test, in f32 as the ray tracers see it.
-#[derive(Clone, Copy, Debug)]
-enum Shape {
-    Ellipsoid {
-        center: Vec3,
-        radii: Vec3,
-    },
-    Cylinder {
-        base: Vec3,
-        radius: f32,
-        height: f32,
-    },
-    Torus {
-        center: Vec3,
-        major: f32,
-        minor: f32,
-    },
+/// What the tests ask of a shape: the ray tracers' intersection and shading point, and the
+/// truth in double precision.
+trait Probe {
+    fn intersect(&self, ray: &RayQuery) -> Hit;
+    fn surface_point(&self, ray: &RayQuery, t: f32) -> (SurfacePoint, Vec3);
+    fn extent(&self) -> (Vec3, f32);
+    fn distance(&self, p: DVec3) -> f64;
+    fn crossings(&self, origin: DVec3, direction: DVec3) -> Vec<f64>;
 }
 
-impl Shape {
+impl Probe for Shape {
     fn intersect(&self, ray: &RayQuery) -> Hit {
         match *self {
             Shape::Ellipsoid { center, radii } => intersect_ellipsoid(ray, center, radii, T_FAR),
