@@ -55,6 +55,10 @@ pub const fn leaving_rays_skip(kind: u32, outside: bool) -> bool {
 /// cap is reached, and reaching it is not an error to report.
 pub const TORUS_ROOT_STEPS: u32 = 24;
 
+/// Newton steps on the torus's signed distance that polish the quartic's root
+/// (`accel::curved`): each squares the relative error of a simple root.
+pub const TORUS_POLISH_STEPS: u32 = 2;
+
 /// `GpuReflector::kind`: a sphere.
 pub const REFLECTOR_SPHERE: u32 = 0;
 /// `GpuReflector::kind`: a torus around the vertical axis through its centre.
@@ -660,6 +664,7 @@ pub fn wgsl_prelude() -> String {
         ("PRIM_CYLINDER", PRIM_CYLINDER),
         ("PRIM_TORUS", PRIM_TORUS),
         ("TORUS_ROOT_STEPS", TORUS_ROOT_STEPS),
+        ("TORUS_POLISH_STEPS", TORUS_POLISH_STEPS),
         ("REFLECTOR_SPHERE", REFLECTOR_SPHERE),
         ("REFLECTOR_TORUS", REFLECTOR_TORUS),
         ("REFLECTOR_PATCH", REFLECTOR_PATCH),

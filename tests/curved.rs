@@ -216,6 +216,40 @@ fn shapes(rng: &mut Rng, size: f32, offset: f32) -> Vec<Shape> {
             minor: a.min(c) * 0.6,
         });
     }
+    // The extremes of proportion: a pancake and a needle, a needle and a band, a thin ring and
+    // a torus whose hole has nearly closed.
+    let centre = unit(rng) * offset;
+    let thin = 1e-3 * size;
+    shapes.extend([
+        Shape::Ellipsoid {
+            center: centre,
+            radii: Vec3::new(size, thin, size),
+        },
+        Shape::Ellipsoid {
+            center: centre,
+            radii: Vec3::new(thin, size, thin),
+        },
+        Shape::Cylinder {
+            base: centre,
+            radius: thin,
+            height: size,
+        },
+        Shape::Cylinder {
+            base: centre,
+            radius: size,
+            height: thin,
+        },
+        Shape::Torus {
+            center: centre,
+            major: size,
+            minor: thin,
+        },
+        Shape::Torus {
+            center: centre,
+            major: size,
+            minor: 0.99 * size,
+        },
+    ]);
     shapes
 }
 

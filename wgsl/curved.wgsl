@@ -123,6 +123,31 @@ fn bracketed_root(poly: array<f32, 5>, lo_in: f32, hi_in: f32) -> vec2<f32> {
     return vec2<f32>(x, 1.0);
 }
 
+// The quartic's root polished by Newton steps on the torus's signed distance, no farther than
+// 16 times its error bound from it (see the Rust twin).
+fn polish_torus_root(f: vec3<f32>, d: vec3<f32>, major: f32, minor: f32, along: f32, error: f32) -> f32 {
+    var x = along;
+    for (var step = 0u; step < TORUS_POLISH_STEPS; step += 1u) {
+        let p = f + x * d;
+        let rho = sqrt(p.x * p.x + p.z * p.z);
+        if (rho == 0.0) {
+            break;
+        }
+        let w = vec3<f32>(p.x * (1.0 - major / rho), p.y, p.z * (1.0 - major / rho));
+        let distance = length(w);
+        let slope = dot(w, d) / distance;
+        if (distance == 0.0 || slope == 0.0) {
+            break;
+        }
+        let next = x - (distance - minor) / slope;
+        if (!(abs(next - along) <= 16.0 * error)) {
+            break;
+        }
+        x = next;
+    }
+    return x;
+}
+
 fn intersect_torus(ray: RayQuery, center: vec3<f32>, major: f32, minor: f32, t_max: f32) -> Hit {
     let reach = major + minor;
     let f = ray.origin - center;
@@ -196,9 +221,12 @@ fn intersect_torus(ray: RayQuery, center: vec3<f32>, major: f32, minor: f32, t_m
         if (root.y > 0.0) {
             let s = root.x;
             let error = gamma(16.0) * polynomial(size, s).x / abs(polynomial(c, s).y);
-            let t = (start + s * reach) / len;
-            if (s > error && t < t_max) {
-                return Hit(t, 0.0, 0.0);
+            if (s > error) {
+                let along = polish_torus_root(f, d, major, minor, start + s * reach, error * reach);
+                let t = along / len;
+                if (t < t_max) {
+                    return Hit(t, 0.0, 0.0);
+                }
             }
         }
     }
