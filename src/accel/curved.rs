@@ -146,7 +146,8 @@ fn polish_torus_root(f: Vec3, d: Vec3, major: f32, minor: f32, along: f32, error
             break;
         }
         let next = x - (distance - minor) / slope;
-        if !((next - along).abs() <= 16.0 * error) {
+        let moved = (next - along).abs();
+        if moved.is_nan() || moved > 16.0 * error {
             break;
         }
         x = next;
