@@ -222,8 +222,8 @@ fn intersect_torus(ray: RayQuery, center: vec3<f32>, major: f32, minor: f32, t_m
             let s = root.x;
             let error = gamma(16.0) * polynomial(size, s).x / abs(polynomial(c, s).y);
             if (s > error) {
-                let along = polish_torus_root(f, d, major, minor, start + s * reach, error * reach);
-                let t = along / len;
+                let distance = polish_torus_root(f, d, major, minor, start + s * reach, error * reach);
+                let t = distance / len;
                 if (t < t_max) {
                     return Hit(t, 0.0, 0.0);
                 }

@@ -7,11 +7,12 @@
 //!   second root as c / q).
 //! - A torus is a quartic in t. Its roots are isolated, not taken from Ferrari's formula (which
 //!   loses every digit in f32 near double roots): the roots of F'' split the ray's span inside
-//!   the torus's bounding sphere where F' is monotone, F''s roots found there split it where F
-//!   is monotone, and each sign change of F is a root, found by Newton's method kept inside
-//!   its bracket. The quartic is set up in units of R + r from where the ray enters the
+//!   the torus's bounding sphere where F' is monotone, the roots of F' found there split it
+//!   where F is monotone, and each sign change of F is a root, found by Newton's method kept
+//!   inside its bracket. The quartic is set up in units of R + r from where the ray enters the
 //!   bounding sphere, so its coefficients are of order one whatever the torus's size and the
-//!   ray's length.
+//!   ray's length. Each root is then polished on the torus's signed distance, which rounds at
+//!   the scale of the coordinates where the quartic rounds at that of (R + r)^2.
 //! - Each hit is rejected when it is no farther than the bound on its own error (it may lie
 //!   behind the origin: the ray's own surface, left from an offset origin), as the triangle
 //!   test does.
@@ -114,8 +115,8 @@ pub fn intersect_torus(ray: &RayQuery, center: Vec3, major: f32, minor: f32, t_m
     let quartic = TorusQuartic::new((f + start * d) * scale, d, major * scale, minor * scale);
     let span = ((exit + margin).min(t_limit) - start) * scale;
     for (s, error) in quartic.roots(span) {
-        let along = polish_torus_root(f, d, major, minor, start + s * reach, error * reach);
-        let t = along / length;
+        let distance = polish_torus_root(f, d, major, minor, start + s * reach, error * reach);
+        let t = distance / length;
         if t < t_max {
             return hit_at(t);
         }
@@ -126,7 +127,7 @@ pub fn intersect_torus(ray: &RayQuery, center: Vec3, major: f32, minor: f32, t_m
 /// The root `along` (distance along the unit `d` from `f`, the ray's origin less the centre)
 /// polished by Newton steps on the torus's signed distance sqrt((rho - R)^2 + y^2) - r. The
 /// quartic's value is rounded at the scale of (R + r)^2, a distance of about (R + r)^2 / r
-/// ULPs: near a double root or on a thin torus its root is off by up to 1e-3 of R (measured);
+/// ULPs: near a double root or on a thin torus its root was off by up to 5e-4 of R (measured);
 /// the distance is rounded at the scale of the coordinates. A step that would take the root
 /// farther than 16 times its own error bound `error` from the quartic's is not taken (the
 /// distance's Newton step could leave for another root).
