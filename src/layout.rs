@@ -59,6 +59,14 @@ pub const TORUS_ROOT_STEPS: u32 = 24;
 /// (`accel::curved`): each squares the relative error of a simple root.
 pub const TORUS_POLISH_STEPS: u32 = 2;
 
+/// How far beyond its bounding sphere (in units of R + r) a ray's span is searched for a
+/// torus's roots: the equator touches that sphere, and a hit there must not be lost to rounding.
+pub const TORUS_MARGIN: f32 = 0.25;
+
+/// The polish may move a torus's root by at most this many times the root's own error bound
+/// (farther, Newton's step on the distance could leave for another root).
+pub const TORUS_POLISH_REACH: f32 = 16.0;
+
 /// `GpuReflector::kind`: a sphere.
 pub const REFLECTOR_SPHERE: u32 = 0;
 /// `GpuReflector::kind`: a torus around the vertical axis through its centre.
@@ -715,6 +723,8 @@ pub fn wgsl_prelude() -> String {
         ("FERMAT_FLAT", FERMAT_FLAT),
         ("PATCH_MARGIN", PATCH_MARGIN),
         ("PATCH_REACH", PATCH_REACH),
+        ("TORUS_MARGIN", TORUS_MARGIN),
+        ("TORUS_POLISH_REACH", TORUS_POLISH_REACH),
     ] {
         out += &format!("const {name}: f32 = {value:e};\n");
     }

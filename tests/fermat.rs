@@ -216,7 +216,7 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
     assert_eq!(json["rows"][1]["subdivision"], 4);
 }
 
-/// The same on the torus, ellipsoid and cylinder scenes (each traced as its fine mesh): the
+/// The same on the torus, ellipsoid and cylinder scenes (each intersected exactly): the
 /// features the preview draws land where the converged f64 search puts them, corners exactly,
 /// points between within a pixel at 16x16, and FLIP over the mirror's pixels falls with the
 /// subdivision.

@@ -247,7 +247,7 @@ fn a_crop_window_renders_the_full_images_pixels_there() {
     assert!(within >= 0.995 && mean_abs < 1e-4, "{within} {mean_abs}");
 }
 
-/// A mirror torus (a scene's parametric surface, traced as its fine mesh) reflecting a floor.
+/// A mirror torus (a scene's parametric surface, intersected exactly) reflecting a floor.
 #[test]
 fn fermat_torus_agrees() {
     check(

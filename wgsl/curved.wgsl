@@ -124,7 +124,7 @@ fn bracketed_root(poly: array<f32, 5>, lo_in: f32, hi_in: f32) -> vec2<f32> {
 }
 
 // The quartic's root polished by Newton steps on the torus's signed distance, no farther than
-// 16 times its error bound from it (see the Rust twin).
+// TORUS_POLISH_REACH times its error bound from it (see the Rust twin).
 fn polish_torus_root(f: vec3<f32>, d: vec3<f32>, major: f32, minor: f32, along: f32, error: f32) -> f32 {
     var x = along;
     for (var step = 0u; step < TORUS_POLISH_STEPS; step += 1u) {
@@ -140,7 +140,7 @@ fn polish_torus_root(f: vec3<f32>, d: vec3<f32>, major: f32, minor: f32, along: 
             break;
         }
         let next = x - (distance - minor) / slope;
-        if (!(abs(next - along) <= 16.0 * error)) {
+        if (!(abs(next - along) <= TORUS_POLISH_REACH * error)) {
             break;
         }
         x = next;
@@ -168,7 +168,7 @@ fn intersect_torus(ray: RayQuery, center: vec3<f32>, major: f32, minor: f32, t_m
         return miss();
     }
     // Start and end beyond the bounding sphere, which the equator touches (see the Rust twin).
-    let margin = 0.25 * reach;
+    let margin = TORUS_MARGIN * reach;
     let start = max(enter - margin, 0.0);
     let scale = 1.0 / reach;
     let o = (f + start * d) * scale;

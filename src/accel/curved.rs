@@ -22,7 +22,7 @@
 use glam::Vec3;
 
 use super::intersect::{Hit, MISS, RayQuery, SurfacePoint, gamma};
-use crate::layout::{TORUS_POLISH_STEPS, TORUS_ROOT_STEPS};
+use crate::layout::{TORUS_MARGIN, TORUS_POLISH_REACH, TORUS_POLISH_STEPS, TORUS_ROOT_STEPS};
 
 /// The roots of a t^2 + 2 b t + c = 0 given its reduced discriminant b^2 - a c (computed by
 /// the caller without cancellation), in increasing order, and a bound on their absolute error:
@@ -106,10 +106,10 @@ pub fn intersect_torus(ray: &RayQuery, center: Vec3, major: f32, minor: f32, t_m
     if exit <= 0.0 || enter >= t_limit {
         return MISS;
     }
-    // The torus's equator touches the bounding sphere: start and end a quarter of R + r
+    // The torus's equator touches the bounding sphere: start and end `TORUS_MARGIN` of R + r
     // beyond it, so that a hit there is not lost to rounding (nor taken for the ray's own
     // surface, which only a start at the origin can be).
-    let margin = 0.25 * reach;
+    let margin = TORUS_MARGIN * reach;
     let start = (enter - margin).max(0.0);
     let scale = 1.0 / reach;
     let quartic = TorusQuartic::new((f + start * d) * scale, d, major * scale, minor * scale);
@@ -129,7 +129,7 @@ pub fn intersect_torus(ray: &RayQuery, center: Vec3, major: f32, minor: f32, t_m
 /// quartic's value is rounded at the scale of (R + r)^2, a distance of about (R + r)^2 / r
 /// ULPs: near a double root or on a thin torus its root was off by up to 5e-4 of R (measured);
 /// the distance is rounded at the scale of the coordinates. A step that would take the root
-/// farther than 16 times its own error bound `error` from the quartic's is not taken (the
+/// farther than `TORUS_POLISH_REACH` times its own error bound `error` from the quartic's is not taken (the
 /// distance's Newton step could leave for another root).
 fn polish_torus_root(f: Vec3, d: Vec3, major: f32, minor: f32, along: f32, error: f32) -> f32 {
     let mut x = along;
@@ -148,7 +148,7 @@ fn polish_torus_root(f: Vec3, d: Vec3, major: f32, minor: f32, along: f32, error
         }
         let next = x - (distance - minor) / slope;
         let moved = (next - along).abs();
-        if moved.is_nan() || moved > 16.0 * error {
+        if moved.is_nan() || moved > TORUS_POLISH_REACH * error {
             break;
         }
         x = next;

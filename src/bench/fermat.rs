@@ -300,7 +300,8 @@ fn displacements(
 
 /// Whether the ray tracer sees the path E → P → X: the eye's ray toward P first meets the
 /// scene at P (a torus hides parts of itself), and nothing stands between P and X (to 1e-3 of
-/// each leg's length: the torus is traced as a mesh, within 1e-4 of its radius of the surface).
+/// each leg's length: Bézier patches are traced as a mesh, within 3e-4 of their size of the
+/// surface; the f64 point and the f32 hit differ by rounding on the others).
 fn light_path_is_clear(flat: &FlatScene, eye: DVec3, p: DVec3, x: DVec3) -> bool {
     let first_hit = |from: DVec3, to: DVec3| {
         let ray = RayQuery::new(from.as_vec3(), (to - from).normalize().as_vec3());
