@@ -16,12 +16,13 @@
 //! poles on the normal of the plane through E, V and its centre (`Sphere::facing`): the
 //! reflection lies on that plane's great circle, the equator, where the parametrisation is
 //! regular. This is the CPU version (f64); `wgsl/fermat.wgsl` is the GPU's (the `fermat`
-//! kernel, `gpu::fermat`). The ellipsoid, cylinder, torus and bicubic Bézier patch are
-//! reflectors of the CPU search only so far: the raster preview reflects in spheres
-//! (docs/fermat.md).
+//! kernel, `gpu::fermat`), which searches on the sphere, ellipsoid, cylinder, torus and
+//! bicubic Bézier patch alike. The ellipsoid, cylinder and torus are given in their own frame
+//! turned by an orientation: their parameters are the own frame's, so a search on a turned
+//! shape takes the steps it takes on the unturned one (docs/fermat.md).
 
 use crate::layout::{FERMAT_C_OFFSET, FERMAT_FLAT, FERMAT_SPREAD};
-use glam::{DVec2, DVec3};
+use glam::{DQuat, DVec2, DVec3};
 
 /// A smooth parametric surface a reflection is searched on.
 pub trait Reflector {
@@ -138,28 +139,37 @@ impl Reflector for Sphere {
     }
 }
 
-/// An ellipsoid with semi-axes `radii` along the world axes, the image of the unit sphere s(u,
-/// v) = sin v (cos u x + sin u z) + cos v y under the scaling by `radii`: f(u, v) = c +
-/// radii ⊙ s(u, v). Its parametrisation's poles are on ±y of the frame (x, y, z); as for the
-/// sphere, [`Ellipsoid::facing`] turns them away from a reflection.
+/// An ellipsoid with semi-axes `radii` along its own axes, the image of the unit sphere s(u,
+/// v) = sin v (cos u x + sin u z) + cos v y under the scaling by `radii`, turned by
+/// `orientation`: f(u, v) = c + Q (radii ⊙ s(u, v)). Its parametrisation's poles are on ±y of
+/// the frame (x, y, z); as for the sphere, [`Ellipsoid::facing`] turns them away from a
+/// reflection.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ellipsoid {
     /// Centre (scene units).
     pub center: DVec3,
-    /// Semi-axes along x, y and z, > 0.
+    /// Semi-axes along its own x, y and z, > 0.
     pub radii: DVec3,
     /// The unit sphere's parametrisation frame: x, y (the poles' axis), z.
     pub frame: [DVec3; 3],
+    /// The rotation about the centre that turns its own axes into the world's.
+    pub orientation: DQuat,
 }
 
 impl Ellipsoid {
-    /// An ellipsoid parametrised about the world axes.
+    /// An ellipsoid with its semi-axes along the world axes, parametrised about them.
     pub fn new(center: DVec3, radii: DVec3) -> Ellipsoid {
         Ellipsoid {
             center,
             radii,
             frame: [DVec3::X, DVec3::Y, DVec3::Z],
+            orientation: DQuat::IDENTITY,
         }
+    }
+
+    /// `x` in the ellipsoid's own frame, its centre at the origin.
+    pub fn to_own(&self, x: DVec3) -> DVec3 {
+        self.orientation.conjugate() * (x - self.center)
     }
 
     /// The same ellipsoid with the poles of its unit sphere on the normal of the plane through
@@ -167,8 +177,8 @@ impl Ellipsoid {
     /// from the poles where f_u vanishes (and a search there stalls without the law holding).
     pub fn facing(&self, eye: DVec3, vertex: DVec3) -> Ellipsoid {
         let unit = Sphere::new(DVec3::ZERO, 1.0).facing(
-            (eye - self.center) / self.radii,
-            (vertex - self.center) / self.radii,
+            self.to_own(eye) / self.radii,
+            self.to_own(vertex) / self.radii,
         );
         Ellipsoid {
             frame: unit.frame,
@@ -187,12 +197,15 @@ impl Ellipsoid {
 
 impl Reflector for Ellipsoid {
     fn point(&self, uv: DVec2) -> DVec3 {
-        self.center + self.radii * self.unit().point(uv)
+        self.center + self.orientation * (self.radii * self.unit().point(uv))
     }
 
     fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
         let (su, sv) = self.unit().tangents(uv);
-        (self.radii * su, self.radii * sv)
+        (
+            self.orientation * (self.radii * su),
+            self.orientation * (self.radii * sv),
+        )
     }
 
     fn inside(&self, _outside: DVec3) -> DVec3 {
@@ -201,14 +214,13 @@ impl Reflector for Ellipsoid {
 
     fn crossing(&self, outside: DVec3) -> DVec2 {
         // In the unit sphere's coordinates the crossing is the direction itself.
-        self.unit()
-            .parameters_of((outside - self.center) / self.radii)
+        self.unit().parameters_of(self.to_own(outside) / self.radii)
     }
 
     fn outward_normal(&self, uv: DVec2) -> DVec3 {
-        // The gradient of |(x − c) / r|²: (x − c) / r².
-        let p = self.point(uv) - self.center;
-        (p / (self.radii * self.radii)).normalize()
+        // The gradient of |(x − c) / r|² in the own frame: (x − c) / r².
+        let p = self.radii * self.unit().point(uv);
+        self.orientation * (p / (self.radii * self.radii)).normalize()
     }
 
     fn u_period(&self) -> Option<f64> {
@@ -216,42 +228,61 @@ impl Reflector for Ellipsoid {
     }
 }
 
-/// A cylinder of radius `radius` around the vertical line through `center`: f(u, v) =
-/// c + r (cos u, 0, sin u) + v y (unbounded in v: the search does not know the caps).
+/// A cylinder of radius `radius` around the line through `center` along its own y, turned by
+/// `orientation`: f(u, v) = c + Q (r cos u, v, r sin u) (unbounded in v: the search does not
+/// know the caps).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cylinder {
     /// A point of the axis (scene units).
     pub center: DVec3,
     /// Radius, > 0.
     pub radius: f64,
+    /// The rotation about `center` that turns its own axes (the axis along y) into the world's.
+    pub orientation: DQuat,
+}
+
+impl Cylinder {
+    /// A cylinder around the vertical line through `center`.
+    pub fn new(center: DVec3, radius: f64) -> Cylinder {
+        Cylinder {
+            center,
+            radius,
+            orientation: DQuat::IDENTITY,
+        }
+    }
+
+    /// `x` in the cylinder's own frame, `center` at the origin.
+    pub fn to_own(&self, x: DVec3) -> DVec3 {
+        self.orientation.conjugate() * (x - self.center)
+    }
 }
 
 impl Reflector for Cylinder {
     fn point(&self, uv: DVec2) -> DVec3 {
         let (su, cu) = uv.x.sin_cos();
-        self.center + DVec3::new(self.radius * cu, uv.y, self.radius * su)
+        self.center + self.orientation * DVec3::new(self.radius * cu, uv.y, self.radius * su)
     }
 
     fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
         let (su, cu) = uv.x.sin_cos();
         (
-            DVec3::new(-self.radius * su, 0.0, self.radius * cu),
-            DVec3::Y,
+            self.orientation * DVec3::new(-self.radius * su, 0.0, self.radius * cu),
+            self.orientation * DVec3::Y,
         )
     }
 
     fn inside(&self, outside: DVec3) -> DVec3 {
-        DVec3::new(self.center.x, outside.y, self.center.z)
+        self.center + self.orientation * DVec3::new(0.0, self.to_own(outside).y, 0.0)
     }
 
     fn crossing(&self, outside: DVec3) -> DVec2 {
-        let d = outside - self.center;
+        let d = self.to_own(outside);
         DVec2::new(d.z.atan2(d.x), d.y)
     }
 
     fn outward_normal(&self, uv: DVec2) -> DVec3 {
         let (su, cu) = uv.x.sin_cos();
-        DVec3::new(cu, 0.0, su)
+        self.orientation * DVec3::new(cu, 0.0, su)
     }
 
     fn u_period(&self) -> Option<f64> {
@@ -259,8 +290,9 @@ impl Reflector for Cylinder {
     }
 }
 
-/// A torus around the vertical line through `center`: f(u, v) = c + (R + r cos v)(cos u, 0,
-/// sin u) + r sin v y, u around the axis, v around the tube.
+/// A torus around the line through `center` along its own y, turned by `orientation`:
+/// f(u, v) = c + Q ((R + r cos v)(cos u, 0, sin u) + r sin v y), u around the axis, v around
+/// the tube.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Torus {
     /// Centre (scene units).
@@ -269,14 +301,31 @@ pub struct Torus {
     pub major: f64,
     /// r: the tube's radius, below R.
     pub minor: f64,
+    /// The rotation about `center` that turns its own axes (the axis along y) into the world's.
+    pub orientation: DQuat,
 }
 
 impl Torus {
-    /// The point of the tube circle below or above `outside`'s azimuth.
-    fn tube_centre(&self, outside: DVec3) -> DVec3 {
-        let d = outside - self.center;
-        let radial = DVec3::new(d.x, 0.0, d.z).normalize_or(DVec3::X);
-        self.center + self.major * radial
+    /// A torus around the vertical line through `center`.
+    pub fn new(center: DVec3, major: f64, minor: f64) -> Torus {
+        Torus {
+            center,
+            major,
+            minor,
+            orientation: DQuat::IDENTITY,
+        }
+    }
+
+    /// `x` in the torus's own frame, `center` at the origin.
+    pub fn to_own(&self, x: DVec3) -> DVec3 {
+        self.orientation.conjugate() * (x - self.center)
+    }
+
+    /// The direction, in the own frame, of the tube circle's point below or above `outside`'s
+    /// azimuth.
+    fn radial(&self, outside: DVec3) -> DVec3 {
+        let d = self.to_own(outside);
+        DVec3::new(d.x, 0.0, d.z).normalize_or(DVec3::X)
     }
 }
 
@@ -285,7 +334,7 @@ impl Reflector for Torus {
         let (su, cu) = uv.x.sin_cos();
         let (sv, cv) = uv.y.sin_cos();
         let ring = self.major + self.minor * cv;
-        self.center + DVec3::new(ring * cu, self.minor * sv, ring * su)
+        self.center + self.orientation * DVec3::new(ring * cu, self.minor * sv, ring * su)
     }
 
     fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
@@ -293,19 +342,19 @@ impl Reflector for Torus {
         let (sv, cv) = uv.y.sin_cos();
         let ring = self.major + self.minor * cv;
         (
-            DVec3::new(-ring * su, 0.0, ring * cu),
-            self.minor * DVec3::new(-sv * cu, cv, -sv * su),
+            self.orientation * DVec3::new(-ring * su, 0.0, ring * cu),
+            self.orientation * (self.minor * DVec3::new(-sv * cu, cv, -sv * su)),
         )
     }
 
     fn inside(&self, outside: DVec3) -> DVec3 {
-        self.tube_centre(outside)
+        self.center + self.orientation * (self.major * self.radial(outside))
     }
 
     fn crossing(&self, outside: DVec3) -> DVec2 {
-        let d = outside - self.center;
+        let d = self.to_own(outside);
         let u = d.z.atan2(d.x);
-        let w = outside - self.tube_centre(outside);
+        let w = d - self.major * self.radial(outside);
         let radial = DVec3::new(u.cos(), 0.0, u.sin());
         DVec2::new(u, w.y.atan2(w.dot(radial)))
     }
@@ -313,7 +362,7 @@ impl Reflector for Torus {
     fn outward_normal(&self, uv: DVec2) -> DVec3 {
         let (su, cu) = uv.x.sin_cos();
         let (sv, cv) = uv.y.sin_cos();
-        DVec3::new(cv * cu, sv, cv * su)
+        self.orientation * DVec3::new(cv * cu, sv, cv * su)
     }
 
     fn u_period(&self) -> Option<f64> {

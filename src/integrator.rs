@@ -17,7 +17,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use crate::accel::curved::{cylinder_surface_point, ellipsoid_surface_point, torus_surface_point};
+use crate::accel::curved::curved_surface_point;
 use crate::accel::intersect::{
     Hit, RayQuery, offset_ray_origin, plane_point, quad_point, shadow_ray_length,
     sphere_surface_point, triangle_point,
@@ -117,11 +117,7 @@ fn surface_at(scene: &FlatScene, prim: &GpuPrimitive, ray: &RayQuery, hit: Hit) 
         }
         PRIM_PLANE => (plane_point(ray, hit.t, p0, p1), p1, p1),
         _ => {
-            let (point, outward) = match prim.kind {
-                PRIM_ELLIPSOID => ellipsoid_surface_point(ray, hit.t, p0, p1),
-                PRIM_CYLINDER => cylinder_surface_point(ray, hit.t, p0, p1.x),
-                _ => torus_surface_point(ray, hit.t, p0, p1.x, p1.y),
-            };
+            let (point, outward) = curved_surface_point(ray, hit.t, prim);
             (point, outward, outward)
         }
     };

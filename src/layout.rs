@@ -30,11 +30,11 @@ pub const PRIM_SPHERE: u32 = 1;
 pub const PRIM_QUAD: u32 = 2;
 /// An infinite plane, tested outside the BVH.
 pub const PRIM_PLANE: u32 = 3;
-/// An ellipsoid with semi-axes along the world's axes.
+/// An ellipsoid, turned about its centre.
 pub const PRIM_ELLIPSOID: u32 = 4;
-/// An open cylinder around the vertical axis through its base centre.
+/// An open cylinder around an axis through its base centre.
 pub const PRIM_CYLINDER: u32 = 5;
-/// A torus around the vertical axis through its centre.
+/// A torus around an axis through its centre.
 pub const PRIM_TORUS: u32 = 6;
 
 /// Whether the rays leaving a primitive of `kind` (shadow rays, mirror bounces) may skip it:
@@ -297,7 +297,9 @@ pub struct GpuCwNode {
 /// `NONE`. Sphere: `p0` centre, `p1.x` radius, `p1.y` |centre|^2 - radius^2 (rounded once from
 /// f64). Quad: `p0` corner, `p1` edge_u, `p2` edge_v. Plane: `p0` a point, `p1` the unit normal.
 /// Ellipsoid: `p0` centre, `p1` semi-axes. Cylinder: `p0` base centre, `p1.x` radius, `p1.y`
-/// height. Torus: `p0` centre, `p1.x` major radius, `p1.y` minor radius.
+/// height. Torus: `p0` centre, `p1.x` major radius, `p1.y` minor radius. These three are given
+/// in their own frame (a cylinder's and torus's axis along y), which the unit quaternion
+/// `p2` = (x, y, z), w = `f32::from_bits(normals)` turns into the world's about `p0`.
 /// Planes are unbounded and live after the BVH's primitives (`GpuFrame::plane_start`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -310,9 +312,11 @@ pub struct GpuPrimitive {
     pub p1: [f32; 3],
     /// Index into the material array.
     pub material: u32,
-    /// Third point or second edge, per `kind`; unused by spheres and planes.
+    /// Third point or second edge, per `kind`; a curved shape's orientation's x, y, z; unused
+    /// by spheres and planes.
     pub p2: [f32; 3],
-    /// Triangle: index into the vertex-normal array, or `NONE` for flat shading.
+    /// Triangle: index into the vertex-normal array, or `NONE` for flat shading; a curved
+    /// shape's orientation's w, its bits.
     pub normals: u32,
 }
 
@@ -575,8 +579,12 @@ pub struct GpuReflector {
     pub height: f32,
     /// Padding to the WGSL layout.
     pub _pad: u32,
-    /// An ellipsoid's semi-axes along x, y, z (w unused); zero for the others.
+    /// An ellipsoid's semi-axes along its own x, y, z (w unused); zero for the others.
     pub radii: [f32; 4],
+    /// The unit quaternion (x, y, z, w) that turns a torus's, ellipsoid's or cylinder's own
+    /// frame into the world's about `center`: the kernel searches in the own frame. The
+    /// identity for the others.
+    pub orientation: [f32; 4],
     /// A patch's control points P_ij at index 4i + j (w unused); zero for other kinds.
     pub control: [[f32; 4]; 16],
 }
@@ -610,7 +618,7 @@ impl GpuLight {
 }
 
 const _: () = assert!(size_of::<GpuRay>() == 32);
-const _: () = assert!(size_of::<GpuReflector>() == 320);
+const _: () = assert!(size_of::<GpuReflector>() == 336);
 const _: () = assert!(size_of::<GpuReflection>() == 48);
 const _: () = assert!(size_of::<GpuBvhNode>() == 32);
 const _: () = assert!(size_of::<GpuCwNode>() == 80);

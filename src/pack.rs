@@ -217,6 +217,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             } => bounded.push((prim(PRIM_QUAD, *material, *corner, *edge_u, *edge_v), None)),
             Shape::Curved {
                 primitive,
+                orientation,
                 material,
             } => {
                 let (kind, p0, p1) = match *primitive {
@@ -232,7 +233,10 @@ pub fn flatten(scene: &Scene) -> FlatScene {
                         minor,
                     } => (PRIM_TORUS, center, Vec3::new(major, minor, 0.0)),
                 };
-                bounded.push((prim(kind, *material, p0, p1, Vec3::ZERO), None));
+                // The orientation's x, y, z in p2 and w's bits in `normals` (`curved::orientation`).
+                let mut curved = prim(kind, *material, p0, p1, orientation.xyz());
+                curved.normals = orientation.w.to_bits();
+                bounded.push((curved, None));
             }
             Shape::Plane {
                 point,

@@ -165,11 +165,11 @@ pub enum MirrorSurface {
     /// A bicubic Bézier patch (rendered with its neighbours as a mesh): reflections found
     /// outside its parameter square belong to a neighbour or to nothing.
     Patch(BezierPatch),
-    /// An ellipsoid (rendered as a mesh), its axes along the world's.
+    /// An ellipsoid (rendered as a mesh).
     Ellipsoid(Ellipsoid),
     /// A cylinder `height` tall above its base circle (rendered as a mesh, open at both ends).
     Cylinder {
-        /// Its base circle's centre and radius (the axis vertical).
+        /// Its base circle's centre, radius and orientation.
         cylinder: Cylinder,
         /// Its height (scene units).
         height: f64,
@@ -194,6 +194,7 @@ impl MirrorSurface {
             eye: eye.to_array(),
             count,
             kind: self.kind(),
+            orientation: glam::Quat::IDENTITY.to_array(),
             ..Default::default()
         };
         match *self {
@@ -205,6 +206,7 @@ impl MirrorSurface {
                 reflector.center = t.center.as_vec3().to_array();
                 reflector.radius = t.major as f32;
                 reflector.minor = t.minor as f32;
+                reflector.orientation = t.orientation.as_quat().to_array();
             }
             MirrorSurface::Patch(patch) => {
                 for (k, p) in patch.points.iter().flatten().enumerate() {
@@ -214,11 +216,13 @@ impl MirrorSurface {
             MirrorSurface::Ellipsoid(e) => {
                 reflector.center = e.center.as_vec3().to_array();
                 reflector.radii = e.radii.as_vec3().extend(0.0).to_array();
+                reflector.orientation = e.orientation.as_quat().to_array();
             }
             MirrorSurface::Cylinder { cylinder, height } => {
                 reflector.center = cylinder.center.as_vec3().to_array();
                 reflector.radius = cylinder.radius as f32;
                 reflector.height = height as f32;
+                reflector.orientation = cylinder.orientation.as_quat().to_array();
             }
         }
         reflector

@@ -640,13 +640,49 @@ fn a_spot_light_needs_its_direction_and_ordered_cones() {
 }
 
 /// A torus must be a ring torus (its tube thinner than its ring), have both radii, and take
-/// none of a sphere's other fields.
+/// none of a sphere's other fields; it may be turned (`rotate`, finite), a sphere not.
 #[test]
 fn torus_fields() {
     let sphere = "type = \"sphere\"\ncenter = [0.0, 1.0, 0.0]\nradius = 1.0";
     let torus = |radii: &str| format!("type = \"torus\"\ncenter = [0.0, 1.0, 0.0]\n{radii}");
     let valid = BASE.replacen(sphere, &torus("major_radius = 1.0\nminor_radius = 0.3"), 1);
     Scene::from_str(Path::new("ok.toml"), &valid, &[]).unwrap();
+    let turned = torus("major_radius = 1.0\nminor_radius = 0.3\nrotate = [90.0, 0.0, 0.0]");
+    let scene = Scene::from_str(
+        Path::new("ok.toml"),
+        &BASE.replacen(sphere, &turned, 1),
+        &[],
+    )
+    .unwrap();
+    match &scene.surfaces[0].surface {
+        chambre::scene::surface::Surface::Torus(t) => {
+            // 90 degrees about x lays the axis along z.
+            let axis = t.orientation * glam::DVec3::Y;
+            assert!((axis - glam::DVec3::Z).length() < 1e-12, "{axis}");
+        }
+        other => panic!("{other:?}"),
+    }
+    expect_error(
+        sphere,
+        &torus("major_radius = 1.0\nminor_radius = 0.3\nrotate = [nan, 0.0, 0.0]"),
+        17,
+        "shapes[0].rotate[0]",
+        "finite",
+    );
+    expect_error(
+        sphere,
+        &format!("{sphere}\nrotate = [0.0, 30.0, 0.0]"),
+        16,
+        "shapes[0].rotate",
+        "does not apply to a sphere",
+    );
+    expect_error(
+        sphere,
+        &torus("major_radius = 1.0\nminor_radius = 0.3\nscale = 2.0"),
+        17,
+        "shapes[0].scale",
+        "does not apply to a torus",
+    );
     expect_error(
         sphere,
         &torus("major_radius = 1.0\nminor_radius = 1.5"),
@@ -723,10 +759,17 @@ fn ellipsoid_and_cylinder_fields() {
     Scene::from_str(Path::new("ok.toml"), &valid, &[]).unwrap();
     let valid = BASE.replacen(
         sphere,
-        &shape("type = \"cylinder\"\nradius = 0.5\nheight = 2.0"),
+        &shape("type = \"cylinder\"\nradius = 0.5\nheight = 2.0\nrotate = [0.0, 0.0, 90.0]"),
         1,
     );
     Scene::from_str(Path::new("ok.toml"), &valid, &[]).unwrap();
+    expect_error(
+        sphere,
+        &shape("type = \"ellipsoid\"\nradii = [1.0, 1.0, 1.0]\ntranslate = [1.0, 0.0, 0.0]"),
+        15,
+        "shapes[0].translate",
+        "does not apply to an ellipsoid",
+    );
     expect_error(
         sphere,
         &shape("type = \"ellipsoid\"\nradii = [1.0, 0.0, 2.0]"),

@@ -5,24 +5,25 @@
 
 mod common;
 
-use chambre::accel::curved::{
-    cylinder_surface_point, ellipsoid_surface_point, intersect_cylinder, intersect_ellipsoid,
-    intersect_torus, torus_surface_point,
-};
+use chambre::accel::curved::curved_surface_point;
 use chambre::accel::cwbvh;
-use chambre::accel::intersect::{Hit, RayQuery, SurfacePoint, offset_ray_origin};
+use chambre::accel::intersect::{
+    Hit, RayQuery, SurfacePoint, intersect_primitive, offset_ray_origin,
+};
 use chambre::bench::rays::{
     Bvh, Pinhole, Query, bounds, coherent_rays, incoherent_rays, trace_cpu,
 };
 use chambre::gpu::trace::GpuTracer;
-use chambre::layout::T_FAR;
+use chambre::layout::{
+    FEATURES_ALL, GpuPrimitive, PRIM_CYLINDER, PRIM_ELLIPSOID, PRIM_TORUS, T_FAR,
+};
 use chambre::math::rng::Rng;
 use chambre::pack::flatten;
 use chambre::scene::{CurvedPrimitive as Shape, Scene};
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Quat, Vec3};
 
-/// What the tests ask of a shape: the ray tracers' intersection and shading point, and the
-/// truth in double precision.
+/// What the tests ask of a shape: the ray tracers' intersection and shading point (through
+/// the primitive the kernels read), and the truth in double precision.
 trait Probe {
     fn intersect(&self, ray: &RayQuery) -> Hit;
     fn surface_point(&self, ray: &RayQuery, t: f32) -> (SurfacePoint, Vec3);
@@ -31,35 +32,80 @@ trait Probe {
     fn crossings(&self, origin: DVec3, direction: DVec3) -> Vec<f64>;
 }
 
-impl Probe for Shape {
-    fn intersect(&self, ray: &RayQuery) -> Hit {
-        match *self {
-            Shape::Ellipsoid { center, radii } => intersect_ellipsoid(ray, center, radii, T_FAR),
+/// A shape as a scene gives it: in its own frame, turned by `orientation` about its centre.
+#[derive(Debug)]
+struct Turned {
+    shape: Shape,
+    orientation: Quat,
+}
+
+impl Turned {
+    /// The primitive the ray tracers intersect (`layout::GpuPrimitive`'s fields for the kind).
+    fn prim(&self) -> GpuPrimitive {
+        let (kind, p0, p1) = match self.shape {
+            Shape::Ellipsoid { center, radii } => (PRIM_ELLIPSOID, center, radii),
             Shape::Cylinder {
                 base,
                 radius,
                 height,
-            } => intersect_cylinder(ray, base, radius, height, T_FAR),
+            } => (PRIM_CYLINDER, base, Vec3::new(radius, height, 0.0)),
             Shape::Torus {
                 center,
                 major,
                 minor,
-            } => intersect_torus(ray, center, major, minor, T_FAR),
+            } => (PRIM_TORUS, center, Vec3::new(major, minor, 0.0)),
+        };
+        GpuPrimitive {
+            p0: p0.to_array(),
+            kind,
+            p1: p1.to_array(),
+            material: 0,
+            p2: self.orientation.xyz().to_array(),
+            normals: self.orientation.w.to_bits(),
         }
+    }
+
+    /// Where `p` (world) is for the unturned shape, in f64.
+    fn unturned(&self, p: DVec3) -> DVec3 {
+        let pivot = DVec3::from(self.prim().p0.map(f64::from));
+        pivot + self.orientation.as_dquat().normalize().conjugate() * (p - pivot)
+    }
+}
+
+impl Probe for Turned {
+    fn intersect(&self, ray: &RayQuery) -> Hit {
+        intersect_primitive::<FEATURES_ALL>(ray, &self.prim(), T_FAR)
     }
 
     fn surface_point(&self, ray: &RayQuery, t: f32) -> (SurfacePoint, Vec3) {
-        match *self {
-            Shape::Ellipsoid { center, radii } => ellipsoid_surface_point(ray, t, center, radii),
-            Shape::Cylinder { base, radius, .. } => cylinder_surface_point(ray, t, base, radius),
-            Shape::Torus {
-                center,
-                major,
-                minor,
-            } => torus_surface_point(ray, t, center, major, minor),
-        }
+        curved_surface_point(ray, t, &self.prim())
     }
 
+    fn extent(&self) -> (Vec3, f32) {
+        let (centre, half) = self.shape.extent();
+        let pivot = Vec3::from(self.prim().p0);
+        (pivot + self.orientation * (centre - pivot), half)
+    }
+
+    fn distance(&self, p: DVec3) -> f64 {
+        self.shape.distance(self.unturned(p))
+    }
+
+    fn crossings(&self, origin: DVec3, direction: DVec3) -> Vec<f64> {
+        let back = self.orientation.as_dquat().normalize().conjugate();
+        self.shape
+            .crossings(self.unturned(origin), back * direction)
+    }
+}
+
+/// The unturned shapes: their box, distance and crossings, in f64.
+trait Unturned {
+    fn extent(&self) -> (Vec3, f32);
+    fn distance(&self, p: DVec3) -> f64;
+    fn crossings(&self, origin: DVec3, direction: DVec3) -> Vec<f64>;
+}
+
+impl Unturned for Shape {
     /// The centre of its bounding box and its half-diagonal.
     fn extent(&self) -> (Vec3, f32) {
         match *self {
@@ -194,8 +240,9 @@ fn unit(rng: &mut Rng) -> Vec3 {
     Vec3::new(r * phi.cos(), z, r * phi.sin())
 }
 
-/// Shapes of size `size` (within a factor of 3) whose centres lie `offset` from the origin.
-fn shapes(rng: &mut Rng, size: f32, offset: f32) -> Vec<Shape> {
+/// Shapes of size `size` (within a factor of 3) whose centres lie `offset` from the origin, each
+/// unturned and turned about a random axis.
+fn shapes(rng: &mut Rng, size: f32, offset: f32) -> Vec<Turned> {
     let mut shapes = Vec::new();
     for _ in 0..6 {
         let mut scale = || size * (0.5 + 2.5 * rng.next_f32());
@@ -251,10 +298,16 @@ fn shapes(rng: &mut Rng, size: f32, offset: f32) -> Vec<Shape> {
         },
     ]);
     shapes
+        .into_iter()
+        .flat_map(|shape| {
+            let turn = Quat::from_axis_angle(unit(rng), std::f32::consts::TAU * rng.next_f32());
+            [Quat::IDENTITY, turn].map(|orientation| Turned { shape, orientation })
+        })
+        .collect()
 }
 
 /// Rays from 1.2 to 20 half-diagonals away, aimed at random points of the shape's box.
-fn rays_at(rng: &mut Rng, shape: &Shape, count: usize) -> Vec<RayQuery> {
+fn rays_at(rng: &mut Rng, shape: &Turned, count: usize) -> Vec<RayQuery> {
     let (centre, half) = shape.extent();
     (0..count)
         .map(|_| {
@@ -374,8 +427,8 @@ fn rays_leaving_curved_surfaces_meet_them_again_only_where_they_cross_them() {
     }
 }
 
-/// Every feature of a scene of curved shapes renders the same on the GPU's kernels and the
-/// CPU: closest and any hit, BVH2 and compressed wide BVH.
+/// Every feature of a scene of curved shapes, two of them turned (`rotate`), renders the same
+/// on the GPU's kernels and the CPU: closest and any hit, BVH2 and compressed wide BVH.
 #[test]
 fn gpu_kernels_find_the_cpus_curved_hits() {
     let text = r#"
@@ -394,6 +447,7 @@ fn gpu_kernels_find_the_cpus_curved_hits() {
         center = [-1.5, 0.3, 0.0]
         major_radius = 0.8
         minor_radius = 0.25
+        rotate = [35.0, 0.0, 20.0]
         material = "grey"
         [[shapes]]
         type = "ellipsoid"
@@ -405,6 +459,7 @@ fn gpu_kernels_find_the_cpus_curved_hits() {
         center = [0.2, -0.5, -1.0]
         radius = 0.6
         height = 1.5
+        rotate = [0.0, 10.0, 70.0]
         material = "grey"
     "#;
     let scene = Scene::from_str(std::path::Path::new("curved.toml"), text, &[]).unwrap();

@@ -12,7 +12,7 @@ use chambre::fermat::{
 use chambre::math::rng::Rng;
 use chambre::preview::MirrorSurface;
 use chambre::scene::surface::Surface;
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 
 mod common;
 
@@ -266,25 +266,29 @@ fn preview_reflections_on_a_teapot_land_where_the_ray_tracer_puts_them() {
 }
 
 /// On a torus, an ellipsoid (solved in its facing frame) and a cylinder (its reflections
-/// within its height) too, the GPU kernel (f32) runs the CPU solver's search: where the CPU
-/// found a reflection seen from outside within the seed's steps, the GPU's point is the CPU's
-/// to 1e-3 (the surfaces are about 1 unit across), its normal to 1e-2.
+/// within its height) too, each turned (the kernel searches in the shape's own frame, the CPU
+/// in the world's), the GPU kernel (f32) runs the CPU solver's search: where the CPU found a
+/// reflection seen from outside within the seed's steps, the GPU's point is the CPU's to 1e-3
+/// (the surfaces are about 1 unit across), its normal to 1e-2.
 #[test]
 fn the_gpu_kernel_finds_the_cpu_solvers_points_on_a_torus_an_ellipsoid_and_a_cylinder() {
     let Some(context) = common::gpu_context() else {
         return;
     };
     let center = DVec3::new(0.2, 0.3, -0.1);
-    let ellipsoid = Ellipsoid::new(center, DVec3::new(0.8, 0.45, 0.5));
+    let orientation = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 0.7);
+    let ellipsoid = Ellipsoid {
+        orientation,
+        ..Ellipsoid::new(center, DVec3::new(0.8, 0.45, 0.5))
+    };
     let cylinder = Cylinder {
-        center,
-        radius: 0.45,
+        orientation,
+        ..Cylinder::new(center, 0.45)
     };
     let height = 1.0;
     let torus = Torus {
-        center,
-        major: 0.6,
-        minor: 0.2,
+        orientation,
+        ..Torus::new(center, 0.6, 0.2)
     };
     let eye = center + DVec3::new(0.3, 1.1, 2.8);
     let mut rng = Rng::new(29, 0, 0);
@@ -341,6 +345,84 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points_on_a_torus_an_ellipsoid_and_a_cyl
             "{agree} of {compared}"
         );
     }
+}
+
+/// Turning a reflector and the eye and vertices with it turns its reflections: the search on a
+/// turned torus, ellipsoid or cylinder takes the same steps as on the unturned one (its
+/// parameters are the own frame's), so where the unturned search converged (the law of
+/// reflection to 1e-4 rad) the turned one ends on its point turned, to rounding. (A search
+/// that did not converge may run off to parameters in the thousands, where rounding decides.)
+#[test]
+fn turning_a_reflector_with_the_scene_turns_its_reflections() {
+    let center = DVec3::new(0.2, 0.3, -0.1);
+    let orientation = DQuat::from_axis_angle(DVec3::new(-0.3, 0.4, 1.0).normalize(), 2.1);
+    let turn = |x: DVec3| center + orientation * (x - center);
+    let ellipsoid = Ellipsoid::new(center, DVec3::new(0.8, 0.45, 0.5));
+    let cylinder = Cylinder::new(center, 0.45);
+    let torus = Torus::new(center, 0.6, 0.2);
+    let eye = center + DVec3::new(0.3, 1.1, 2.8);
+    let mut rng = Rng::new(31, 0, 0);
+    let vertices: Vec<DVec3> = (0..2000)
+        .map(|_| center + direction(&mut rng) * (1.0 + 2.0 * rng.next_f32() as f64))
+        .collect();
+    let solver = Solver::default();
+    let mut worst: f64 = 0.0;
+    let mut compared = [0; 3];
+    for v in &vertices {
+        let (e, turned_v) = (turn(eye), turn(*v));
+        let pairs = [
+            {
+                let f = ellipsoid.facing(eye, *v);
+                let g = Ellipsoid {
+                    orientation,
+                    ..ellipsoid
+                }
+                .facing(e, turned_v);
+                let uv = solver.solve(&f, eye, *v).uv;
+                (
+                    f.point(uv),
+                    f.outward_normal(uv),
+                    g.point(solver.solve(&g, e, turned_v).uv),
+                )
+            },
+            {
+                let g = Cylinder {
+                    orientation,
+                    ..cylinder
+                };
+                let uv = solver.solve(&cylinder, eye, *v).uv;
+                (
+                    cylinder.point(uv),
+                    cylinder.outward_normal(uv),
+                    g.point(solver.solve(&g, e, turned_v).uv),
+                )
+            },
+            {
+                let g = Torus {
+                    orientation,
+                    ..torus
+                };
+                let uv = solver.solve(&torus, eye, *v).uv;
+                (
+                    torus.point(uv),
+                    torus.outward_normal(uv),
+                    g.point(solver.solve(&g, e, turned_v).uv),
+                )
+            },
+        ];
+        for (k, (plain, normal, turned)) in pairs.into_iter().enumerate() {
+            if reflection_error(plain, normal, eye, *v) < 1e-4 {
+                compared[k] += 1;
+                worst = worst.max((turn(plain) - turned).length());
+            }
+        }
+    }
+    eprintln!(
+        "converged (ellipsoid, cylinder, torus): {compared:?}; largest distance between a turned \
+         search's point and the unturned one's, turned: {worst:e}"
+    );
+    assert!(compared.iter().all(|&c| c > 1000), "{compared:?}");
+    assert!(worst < 1e-9, "{worst:e}");
 }
 
 /// The sample teapot, its patches as the scene places them (Y-up, scaled, oriented outward).
@@ -608,15 +690,8 @@ fn the_other_reflectors_obey_the_law_of_reflection_where_the_search_converged() 
     let mut rng = Rng::new(23, 0, 0);
     let mut uniform = move || rng.next_f32() as f64;
     let ellipsoid = Ellipsoid::new(DVec3::new(0.2, 0.1, -0.3), DVec3::new(1.0, 0.6, 1.4));
-    let cylinder = Cylinder {
-        center: DVec3::new(-0.1, 0.0, 0.2),
-        radius: 0.8,
-    };
-    let torus = Torus {
-        center: DVec3::ZERO,
-        major: 1.5,
-        minor: 0.5,
-    };
+    let cylinder = Cylinder::new(DVec3::new(-0.1, 0.0, 0.2), 0.8);
+    let torus = Torus::new(DVec3::ZERO, 1.5, 0.5);
     // A dome over [-1, 1]²: the inner control points raised.
     let mut points = [[DVec3::ZERO; 4]; 4];
     for (i, row) in points.iter_mut().enumerate() {

@@ -249,6 +249,7 @@ fn shared_structs_have_identical_layouts() {
             height,
             _pad,
             radii,
+            orientation,
             control
         }
     );

@@ -15,7 +15,7 @@ const TAU: f32 = 6.283185307179586;
 
 // The parametrisation's frame for one vertex: a sphere's faces E and V, x toward the
 // bisector, y (the poles' axis) the normal of the plane through E, V and the centre (an
-// ellipsoid's the same in its unit sphere's coordinates); the others' is the world's axes.
+// ellipsoid's the same in its unit sphere's coordinates); the others' is their own axes.
 struct Frame {
     x: vec3<f32>,
     y: vec3<f32>,
@@ -248,8 +248,12 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     if (i >= reflector.count) {
         return;
     }
-    let eye = reflector.eye;
-    let vertex = fermat_vertices[i].xyz;
+    // The search runs in the reflector's own frame (a turned torus, ellipsoid or cylinder;
+    // others have the identity orientation): E and V are taken into it, P and its normal out.
+    let q = reflector.orientation;
+    let c = reflector.center;
+    let eye = c + turn(conjugate(q), reflector.eye - c);
+    let vertex = c + turn(conjugate(q), fermat_vertices[i].xyz - c);
     let f = frame_for(eye, vertex);
     // The initial triangle: A and B where E -> O and V -> O cross the reflector, C off AB.
     let a0 = crossing(f, eye);
@@ -310,8 +314,9 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
             break;
         }
     }
-    let point = surface(f, best).p;
-    var normal = surface_normal(f, best);
+    let own_point = surface(f, best).p;
+    let point = c + turn(q, own_point - c);
+    var normal = turn(q, surface_normal(f, best));
     // A patch's reflection outside its square is none of its own: a zero normal, never seen
     // from outside, so the preview leaves it out (`fermat::on_patch`).
     let margin = PATCH_MARGIN;
@@ -325,6 +330,6 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         && (best.y < -margin * h || best.y > (1.0 + margin) * h)) {
         normal = vec3<f32>(0.0);
     }
-    reflections[i] = GpuReflection(point, steps, normal, 0u, best, length(vertex - point),
+    reflections[i] = GpuReflection(point, steps, normal, 0u, best, length(vertex - own_point),
         degenerate);
 }

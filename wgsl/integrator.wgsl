@@ -57,14 +57,7 @@ fn surface_at(prim: GpuPrimitive, ray: RayQuery, hit: Hit) -> Surface {
             shading = prim.p1;
         }
         default: {
-            var curved: CurvedPoint;
-            if (prim.kind == PRIM_ELLIPSOID) {
-                curved = ellipsoid_surface_point(ray, hit.t, prim.p0, prim.p1);
-            } else if (prim.kind == PRIM_CYLINDER) {
-                curved = cylinder_surface_point(ray, hit.t, prim.p0, prim.p1.x);
-            } else {
-                curved = torus_surface_point(ray, hit.t, prim.p0, prim.p1.x, prim.p1.y);
-            }
+            let curved = curved_surface_point(ray, hit.t, prim);
             point = curved.point;
             normal = curved.outward;
             shading = curved.outward;

@@ -252,21 +252,22 @@ fn intersect_primitive(ray: RayQuery, prim: GpuPrimitive, t_max: f32) -> Hit {
         case PRIM_SPHERE: { return intersect_sphere(ray, prim.p0, prim.p1.x, prim.p1.y, t_max); }
         case PRIM_QUAD: { return intersect_quad(ray, prim.p0, prim.p1, prim.p2, t_max); }
         case PRIM_PLANE: { return intersect_plane(ray, prim.p0, prim.p1, t_max); }
+        // Curved shapes are tested in their own frame (`ray_in_frame`).
         case PRIM_ELLIPSOID: {
             if (FEATURE_CURVED) {
-                return intersect_ellipsoid(ray, prim.p0, prim.p1, t_max);
+                return intersect_ellipsoid(ray_in_frame(ray, prim.p0, prim_orientation(prim)), prim.p1, t_max);
             }
             return miss();
         }
         case PRIM_CYLINDER: {
             if (FEATURE_CURVED) {
-                return intersect_cylinder(ray, prim.p0, prim.p1.x, prim.p1.y, t_max);
+                return intersect_cylinder(ray_in_frame(ray, prim.p0, prim_orientation(prim)), prim.p1.x, prim.p1.y, t_max);
             }
             return miss();
         }
         case PRIM_TORUS: {
             if (FEATURE_CURVED) {
-                return intersect_torus(ray, prim.p0, prim.p1.x, prim.p1.y, t_max);
+                return intersect_torus(ray_in_frame(ray, prim.p0, prim_orientation(prim)), prim.p1.x, prim.p1.y, t_max);
             }
             return miss();
         }

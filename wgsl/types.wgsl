@@ -140,7 +140,20 @@ struct GpuReflector {
     height: f32,
     _pad: u32,
     radii: vec4<f32>,
+    orientation: vec4<f32>,
     control: array<vec4<f32>, 16>,
+}
+
+// v turned by the unit quaternion q = (x, y, z, w): a curved shape's orientation
+// (`GpuPrimitive`'s p2 and normals word, `GpuReflector::orientation`), as glam's `Quat * Vec3`.
+fn turn(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let b = q.xyz;
+    return v * (q.w * q.w - dot(b, b)) + b * (dot(v, b) * 2.0) + cross(b, v) * (q.w * 2.0);
+}
+
+// The inverse of a unit quaternion's rotation.
+fn conjugate(q: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(-q.xyz, q.w);
 }
 
 struct GpuReflection {

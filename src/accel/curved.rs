@@ -1,5 +1,6 @@
-//! Exact ray intersection with the curved surfaces a scene declares besides spheres: ellipsoids
-//! (semi-axes along the world's axes), open cylinders and tori (around the vertical axis).
+//! Exact ray intersection with the curved surfaces a scene declares besides spheres:
+//! ellipsoids, open cylinders and tori, each in its own frame (the semi-axes along its axes,
+//! the axis of a cylinder or torus along its y) turned into the world's by an orientation.
 //! Twin: `wgsl/curved.wgsl`.
 //!
 //! - Ellipsoids and cylinders are quadrics: a t^2 + 2 b t + c = 0, solved without cancellation
@@ -18,11 +19,96 @@
 //!   test does.
 //! - The shading point is the ray's point re-projected onto the surface (as pbrt-v4 does for
 //!   its quadrics), so its error is a few ULPs of the shape's size, whatever the ray's length.
+//! - A shape may be turned about its centre (a cylinder's base): the ray is taken into the
+//!   shape's own frame (`ray_in_frame`), where the tests above run, and the shading point back
+//!   out (`point_to_world`); a rotation preserves lengths, so t is the same in both frames.
 
-use glam::Vec3;
+use glam::{Quat, Vec3};
 
 use super::intersect::{Hit, MISS, RayQuery, SurfacePoint, gamma};
-use crate::layout::{TORUS_MARGIN, TORUS_POLISH_REACH, TORUS_POLISH_STEPS, TORUS_ROOT_STEPS};
+use crate::layout::{
+    GpuPrimitive, PRIM_CYLINDER, PRIM_ELLIPSOID, TORUS_MARGIN, TORUS_POLISH_REACH,
+    TORUS_POLISH_STEPS, TORUS_ROOT_STEPS,
+};
+
+/// A curved primitive's orientation: the unit quaternion that turns its own frame (the axis of
+/// a cylinder or torus along y, an ellipsoid's semi-axes along x, y, z) into the world's, about
+/// `p0`. Its x, y, z are in `p2` and w's bits in `normals` (a word only triangles use
+/// otherwise): see `layout::GpuPrimitive`.
+pub fn orientation(prim: &GpuPrimitive) -> Quat {
+    Quat::from_xyzw(
+        prim.p2[0],
+        prim.p2[1],
+        prim.p2[2],
+        f32::from_bits(prim.normals),
+    )
+}
+
+/// Bound on the rounding of a vector v turned by a unit quaternion (glam's
+/// v (w^2 - |q|^2) + 2 (q . v) q + 2 w (q x v): terms of at most 4 |v| together, each rounded
+/// a few times, and the quaternion's own rounding to f32), per component. An identity
+/// orientation turns exactly (its q is zero).
+fn rotation_error(length: f32) -> f32 {
+    gamma(32) * length
+}
+
+/// A ray in a curved shape's own frame (`ray_in_frame`): all the curved tests read.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameRay {
+    /// The origin, relative to the shape's centre (a cylinder's base), in its frame.
+    pub origin: Vec3,
+    /// The direction, in its frame.
+    pub direction: Vec3,
+}
+
+/// `ray` in the own frame of a shape centred at `center` and turned by `orientation`, the centre
+/// at the origin.
+pub fn ray_in_frame(ray: &RayQuery, center: Vec3, orientation: Quat) -> FrameRay {
+    let origin = ray.origin - center;
+    // An identity orientation would turn exactly; most shapes are unturned, and skipping the
+    // turns keeps their frames as fast as before there were orientations (`bench frame` on the
+    // curved-mirror scenes; on lavapipe the same branch measured slower than turning always,
+    // so the WGSL twin turns always, to the same values).
+    if orientation.xyz() == Vec3::ZERO {
+        return FrameRay {
+            origin,
+            direction: ray.direction,
+        };
+    }
+    let inverse = orientation.conjugate();
+    FrameRay {
+        origin: inverse * origin,
+        direction: inverse * ray.direction,
+    }
+}
+
+/// A shading point and outward normal found in a shape's own frame (`ray_in_frame`, the centre
+/// at the origin) in the world's: the error bound grows by the rounding of both rotations (the
+/// ray's into the frame and the point's out of it; none for the identity) and of the
+/// translation.
+fn point_to_world(
+    (local, outward): (SurfacePoint, Vec3),
+    center: Vec3,
+    orientation: Quat,
+) -> (SurfacePoint, Vec3) {
+    if orientation.xyz() == Vec3::ZERO {
+        let position = center + local.position;
+        let point = SurfacePoint {
+            position,
+            error: local.error + gamma(1) * position.abs(),
+        };
+        return (point, outward);
+    }
+    let offset = orientation * local.position;
+    let position = center + offset;
+    // A bound per component turned is at most the bound's length in each.
+    let turned = local.error.length() + rotation_error(2.0 * offset.length());
+    let point = SurfacePoint {
+        position,
+        error: Vec3::splat(turned) + gamma(1) * position.abs(),
+    };
+    (point, orientation * outward)
+}
 
 /// The roots of a t^2 + 2 b t + c = 0 given its reduced discriminant b^2 - a c (computed by
 /// the caller without cancellation), in increasing order, and a bound on their absolute error:
@@ -42,10 +128,11 @@ fn quadratic_roots(a: f32, b: f32, c: f32, discriminant: f32, c_size: f32) -> Op
     Some([t0.min(t1), t0.max(t1), error])
 }
 
-/// The ellipsoid with `center` and semi-axes `radii`: in coordinates scaled by 1 / radii it is
-/// the unit sphere, and t is the same in both.
-pub fn intersect_ellipsoid(ray: &RayQuery, center: Vec3, radii: Vec3, t_max: f32) -> Hit {
-    let f = (ray.origin - center) / radii;
+/// The ellipsoid with semi-axes `radii` along the axes of `ray`'s frame, centred at its origin
+/// (`ray_in_frame`): in coordinates scaled by 1 / radii it is the unit sphere, and t is the
+/// same in both.
+pub fn intersect_ellipsoid(ray: &FrameRay, radii: Vec3, t_max: f32) -> Hit {
+    let f = ray.origin / radii;
     let e = ray.direction / radii;
     let a = e.dot(e);
     let f2 = f.dot(f);
@@ -61,9 +148,10 @@ pub fn intersect_ellipsoid(ray: &RayQuery, center: Vec3, radii: Vec3, t_max: f32
     hit_at(t)
 }
 
-/// The open cylinder of `radius` around the vertical axis through `base`, `height` tall.
-pub fn intersect_cylinder(ray: &RayQuery, base: Vec3, radius: f32, height: f32, t_max: f32) -> Hit {
-    let f = ray.origin - base;
+/// The open cylinder of `radius` around the y axis of `ray`'s frame, from its origin (the base
+/// circle's centre, `ray_in_frame`) `height` up.
+pub fn intersect_cylinder(ray: &FrameRay, radius: f32, height: f32, t_max: f32) -> Hit {
+    let f = ray.origin;
     let d = ray.direction;
     let a = d.x * d.x + d.z * d.z;
     let f2 = f.x * f.x + f.z * f.z;
@@ -85,11 +173,12 @@ pub fn intersect_cylinder(ray: &RayQuery, base: Vec3, radius: f32, height: f32, 
     MISS
 }
 
-/// The torus around the vertical axis through `center`: the circle of radius `major` swept by
-/// a disc of radius `minor` < `major`, F(p) = (|p|^2 + R^2 - r^2)^2 - 4 R^2 (p_x^2 + p_z^2) = 0.
-pub fn intersect_torus(ray: &RayQuery, center: Vec3, major: f32, minor: f32, t_max: f32) -> Hit {
+/// The torus around the y axis of `ray`'s frame, centred at its origin (`ray_in_frame`): the
+/// circle of radius `major` swept by a disc of radius `minor` < `major`,
+/// F(p) = (|p|^2 + R^2 - r^2)^2 - 4 R^2 (p_x^2 + p_z^2) = 0.
+pub fn intersect_torus(ray: &FrameRay, major: f32, minor: f32, t_max: f32) -> Hit {
     let reach = major + minor;
-    let f = ray.origin - center;
+    let f = ray.origin;
     let length = ray.direction.length();
     let d = ray.direction / length;
     // The bounding sphere, widened by a few ULPs so that rounding never cuts the torus.
@@ -298,68 +387,71 @@ fn bracketed_root(poly: &[f32; 5], lo: f32, hi: f32) -> Option<f32> {
     Some(x)
 }
 
-/// The hit point of `intersect_ellipsoid` and its outward normal: the ray's point, scaled to
-/// the unit sphere, normalised and scaled back, so it lies on the ellipsoid within a few ULPs
-/// of its semi-axes.
-pub fn ellipsoid_surface_point(
-    ray: &RayQuery,
-    t: f32,
-    center: Vec3,
-    radii: Vec3,
-) -> (SurfacePoint, Vec3) {
-    let unit = (((ray.origin - center) + t * ray.direction) / radii).normalize();
-    let offset = radii * unit;
-    let position = center + offset;
+/// The shading point and outward normal where `ray` meets the ellipsoid, cylinder or torus
+/// `prim` at `t`: found in the shape's own frame and taken back to the world's.
+pub fn curved_surface_point(ray: &RayQuery, t: f32, prim: &GpuPrimitive) -> (SurfacePoint, Vec3) {
+    let (center, turn) = (Vec3::from(prim.p0), orientation(prim));
+    let local = ray_in_frame(ray, center, turn);
+    let p1 = Vec3::from(prim.p1);
+    let found = match prim.kind {
+        PRIM_ELLIPSOID => ellipsoid_surface_point(&local, t, p1),
+        PRIM_CYLINDER => {
+            let (mut point, outward) = cylinder_surface_point(&local, t, p1.x);
+            // Its height is the ray's, whose origin was turned into the frame.
+            if turn.xyz() != Vec3::ZERO {
+                point.error.y += rotation_error(local.origin.length());
+            }
+            (point, outward)
+        }
+        _ => torus_surface_point(&local, t, p1.x, p1.y),
+    };
+    point_to_world(found, center, turn)
+}
+
+/// The hit point of `intersect_ellipsoid` and its outward normal, in the ray's frame: the
+/// ray's point, scaled to the unit sphere, normalised and scaled back, so it lies on the
+/// ellipsoid within a few ULPs of its semi-axes.
+pub fn ellipsoid_surface_point(ray: &FrameRay, t: f32, radii: Vec3) -> (SurfacePoint, Vec3) {
+    let unit = ((ray.origin + t * ray.direction) / radii).normalize();
+    let position = radii * unit;
     let outward = (unit / radii).normalize();
     let point = SurfacePoint {
         position,
-        error: gamma(6) * offset.abs() + gamma(1) * position.abs(),
+        error: gamma(6) * position.abs(),
     };
     (point, outward)
 }
 
-/// The hit point of `intersect_cylinder` and its outward normal: the ray's point moved
-/// radially onto the cylinder; its height is the ray's.
-pub fn cylinder_surface_point(
-    ray: &RayQuery,
-    t: f32,
-    base: Vec3,
-    radius: f32,
-) -> (SurfacePoint, Vec3) {
+/// The hit point of `intersect_cylinder` and its outward normal, in the ray's frame: the
+/// ray's point moved radially onto the cylinder; its height is the ray's.
+pub fn cylinder_surface_point(ray: &FrameRay, t: f32, radius: f32) -> (SurfacePoint, Vec3) {
     let along = t * ray.direction;
-    let local = (ray.origin - base) + along;
+    let local = ray.origin + along;
     let outward = Vec3::new(local.x, 0.0, local.z).normalize();
-    let offset = Vec3::new(radius * outward.x, local.y, radius * outward.z);
-    let position = base + offset;
-    let height_error = gamma(3) * ((ray.origin - base).y.abs() + along.y.abs());
+    let position = Vec3::new(radius * outward.x, local.y, radius * outward.z);
+    // The origin's own rounding (its difference from the base) included.
+    let height_error = gamma(3) * (ray.origin.y.abs() + along.y.abs());
     let point = SurfacePoint {
         position,
-        error: Vec3::new(gamma(5) * radius, height_error, gamma(5) * radius)
-            + gamma(1) * position.abs(),
+        error: Vec3::new(gamma(5) * radius, height_error, gamma(5) * radius),
     };
     (point, outward)
 }
 
-/// The hit point of `intersect_torus` and its outward normal: the nearest point of the ring
-/// (the circle of radius R) to the ray's point, plus r along the direction to that point.
-pub fn torus_surface_point(
-    ray: &RayQuery,
-    t: f32,
-    center: Vec3,
-    major: f32,
-    minor: f32,
-) -> (SurfacePoint, Vec3) {
-    let local = (ray.origin - center) + t * ray.direction;
+/// The hit point of `intersect_torus` and its outward normal, in the ray's frame: the nearest
+/// point of the ring (the circle of radius R) to the ray's point, plus r along the direction
+/// to that point.
+pub fn torus_surface_point(ray: &FrameRay, t: f32, major: f32, minor: f32) -> (SurfacePoint, Vec3) {
+    let local = ray.origin + t * ray.direction;
     let horizontal = Vec3::new(local.x, 0.0, local.z);
     // On the axis (impossible on the surface, as r < R) any direction of the ring will do.
     let around = horizontal.try_normalize().unwrap_or(Vec3::X);
     let ring = major * around;
     let outward = (local - ring).normalize();
-    let offset = ring + minor * outward;
-    let position = center + offset;
+    let position = ring + minor * outward;
     let point = SurfacePoint {
         position,
-        error: Vec3::splat(gamma(6) * (major + minor)) + gamma(1) * position.abs(),
+        error: Vec3::splat(gamma(6) * (major + minor)),
     };
     (point, outward)
 }

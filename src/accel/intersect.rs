@@ -21,7 +21,9 @@
 
 use glam::{Vec3, Vec3A};
 
-use super::curved::{intersect_cylinder, intersect_ellipsoid, intersect_torus};
+use super::curved::{
+    intersect_cylinder, intersect_ellipsoid, intersect_torus, orientation, ray_in_frame,
+};
 use crate::layout::{
     FEATURE_CURVED, FEATURE_TRIANGLES, GpuPrimitive, PRIM_CYLINDER, PRIM_ELLIPSOID, PRIM_PLANE,
     PRIM_QUAD, PRIM_SPHERE, PRIM_TORUS, PRIM_TRIANGLE, T_FAR, has,
@@ -356,9 +358,16 @@ pub fn intersect_primitive<const F: u32>(ray: &RayQuery, prim: &GpuPrimitive, t_
         PRIM_SPHERE => intersect_sphere(ray, p0, p1.x, p1.y, t_max),
         PRIM_QUAD => intersect_quad(ray, p0, p1, p2, t_max),
         PRIM_PLANE => intersect_plane(ray, p0, p1, t_max),
-        PRIM_ELLIPSOID if has(F, FEATURE_CURVED) => intersect_ellipsoid(ray, p0, p1, t_max),
-        PRIM_CYLINDER if has(F, FEATURE_CURVED) => intersect_cylinder(ray, p0, p1.x, p1.y, t_max),
-        PRIM_TORUS if has(F, FEATURE_CURVED) => intersect_torus(ray, p0, p1.x, p1.y, t_max),
+        // Curved shapes are tested in their own frame (`curved::ray_in_frame`).
+        PRIM_ELLIPSOID if has(F, FEATURE_CURVED) => {
+            intersect_ellipsoid(&ray_in_frame(ray, p0, orientation(prim)), p1, t_max)
+        }
+        PRIM_CYLINDER if has(F, FEATURE_CURVED) => {
+            intersect_cylinder(&ray_in_frame(ray, p0, orientation(prim)), p1.x, p1.y, t_max)
+        }
+        PRIM_TORUS if has(F, FEATURE_CURVED) => {
+            intersect_torus(&ray_in_frame(ray, p0, orientation(prim)), p1.x, p1.y, t_max)
+        }
         _ => MISS,
     }
 }

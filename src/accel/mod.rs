@@ -21,6 +21,7 @@ use obvhs::aabb::Aabb;
 use obvhs::bvh2::Bvh2;
 
 use build::{build_bvh, expected_traversal_iterations, tree_depth};
+use curved::orientation;
 
 use crate::layout::*;
 
@@ -207,17 +208,38 @@ pub(crate) fn primitive_bounds(p: &GpuPrimitive) -> Aabb {
     let [a, b, c] = [p.p0, p.p1, p.p2].map(Vec3A::from);
     match p.kind {
         PRIM_SPHERE => Aabb::new(a - Vec3A::splat(b.x), a + Vec3A::splat(b.x)),
-        PRIM_ELLIPSOID => Aabb::new(a - b, a + b),
-        PRIM_CYLINDER => Aabb::new(a - Vec3A::new(b.x, 0.0, b.x), a + Vec3A::new(b.x, b.y, b.x)),
-        PRIM_TORUS => {
-            let reach = b.x + b.y;
-            let half = Vec3A::new(reach, b.y, reach);
-            Aabb::new(a - half, a + half)
-        }
+        PRIM_ELLIPSOID | PRIM_CYLINDER | PRIM_TORUS => curved_bounds(p.kind, a, b, orientation(p)),
         PRIM_QUAD => Aabb::from_points(&[a, a + b, a + c, a + b + c]),
         _ => Aabb::from_points(&[a, b, c]),
     }
 }
+
+/// The box around an ellipsoid, cylinder or torus (`kind`, with `p0` and `p1` as
+/// `GpuPrimitive` gives them) turned by `turn`: the tight box of the turned shape, each
+/// half-extent widened by a few ULPs for the rotation's rounding. With the world's x, y, z
+/// seen in the shape's frame as the rows of M (M = R^T):
+/// an ellipsoid's half-extent along axis i is |M_i ⊙ radii|; a cylinder's, around its axis's
+/// middle, h/2 |a_i| + r sqrt(1 - a_i^2) with a = R y its axis; a torus's R sqrt(1 - a_i^2) + r.
+fn curved_bounds(kind: u32, p0: Vec3A, p1: Vec3A, turn: glam::Quat) -> Aabb {
+    let rows = glam::Mat3A::from_quat(turn).transpose();
+    let rows = [rows.x_axis, rows.y_axis, rows.z_axis];
+    // sqrt(1 - a_i^2): the length of the world axis's part across the shape's axis.
+    let across = |i: usize| (1.0 - rows[i].y * rows[i].y).max(0.0).sqrt();
+    let (middle, half): (Vec3A, [f32; 3]) = match kind {
+        PRIM_ELLIPSOID => (p0, [0, 1, 2].map(|i| (rows[i] * p1).length())),
+        PRIM_CYLINDER => (
+            p0 + Vec3A::from(turn * glam::Vec3::new(0.0, p1.y / 2.0, 0.0)),
+            [0, 1, 2].map(|i| p1.y / 2.0 * rows[i].y.abs() + p1.x * across(i)),
+        ),
+        _ => (p0, [0, 1, 2].map(|i| p1.x * across(i) + p1.y)),
+    };
+    let half = Vec3A::from(half) * (1.0 + ROTATION_BOUNDS_WIDENING);
+    Aabb::new(middle - half, middle + half)
+}
+
+/// Relative widening of a turned curved shape's box: the rotation matrix's and the extents'
+/// rounding, a few ULPs, generously.
+const ROTATION_BOUNDS_WIDENING: f32 = 64.0 * f32::EPSILON;
 
 fn widen(aabb: &mut Aabb) {
     let scale = aabb.min.abs().max(aabb.max.abs()).max_element();

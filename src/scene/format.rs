@@ -335,6 +335,7 @@ pub struct ShapeEntry {
     /// Mesh or Bézier patches: translation (scene units), applied last.
     pub translate: Option<Vec3>,
     /// Mesh or Bézier patches: rotation in degrees about x, then y, then z; applied after `scale`.
+    /// Torus, ellipsoid or cylinder: the same rotation about its `center`.
     pub rotate: Option<Vec3>,
     /// Mesh or Bézier patches: scale factor, uniform or per axis; applied first.
     pub scale: Option<Scale>,

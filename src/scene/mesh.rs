@@ -7,7 +7,7 @@
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
-use glam::{Mat3, Vec3};
+use glam::{DQuat, DVec3, Mat3, Vec3};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{DefaultElement, Encoding, Header, Property, PropertyType, ScalarType};
 
@@ -584,9 +584,36 @@ pub fn rotation_of(rotate_deg: Vec3) -> Mat3 {
         * Mat3::from_rotation_x(rotate_deg.x.to_radians())
 }
 
+/// The same rotation as [`rotation_of`], in double precision, as a quaternion: a torus's,
+/// ellipsoid's or cylinder's `rotate` (its orientation about its centre).
+pub fn orientation_of(rotate_deg: DVec3) -> DQuat {
+    DQuat::from_rotation_z(rotate_deg.z.to_radians())
+        * DQuat::from_rotation_y(rotate_deg.y.to_radians())
+        * DQuat::from_rotation_x(rotate_deg.x.to_radians())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A curved shape's `rotate` turns it as a mesh's turns the mesh.
+    #[test]
+    fn orientation_of_turns_as_rotation_of() {
+        for rotate in [
+            DVec3::new(90.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.0, 90.0),
+            DVec3::new(30.0, -45.0, 120.0),
+        ] {
+            for v in [DVec3::X, DVec3::Y, DVec3::new(0.3, -0.5, 0.8)] {
+                let by_matrix = rotation_of(rotate.as_vec3()) * v.as_vec3();
+                let by_quaternion = orientation_of(rotate) * v;
+                assert!(
+                    (by_quaternion.as_vec3() - by_matrix).length() < 1e-6,
+                    "{rotate} turns {v} to {by_quaternion} and {by_matrix}"
+                );
+            }
+        }
+    }
 
     /// The 2 GiB limit scaled down: an endless stream of empty lines stops at `max_bytes`.
     #[test]

@@ -14,7 +14,7 @@ mod validate;
 
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Quat, Vec3};
 
 use crate::adaptive::AdaptiveSettings;
 
@@ -129,8 +129,12 @@ pub enum Shape {
     /// An ellipsoid, cylinder or torus, intersected exactly (`accel::curved`); its surface,
     /// in double precision, is also among `Scene::surfaces`.
     Curved {
-        /// The surface.
+        /// The surface, in its own frame.
         primitive: CurvedPrimitive,
+        /// The rotation about its centre (a cylinder's base) that turns its own frame into the
+        /// world's; the identity leaves a cylinder's or torus's axis vertical and an
+        /// ellipsoid's semi-axes along the world's axes.
+        orientation: Quat,
         /// Index into the materials.
         material: u32,
     },
@@ -146,14 +150,14 @@ pub enum Shape {
 /// A curved surface the ray tracers intersect exactly, in the precision they trace in.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum CurvedPrimitive {
-    /// An ellipsoid with semi-axes along the world's axes.
+    /// An ellipsoid with semi-axes along its frame's axes.
     Ellipsoid {
         /// Centre (scene units).
         center: Vec3,
         /// Semi-axes along x, y and z, > 0.
         radii: Vec3,
     },
-    /// An open cylinder around the vertical axis.
+    /// An open cylinder around its frame's y axis.
     Cylinder {
         /// The centre of its base circle (scene units).
         base: Vec3,
@@ -162,7 +166,7 @@ pub enum CurvedPrimitive {
         /// Height above the base, > 0.
         height: f32,
     },
-    /// A torus around the vertical axis through its centre.
+    /// A torus around its frame's y axis through its centre.
     Torus {
         /// Centre (scene units).
         center: Vec3,

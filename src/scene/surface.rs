@@ -29,13 +29,13 @@ pub struct CurvedSurface {
 /// The parametric surfaces a scene can declare.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Surface {
-    /// A torus around a vertical axis.
+    /// A torus, its axis turned by its orientation.
     Torus(Torus),
     /// Bicubic Bézier patches (Newell's teapot), each oriented with f_u × f_v outward.
     Patches(Vec<BezierPatch>),
-    /// An ellipsoid, its semi-axes along the world's axes.
+    /// An ellipsoid, its semi-axes turned by its orientation.
     Ellipsoid(Ellipsoid),
-    /// A cylinder around a vertical axis, `height` tall above its base circle, open at both
+    /// A cylinder around its (turned) axis, `height` tall above its base circle, open at both
     /// ends.
     Cylinder {
         /// The base circle's centre and radius.
@@ -57,23 +57,34 @@ impl Surface {
                     material,
                 };
             }
-            Surface::Torus(t) => CurvedPrimitive::Torus {
-                center: t.center.as_vec3(),
-                major: t.major as f32,
-                minor: t.minor as f32,
-            },
-            Surface::Ellipsoid(e) => CurvedPrimitive::Ellipsoid {
-                center: e.center.as_vec3(),
-                radii: e.radii.as_vec3(),
-            },
-            Surface::Cylinder { cylinder, height } => CurvedPrimitive::Cylinder {
-                base: cylinder.center.as_vec3(),
-                radius: cylinder.radius as f32,
-                height: *height as f32,
-            },
+            Surface::Torus(t) => (
+                CurvedPrimitive::Torus {
+                    center: t.center.as_vec3(),
+                    major: t.major as f32,
+                    minor: t.minor as f32,
+                },
+                t.orientation,
+            ),
+            Surface::Ellipsoid(e) => (
+                CurvedPrimitive::Ellipsoid {
+                    center: e.center.as_vec3(),
+                    radii: e.radii.as_vec3(),
+                },
+                e.orientation,
+            ),
+            Surface::Cylinder { cylinder, height } => (
+                CurvedPrimitive::Cylinder {
+                    base: cylinder.center.as_vec3(),
+                    radius: cylinder.radius as f32,
+                    height: *height as f32,
+                },
+                cylinder.orientation,
+            ),
         };
+        let (primitive, orientation) = primitive;
         Shape::Curved {
             primitive,
+            orientation: orientation.as_quat(),
             material,
         }
     }
@@ -433,11 +444,7 @@ mod tests {
 
     #[test]
     fn the_torus_mesh_lies_on_the_torus_within_its_sagitta() {
-        let torus = Torus {
-            center: DVec3::new(0.2, 0.5, -0.1),
-            major: 0.6,
-            minor: 0.2,
-        };
+        let torus = Torus::new(DVec3::new(0.2, 0.5, -0.1), 0.6, 0.2);
         let mesh = Surface::Torus(torus).mesh_of(FINE, PATCH_QUADS);
         let [nu, nv] = FINE;
         assert_eq!(mesh.triangles.len() as u32, 2 * nu * nv);
@@ -482,7 +489,7 @@ mod tests {
         let ellipsoid = Surface::Ellipsoid(Ellipsoid::new(center, radii));
         let (radius, height) = (0.45, 1.2);
         let cylinder = Surface::Cylinder {
-            cylinder: Cylinder { center, radius },
+            cylinder: Cylinder::new(center, radius),
             height,
         };
         // Each surface's implicit function, zero on it, and its gradient.

@@ -11,7 +11,7 @@ use super::format::{
     ShapeEntry, ShapeType, Vec3 as F3,
 };
 use super::load::ParsedScene;
-use super::mesh::{compute_vertex_normals, load_mesh, rotation_of, transform_mesh};
+use super::mesh::{compute_vertex_normals, load_mesh, orientation_of, rotation_of, transform_mesh};
 use super::surface::{CurvedSurface, Surface, load_bezier_patches, orient_outward};
 use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
@@ -912,10 +912,21 @@ fn validate_shapes(
                 Shape::Mesh { mesh, material }
             }
             ShapeType::Torus => {
+                // A torus may be turned (`rotate`); the other mesh fields are foreign to it.
+                let mesh_but_rotate: Vec<_> = mesh_fields
+                    .into_iter()
+                    .filter(|f| f.0 != "rotate")
+                    .collect();
                 check.forbid(
                     &prefix,
                     "torus",
-                    &[&radius_field[..], &quad_fields, &plane_fields, &mesh_fields].concat(),
+                    &[
+                        &radius_field[..],
+                        &quad_fields,
+                        &plane_fields,
+                        &mesh_but_rotate,
+                    ]
+                    .concat(),
                 )?;
                 check.forbid(
                     &prefix,
@@ -927,8 +938,8 @@ fn validate_shapes(
             }
             ShapeType::Ellipsoid | ShapeType::Cylinder => {
                 let (kind, own) = match s.kind {
-                    ShapeType::Ellipsoid => ("ellipsoid", ["radii"].as_slice()),
-                    _ => ("cylinder", ["radius", "height"].as_slice()),
+                    ShapeType::Ellipsoid => ("ellipsoid", ["radii", "rotate"].as_slice()),
+                    _ => ("cylinder", ["radius", "height", "rotate"].as_slice()),
                 };
                 let present = [
                     &sphere_fields[..],
@@ -1049,15 +1060,19 @@ fn round_surface(check: &Checker, prefix: &str, s: &ShapeEntry) -> Result<Surfac
                     format!("must all be positive, got {}", nums(&radii.to_array())),
                 ));
             }
-            (
-                Surface::Ellipsoid(Ellipsoid::new(center, radii)),
-                radii.max_element(),
-            )
+            let ellipsoid = Ellipsoid {
+                orientation: orientation(check, prefix, s)?,
+                ..Ellipsoid::new(center, radii)
+            };
+            (Surface::Ellipsoid(ellipsoid), radii.max_element())
         }
         _ => {
             let radius = positive("radius", s.radius)?;
             let height = positive("height", s.height)?;
-            let cylinder = Cylinder { center, radius };
+            let cylinder = Cylinder {
+                orientation: orientation(check, prefix, s)?,
+                ..Cylinder::new(center, radius)
+            };
             (Surface::Cylinder { cylinder, height }, radius + height)
         }
     };
@@ -1104,10 +1119,18 @@ fn torus(check: &Checker, prefix: &str, s: &ShapeEntry) -> Result<Torus> {
         ));
     }
     Ok(Torus {
-        center,
-        major,
-        minor,
+        orientation: orientation(check, prefix, s)?,
+        ..Torus::new(center, major, minor)
     })
+}
+
+/// A torus's, ellipsoid's or cylinder's `rotate` (degrees about x, then y, then z, as a mesh's),
+/// its orientation about its centre; none leaves it unturned.
+fn orientation(check: &Checker, prefix: &str, s: &ShapeEntry) -> Result<glam::DQuat> {
+    let at = format!("{prefix}.rotate");
+    Ok(orientation_of(
+        check.vector(&at, s.rotate.unwrap_or_default())?,
+    ))
 }
 
 /// NaN compares false, so finiteness is tested first and explicitly.
