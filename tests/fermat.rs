@@ -370,45 +370,39 @@ fn turning_a_reflector_with_the_scene_turns_its_reflections() {
     let mut compared = [0; 3];
     for v in &vertices {
         let (e, turned_v) = (turn(eye), turn(*v));
+        let (plain, turned) = ((eye, *v), (e, turned_v));
         let pairs = [
-            {
-                let f = ellipsoid.facing(eye, *v);
-                let g = Ellipsoid {
+            both(
+                &solver,
+                &ellipsoid.facing(eye, *v),
+                &Ellipsoid {
                     orientation,
                     ..ellipsoid
                 }
-                .facing(e, turned_v);
-                let uv = solver.solve(&f, eye, *v).uv;
-                (
-                    f.point(uv),
-                    f.outward_normal(uv),
-                    g.point(solver.solve(&g, e, turned_v).uv),
-                )
-            },
-            {
-                let g = Cylinder {
+                .facing(e, turned_v),
+                plain,
+                turned,
+            ),
+            both(
+                &solver,
+                &cylinder,
+                &Cylinder {
                     orientation,
                     ..cylinder
-                };
-                let uv = solver.solve(&cylinder, eye, *v).uv;
-                (
-                    cylinder.point(uv),
-                    cylinder.outward_normal(uv),
-                    g.point(solver.solve(&g, e, turned_v).uv),
-                )
-            },
-            {
-                let g = Torus {
+                },
+                plain,
+                turned,
+            ),
+            both(
+                &solver,
+                &torus,
+                &Torus {
                     orientation,
                     ..torus
-                };
-                let uv = solver.solve(&torus, eye, *v).uv;
-                (
-                    torus.point(uv),
-                    torus.outward_normal(uv),
-                    g.point(solver.solve(&g, e, turned_v).uv),
-                )
-            },
+                },
+                plain,
+                turned,
+            ),
         ];
         for (k, (plain, normal, turned)) in pairs.into_iter().enumerate() {
             if reflection_error(plain, normal, eye, *v) < 1e-4 {
@@ -423,6 +417,24 @@ fn turning_a_reflector_with_the_scene_turns_its_reflections() {
     );
     assert!(compared.iter().all(|&c| c > 1000), "{compared:?}");
     assert!(worst < 1e-9, "{worst:e}");
+}
+
+/// Where the search on `plain` ends for (eye, vertex), with the normal there, and where it ends
+/// on `turned` for the turned eye and vertex.
+fn both(
+    solver: &Solver,
+    plain: &impl Reflector,
+    turned: &impl Reflector,
+    (eye, vertex): (DVec3, DVec3),
+    (turned_eye, turned_vertex): (DVec3, DVec3),
+) -> (DVec3, DVec3, DVec3) {
+    let uv = solver.solve(plain, eye, vertex).uv;
+    let turned_uv = solver.solve(turned, turned_eye, turned_vertex).uv;
+    (
+        plain.point(uv),
+        plain.outward_normal(uv),
+        turned.point(turned_uv),
+    )
 }
 
 /// The sample teapot, its patches as the scene places them (Y-up, scaled, oriented outward).
