@@ -166,8 +166,21 @@ fn alhazens_point_obeys_the_law_of_reflection() {
 /// The Fermat comparison (`chambre bench fermat`) on `scene`, made small, at subdivisions 1
 /// and 4 (4 cuts the scenes' 4x4 floor 16x16, as the seed's).
 fn compare_small(context: &chambre::gpu::GpuContext, scene: &str) -> FermatReport {
+    compare_small_with(context, scene, &[])
+}
+
+/// `compare_small` with the scene's fields overridden as `-D` does.
+fn compare_small_with(
+    context: &chambre::gpu::GpuContext,
+    scene: &str,
+    extra: &[&str],
+) -> FermatReport {
     let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(scene);
-    let overrides = ["render.width=160".to_string(), "render.height=120".into()];
+    let overrides: Vec<String> = ["render.width=160", "render.height=120"]
+        .iter()
+        .chain(extra)
+        .map(|o| o.to_string())
+        .collect();
     let config = FermatConfig {
         scene: &scene,
         overrides: &overrides,
@@ -235,6 +248,55 @@ fn preview_reflections_on_a_torus_an_ellipsoid_and_a_cylinder_land_where_the_ray
         }
         assert!(
             fine.drawn as f64 >= 0.85 * fine.features as f64,
+            "{mirror}: {fine:?}"
+        );
+        assert!(fine.displacement_p99_px < 1.0, "{mirror}: {fine:?}");
+        assert!(
+            fine.flip_reflector < coarse.flip_reflector,
+            "{mirror}: {report:?}"
+        );
+    }
+}
+
+/// The same with the torus, ellipsoid and cylinder turned (`rotate`), each raised clear of the
+/// floor: the preview's mesh, its Fermat kernel in the shape's own
+/// frame and the ray tracer's exact intersection all turn alike.
+#[test]
+fn preview_reflections_on_turned_mirrors_land_where_the_ray_tracer_puts_them() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    for (mirror, turn) in [
+        (
+            "torus",
+            [
+                "shapes[0].center=[0.0, 0.6, 0.0]",
+                "shapes[0].rotate=[30.0, 0.0, 20.0]",
+            ],
+        ),
+        (
+            "ellipsoid",
+            [
+                "shapes[0].center=[0.0, 0.85, 0.0]",
+                "shapes[0].rotate=[0.0, 35.0, 25.0]",
+            ],
+        ),
+        (
+            "cylinder",
+            [
+                "shapes[0].center=[0.0, 0.3, 0.0]",
+                "shapes[0].rotate=[20.0, 0.0, 25.0]",
+            ],
+        ),
+    ] {
+        let report = compare_small_with(&context, &format!("scenes/fermat_{mirror}.toml"), &turn);
+        let [coarse, fine] = [&report.rows[0], &report.rows[1]];
+        for row in [coarse, fine] {
+            assert!(row.features > 200, "{mirror}: {row:?}");
+            assert!(row.corner_max_px < 0.05, "{mirror}: {row:?}");
+        }
+        assert!(
+            fine.drawn as f64 >= 0.8 * fine.features as f64,
             "{mirror}: {fine:?}"
         );
         assert!(fine.displacement_p99_px < 1.0, "{mirror}: {fine:?}");
