@@ -25,11 +25,18 @@ fn direction(rng: &mut Rng) -> DVec3 {
     DVec3::new(s * phi.cos(), z, s * phi.sin())
 }
 
+/// The seed's search on random configurations around a sphere (E at 2–6 radii, V at 1.2–4.2,
+/// at most 150° apart seen from the centre). Where V shows in the mirror at all (E and V see a
+/// common point of the sphere: the angles their tangent cones reach from the centre add up to
+/// more than the angle between them), it finds Alhazen's point within 5 steps in 96% or more
+/// of them (the rest are printed, by angle of incidence and by how far the pair is from having
+/// no common point: grazing); where V does not show, it never claims a reflection seen from
+/// outside.
 #[test]
 fn the_solver_finds_alhazens_point_within_five_steps() {
     let base = Sphere::new(DVec3::new(0.3, -0.2, 0.1), 1.3);
     let solver = Solver::default();
-    let (mut converged, mut failures) = (0, Vec::new());
+    let (mut converged, mut failures, mut without_reflection) = (0, Vec::new(), 0);
     // Per band of the angle of incidence at Alhazen's point: configurations, converged.
     let bands = [0.0, 30.0, 60.0, 75.0, 90.01];
     let mut by_incidence = [(0u32, 0u32); 4];
@@ -49,13 +56,26 @@ fn the_solver_finds_alhazens_point_within_five_steps() {
         let solution = solver.solve(&sphere, eye, vertex);
         let p = sphere.point(solution.uv);
         let error = reflection_error(p, sphere.normal(solution.uv), eye, vertex);
-        let exact = alhazen_sphere(&sphere, eye, vertex);
         let visible = seen_from_outside(p, sphere.normal(solution.uv), eye, vertex);
+        let found = error < 1e-4 && visible;
+        // How much wider than the angle between E and V the two tangent cones reach (degrees):
+        // at most 0, V does not show in the mirror; near 0, the reflection grazes.
+        let reach = |x: DVec3| (base.radius / x.length()).acos();
+        let margin = (reach(e) + reach(v) - e.angle_between(v)).to_degrees();
+        if margin <= 0.0 {
+            without_reflection += 1;
+            assert!(
+                !found,
+                "a reflection seen from outside where none exists: {p}"
+            );
+            continue;
+        }
+        let exact = alhazen_sphere(&sphere, eye, vertex);
         let normal = (exact - sphere.center).normalize();
         let incidence = normal.angle_between(eye - exact).to_degrees();
         let band = bands.windows(2).position(|b| incidence < b[1]).unwrap_or(3);
         by_incidence[band].0 += 1;
-        if error < 1e-4 && visible {
+        if found {
             converged += 1;
             by_incidence[band].1 += 1;
             assert!(
@@ -63,8 +83,7 @@ fn the_solver_finds_alhazens_point_within_five_steps() {
                 "converged to {p}, Alhazen's point is {exact}"
             );
         } else {
-            let polar = (p - sphere.center).normalize().y.abs();
-            failures.push((error, visible, polar, e.angle_between(v).to_degrees()));
+            failures.push((error, incidence, margin));
         }
     }
     let total = converged + failures.len();
@@ -76,13 +95,17 @@ fn the_solver_finds_alhazens_point_within_five_steps() {
             100.0 * *ok as f64 / (*count).max(1) as f64
         );
     }
+    let grazing = failures.iter().filter(|f| f.2 < 10.0).count();
     eprintln!(
-        "{converged} of {total} converged within 5 steps; failures (error rad, on the side seen, \
-         |cos| to the poles' axis, angle E-O-V in degrees): {failures:?}"
+        "{converged} of the {total} configurations where V shows in the mirror converged within \
+         5 steps ({without_reflection} more have no reflection); of the {} that did not, \
+         {grazing} are within 10 degrees of having none; failures (error rad, incidence deg, \
+         margin deg): {failures:?}",
+        failures.len()
     );
-    assert!(total > 1500, "{total} configurations kept");
+    assert!(total > 1500, "{total} configurations with a reflection");
     assert!(
-        converged as f64 >= 0.88 * total as f64,
+        converged as f64 >= 0.96 * total as f64,
         "{converged} of {total}"
     );
 }
