@@ -239,14 +239,16 @@ pub enum ShapeType {
     Plane,
     /// A triangle mesh read from `file` (OBJ or PLY, optionally gzipped).
     Mesh,
-    /// A torus around the vertical axis through `center`: `major_radius`, `minor_radius`.
+    /// A torus around the vertical axis through `center`: `major_radius`, `minor_radius`;
+    /// `rotate` turns it about `center`.
     Torus,
     /// Bicubic Bézier patches read from `file` (Newell's format), placed as a mesh is.
     Bezier,
-    /// An ellipsoid: `center`, semi-axes `radii` along the world's axes.
+    /// An ellipsoid: `center`, semi-axes `radii` along x, y, z; `rotate` turns it about
+    /// `center`.
     Ellipsoid,
     /// A cylinder around the vertical axis through `center` (its base circle's centre):
-    /// `radius`, `height`; open at both ends.
+    /// `radius`, `height`; open at both ends; `rotate` turns it about `center`.
     Cylinder,
 }
 
