@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 
-use glam::Vec3;
+use glam::{Quat, Vec3};
 use obvhs::bvh2::Bvh2;
 
 use crate::accel::cwbvh::{self, CwGeometry};
@@ -219,25 +219,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
                 primitive,
                 orientation,
                 material,
-            } => {
-                let (kind, p0, p1) = match *primitive {
-                    CurvedPrimitive::Ellipsoid { center, radii } => (PRIM_ELLIPSOID, center, radii),
-                    CurvedPrimitive::Cylinder {
-                        base,
-                        radius,
-                        height,
-                    } => (PRIM_CYLINDER, base, Vec3::new(radius, height, 0.0)),
-                    CurvedPrimitive::Torus {
-                        center,
-                        major,
-                        minor,
-                    } => (PRIM_TORUS, center, Vec3::new(major, minor, 0.0)),
-                };
-                // The orientation's x, y, z in p2 and w's bits in `normals` (`curved::orientation`).
-                let mut curved = prim(kind, *material, p0, p1, orientation.xyz());
-                curved.normals = orientation.w.to_bits();
-                bounded.push((curved, None));
-            }
+            } => bounded.push((curved_primitive(primitive, *orientation, *material), None)),
             Shape::Plane {
                 point,
                 normal,
@@ -446,6 +428,32 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         cwbvh: std::sync::OnceLock::new(),
         wide: std::sync::OnceLock::new(),
     }
+}
+
+/// The primitive of an ellipsoid, cylinder or torus turned by `orientation` (the fields per kind
+/// on `layout::GpuPrimitive`): the orientation's x, y, z in p2 and w's bits in `normals`, as
+/// `accel::curved::orientation` reads them.
+pub fn curved_primitive(
+    primitive: &CurvedPrimitive,
+    orientation: Quat,
+    material: u32,
+) -> GpuPrimitive {
+    let (kind, p0, p1) = match *primitive {
+        CurvedPrimitive::Ellipsoid { center, radii } => (PRIM_ELLIPSOID, center, radii),
+        CurvedPrimitive::Cylinder {
+            base,
+            radius,
+            height,
+        } => (PRIM_CYLINDER, base, Vec3::new(radius, height, 0.0)),
+        CurvedPrimitive::Torus {
+            center,
+            major,
+            minor,
+        } => (PRIM_TORUS, center, Vec3::new(major, minor, 0.0)),
+    };
+    let mut curved = prim(kind, material, p0, p1, orientation.xyz());
+    curved.normals = orientation.w.to_bits();
+    curved
 }
 
 fn prim(kind: u32, material: u32, p0: Vec3, p1: Vec3, p2: Vec3) -> GpuPrimitive {

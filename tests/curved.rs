@@ -14,11 +14,9 @@ use chambre::bench::rays::{
     Bvh, Pinhole, Query, bounds, coherent_rays, incoherent_rays, trace_cpu,
 };
 use chambre::gpu::trace::GpuTracer;
-use chambre::layout::{
-    FEATURES_ALL, GpuPrimitive, PRIM_CYLINDER, PRIM_ELLIPSOID, PRIM_TORUS, T_FAR,
-};
+use chambre::layout::{FEATURES_ALL, GpuPrimitive, T_FAR};
 use chambre::math::rng::Rng;
-use chambre::pack::flatten;
+use chambre::pack::{curved_primitive, flatten};
 use chambre::scene::{CurvedPrimitive as Shape, Scene};
 use glam::{DVec3, Quat, Vec3};
 
@@ -40,29 +38,9 @@ struct Turned {
 }
 
 impl Turned {
-    /// The primitive the ray tracers intersect (`layout::GpuPrimitive`'s fields for the kind).
+    /// The primitive the ray tracers intersect, packed as a scene's is.
     fn prim(&self) -> GpuPrimitive {
-        let (kind, p0, p1) = match self.shape {
-            Shape::Ellipsoid { center, radii } => (PRIM_ELLIPSOID, center, radii),
-            Shape::Cylinder {
-                base,
-                radius,
-                height,
-            } => (PRIM_CYLINDER, base, Vec3::new(radius, height, 0.0)),
-            Shape::Torus {
-                center,
-                major,
-                minor,
-            } => (PRIM_TORUS, center, Vec3::new(major, minor, 0.0)),
-        };
-        GpuPrimitive {
-            p0: p0.to_array(),
-            kind,
-            p1: p1.to_array(),
-            material: 0,
-            p2: self.orientation.xyz().to_array(),
-            normals: self.orientation.w.to_bits(),
-        }
+        curved_primitive(&self.shape, self.orientation, 0)
     }
 
     /// Where `p` (world) is for the unturned shape, in f64.
