@@ -414,22 +414,29 @@ pub fn trace_path<const F: u32>(
     radiance
 }
 
-/// Radiance of sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1),
+/// A camera sample: the ray and the time it is traced at.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraRay {
+    /// The ray from the lens.
+    pub ray: Ray,
+    /// Seconds into the shutter (its opening when the shutter is instant).
+    pub time: f32,
+}
+
+/// Camera sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1),
 /// lens point (2-3, drawn only by a lens), time (4, drawn only while the shutter is open a
-/// while; from the pixel pattern), then the path with the light samples in `window` (its
-/// first hit to `first_hit`).
-pub fn trace_sample<const F: u32>(
+/// while; from the pixel pattern), drawn from `rng`, which the path then goes on drawing from.
+/// Twin: `camera_sample` in wgsl/integrator.wgsl.
+pub fn camera_sample<const F: u32>(
     scene: &FlatScene,
     x: u32,
     y: u32,
     sample: u32,
-    window: LightWindow,
-    stats: &mut SampleStats,
-    first_hit: &mut FirstHit,
-) -> Vec3 {
+    rng: &mut Rng,
+    flags: &mut u32,
+) -> CameraRay {
     let frame = &scene.frame;
     let camera = &scene.camera;
-    let mut rng = Rng::new(frame.seed, y * frame.width + x, sample);
     let jitter = sample_2d(
         frame,
         &scene.sample_table,
@@ -437,8 +444,8 @@ pub fn trace_sample<const F: u32>(
         x,
         y,
         sample,
-        &mut rng,
-        &mut stats.flags,
+        rng,
+        flags,
     );
     let raster = Vec2::new(x as f32 + jitter[0], y as f32 + jitter[1]);
     let film = film_position_mm(camera, frame.width, frame.height, raster);
@@ -451,8 +458,8 @@ pub fn trace_sample<const F: u32>(
             x,
             y,
             sample,
-            &mut rng,
-            &mut stats.flags,
+            rng,
+            flags,
         );
         lens = Vec2::from(sample_aperture(camera, &scene.sample_table, u));
     }
@@ -463,18 +470,36 @@ pub fn trace_sample<const F: u32>(
             dim: TIME_DIMENSION,
             ..PatternSource::pixel(frame)
         };
-        let u = sample_2d(
-            frame,
-            &scene.sample_table,
-            source,
-            x,
-            y,
-            sample,
-            &mut rng,
-            &mut stats.flags,
-        );
+        let u = sample_2d(frame, &scene.sample_table, source, x, y, sample, rng, flags);
         time += u[0] * camera.shutter_span;
     }
-    let ray = generate_ray(camera, film, lens);
-    trace_path::<F>(scene, ray, time, window, &mut rng, stats, first_hit)
+    CameraRay {
+        ray: generate_ray(camera, film, lens),
+        time,
+    }
+}
+
+/// Radiance of sample `sample` of pixel (x, y): its camera ray ([`camera_sample`]), then the
+/// path with the light samples in `window` (its first hit to `first_hit`).
+pub fn trace_sample<const F: u32>(
+    scene: &FlatScene,
+    x: u32,
+    y: u32,
+    sample: u32,
+    window: LightWindow,
+    stats: &mut SampleStats,
+    first_hit: &mut FirstHit,
+) -> Vec3 {
+    let frame = &scene.frame;
+    let mut rng = Rng::new(frame.seed, y * frame.width + x, sample);
+    let camera = camera_sample::<F>(scene, x, y, sample, &mut rng, &mut stats.flags);
+    trace_path::<F>(
+        scene,
+        camera.ray,
+        camera.time,
+        window,
+        &mut rng,
+        stats,
+        first_hit,
+    )
 }

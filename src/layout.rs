@@ -556,6 +556,21 @@ pub struct GpuRay {
     pub _pad0: u32,
 }
 
+/// A camera ray's closest hit, as a split render's `primary` kernel stores it for
+/// `render_split` (`wgsl/render.wgsl`): the primitive (`NONE`: a miss) and `intersect::Hit`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPrimaryHit {
+    /// The primitive hit, in the CWBVH's order, or `NONE`.
+    pub prim: u32,
+    /// Distance along the ray.
+    pub t: f32,
+    /// The hit's first surface coordinate (`Hit::b1`).
+    pub b1: f32,
+    /// The hit's second surface coordinate (`Hit::b2`).
+    pub b2: f32,
+}
+
 /// A Fermat solve's reflector and eye (`wgsl/fermat.wgsl`): a sphere, a torus (around the
 /// vertical axis through its centre), a bicubic Bézier patch, an ellipsoid or a cylinder, and how many vertices the `fermat_vertices` buffer holds.
 #[repr(C)]

@@ -393,6 +393,14 @@ impl RenderPlan {
         self.passes.len() * per_pass.div_ceil(self.dispatches_per_batch)
     }
 
+    /// Camera samples one dispatch takes at most: a band's pixels (a band of a pixel list has
+    /// no more) times a pass's samples (an adaptive pass takes no more).
+    pub fn samples_per_dispatch(&self) -> u64 {
+        let rows = self.bands.iter().map(|b| b.1).max().unwrap_or(0);
+        let samples = self.passes.iter().map(|p| p.1).max().unwrap_or(0);
+        self.width as u64 * rows as u64 * samples as u64
+    }
+
     /// The dispatches of pass `pass`, in order: each band in every light window.
     pub fn dispatches(&self, pass: usize) -> Vec<GpuPass> {
         let (sample_start, sample_count) = self.passes[pass];

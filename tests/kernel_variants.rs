@@ -1,6 +1,6 @@
 //! A kernel specialised to a scene's features renders the same image as the general kernel,
-//! bit for bit, on the sample scenes that leave features out; and no kernel can be built that
-//! lacks a feature its scene uses.
+//! bit for bit, on the sample scenes that leave features out; the split kernels render the
+//! megakernel's; and no kernel can be built that lacks a feature its scene uses.
 
 mod common;
 
@@ -8,9 +8,10 @@ use std::sync::atomic::AtomicBool;
 
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::GpuRenderer;
+use chambre::gpu::render::PathKernels;
 use chambre::layout::*;
 use chambre::pack::flatten;
-use chambre::render::{Image, render};
+use chambre::render::{Image, RayBudgets, render};
 
 fn render_with(flat: &chambre::pack::FlatScene, features: u32) -> Option<(Image, u64)> {
     let context = common::gpu_context()?;
@@ -91,6 +92,120 @@ fn specialised_kernels_render_the_general_kernels_image() {
             differing, 0,
             "{path}: the specialised kernel's image differs"
         );
+    }
+}
+
+/// The split kernels (camera rays' hits first, then the paths from them) render the
+/// megakernel's image bit for bit: the same camera samples, hits and shading, in the same
+/// order; with light windows, adaptive passes (pixel lists) and AOV layers too, and the same
+/// rays, cut-off paths and per-pixel sample counts.
+#[test]
+fn the_split_kernels_render_the_megakernels_image() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let few_rays = RayBudgets {
+        per_invocation: 4,
+        ..RayBudgets::DEFAULT
+    };
+    let cases: [(&str, &[&str], RayBudgets); 6] = [
+        // mirrors, a point light, a plane
+        (
+            "scenes/spheres.toml",
+            &["render.width=96", "render.height=64"],
+            RayBudgets::DEFAULT,
+        ),
+        // triangles
+        (
+            "scenes/bunny.toml",
+            &["render.width=72", "render.height=48"],
+            RayBudgets::DEFAULT,
+        ),
+        // an area light of 8 samples a hit in light windows, adaptive sampling
+        (
+            "scenes/area_light.toml",
+            &[
+                "render.width=48",
+                "render.height=48",
+                "render.spp=8",
+                "lights[0].samples=8",
+                "render.noise_target=0.05",
+            ],
+            few_rays,
+        ),
+        // a thin lens
+        (
+            "scenes/thin_lens.toml",
+            &["render.width=72", "render.height=48"],
+            RayBudgets::DEFAULT,
+        ),
+        // a curved mirror, its paths cut off at max_depth
+        (
+            "scenes/fermat_torus.toml",
+            &["render.width=64", "render.height=48"],
+            RayBudgets::DEFAULT,
+        ),
+        // motion blur: a rolling sphere
+        (
+            "scenes/tabletop.toml",
+            &[
+                "render.width=72",
+                "render.height=48",
+                "shapes[2].velocity=[0.3,0.0,0.1]",
+                "camera.shutter=[0.0,1.0]",
+            ],
+            RayBudgets::DEFAULT,
+        ),
+    ];
+    for (path, overrides, budgets) in cases {
+        let overrides = [&["render.spp=2"], overrides].concat();
+        let mut flat = flatten(&common::load(path, &overrides));
+        flat.aovs = true;
+        if budgets == few_rays {
+            let windows = chambre::render::plan_passes(&flat, &budgets).light_windows;
+            assert!(windows.len() > 1, "{path}: {windows:?}");
+        }
+        let run = |kernels| {
+            let mut renderer = GpuRenderer::with_kernels(
+                context.clone(),
+                &flat,
+                flat.features(),
+                budgets,
+                kernels,
+            )
+            .unwrap();
+            let output = render(
+                &flat,
+                &mut renderer,
+                &mut |_, _| {},
+                &AtomicBool::new(false),
+            )
+            .unwrap();
+            assert!(output.stopped.is_none(), "{path}: {:?}", output.stopped);
+            assert_eq!(output.status_flags, 0, "{path}");
+            output
+        };
+        let mega = run(PathKernels::Megakernel);
+        let split = run(PathKernels::Split);
+        let differing = mega
+            .image
+            .pixels
+            .iter()
+            .zip(&split.image.pixels)
+            .filter(|(a, b)| a != b)
+            .count();
+        eprintln!(
+            "{path}: {differing} of {} pixels differ, {} rays, {} cut off",
+            mega.image.pixels.len(),
+            mega.rays,
+            mega.truncated_paths
+        );
+        assert_eq!(differing, 0, "{path}: the split kernels' image differs");
+        assert_eq!(split.rays, mega.rays, "{path}: rays");
+        assert_eq!(split.truncated_paths, mega.truncated_paths, "{path}");
+        assert_eq!(split.sample_counts, mega.sample_counts, "{path}");
+        let (a, b) = (mega.aovs.unwrap(), split.aovs.unwrap());
+        assert!(a.depth == b.depth && a.normal == b.normal && a.albedo == b.albedo);
     }
 }
 

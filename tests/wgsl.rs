@@ -237,6 +237,7 @@ fn shared_structs_have_identical_layouts() {
             _pad0
         }
     );
+    layout!(module, GpuPrimaryHit { prim, t, b1, b2 });
     layout!(
         module,
         GpuReflector {

@@ -28,3 +28,5 @@
 @group(0) @binding(15) var<uniform> reflector: GpuReflector;
 @group(0) @binding(16) var<storage, read> fermat_vertices: array<vec4<f32>>;
 @group(0) @binding(17) var<storage, read_write> reflections: array<GpuReflection>;
+// A split render's camera-ray hits, one per sample of a dispatch (wgsl/render.wgsl).
+@group(0) @binding(18) var<storage, read_write> primary_hits: array<GpuPrimaryHit>;

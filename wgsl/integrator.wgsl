@@ -207,16 +207,34 @@ fn moved_surface_at(id: u32, ray: RayQuery, hit: Hit) -> Surface {
     return surface;
 }
 
-fn trace_path(origin: vec3<f32>, direction: vec3<f32>, time: f32, window: LightWindow, rng: ptr<function, Rng>,
-              counters: ptr<function, PathCounters>, first_hit: ptr<function, FirstHit>) -> vec3<f32> {
+// The camera ray's query: what the path's first closest-hit search traces.
+fn camera_query(camera_ray: CameraRay) -> RayQuery {
+    return ray_at_time(ray_query_new(camera_ray.origin, camera_ray.direction), camera_ray.time);
+}
+
+// Radiance along the path of `camera_ray`. Where `camera_hit_known`, the camera ray's closest
+// hit is `camera_hit` (`cw_closest_hit(camera_query(camera_ray), NONE, T_FAR)`, which the
+// `primary` kernel of a split render traced); else the path traces it, `camera_hit` unused.
+// Callers pass a constant: the megakernel's loop then compiles to one traversal call site, which
+// lavapipe runs 15-25% faster on mirror scenes than a traversal skipped at depth 0. The CPU twin
+// (trace_path in src/integrator.rs) always traces the camera ray itself.
+fn trace_path(camera_ray: CameraRay, camera_hit_known: bool, camera_hit: PrimHit, window: LightWindow,
+              rng: ptr<function, Rng>, counters: ptr<function, PathCounters>,
+              first_hit: ptr<function, FirstHit>) -> vec3<f32> {
     let first = window_is_first(window);
+    let time = camera_ray.time;
     var radiance = vec3<f32>(0.0);
     var throughput = vec3<f32>(1.0);
-    var ray = ray_at_time(ray_query_new(origin, direction), time);
+    var ray = camera_query(camera_ray);
     var skip = NONE;
     for (var depth = 0u; depth <= frame.max_depth; depth += 1u) {
         (*counters).rays += 1u;
-        let found = cw_closest_hit(ray, skip, T_FAR);
+        var found: PrimHit;
+        if (camera_hit_known && depth == 0u) {
+            found = camera_hit;
+        } else {
+            found = cw_closest_hit(ray, skip, T_FAR);
+        }
         if (found.prim == NONE) {
             if (first) {
                 radiance += throughput * frame.background;
@@ -265,24 +283,47 @@ fn trace_path(origin: vec3<f32>, direction: vec3<f32>, time: f32, window: LightW
     return radiance;
 }
 
-fn trace_sample(x: u32, y: u32, sample: u32, window: LightWindow,
-                counters: ptr<function, PathCounters>, first_hit: ptr<function, FirstHit>) -> vec3<f32> {
-    var rng = rng_new(frame.seed, y * frame.width + x, sample);
+// A camera sample: the ray and the time it is traced at.
+struct CameraRay {
+    origin: vec3<f32>,
+    direction: vec3<f32>,
+    time: f32,
+}
+
+// Camera sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1), lens
+// point (2-3, drawn only by a lens), time (4, drawn only while the shutter is open a while),
+// drawn from `rng`, which the path then goes on drawing from. Twin: camera_sample in
+// src/integrator.rs.
+fn camera_sample(x: u32, y: u32, sample: u32, rng: ptr<function, Rng>) -> CameraRay {
     let pixel_source = PatternSource(frame.pixel_sampler, frame.pixel_strata_columns, frame.pixel_table_offset, PIXEL_DIMENSION);
-    let jitter = sample_2d(pixel_source, x, y, sample, &rng);
+    let jitter = sample_2d(pixel_source, x, y, sample, rng);
     let raster = vec2<f32>(f32(x) + jitter.x, f32(y) + jitter.y);
     let film = film_position_mm(camera, frame.width, frame.height, raster);
     var lens = vec2<f32>(0.0, 0.0);
     if (FEATURE_LENS && camera.lens_radius_mm > 0.0) {
         let lens_source = PatternSource(frame.lens_sampler, frame.lens_strata_columns, frame.lens_table_offset, LENS_DIMENSION);
-        lens = sample_aperture(sample_2d(lens_source, x, y, sample, &rng));
+        lens = sample_aperture(sample_2d(lens_source, x, y, sample, rng));
     }
     var time = camera.shutter_open;
     if (camera.shutter_span > 0.0) {
-        rng_seek(&rng, TIME_DIMENSION);
+        rng_seek(rng, TIME_DIMENSION);
         let time_source = PatternSource(frame.pixel_sampler, frame.pixel_strata_columns, frame.pixel_table_offset, TIME_DIMENSION);
-        time += sample_2d(time_source, x, y, sample, &rng).x * camera.shutter_span;
+        time += sample_2d(time_source, x, y, sample, rng).x * camera.shutter_span;
     }
     let ray = generate_ray(camera, film, lens);
-    return trace_path(ray.origin, ray.direction, time, window, &rng, counters, first_hit);
+    return CameraRay(ray.origin, ray.direction, time);
+}
+
+// The random numbers of camera sample `sample` of pixel (x, y).
+fn sample_rng(x: u32, y: u32, sample: u32) -> Rng {
+    return rng_new(frame.seed, y * frame.width + x, sample);
+}
+
+// Radiance of camera sample `sample` of pixel (x, y), its path traced whole.
+fn trace_sample(x: u32, y: u32, sample: u32, window: LightWindow,
+                counters: ptr<function, PathCounters>, first_hit: ptr<function, FirstHit>) -> vec3<f32> {
+    var rng = sample_rng(x, y, sample);
+    let camera_ray = camera_sample(x, y, sample, &rng);
+    let unused = PrimHit(NONE, miss());
+    return trace_path(camera_ray, false, unused, window, &rng, counters, first_hit);
 }

@@ -130,6 +130,13 @@ struct GpuRay {
     _pad0: u32,
 }
 
+struct GpuPrimaryHit {
+    prim: u32,
+    t: f32,
+    b1: f32,
+    b2: f32,
+}
+
 struct GpuReflector {
     center: vec3<f32>,
     radius: f32,

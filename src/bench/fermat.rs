@@ -30,6 +30,7 @@ use crate::fermat::{
 };
 use crate::gpu::GpuContext;
 use crate::gpu::preview::{ReflectionOptions, draw_with, extent_and_far};
+use crate::gpu::render::PathKernels;
 use crate::layout::{FEATURES_ALL, NONE, T_FAR};
 use crate::pack::{FlatScene, flatten};
 use crate::preview::{
@@ -145,6 +146,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             Way::Gpu {
                 features,
                 budgets: None,
+                kernels: PathKernels::Megakernel,
             },
             Some(context),
         )?;

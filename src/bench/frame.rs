@@ -10,6 +10,7 @@ use serde::Serialize;
 use super::Spread;
 use crate::cpu::CpuRenderer;
 use crate::error::Result;
+use crate::gpu::render::PathKernels;
 use crate::gpu::{GpuContext, GpuRenderer};
 use crate::layout::FEATURES_ALL;
 use crate::pack::{FlatScene, flatten};
@@ -84,6 +85,8 @@ pub(super) enum Way {
         features: u32,
         /// Budgets other than the adapter's.
         budgets: Option<RayBudgets>,
+        /// The megakernel, or the split kernels.
+        kernels: PathKernels,
     },
 }
 
@@ -98,13 +101,18 @@ pub(super) fn render_once(
             let mut renderer = CpuRenderer::new(scene).with_features(features)?;
             render(scene, &mut renderer, &mut |_, _| {}, &cancel)
         }
-        Way::Gpu { features, budgets } => {
+        Way::Gpu {
+            features,
+            budgets,
+            kernels,
+        } => {
             let context = gpu
                 .expect("a GPU way is only planned with a GPU context")
                 .clone();
             let budgets =
                 budgets.unwrap_or_else(|| RayBudgets::for_adapter(context.is_cpu_adapter));
-            let mut renderer = GpuRenderer::with_budgets(context, scene, features, budgets)?;
+            let mut renderer =
+                GpuRenderer::with_kernels(context, scene, features, budgets, kernels)?;
             render(scene, &mut renderer, &mut |_, _| {}, &cancel)
         }
     }
@@ -146,6 +154,7 @@ pub fn run(
                 Way::Gpu {
                     features: flat.features(),
                     budgets: None,
+                    kernels: PathKernels::Megakernel,
                 },
             ));
             ways.push((
@@ -153,6 +162,15 @@ pub fn run(
                 Way::Gpu {
                     features: FEATURES_ALL,
                     budgets: None,
+                    kernels: PathKernels::Megakernel,
+                },
+            ));
+            ways.push((
+                "gpu-split".into(),
+                Way::Gpu {
+                    features: flat.features(),
+                    budgets: None,
+                    kernels: PathKernels::Split,
                 },
             ));
             for &n in rays_per_invocation {
@@ -167,6 +185,7 @@ pub fn run(
                     Way::Gpu {
                         features: flat.features(),
                         budgets: Some(budgets),
+                        kernels: PathKernels::Megakernel,
                     },
                 ));
             }
@@ -224,7 +243,9 @@ impl FrameReport {
         let mut out = String::from(
             "frame: each sample scene at its own size and spp; median (min–max) ms of the timed \
              runs, interleaved; `cpu` and `gpu` run code specialised to the scene's features, \
-             `cpu-general` and `gpu-general` the code with every feature; ratios are speed-ups\n\n",
+             `cpu-general` and `gpu-general` the code with every feature, `gpu-split` the \
+             specialised code as two kernels (camera rays' hits, then the paths); ratios are \
+             speed-ups\n\n",
         );
         out += "| scene | size x spp | triangles | features | backend | frame ms | kernel ms | Mrays/s | vs CPU | vs general |\n";
         out += "|---|---|---|---|---|---|---|---|---|---|\n";

@@ -46,7 +46,7 @@ const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
 }
 
 /// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
-pub const BINDINGS: [Binding; 18] = [
+pub const BINDINGS: [Binding; 19] = [
     binding(0, "camera", Access::Uniform),
     binding(1, "frame", Access::Uniform),
     // One GpuPass per dispatch of a batch, each at its own dynamic offset.
@@ -69,6 +69,7 @@ pub const BINDINGS: [Binding; 18] = [
     binding(15, "reflector", Access::Uniform),
     binding(16, "fermat_vertices", Access::StorageRead),
     binding(17, "reflections", Access::StorageReadWrite),
+    binding(18, "primary_hits", Access::StorageReadWrite),
 ];
 
 /// The bindings of the render kernel: nine storage buffers, one more than WebGPU's baseline
@@ -86,6 +87,38 @@ const RENDER_BINDINGS: [Binding; 12] = [
     BINDINGS[10],
     BINDINGS[13],
     BINDINGS[14],
+];
+
+/// The bindings of a split render's first kernel (`primary`): what camera rays and their
+/// traversal read, and where their hits go.
+const PRIMARY_BINDINGS: [Binding; 9] = [
+    BINDINGS[0],
+    BINDINGS[1],
+    BINDINGS[2],
+    BINDINGS[4],
+    BINDINGS[9],
+    BINDINGS[10],
+    BINDINGS[13],
+    BINDINGS[14],
+    BINDINGS[18],
+];
+
+/// The bindings of a split render's second kernel (`render_split`): the megakernel's and the
+/// camera rays' hits.
+const RENDER_SPLIT_BINDINGS: [Binding; 13] = [
+    BINDINGS[0],
+    BINDINGS[1],
+    BINDINGS[2],
+    BINDINGS[4],
+    BINDINGS[5],
+    BINDINGS[6],
+    BINDINGS[7],
+    BINDINGS[8],
+    BINDINGS[9],
+    BINDINGS[10],
+    BINDINGS[13],
+    BINDINGS[14],
+    BINDINGS[18],
 ];
 
 /// The bindings of the ray-query kernels.
@@ -180,6 +213,22 @@ pub const RENDER: Kernel = Kernel {
     bindings: &RENDER_BINDINGS,
 };
 
+/// A split render's first kernel: each camera ray's closest hit, stored for `RENDER_SPLIT`.
+pub const RENDER_PRIMARY: Kernel = Kernel {
+    name: "render_primary",
+    modules: RENDER.modules,
+    entry_point: "primary",
+    bindings: &PRIMARY_BINDINGS,
+};
+
+/// A split render's second kernel: the megakernel's paths from the stored camera-ray hits.
+pub const RENDER_SPLIT: Kernel = Kernel {
+    name: "render_split",
+    modules: RENDER.modules,
+    entry_point: "render_split",
+    bindings: &RENDER_SPLIT_BINDINGS,
+};
+
 const TRACE_MODULES: &[&str] = &[
     "types.wgsl",
     "bindings.wgsl",
@@ -233,8 +282,10 @@ pub const FERMAT: Kernel = Kernel {
 };
 
 /// Every kernel chambre builds.
-pub const KERNELS: [&Kernel; 6] = [
+pub const KERNELS: [&Kernel; 8] = [
     &RENDER,
+    &RENDER_PRIMARY,
+    &RENDER_SPLIT,
     &TRACE_CLOSEST,
     &TRACE_ANY,
     &TRACE_CLOSEST_CW,

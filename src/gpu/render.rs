@@ -5,6 +5,9 @@
 //! dispatch at its own dynamic offset of a uniform buffer), then copies of its status words and
 //! timestamps to mappable buffers whose mapping is requested at once. The host waits only in
 //! `finish`, for the oldest batch, while the next one is already queued.
+//!
+//! A dispatch runs the megakernel, or the split kernels one after the other
+//! ([`PathKernels`]): the same paths, the same image.
 
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
@@ -13,9 +16,31 @@ use std::time::Duration;
 use super::kernels::{self, Pipeline};
 use super::{GpuContext, wgpu_error_text};
 use crate::error::{Error, Result};
-use crate::layout::{GpuLight, GpuPass, WORKGROUP_SIZE};
+use crate::layout::{GpuLight, GpuPass, GpuPrimaryHit, WORKGROUP_SIZE};
 use crate::pack::FlatScene;
 use crate::render::{AccumulationLayout, Backend, DispatchStatus, RayBudgets, plan_passes};
+
+/// How the device runs a dispatch's camera samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PathKernels {
+    /// One kernel traces each sample's path whole (`render` in wgsl/render.wgsl).
+    #[default]
+    Megakernel,
+    /// The camera rays' closest hits in a kernel of their own (`primary`), stored, then the
+    /// paths from them (`render_split`): the traversal of the camera rays, most of a frame's
+    /// work, runs apart from the shading's code and registers.
+    Split,
+}
+
+impl PathKernels {
+    /// The kernels a dispatch runs, in order.
+    pub fn kernels(self) -> &'static [&'static kernels::Kernel] {
+        match self {
+            PathKernels::Megakernel => &[&kernels::RENDER],
+            PathKernels::Split => &[&kernels::RENDER_PRIMARY, &kernels::RENDER_SPLIT],
+        }
+    }
+}
 
 /// A buffer copied back to the host after a submission: the map is requested when the batch
 /// is submitted, and read when the batch is finished.
@@ -68,13 +93,16 @@ struct Batch {
     timestamps: Option<Readback>,
     _passes: wgpu::Buffer,
     _status: wgpu::Buffer,
-    _bind_group: wgpu::BindGroup,
+    _bind_groups: Vec<wgpu::BindGroup>,
 }
 
 /// The scene uploaded and the kernel compiled; runs batches into a device-side accumulation.
 pub struct GpuRenderer {
     context: GpuContext,
-    pipeline: Pipeline,
+    /// The kernels a dispatch runs, in order.
+    pipelines: Vec<Pipeline>,
+    /// Camera samples one dispatch may take (the split kernels' `primary_hits` hold as many).
+    samples_per_dispatch: u64,
     /// Every buffer of the bind group but the per-batch `pass_info` and `status`.
     scene_buffers: Vec<(&'static str, wgpu::Buffer)>,
     /// The `layout::FEATURE_*` bits the kernel was built with.
@@ -115,6 +143,17 @@ impl GpuRenderer {
         features: u32,
         budgets: RayBudgets,
     ) -> Result<GpuRenderer> {
+        GpuRenderer::with_kernels(context, scene, features, budgets, PathKernels::Megakernel)
+    }
+
+    /// Like [`GpuRenderer::with_budgets`], running each dispatch with `path_kernels`.
+    pub fn with_kernels(
+        context: GpuContext,
+        scene: &FlatScene,
+        features: u32,
+        budgets: RayBudgets,
+        path_kernels: PathKernels,
+    ) -> Result<GpuRenderer> {
         let missing = scene.features() & !features;
         if missing != 0 {
             return Err(Error::Gpu(format!(
@@ -123,17 +162,31 @@ impl GpuRenderer {
         }
         let device = &context.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let storage_buffers = kernels::RENDER.storage_buffers();
         let allowed = device.limits().max_storage_buffers_per_shader_stage;
-        if allowed < storage_buffers {
-            return Err(Error::Gpu(format!(
-                "the render kernel reads {storage_buffers} storage buffers; this adapter allows \
-                 {allowed} per shader stage (use --backend cpu)"
-            )));
+        for kernel in path_kernels.kernels() {
+            let storage_buffers = kernel.storage_buffers();
+            if allowed < storage_buffers {
+                return Err(Error::Gpu(format!(
+                    "the {} kernel reads {storage_buffers} storage buffers; this adapter \
+                     allows {allowed} per shader stage (use --backend cpu)",
+                    kernel.name
+                )));
+            }
         }
-        let layout = plan_passes(scene, &budgets).layout;
-        let scene_buffers = upload_scene(&context, scene, &layout)?;
-        let pipeline = kernels::build_pipeline(device, &kernels::RENDER, features);
+        let plan = plan_passes(scene, &budgets);
+        let samples_per_dispatch = plan.samples_per_dispatch();
+        let mut scene_buffers = upload_scene(&context, scene, &plan.layout)?;
+        if path_kernels == PathKernels::Split {
+            scene_buffers.push((
+                "primary_hits",
+                primary_hits_buffer(&context, samples_per_dispatch)?,
+            ));
+        }
+        let pipelines = path_kernels
+            .kernels()
+            .iter()
+            .map(|&kernel| kernels::build_pipeline(device, kernel, features))
+            .collect();
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
                 "creating the render pipeline: {}",
@@ -145,10 +198,11 @@ impl GpuRenderer {
         Ok(GpuRenderer {
             kernel_time: context.has_timestamps().then_some(Duration::ZERO),
             context,
-            pipeline,
+            pipelines,
+            samples_per_dispatch,
             scene_buffers,
             features,
-            layout,
+            layout: plan.layout,
             pass_stride,
             in_flight: VecDeque::new(),
             budgets,
@@ -173,6 +227,22 @@ impl GpuRenderer {
             .expect("uploaded with the scene")
             .1
     }
+}
+
+/// The split kernels' store of camera-ray hits: one per camera sample of a dispatch.
+fn primary_hits_buffer(context: &GpuContext, samples: u64) -> Result<wgpu::Buffer> {
+    let size = samples.max(1) * size_of::<GpuPrimaryHit>() as u64;
+    let limit = context.device.limits().max_storage_buffer_binding_size;
+    if size > limit {
+        let what = format!("the camera-ray hits of a dispatch ({samples} samples)");
+        return Err(super::over_binding_limit(&what, size, limit));
+    }
+    Ok(context.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("primary hits"),
+        size,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    }))
 }
 
 /// Uploads what the render kernel reads, named by binding.
@@ -247,6 +317,15 @@ impl Backend for GpuRenderer {
     }
 
     fn submit(&mut self, dispatches: &[GpuPass]) -> Result<()> {
+        if let Some(pass) = dispatches.iter().find(|p| {
+            p.tile_width as u64 * p.tile_height as u64 * p.sample_count as u64
+                > self.samples_per_dispatch
+        }) {
+            return Err(Error::Gpu(format!(
+                "a dispatch of {}x{} pixels and {} samples exceeds the plan's {} samples",
+                pass.tile_width, pass.tile_height, pass.sample_count, self.samples_per_dispatch
+            )));
+        }
         let context = &self.context;
         let device = &context.device;
         let stride = self.pass_stride as usize;
@@ -261,7 +340,11 @@ impl Backend for GpuRenderer {
             self.scene_buffers.iter().map(|(n, b)| (*n, b)).collect();
         buffers.push(("pass_info", &passes));
         buffers.push(("status", &status));
-        let bind_group = self.pipeline.bind_group(device, &buffers)?;
+        let bind_groups = self
+            .pipelines
+            .iter()
+            .map(|pipeline| pipeline.bind_group(device, &buffers))
+            .collect::<Result<Vec<_>>>()?;
         let queries = context.has_timestamps().then(|| {
             device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("kernel time"),
@@ -283,14 +366,18 @@ impl Backend for GpuRenderer {
                 label: Some("render batch"),
                 timestamp_writes,
             });
-            compute.set_pipeline(&self.pipeline.pipeline);
             for (i, pass) in dispatches.iter().enumerate() {
-                compute.set_bind_group(0, &bind_group, &[(i * stride) as u32]);
-                compute.dispatch_workgroups(
-                    pass.tile_width.div_ceil(WORKGROUP_SIZE),
-                    pass.tile_height.div_ceil(WORKGROUP_SIZE),
-                    1,
-                );
+                // A split dispatch's kernels run in order: a compute pass orders the writes
+                // of one dispatch before the reads of the next.
+                for (pipeline, bind_group) in self.pipelines.iter().zip(&bind_groups) {
+                    compute.set_pipeline(&pipeline.pipeline);
+                    compute.set_bind_group(0, bind_group, &[(i * stride) as u32]);
+                    compute.dispatch_workgroups(
+                        pass.tile_width.div_ceil(WORKGROUP_SIZE),
+                        pass.tile_height.div_ceil(WORKGROUP_SIZE),
+                        1,
+                    );
+                }
             }
         }
         let status_readback = Readback::new(device, "status readback", status.size());
@@ -318,7 +405,7 @@ impl Backend for GpuRenderer {
             timestamps,
             _passes: passes,
             _status: status,
-            _bind_group: bind_group,
+            _bind_groups: bind_groups,
         });
         Ok(())
     }
