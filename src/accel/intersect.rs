@@ -57,14 +57,18 @@ pub struct RayQuery {
     pub time: f32,
 }
 
-fn safe_reciprocal(d: f32) -> f32 {
-    if (0.0..MIN_DIRECTION).contains(&d) {
-        1.0 / MIN_DIRECTION
-    } else if d < 0.0 && d > -MIN_DIRECTION {
-        -1.0 / MIN_DIRECTION
-    } else {
-        1.0 / d
-    }
+/// 1 / d per component, a component below `MIN_DIRECTION` in magnitude taken as
+/// ±`MIN_DIRECTION` (+ for a zero of either sign), so the slab test never meets an infinity;
+/// one vector division. Twin: `safe_reciprocal` in wgsl/intersect.wgsl, per component.
+fn safe_reciprocals(d: Vec3) -> Vec3 {
+    let d = Vec3A::from(d);
+    let least = Vec3A::select(
+        d.cmplt(Vec3A::ZERO),
+        Vec3A::splat(-MIN_DIRECTION),
+        Vec3A::splat(MIN_DIRECTION),
+    );
+    let safe = Vec3A::select(d.abs().cmplt(Vec3A::splat(MIN_DIRECTION)), least, d);
+    (Vec3A::ONE / safe).into()
 }
 
 impl RayQuery {
@@ -84,18 +88,16 @@ impl RayQuery {
             std::mem::swap(&mut kx, &mut ky);
         }
         let dz = direction[kz];
+        // Each as one vector division: the same correctly rounded quotients as one by one.
+        let shear = Vec3A::new(-direction[kx], -direction[ky], 1.0) / Vec3A::splat(dz);
         RayQuery {
             origin,
             direction,
-            inv_direction: Vec3::new(
-                safe_reciprocal(direction.x),
-                safe_reciprocal(direction.y),
-                safe_reciprocal(direction.z),
-            ),
+            inv_direction: safe_reciprocals(direction),
             kx,
             ky,
             kz,
-            shear: Vec3::new(-direction[kx] / dz, -direction[ky] / dz, 1.0 / dz),
+            shear: shear.into(),
             time: 0.0,
         }
     }
@@ -511,5 +513,60 @@ fn next_float_up(v: f32) -> f32 {
         f32::from_bits(v.to_bits() + 1)
     } else {
         f32::from_bits(v.to_bits() - 1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The rule of `safe_reciprocal` in wgsl/intersect.wgsl, one component at a time.
+    fn safe_reciprocal(d: f32) -> f32 {
+        if (0.0..MIN_DIRECTION).contains(&d) {
+            1.0 / MIN_DIRECTION
+        } else if d < 0.0 && d > -MIN_DIRECTION {
+            -1.0 / MIN_DIRECTION
+        } else {
+            1.0 / d
+        }
+    }
+
+    /// The vector reciprocals are the WGSL rule's, bit for bit, at the extremes too: zeros of
+    /// both signs, the smallest subnormal, values either side of `MIN_DIRECTION`, the largest
+    /// floats, infinities and NaN.
+    #[test]
+    fn safe_reciprocals_follow_the_kernels_rule() {
+        let mut values = vec![
+            0.0,
+            f32::from_bits(1),
+            1e-30,
+            MIN_DIRECTION,
+            f32::from_bits(MIN_DIRECTION.to_bits() - 1),
+            f32::from_bits(MIN_DIRECTION.to_bits() + 1),
+            1e-7,
+            0.5,
+            1.0,
+            3.0,
+            f32::MAX,
+            f32::INFINITY,
+        ];
+        values.extend(values.clone().iter().map(|v| -v));
+        values.push(f32::NAN);
+        for &x in &values {
+            for &y in &values {
+                let d = Vec3::new(x, y, 1.0);
+                let got = safe_reciprocals(d);
+                for axis in 0..3 {
+                    let want = safe_reciprocal(d[axis]);
+                    assert!(
+                        got[axis].to_bits() == want.to_bits()
+                            || (got[axis].is_nan() && want.is_nan()),
+                        "1/{} gave {}, the rule {want}",
+                        d[axis],
+                        got[axis]
+                    );
+                }
+            }
+        }
     }
 }
