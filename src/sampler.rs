@@ -27,7 +27,7 @@ use std::f64::consts::TAU;
 
 use crate::layout::*;
 use crate::math::rng::{Rng, pcg_hash};
-use crate::math::sampling::{concentric_disk, strata_columns, stratified_2d};
+use crate::math::sampling::{concentric_disk, div_rem, strata_columns, stratified_2d};
 
 /// Samples per pixel the table-based samplers (poisson, interleaved) accept.
 pub const MAX_TABLE_SPP: u32 = 4096;
@@ -331,7 +331,7 @@ pub fn permute(i: u32, n: u32, key: u32) -> Option<u32> {
         i &= w;
         i ^= i >> 5;
         if i < n {
-            return Some(i.wrapping_add(key) % n);
+            return Some(div_rem(i.wrapping_add(key), n).1);
         }
     }
     None
@@ -533,8 +533,9 @@ pub fn light_sample_2d(
     u: [f32; 2],
     flags: &mut u32,
 ) -> [f32; 2] {
-    if frame.pixel_sampler == SAMPLER_RANDOM || frame.spp > MAX_LIGHT_PATTERN_POINTS / light_samples
-    {
+    // The kernel's `spp > MAX_LIGHT_PATTERN_POINTS / light_samples`, without its division.
+    let points = frame.spp as u64 * light_samples as u64;
+    if frame.pixel_sampler == SAMPLER_RANDOM || points > MAX_LIGHT_PATTERN_POINTS as u64 {
         return stratified_2d(k, light_samples, light_columns, u);
     }
     let index = sample * light_samples + k;
