@@ -46,7 +46,7 @@ fn permute(index: u32, n: u32, key: u32) -> u32 {
         i &= w;
         i ^= i >> 5u;
         if (i < n) {
-            return (i + key) % n;
+            return remainder(i + key, n);
         }
     }
     flag_status(STATUS_PERMUTE_CAP);

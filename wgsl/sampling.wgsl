@@ -4,10 +4,38 @@
 const FRAC_PI_4: f32 = 0.78539816339744830962;
 
 fn stratified_2d(index: u32, n: u32, columns: u32, u: vec2<f32>) -> vec2<f32> {
-    let rows = n / columns;
-    let cx = f32(index % columns);
-    let cy = f32(index / columns);
-    return vec2<f32>((cx + u.x) / f32(columns), (cy + u.y) / f32(rows));
+    let rows = quotient(n, columns);
+    let cx = f32(remainder(index, columns));
+    let cy = f32(quotient(index, columns));
+    return vec2<f32>(over(cx + u.x, columns), over(cy + u.y, rows));
+}
+
+// a / d and a % d (d > 0): a shift and a mask where d is a power of two, as most strata counts
+// are (twin: div_rem in src/math/sampling.rs; lavapipe divides integers lane by lane).
+fn is_power_of_two(d: u32) -> bool {
+    return (d & (d - 1u)) == 0u;
+}
+
+fn quotient(a: u32, d: u32) -> u32 {
+    if (is_power_of_two(d)) {
+        return a >> countTrailingZeros(d);
+    }
+    return a / d;
+}
+
+fn remainder(a: u32, d: u32) -> u32 {
+    if (is_power_of_two(d)) {
+        return a & (d - 1u);
+    }
+    return a % d;
+}
+
+// x / d, as a product with the exact reciprocal where d is a power of two (twin: over).
+fn over(x: f32, d: u32) -> f32 {
+    if (is_power_of_two(d)) {
+        return x * (1.0 / f32(d));
+    }
+    return x / f32(d);
 }
 
 fn sin_quarter(x: f32) -> f32 {
