@@ -77,6 +77,13 @@ fn bench_rays_reports_the_same_checksum_on_every_backend() {
         let bytes = reads["bytes_per_ray"].as_f64().unwrap();
         assert!((bytes - (80.0 * nodes + 48.0 * prims + 36.0)).abs() < 1e-6 * bytes);
     }
+    let set_up = body["set_up"].as_array().unwrap();
+    assert_eq!(set_up.len(), 2, "one per ray set");
+    for s in set_up {
+        let m = &s["mrays_per_s"];
+        assert!(m["min"].as_f64().unwrap() > 0.0, "{s}");
+        assert!(m["min"].as_f64() <= m["median"].as_f64(), "{s}");
+    }
     let results = body["results"].as_array().unwrap();
     assert_eq!(
         results.len(),

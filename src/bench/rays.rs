@@ -225,6 +225,30 @@ pub fn trace_cpu(scene: &FlatScene, bvh: Bvh, rays: &RaySet, query: Query) -> Re
         .collect())
 }
 
+/// What every CPU query pays before traversing, as Embree's benchmark measures it: each ray
+/// read, its `RayQuery` built (the slab test's reciprocals, the watertight test's shear), and a
+/// result written, over the same threads as `trace_cpu`, with no traversal.
+pub fn set_up_cpu(rays: &RaySet) -> Vec<f32> {
+    (0..rays.len())
+        .into_par_iter()
+        .with_min_len(1024)
+        .map(|i| {
+            let ray = RayQuery::new(rays.origins[i], rays.directions[i]);
+            std::hint::black_box(&ray);
+            T_FAR
+        })
+        .collect()
+}
+
+/// The ray set-up alone on the CPU, for one ray set ([`set_up_cpu`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct SetUpResult {
+    /// "coherent" or "incoherent".
+    pub set: &'static str,
+    /// Millions of rays set up per second over the timed runs.
+    pub mrays_per_s: Spread,
+}
+
 /// The figures of one ray set, query and backend.
 #[derive(Clone, Debug, Serialize)]
 pub struct RaysResult {
@@ -263,6 +287,8 @@ pub struct RaysReport {
     pub cwbvh_reads: Vec<Reads>,
     /// One entry per ray set, backend, BVH and query.
     pub results: Vec<RaysResult>,
+    /// The CPU's ray set-up alone, per ray set (when the CPU is measured).
+    pub set_up: Vec<SetUpResult>,
 }
 
 /// Mean bytes one closest-hit ray reads through the CWBVH: its nodes (80 bytes each) and
@@ -399,9 +425,18 @@ pub fn run(
     let incoherent = incoherent_rays(lo, hi, coherent.len(), config.seed);
     let mut results = Vec::new();
     let mut cwbvh_reads = Vec::new();
+    let mut set_up = Vec::new();
     for (set, rays) in [("coherent", &coherent), ("incoherent", &incoherent)] {
         if config.bvhs.contains(&Bvh::Cwbvh) {
             cwbvh_reads.push(Reads::of(set, cw, rays));
+        }
+        if backends.contains(&Backend::Cpu) {
+            let mrays_per_s = measure(config.runs, rays.len(), || {
+                let start = Instant::now();
+                set_up_cpu(rays);
+                Ok(start.elapsed())
+            })?;
+            set_up.push(SetUpResult { set, mrays_per_s });
         }
         for &backend in backends {
             for &bvh in &config.bvhs {
@@ -448,6 +483,7 @@ pub fn run(
         bvh2_nodes: scene.nodes.len(),
         cwbvh_reads,
         results,
+        set_up,
     })
 }
 
@@ -514,6 +550,26 @@ impl RaysReport {
                 r.mrays_per_s.max,
                 r.checksum.hits,
                 r.checksum.sum_t
+            );
+        }
+        for s in &self.set_up {
+            // The share of the fastest CPU closest-hit query's time that is set-up.
+            let fastest = self
+                .results
+                .iter()
+                .filter(|r| r.set == s.set && r.query == Query::ClosestHit)
+                .filter(|r| r.backend.starts_with("cpu"))
+                .map(|r| r.mrays_per_s.median)
+                .fold(0.0, f64::max);
+            out += &format!(
+                "\nRay set-up alone on the CPU, {} rays (each read, its `RayQuery` built, a \
+                 result written; no traversal): {:.0} Mrays/s (min {:.0}, max {:.0}), {:.1}% of \
+                 the time of the fastest CPU closest-hit query above\n",
+                s.set,
+                s.mrays_per_s.median,
+                s.mrays_per_s.min,
+                s.mrays_per_s.max,
+                100.0 * fastest / s.mrays_per_s.median
             );
         }
         out
