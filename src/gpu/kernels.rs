@@ -103,23 +103,17 @@ const PRIMARY_BINDINGS: [Binding; 9] = [
     BINDINGS[18],
 ];
 
-/// The bindings of a split render's second kernel (`render_split`): the megakernel's and the
+/// The bindings of a split render's second kernel (`render_split`): the megakernel's, then the
 /// camera rays' hits.
-const RENDER_SPLIT_BINDINGS: [Binding; 13] = [
-    BINDINGS[0],
-    BINDINGS[1],
-    BINDINGS[2],
-    BINDINGS[4],
-    BINDINGS[5],
-    BINDINGS[6],
-    BINDINGS[7],
-    BINDINGS[8],
-    BINDINGS[9],
-    BINDINGS[10],
-    BINDINGS[13],
-    BINDINGS[14],
-    BINDINGS[18],
-];
+const RENDER_SPLIT_BINDINGS: [Binding; 13] = {
+    let mut list = [BINDINGS[18]; 13];
+    let mut i = 0;
+    while i < RENDER_BINDINGS.len() {
+        list[i] = RENDER_BINDINGS[i];
+        i += 1;
+    }
+    list
+};
 
 /// The bindings of the ray-query kernels.
 const TRACE_BINDINGS: [Binding; 7] = [
