@@ -209,6 +209,39 @@ fn the_split_kernels_render_the_megakernels_image() {
     }
 }
 
+/// A dispatch of more camera samples than the split kernels' hit store holds is refused before
+/// anything runs, rather than overrunning the store (the render plan never makes one).
+#[test]
+fn the_split_kernels_refuse_a_dispatch_their_hit_store_cannot_hold() {
+    use chambre::render::Backend;
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let flat = flatten(&common::load(
+        "scenes/spheres.toml",
+        &["render.width=24", "render.height=16"],
+    ));
+    let mut renderer = GpuRenderer::with_kernels(
+        context,
+        &flat,
+        flat.features(),
+        RayBudgets::DEFAULT,
+        PathKernels::Split,
+    )
+    .unwrap();
+    let plan = chambre::render::plan_passes(&flat, &RayBudgets::DEFAULT);
+    let mut pass = plan.dispatches(0)[0];
+    pass.sample_count = (plan.samples_per_dispatch() + 1) as u32;
+    pass.tile_width = 1;
+    pass.tile_height = 1;
+    let error = renderer
+        .submit(&[pass])
+        .err()
+        .expect("an oversized dispatch");
+    assert!(error.to_string().contains("camera-ray hits"), "{error}");
+    assert_eq!(renderer.in_flight(), 0);
+}
+
 #[test]
 fn a_kernel_without_a_feature_the_scene_uses_is_refused() {
     let flat = flatten(&common::load(

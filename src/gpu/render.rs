@@ -101,6 +101,8 @@ pub struct GpuRenderer {
     context: GpuContext,
     /// The kernels a dispatch runs, in order.
     pipelines: Vec<Pipeline>,
+    /// The megakernel or the split kernels.
+    path_kernels: PathKernels,
     /// Camera samples one dispatch may take (the split kernels' `primary_hits` hold as many).
     samples_per_dispatch: u64,
     /// Every buffer of the bind group but the per-batch `pass_info` and `status`.
@@ -199,6 +201,7 @@ impl GpuRenderer {
             kernel_time: context.has_timestamps().then_some(Duration::ZERO),
             context,
             pipelines,
+            path_kernels,
             samples_per_dispatch,
             scene_buffers,
             features,
@@ -317,12 +320,16 @@ impl Backend for GpuRenderer {
     }
 
     fn submit(&mut self, dispatches: &[GpuPass]) -> Result<()> {
-        if let Some(pass) = dispatches.iter().find(|p| {
-            p.tile_width as u64 * p.tile_height as u64 * p.sample_count as u64
-                > self.samples_per_dispatch
-        }) {
+        let samples =
+            |p: &GpuPass| p.tile_width as u64 * p.tile_height as u64 * p.sample_count as u64;
+        let split = self.path_kernels == PathKernels::Split;
+        if let Some(pass) = dispatches
+            .iter()
+            .find(|&p| split && samples(p) > self.samples_per_dispatch)
+        {
             return Err(Error::Gpu(format!(
-                "a dispatch of {}x{} pixels and {} samples exceeds the plan's {} samples",
+                "a dispatch of {}x{} pixels and {} samples exceeds the {} camera-ray hits \
+                 the split kernels store",
                 pass.tile_width, pass.tile_height, pass.sample_count, self.samples_per_dispatch
             )));
         }
