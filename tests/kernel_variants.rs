@@ -234,10 +234,7 @@ fn the_split_kernels_refuse_a_dispatch_their_hit_store_cannot_hold() {
     pass.sample_count = (plan.samples_per_dispatch() + 1) as u32;
     pass.tile_width = 1;
     pass.tile_height = 1;
-    let error = renderer
-        .submit(&[pass])
-        .err()
-        .expect("an oversized dispatch");
+    let error = renderer.submit(&[pass]).expect_err("an oversized dispatch");
     assert!(error.to_string().contains("camera-ray hits"), "{error}");
     assert_eq!(renderer.in_flight(), 0);
 }
