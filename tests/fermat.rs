@@ -25,6 +25,14 @@ fn direction(rng: &mut Rng) -> DVec3 {
     DVec3::new(s * phi.cos(), z, s * phi.sin())
 }
 
+/// `count` random points 1 to 3 units from `center`, in uniform directions.
+fn points_around(center: DVec3, count: usize, seed: u32) -> Vec<DVec3> {
+    let mut rng = Rng::new(seed, 0, 0);
+    (0..count)
+        .map(|_| center + direction(&mut rng) * (1.0 + 2.0 * rng.next_f32() as f64))
+        .collect()
+}
+
 /// The seed's search on random configurations around a sphere (E at 2–6 radii, V at 1.2–4.2,
 /// at most 150° apart seen from the centre). Where V shows in the mirror at all (E and V see a
 /// common point of the sphere: the angles their tangent cones reach from the centre add up to
@@ -370,10 +378,7 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points_on_a_torus_an_ellipsoid_and_a_cyl
         ..Torus::new(center, 0.6, 0.2)
     };
     let eye = center + DVec3::new(0.3, 1.1, 2.8);
-    let mut rng = Rng::new(29, 0, 0);
-    let vertices: Vec<DVec3> = (0..3000)
-        .map(|_| center + direction(&mut rng) * (1.0 + 2.0 * rng.next_f32() as f64))
-        .collect();
+    let vertices = points_around(center, 3000, 29);
     let solver = Solver::default();
     let surfaces = [
         MirrorSurface::Torus(torus),
@@ -440,10 +445,7 @@ fn turning_a_reflector_with_the_scene_turns_its_reflections() {
     let cylinder = Cylinder::new(center, 0.45);
     let torus = Torus::new(center, 0.6, 0.2);
     let eye = center + DVec3::new(0.3, 1.1, 2.8);
-    let mut rng = Rng::new(31, 0, 0);
-    let vertices: Vec<DVec3> = (0..2000)
-        .map(|_| center + direction(&mut rng) * (1.0 + 2.0 * rng.next_f32() as f64))
-        .collect();
+    let vertices = points_around(center, 2000, 31);
     let solver = Solver::default();
     let mut worst: f64 = 0.0;
     let mut compared = [0; 3];
