@@ -638,7 +638,7 @@ pub fn seen_from_outside(p: DVec3, n: DVec3, eye: DVec3, vertex: DVec3) -> bool 
 
 /// Whether the raster preview draws a reflection found at `p` (outward unit normal `n`):
 /// seen from outside, with the law of reflection holding to `layout::REFLECTION_TOLERANCE`
-/// (the CPU twin of `reflection_holds` in wgsl/preview_reflect.wgsl).
+/// (the CPU twin of `reflection_shows` in wgsl/fermat.wgsl).
 pub fn drawn_in_preview(p: DVec3, n: DVec3, eye: DVec3, vertex: DVec3) -> bool {
     seen_from_outside(p, n, eye, vertex)
         && reflection_error(p, n, eye, vertex) < f64::from(crate::layout::REFLECTION_TOLERANCE)

@@ -592,8 +592,10 @@ pub struct GpuReflector {
     pub minor: f32,
     /// A cylinder's height (scene units); 0 for the others.
     pub height: f32,
-    /// Padding to the WGSL layout.
-    pub _pad: u32,
+    /// 1 + the index of the mirror this surface belongs to (the id the preview's main pass
+    /// writes): the cull (`fermat_cull`) leaves out the mirror's own triangles. 0 where no
+    /// triangles are culled.
+    pub mirror: u32,
     /// An ellipsoid's semi-axes along its own x, y, z (w unused); zero for the others.
     pub radii: [f32; 4],
     /// The unit quaternion (x, y, z, w) that turns a torus's, ellipsoid's or cylinder's own
@@ -623,6 +625,21 @@ pub struct GpuReflection {
     pub depth: f32,
     /// 1 where the step system was singular (the search stopped there).
     pub degenerate: u32,
+}
+
+/// The arguments of an indirect draw (wgpu's `DrawIndirectArgs`): the `fermat_cull` kernel
+/// counts the vertices of the reflected triangles that show, and the preview draws that many.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuDrawArgs {
+    /// Vertices to draw: three per triangle the cull kept (counted atomically).
+    pub vertex_count: u32,
+    /// 1.
+    pub instance_count: u32,
+    /// 0.
+    pub first_vertex: u32,
+    /// 0.
+    pub first_instance: u32,
 }
 
 impl GpuLight {

@@ -83,8 +83,12 @@ pub struct ReflectorPass {
     pub id: u32,
     /// The reflector's material.
     pub material: u32,
+    /// The search's index: its rows of the reflection points and of the triangles shown.
+    pub search: u32,
+    /// Vertices each search solves: the length of a search's rows of reflection points.
+    pub solves: u32,
     /// Padding to the WGSL layout.
-    pub _pad: u32,
+    pub _pad: [u32; 3],
 }
 
 /// Every bounded primitive and plane of `scene` as triangles; `extent` sizes the planes (they

@@ -7,7 +7,7 @@
 use chambre::bench::fermat::{FermatConfig, FermatReport};
 use chambre::fermat::{
     BezierPatch, Cylinder, Ellipsoid, Reflector, Solver, Sphere, Torus, alhazen_sphere,
-    on_cylinder, on_patch, reflection_error, seen_from_outside,
+    drawn_in_preview, on_cylinder, on_patch, reflection_error, seen_from_outside,
 };
 use chambre::math::rng::Rng;
 use chambre::preview::MirrorSurface;
@@ -176,6 +176,124 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points() {
         agree as f64 >= 0.99 * compared as f64,
         "{agree} of {compared}"
     );
+}
+
+/// The preview's cull (`fermat_cull`) lists exactly the reflected triangles whose three
+/// vertices' reflections it draws — the CPU twin `fermat::drawn_in_preview` judging the
+/// kernel's own points — and that do not lie on the searched mirror itself: a floor of 1,800
+/// triangles under a sphere and under one of the teapot's patches, a seventh of them tagged as
+/// lying on the mirror (left out), a seventh on another mirror (kept). Triangles with a vertex
+/// within 2% of the tolerance, or within 1e-4 of being unseen, where the kernel's f32 and the
+/// twin's f64 may judge differently, are not compared.
+#[test]
+fn the_cull_lists_the_triangles_whose_reflections_show() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let (_, patches) = teapot();
+    let cases = [
+        (
+            "sphere",
+            MirrorSurface::Sphere {
+                center: glam::Vec3::new(0.0, 0.65, 0.0),
+                radius: 0.6,
+            },
+            DVec3::new(0.0, 1.6, 3.2),
+        ),
+        (
+            "teapot patch",
+            MirrorSurface::Patch(patches[2]),
+            DVec3::new(0.3, 1.8, 3.5),
+        ),
+    ];
+    // A 31 x 31 grid of floor points from -2 to 2, two triangles per cell.
+    let n = 31;
+    let vertices: Vec<glam::Vec3> = (0..n * n)
+        .map(|k| {
+            let at = |i: u32| -2.0 + 4.0 * i as f32 / (n - 1) as f32;
+            glam::Vec3::new(at(k % n), 0.0, at(k / n))
+        })
+        .collect();
+    let mut triangles = Vec::new();
+    for row in 0..n - 1 {
+        for column in 0..n - 1 {
+            let k = row * n + column;
+            for corners in [[k, k + 1, k + n], [k + 1, k + n + 1, k + n]] {
+                // Tags: 0 on no mirror, 1 on the mirror searched, 2 on another.
+                let tag = match triangles.len() % 7 {
+                    3 => 1,
+                    5 => 2,
+                    _ => 0,
+                };
+                triangles.push([corners[0], corners[1], corners[2], tag]);
+            }
+        }
+    }
+    let tolerance = f64::from(chambre::layout::REFLECTION_TOLERANCE);
+    for (name, surface, eye) in cases {
+        let (points, shown) = chambre::gpu::fermat::shown_triangles(
+            &context,
+            surface,
+            (eye.as_vec3(), 1),
+            &vertices,
+            &triangles,
+            chambre::gpu::preview::ReflectionOptions::default().steps,
+        )
+        .unwrap();
+        // Per vertex: drawn by the twin's judgement, or too close to call.
+        let judged: Vec<Option<bool>> = vertices
+            .iter()
+            .zip(&points)
+            .map(|(v, r)| {
+                let (v, p) = (v.as_dvec3(), glam::Vec3::from(r.point).as_dvec3());
+                let normal = glam::Vec3::from(r.normal).as_dvec3();
+                let unseen = |x: DVec3| (x - p).normalize().dot(normal).abs() < 1e-4;
+                let error = reflection_error(p, normal, eye, v);
+                let close = normal != DVec3::ZERO
+                    && (unseen(eye) || unseen(v) || (error / tolerance - 1.0).abs() < 0.02);
+                (!close).then(|| drawn_in_preview(p, normal, eye, v))
+            })
+            .collect();
+        let (mut compared, mut own_left_out) = (0, 0);
+        let mut expected = Vec::new();
+        for (t, tri) in triangles.iter().enumerate() {
+            let corners: Option<Vec<bool>> = tri[..3].iter().map(|&k| judged[k as usize]).collect();
+            let Some(corners) = corners else {
+                continue;
+            };
+            compared += 1;
+            let drawn = corners.iter().all(|&d| d);
+            own_left_out += (drawn && tri[3] == 1) as u32;
+            if drawn && tri[3] != 1 {
+                expected.push(t as u32);
+            }
+        }
+        let listed: Vec<u32> = shown
+            .iter()
+            .copied()
+            .filter(|&t| {
+                triangles[t as usize][..3]
+                    .iter()
+                    .all(|&k| judged[k as usize].is_some())
+            })
+            .collect();
+        eprintln!(
+            "{name}: {} triangles listed, {} of them compared; {compared} compared, {own_left_out} \
+             on the mirror itself left out",
+            shown.len(),
+            listed.len()
+        );
+        assert!(compared > 1700, "{name}: {compared} compared");
+        assert!(expected.len() > 50, "{name}: {} shown", expected.len());
+        // Some triangles drawn, and some not: what the cull removes.
+        assert!(
+            compared - expected.len() > 100,
+            "{name}: {} shown",
+            expected.len()
+        );
+        assert!(own_left_out > 5, "{name}: {own_left_out}");
+        assert_eq!(listed, expected, "{name}");
+    }
 }
 
 #[test]

@@ -248,7 +248,7 @@ fn shared_structs_have_identical_layouts() {
             kind,
             minor,
             height,
-            _pad,
+            mirror,
             radii,
             orientation,
             control
@@ -264,6 +264,15 @@ fn shared_structs_have_identical_layouts() {
             uv,
             depth,
             degenerate
+        }
+    );
+    layout!(
+        module,
+        GpuDrawArgs {
+            vertex_count,
+            instance_count,
+            first_vertex,
+            first_instance
         }
     );
     layout!(
@@ -449,7 +458,11 @@ fn preview_structs_have_identical_layouts() {
         ("far", offset_of!(ReflectorPass, far)),
         ("id", offset_of!(ReflectorPass, id)),
         ("material", offset_of!(ReflectorPass, material)),
+        ("search", offset_of!(ReflectorPass, search)),
+        ("solves", offset_of!(ReflectorPass, solves)),
         ("_pad0", offset_of!(ReflectorPass, _pad)),
+        ("_pad1", offset_of!(ReflectorPass, _pad) + 4),
+        ("_pad2", offset_of!(ReflectorPass, _pad) + 8),
     ];
     check_struct(&module, "ReflectorPass", size_of::<ReflectorPass>(), &pass);
 }

@@ -23,10 +23,18 @@
 @group(0) @binding(13) var<storage, read> cw_nodes: array<GpuCwNode>;
 // The pixels an adaptive pass samples (`y * width + x`), when `pass_info.listed_pixels` is not 0.
 @group(0) @binding(14) var<storage, read> pixel_list: array<u32>;
-// The Fermat kernel's reflector and eye, the vertices it solves (xyz, w unused) and their
-// reflection points (wgsl/fermat.wgsl).
-@group(0) @binding(15) var<uniform> reflector: GpuReflector;
+// The Fermat kernel's searches, one surface and eye each (a dispatch's y picks one), the
+// vertices each solves (xyz, w unused) and their reflection points, search after search
+// (wgsl/fermat.wgsl).
+@group(0) @binding(15) var<storage, read> reflectors: array<GpuReflector>;
 @group(0) @binding(16) var<storage, read> fermat_vertices: array<vec4<f32>>;
 @group(0) @binding(17) var<storage, read_write> reflections: array<GpuReflection>;
 // A split render's camera-ray hits, one per sample of a dispatch (wgsl/render.wgsl).
 @group(0) @binding(18) var<storage, read_write> primary_hits: array<GpuPrimaryHit>;
+// The preview's reflected triangles for `fermat_cull` (wgsl/fermat.wgsl): per triangle its three
+// vertices' solves (indices into `fermat_vertices`) and, in w, 1 + the index of the mirror it
+// lies on (0: on none); per search, the triangles whose reflection shows (a list as long as
+// `reflected_triangles`, search after search), and the indirect draw that draws them.
+@group(0) @binding(19) var<storage, read> reflected_triangles: array<vec4<u32>>;
+@group(0) @binding(20) var<storage, read_write> shown_triangles: array<u32>;
+@group(0) @binding(21) var<storage, read_write> draw_args: array<GpuDrawArgs>;

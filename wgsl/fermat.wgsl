@@ -11,6 +11,9 @@ override FERMAT_STEPS: u32 = 5u;
 // only its own surface's code (`gpu::fermat::FermatPass`).
 override REFLECTOR_KIND: u32 = 0u;
 const FERMAT_MIN_SIZE: f32 = 1e-7;
+// The invocation's search (`reflectors[global_invocation_id.y]`), which the surface functions
+// below read.
+var<private> reflector: GpuReflector;
 const TAU: f32 = 6.283185307179586;
 
 // The parametrisation's frame for one vertex: a sphere's faces E and V, x toward the
@@ -244,8 +247,10 @@ fn replaced_corner(corners: array<vec2<f32>, 3>, p: vec2<f32>) -> u32 {
 
 @compute @workgroup_size(64, 1, 1)
 fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
+    // One row of the dispatch per search; a pipeline solves its kind's searches only.
+    reflector = reflectors[id.y];
     let i = id.x;
-    if (i >= reflector.count) {
+    if (reflector.kind != REFLECTOR_KIND || i >= reflector.count) {
         return;
     }
     // The search runs in the reflector's own frame (a turned torus, ellipsoid or cylinder;
@@ -330,6 +335,54 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         && (best.y < -margin * h || best.y > (1.0 + margin) * h)) {
         normal = vec3<f32>(0.0);
     }
-    reflections[i] = GpuReflection(point, steps, normal, 0u, best, length(vertex - own_point),
-        degenerate);
+    reflections[id.y * reflector.count + i] = GpuReflection(point, steps, normal, 0u, best,
+        length(vertex - own_point), degenerate);
+}
+
+// The reflection `r` of `vertex` is drawn: E and V both see P from outside the mirror and the
+// law of reflection holds at P to REFLECTION_TOLERANCE. (A search whose triangle shrank below
+// f32's resolution reports its step system singular; its point still counts if the law holds
+// there.) CPU twin: `fermat::drawn_in_preview`.
+fn reflection_shows(r: GpuReflection, eye: vec3<f32>, vertex: vec3<f32>) -> bool {
+    let n = r.normal;
+    let to_eye = normalize(eye - r.point);
+    let to_vertex = normalize(vertex - r.point);
+    let half = to_eye + to_vertex;
+    return dot(n, to_eye) > 0.0 && dot(n, to_vertex) > 0.0
+        && length(cross(n, normalize(half))) < REFLECTION_TOLERANCE;
+}
+
+// One reflected triangle of one search per invocation (x the triangle, y the search): listed in
+// the search's part of `shown_triangles` (and its three vertices counted into its indirect
+// draw) when all three vertices' reflections show on the search's surface and the triangle
+// does not lie on that mirror itself (a mirror does not reflect itself in the preview). Runs
+// after `fermat` has solved the vertices; the preview draws only the listed triangles, so the
+// vertex stage no longer runs for the many whose reflection is not on a surface (most of a
+// teapot patch's). The list's order varies from run to run; the reflections' depth test makes
+// the image independent of it. The counts start at 0 (cleared before the dispatch).
+@compute @workgroup_size(64, 1, 1)
+fn fermat_cull(@builtin(global_invocation_id) id: vec3<u32>) {
+    let t = id.x;
+    let s = id.y;
+    let triangles = arrayLength(&reflected_triangles);
+    if (t == 0u) {
+        draw_args[s].instance_count = 1u;
+    }
+    reflector = reflectors[s];
+    if (t >= triangles) {
+        return;
+    }
+    let triangle = reflected_triangles[t];
+    if (triangle.w == reflector.mirror) {
+        return;
+    }
+    for (var k = 0u; k < 3u; k += 1u) {
+        let solve = triangle[k];
+        let r = reflections[s * reflector.count + solve];
+        if (!reflection_shows(r, reflector.eye, fermat_vertices[solve].xyz)) {
+            return;
+        }
+    }
+    let slot = atomicAdd(&draw_args[s].vertex_count, 3u) / 3u;
+    shown_triangles[s * triangles + slot] = t;
 }

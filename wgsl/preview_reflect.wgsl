@@ -22,15 +22,26 @@ struct ReflectorPass {
     id: u32,
     // The reflector's material.
     material: u32,
+    // The search's index: its rows of `reflected_points` and `shown_triangles`.
+    search: u32,
+    // Vertices each search solves: the length of a search's row of `reflected_points`.
+    solves: u32,
     _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(1) @binding(0) var<storage, read> reflected_vertices: array<PreviewVertex>;
+// Every search's reflection points, search after search (`reflector_pass.search` picks a row).
 @group(1) @binding(1) var<storage, read> reflected_points: array<GpuReflection>;
 @group(1) @binding(2) var<uniform> reflector_pass: ReflectorPass;
 @group(1) @binding(3) var reflector_ids: texture_2d<u32>;
 // Per reflected vertex, the index of its Fermat solve (vertices at one position share one).
 @group(1) @binding(4) var<storage, read> solve_of: array<u32>;
+// Per search, the reflected triangles whose reflection shows on its surface, as `fermat_cull`
+// listed them (wgsl/fermat.wgsl; a row as long as the reflected triangles): the draw runs three
+// vertices for each.
+@group(1) @binding(5) var<storage, read> shown_triangles: array<u32>;
 
 struct ReflectedOut {
     @builtin(position) clip: vec4<f32>,
@@ -46,35 +57,17 @@ struct ReflectedOut {
     @location(5) @interpolate(flat) reflector: u32,
 }
 
-// Vertex `i`'s reflection is drawn: E and V both see P from outside the mirror and the law of
-// reflection holds at P. (A search whose triangle shrank below f32's resolution reports its
-// step system singular; its point still counts if the law holds there.)
-fn reflection_holds(i: u32) -> bool {
-    let r = reflected_points[solve_of[i]];
-    let n = r.normal;
-    let to_eye = normalize(preview.eye.xyz - r.point);
-    let to_vertex = normalize(reflected_vertices[i].position - r.point);
-    let half = to_eye + to_vertex;
-    return dot(n, to_eye) > 0.0 && dot(n, to_vertex) > 0.0
-        && length(cross(n, normalize(half))) < REFLECTION_TOLERANCE;
-}
-
+// Vertex `j` of the `j / 3`-th triangle shown: its reflected vertex and reflection point.
 @vertex
-fn reflected_vertex(@builtin(vertex_index) i: u32) -> ReflectedOut {
+fn reflected_vertex(@builtin(vertex_index) j: u32) -> ReflectedOut {
+    let triangles = arrayLength(&reflected_vertices) / 3u;
+    let i = 3u * shown_triangles[reflector_pass.search * triangles + j / 3u] + j % 3u;
     let v = reflected_vertices[i];
-    let r = reflected_points[solve_of[i]];
+    let r = reflected_points[reflector_pass.search * reflector_pass.solves + solve_of[i]];
     var clip = preview.clip * vec4<f32>(r.point, 1.0);
     // Depth linear in |P - V| (interpolated across the triangle after the perspective divide,
     // as the seed's z-buffer does).
     clip.z = clamp(r.depth / reflector_pass.far, 0.0, 1.0) * clip.w;
-    let first = i - i % 3u;
-    // A mirror does not reflect itself here; other mirrors' triangles it does.
-    let own = v.reflector == reflector_pass.id;
-    if (own || !(reflection_holds(first) && reflection_holds(first + 1u)
-        && reflection_holds(first + 2u))) {
-        // The whole triangle collapses to one point and draws nothing.
-        clip = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-    }
     return ReflectedOut(clip, v.position, v.normal, v.material, r.point, r.normal, v.reflector);
 }
 

@@ -145,7 +145,7 @@ struct GpuReflector {
     kind: u32,
     minor: f32,
     height: f32,
-    _pad: u32,
+    mirror: u32,
     radii: vec4<f32>,
     orientation: vec4<f32>,
     control: array<vec4<f32>, 16>,
@@ -171,4 +171,12 @@ struct GpuReflection {
     uv: vec2<f32>,
     depth: f32,
     degenerate: u32,
+}
+
+// wgpu's indirect draw arguments; `fermat_cull` counts the vertices atomically.
+struct GpuDrawArgs {
+    vertex_count: atomic<u32>,
+    instance_count: u32,
+    first_vertex: u32,
+    first_instance: u32,
 }

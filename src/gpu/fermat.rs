@@ -1,16 +1,19 @@
 //! Reflection points on curved mirrors (sphere, torus, ellipsoid, cylinder, Bézier patch) by
 //! Fermat's principle on the GPU: the `fermat` kernel of the registry solves one scene vertex
-//! per invocation; `fermat::Solver` is its CPU
-//! twin (f64), and `tests/fermat.rs` checks that they agree. The raster preview encodes it
-//! before its draws (`gpu::preview`), one dispatch per curved mirror, with no host wait between
-//! them.
+//! of one search (a surface of a mirror) per invocation; `fermat::Solver` is its CPU twin
+//! (f64), and `tests/fermat.rs` checks that they agree. The raster preview encodes it before its
+//! draws (`gpu::preview`): every search in one dispatch per kind of surface, then the
+//! `fermat_cull` kernel, which lists for every search the reflected triangles whose reflection
+//! shows on its surface, for an indirect draw each. A teapot's 32 patches took 64 dispatches a
+//! frame before, whose fixed cost on lavapipe outweighed their work (docs/fermat.md).
 
 use glam::Vec3;
+use wgpu::util::DeviceExt;
 
 use super::GpuContext;
-use super::kernels::{self, FERMAT};
+use super::kernels::{self, FERMAT, FERMAT_CULL};
 use crate::error::{Error, Result};
-use crate::layout::{GpuReflection, GpuReflector};
+use crate::layout::{GpuDrawArgs, GpuReflection, GpuReflector};
 use crate::preview::MirrorSurface;
 
 /// The seed's step count ("4–5 steps"), the kernel's default.
@@ -24,19 +27,36 @@ const WORKGROUP: u32 = 64;
 /// (on lavapipe the general kernel took a sphere's preview frame from 4 to 12 ms).
 pub struct FermatPass {
     pipelines: Vec<(u32, kernels::Pipeline)>,
+    cull: kernels::Pipeline,
 }
 
-/// One reflector's inputs and output on the device.
+/// The searches' inputs and output on the device: every surface of every curved mirror solves
+/// the same vertices, all in one dispatch per kind of surface (a dispatch row per search).
 pub struct FermatSolve {
-    /// The reflector, the eye and the vertex count (`GpuReflector`); the eye is rewritten as the
-    /// camera moves.
-    pub reflector: wgpu::Buffer,
-    /// One `GpuReflection` per vertex.
+    /// One `GpuReflector` per search (its surface, the eye, the vertex count, its mirror); the
+    /// eye is rewritten as the camera moves.
+    pub reflectors: wgpu::Buffer,
+    /// One `GpuReflection` per vertex and search, search after search.
     pub output: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
+    /// Per kind of surface present, its pipeline's index in `FermatPass::pipelines` and the
+    /// bind group it runs with.
+    bind_groups: Vec<(usize, wgpu::BindGroup)>,
     count: u32,
-    /// Its pipeline's index in `FermatPass::pipelines`.
-    pipeline: usize,
+    searches: u32,
+}
+
+/// The searches' cull of the reflected triangles (`fermat_cull`): per search the triangles
+/// whose reflection shows on its surface, and the arguments of the indirect draw of them.
+pub struct FermatCull {
+    /// Per search, as many slots as triangles: the indices of the triangles shown (into the
+    /// reflected triangles), the first `vertex_count / 3` of its slots written, in no fixed
+    /// order.
+    pub shown: wgpu::Buffer,
+    /// One `GpuDrawArgs` per search: three vertices per triangle shown.
+    pub args: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    triangles: u32,
+    searches: u32,
 }
 
 impl FermatPass {
@@ -58,56 +78,146 @@ impl FermatPass {
                 (kind, pipeline)
             })
             .collect();
-        FermatPass { pipelines }
+        let cull = kernels::build_pipeline(&context.device, &FERMAT_CULL, 0);
+        FermatPass { pipelines, cull }
     }
 
-    /// The buffers that solve `vertices` (positions, w unused) for `reflector`.
+    /// The buffers that solve `vertices` (positions, w unused) for each of `reflectors` (one
+    /// search each, all with the vertices' count).
     pub fn solve(
         &self,
         context: &GpuContext,
-        reflector: GpuReflector,
+        reflectors: &[GpuReflector],
         vertices: &wgpu::Buffer,
     ) -> Result<FermatSolve> {
-        let uniforms = context.uniform_buffer("reflector", bytemuck::bytes_of(&reflector));
-        let output = context.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("reflections"),
-            size: (reflector.count.max(1) as usize * size_of::<GpuReflection>()) as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let pipeline = self
-            .pipelines
-            .iter()
-            .position(|(kind, _)| *kind == reflector.kind)
-            .ok_or_else(|| {
-                Error::Gpu(format!(
-                    "no fermat pipeline for reflector kind {}",
-                    reflector.kind
-                ))
-            })?;
-        let bind_group = self.pipelines[pipeline].1.bind_group(
-            &context.device,
-            &[
-                ("reflector", &uniforms),
-                ("fermat_vertices", vertices),
-                ("reflections", &output),
-            ],
+        let count = reflectors.first().map_or(0, |r| r.count);
+        let uniforms = context
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("reflectors"),
+                contents: bytemuck::cast_slice(reflectors),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            });
+        let output = self.storage(
+            context,
+            "reflection points",
+            count.max(1) as u64 * reflectors.len() as u64 * size_of::<GpuReflection>() as u64,
         )?;
+        let mut kinds: Vec<u32> = reflectors.iter().map(|r| r.kind).collect();
+        kinds.sort_unstable();
+        kinds.dedup();
+        let bind_groups = kinds
+            .into_iter()
+            .map(|kind| {
+                let pipeline = self
+                    .pipelines
+                    .iter()
+                    .position(|(k, _)| *k == kind)
+                    .ok_or_else(|| {
+                        Error::Gpu(format!("no fermat pipeline for reflector kind {kind}"))
+                    })?;
+                let bind_group = self.pipelines[pipeline].1.bind_group(
+                    &context.device,
+                    &[
+                        ("reflectors", &uniforms),
+                        ("fermat_vertices", vertices),
+                        ("reflections", &output),
+                    ],
+                )?;
+                Ok((pipeline, bind_group))
+            })
+            .collect::<Result<Vec<_>>>()?;
         Ok(FermatSolve {
-            reflector: uniforms,
+            reflectors: uniforms,
             output,
-            bind_group,
-            count: reflector.count,
-            pipeline,
+            bind_groups,
+            count,
+            searches: reflectors.len() as u32,
         })
     }
 
-    /// Records the solve of `solve`'s vertices into `encoder`.
+    /// A storage buffer of `bytes` the kernels write (and tests read back), or the refusal of
+    /// one larger than a binding may be on this adapter.
+    fn storage(&self, context: &GpuContext, what: &str, bytes: u64) -> Result<wgpu::Buffer> {
+        let limit = context.device.limits().max_storage_buffer_binding_size;
+        if bytes > limit {
+            return Err(super::over_binding_limit(what, bytes, limit));
+        }
+        Ok(context.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(what),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        }))
+    }
+
+    /// Records the solve of every search of `solve` into `encoder`: one dispatch per kind of
+    /// surface, a row of it per search (a pipeline skips the rows of other kinds).
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, solve: &FermatSolve) {
         let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&self.pipelines[solve.pipeline].1.pipeline);
-        pass.set_bind_group(0, &solve.bind_group, &[]);
-        pass.dispatch_workgroups(solve.count.div_ceil(WORKGROUP), 1, 1);
+        for (pipeline, bind_group) in &solve.bind_groups {
+            pass.set_pipeline(&self.pipelines[*pipeline].1.pipeline);
+            pass.set_bind_group(0, bind_group, &[]);
+            pass.dispatch_workgroups(solve.count.div_ceil(WORKGROUP), solve.searches, 1);
+        }
+    }
+
+    /// The buffers that cull `triangles` (`count` of them: per triangle its vertices' solves
+    /// and 1 + the index of the mirror it lies on, as `reflected_triangles` in
+    /// wgsl/bindings.wgsl) against each search of `solve`; a search's reflector names the
+    /// mirror (`GpuReflector::mirror`) whose own triangles it leaves out.
+    pub fn cull(
+        &self,
+        context: &GpuContext,
+        solve: &FermatSolve,
+        vertices: &wgpu::Buffer,
+        triangles: &wgpu::Buffer,
+        count: u32,
+    ) -> Result<FermatCull> {
+        let what = format!("the lists of {count} reflected triangles");
+        let shown = self.storage(
+            context,
+            &what,
+            count.max(1) as u64 * 4 * solve.searches as u64,
+        )?;
+        let args = context.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("reflected draws"),
+            size: (solve.searches.max(1) as usize * size_of::<GpuDrawArgs>()) as u64,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::INDIRECT
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let bind_group = self.cull.bind_group(
+            &context.device,
+            &[
+                ("reflectors", &solve.reflectors),
+                ("fermat_vertices", vertices),
+                ("reflections", &solve.output),
+                ("reflected_triangles", triangles),
+                ("shown_triangles", &shown),
+                ("draw_args", &args),
+            ],
+        )?;
+        Ok(FermatCull {
+            shown,
+            args,
+            bind_group,
+            triangles: count,
+            searches: solve.searches,
+        })
+    }
+
+    /// Records `cull` into `encoder`, after its searches' solve: the draws' arguments are
+    /// cleared (the kernel sets their instance counts back to 1), then every search's
+    /// triangles are listed anew, in one dispatch (a row per search).
+    pub fn encode_cull(&self, encoder: &mut wgpu::CommandEncoder, cull: &FermatCull) {
+        encoder.clear_buffer(&cull.args, 0, None);
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&self.cull.pipeline);
+        pass.set_bind_group(0, &cull.bind_group, &[]);
+        pass.dispatch_workgroups(cull.triangles.div_ceil(WORKGROUP), cull.searches, 1);
     }
 }
 
@@ -115,6 +225,59 @@ impl FermatPass {
 pub fn vertex_buffer(context: &GpuContext, vertices: &[Vec3]) -> Result<wgpu::Buffer> {
     let points: Vec<[f32; 4]> = vertices.iter().map(|v| v.extend(0.0).to_array()).collect();
     context.storage_buffer("fermat vertices", bytemuck::cast_slice(&points))
+}
+
+/// The reflections of `vertices` seen from `eye` on `surface` (at most `steps` steps) and the
+/// triangles of `triangles` (three indices into `vertices` and 1 + the index of the mirror each
+/// lies on) that the preview draws on it as a part of mirror `mirror`, sorted: `fermat_cull`'s
+/// list, read back (none is culled where `triangles` is empty).
+pub fn shown_triangles(
+    context: &GpuContext,
+    surface: MirrorSurface,
+    (eye, mirror): (Vec3, u32),
+    vertices: &[Vec3],
+    triangles: &[[u32; 4]],
+    steps: u32,
+) -> Result<(Vec<GpuReflection>, Vec<u32>)> {
+    if vertices.is_empty() {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    let device = &context.device;
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let reflector = GpuReflector {
+        mirror,
+        ..surface.gpu(eye, vertices.len() as u32)
+    };
+    let pass = FermatPass::new(context, steps, &[reflector.kind]);
+    let input = vertex_buffer(context, vertices)?;
+    let solve = pass.solve(context, &[reflector], &input)?;
+    let mut encoder = device.create_command_encoder(&Default::default());
+    pass.encode(&mut encoder, &solve);
+    let cull = if triangles.is_empty() {
+        None
+    } else {
+        let table =
+            context.storage_buffer("reflected triangles", bytemuck::cast_slice(triangles))?;
+        let cull = pass.cull(context, &solve, &input, &table, triangles.len() as u32)?;
+        pass.encode_cull(&mut encoder, &cull);
+        Some(cull)
+    };
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        return Err(Error::Gpu(format!(
+            "the fermat kernels: {}",
+            super::wgpu_error_text(&e)
+        )));
+    }
+    context.wait(context.queue.submit([encoder.finish()]))?;
+    let reflections = bytemuck::pod_collect_to_vec(&context.read_buffer(&solve.output)?);
+    let Some(cull) = cull else {
+        return Ok((reflections, Vec::new()));
+    };
+    let args: GpuDrawArgs = bytemuck::pod_read_unaligned(&context.read_buffer(&cull.args)?);
+    let listed: Vec<u32> = bytemuck::pod_collect_to_vec(&context.read_buffer(&cull.shown)?);
+    let mut shown = listed[..(args.vertex_count / 3) as usize].to_vec();
+    shown.sort_unstable();
+    Ok((reflections, shown))
 }
 
 /// The reflection point of each of `vertices` seen from `eye` on `surface`, found in at most
@@ -126,24 +289,6 @@ pub fn reflections(
     vertices: &[Vec3],
     steps: u32,
 ) -> Result<Vec<GpuReflection>> {
-    if vertices.is_empty() {
-        return Ok(Vec::new());
-    }
-    let device = &context.device;
-    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let reflector = surface.gpu(eye, vertices.len() as u32);
-    let pass = FermatPass::new(context, steps, &[reflector.kind]);
-    let input = vertex_buffer(context, vertices)?;
-    let solve = pass.solve(context, reflector, &input)?;
-    let mut encoder = device.create_command_encoder(&Default::default());
-    pass.encode(&mut encoder, &solve);
-    if let Some(e) = pollster::block_on(scope.pop()) {
-        return Err(Error::Gpu(format!(
-            "the fermat kernel: {}",
-            super::wgpu_error_text(&e)
-        )));
-    }
-    context.wait(context.queue.submit([encoder.finish()]))?;
-    let bytes = context.read_buffer(&solve.output)?;
-    Ok(bytemuck::pod_collect_to_vec(&bytes))
+    let (reflections, _) = shown_triangles(context, surface, (eye, 0), vertices, &[], steps)?;
+    Ok(reflections)
 }

@@ -46,7 +46,7 @@ const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
 }
 
 /// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
-pub const BINDINGS: [Binding; 19] = [
+pub const BINDINGS: [Binding; 22] = [
     binding(0, "camera", Access::Uniform),
     binding(1, "frame", Access::Uniform),
     // One GpuPass per dispatch of a batch, each at its own dynamic offset.
@@ -66,10 +66,13 @@ pub const BINDINGS: [Binding; 19] = [
     binding(12, "distances", Access::StorageReadWrite),
     binding(13, "cw_nodes", Access::StorageRead),
     binding(14, "pixel_list", Access::StorageRead),
-    binding(15, "reflector", Access::Uniform),
+    binding(15, "reflectors", Access::StorageRead),
     binding(16, "fermat_vertices", Access::StorageRead),
     binding(17, "reflections", Access::StorageReadWrite),
     binding(18, "primary_hits", Access::StorageReadWrite),
+    binding(19, "reflected_triangles", Access::StorageRead),
+    binding(20, "shown_triangles", Access::StorageReadWrite),
+    binding(21, "draw_args", Access::StorageReadWrite),
 ];
 
 /// The bindings of the render kernel: nine storage buffers, one more than WebGPU's baseline
@@ -139,6 +142,16 @@ const TRACE_CW_BINDINGS: [Binding; 7] = [
 
 /// The bindings of the Fermat kernel.
 const FERMAT_BINDINGS: [Binding; 3] = [BINDINGS[15], BINDINGS[16], BINDINGS[17]];
+
+/// The bindings of the Fermat cull: the reflector's eye and id, the solves, and the triangles.
+const FERMAT_CULL_BINDINGS: [Binding; 6] = [
+    BINDINGS[15],
+    BINDINGS[16],
+    BINDINGS[17],
+    BINDINGS[19],
+    BINDINGS[20],
+    BINDINGS[21],
+];
 
 /// (file name, source) of every WGSL module a kernel may compose.
 pub const MODULES: [(&str, &str); 15] = [
@@ -275,8 +288,18 @@ pub const FERMAT: Kernel = Kernel {
     bindings: &FERMAT_BINDINGS,
 };
 
+/// The preview's reflected triangles whose three vertices' reflections show on one curved
+/// mirror, listed for an indirect draw, one invocation per triangle (CPU twin:
+/// `fermat::drawn_in_preview` per vertex): the draw then runs the vertex stage for those only.
+pub const FERMAT_CULL: Kernel = Kernel {
+    name: "fermat_cull",
+    modules: FERMAT.modules,
+    entry_point: "fermat_cull",
+    bindings: &FERMAT_CULL_BINDINGS,
+};
+
 /// Every kernel chambre builds.
-pub const KERNELS: [&Kernel; 8] = [
+pub const KERNELS: [&Kernel; 9] = [
     &RENDER,
     &RENDER_PRIMARY,
     &RENDER_SPLIT,
@@ -285,6 +308,7 @@ pub const KERNELS: [&Kernel; 8] = [
     &TRACE_CLOSEST_CW,
     &TRACE_ANY_CW,
     &FERMAT,
+    &FERMAT_CULL,
 ];
 
 /// The complete source of `kernel`, with a marker comment where each module starts.

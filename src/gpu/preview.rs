@@ -13,11 +13,11 @@ use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
 
-use super::fermat::{FermatPass, FermatSolve};
+use super::fermat::{FermatCull, FermatPass, FermatSolve};
 use super::{GpuContext, wgpu_error_text};
 use crate::camera::CameraSpec;
 use crate::error::{Error, Result};
-use crate::layout::wgsl_prelude;
+use crate::layout::{GpuDrawArgs, GpuReflector, wgsl_prelude};
 use crate::pack::FlatScene;
 use crate::preview::{
     MirrorSurface, PreviewUniforms, PreviewVertex, Reflector, ReflectorPass, bounded_radius,
@@ -368,11 +368,12 @@ impl PreviewRenderer {
         self.vertex_count as usize / 3
     }
 
-    /// Reflected triangles drawn a frame, summed over the curved mirrors' searches.
+    /// Reflected triangles a frame, summed over the curved mirrors' searches: each search's
+    /// cull considers them all, and the draw runs for those whose reflection shows.
     pub fn reflected_triangles(&self) -> usize {
         self.reflections
             .as_ref()
-            .map_or(0, |r| r.vertex_count as usize / 3 * r.solves.len())
+            .map_or(0, |r| r.vertex_count as usize / 3 * r.searches.len())
     }
 }
 
@@ -389,13 +390,16 @@ struct ReflectionSetup<'a> {
     size: wgpu::Extent3d,
 }
 
-/// The reflection passes of the curved mirrors: the Fermat solves (one per search of each
-/// mirror), the reflected triangles' pipeline and its own depth buffer (|P − V|); it draws over
-/// the main pass's colour target.
+/// The reflection passes of the curved mirrors: the Fermat solves (a search per surface of
+/// each mirror, all in one dispatch per kind of surface), the cull of the reflected triangles
+/// for every search in one dispatch, the reflected triangles' pipeline and its own depth buffer
+/// (|P − V|); it draws over the main pass's colour target, each search's shown triangles by an
+/// indirect draw.
 struct Reflections {
     fermat: FermatPass,
-    solves: Vec<FermatSolve>,
-    /// Per solve: 1 + its mirror's index (the id the main pass wrote), and the search.
+    solve: FermatSolve,
+    cull: FermatCull,
+    /// Per search: 1 + its mirror's index (the id the main pass wrote), and its surface.
     searches: Vec<(u32, MirrorSurface)>,
     pipeline: wgpu::RenderPipeline,
     shared_group: wgpu::BindGroup,
@@ -427,7 +431,7 @@ impl Reflections {
         let fermat = FermatPass::new(context, steps, &kinds);
         let (positions, solve_of) = shared_positions(triangles);
         let fermat_vertices = super::fermat::vertex_buffer(context, &positions)?;
-        let solve_of = context.storage_buffer("solve of", bytemuck::cast_slice(&solve_of))?;
+        let solve_buffer = context.storage_buffer("solve of", bytemuck::cast_slice(&solve_of))?;
         let vertices =
             context.storage_buffer("reflected vertices", bytemuck::cast_slice(triangles))?;
         let searches: Vec<(u32, MirrorSurface)> = reflectors
@@ -435,13 +439,22 @@ impl Reflections {
             .enumerate()
             .flat_map(|(k, r)| r.searches.iter().map(move |&s| (k as u32 + 1, s)))
             .collect();
-        let solves = searches
-            .iter()
-            .map(|(_, search)| {
-                let reflector = search.gpu(setup.eye, positions.len() as u32);
-                fermat.solve(context, reflector, &fermat_vertices)
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let solve = fermat.solve(
+            context,
+            &search_uniforms(&searches, setup.eye, positions.len()),
+            &fermat_vertices,
+        )?;
+        let table: Vec<[u32; 4]> = solve_of
+            .chunks(3)
+            .zip(triangles.chunks(3))
+            .map(|(s, t)| [s[0], s[1], s[2], t[0].reflector])
+            .collect();
+        let table = context.storage_buffer(
+            &format!("the {} reflected triangles", table.len()),
+            bytemuck::cast_slice(&table),
+        )?;
+        let triangle_count = triangles.len() as u32 / 3;
+        let cull = fermat.cull(context, &solve, &fermat_vertices, &table, triangle_count)?;
         let pipeline = render_pipeline(
             device,
             setup.module,
@@ -460,13 +473,15 @@ impl Reflections {
         });
         let reflector_groups = searches
             .iter()
-            .zip(&solves)
-            .map(|(&(id, _), solve)| {
+            .enumerate()
+            .map(|(search, &(id, _))| {
                 let pass = ReflectorPass {
                     far: setup.far as f32,
                     id,
                     material: reflectors[id as usize - 1].material,
-                    _pad: 0,
+                    search: search as u32,
+                    solves: positions.len() as u32,
+                    _pad: [0; 3],
                 };
                 let uniforms = context.uniform_buffer("reflector pass", bytemuck::bytes_of(&pass));
                 device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -476,7 +491,8 @@ impl Reflections {
                         buffer_entry(0, &vertices),
                         buffer_entry(1, &solve.output),
                         buffer_entry(2, &uniforms),
-                        buffer_entry(4, &solve_of),
+                        buffer_entry(4, &solve_buffer),
+                        buffer_entry(5, &cull.shown),
                         texture_entry(3, setup.id_view),
                     ],
                 })
@@ -497,7 +513,8 @@ impl Reflections {
         let depth = target(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
         Ok(Some(Reflections {
             fermat,
-            solves,
+            solve,
+            cull,
             searches,
             pipeline,
             shared_group,
@@ -511,19 +528,16 @@ impl Reflections {
 
     /// Every reflector's solves see the eye at `eye` from the next frame on.
     fn set_eye(&self, context: &GpuContext, eye: glam::Vec3) {
-        for (solve, (_, search)) in self.solves.iter().zip(&self.searches) {
-            let reflector = search.gpu(eye, self.solve_count);
-            context
-                .queue
-                .write_buffer(&solve.reflector, 0, bytemuck::bytes_of(&reflector));
-        }
+        let reflectors = search_uniforms(&self.searches, eye, self.solve_count as usize);
+        context
+            .queue
+            .write_buffer(&self.solve.reflectors, 0, bytemuck::cast_slice(&reflectors));
     }
 
-    /// Records the Fermat solves of every reflector.
+    /// Records the Fermat solves of every search, then their cull.
     fn solve(&self, encoder: &mut wgpu::CommandEncoder) {
-        for solve in &self.solves {
-            self.fermat.encode(encoder, solve);
-        }
+        self.fermat.encode(encoder, &self.solve);
+        self.fermat.encode_cull(encoder, &self.cull);
     }
 
     /// Records the reflection passes, after the main pass: reflected fragments replace the
@@ -540,11 +554,28 @@ impl Reflections {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.shared_group, &[]);
-        for group in &self.reflector_groups {
+        for (search, group) in self.reflector_groups.iter().enumerate() {
             pass.set_bind_group(1, group, &[]);
-            pass.draw(0..self.vertex_count, 0..1);
+            let offset = search * size_of::<GpuDrawArgs>();
+            pass.draw_indirect(&self.cull.args, offset as u64);
         }
     }
+}
+
+/// The Fermat kernel's searches: each surface of `searches` as a part of its mirror (1 + the
+/// mirror's index, with it), seen from `eye`, solving `count` vertices.
+fn search_uniforms(
+    searches: &[(u32, MirrorSurface)],
+    eye: glam::Vec3,
+    count: usize,
+) -> Vec<GpuReflector> {
+    searches
+        .iter()
+        .map(|&(id, search)| GpuReflector {
+            mirror: id,
+            ..search.gpu(eye, count as u32)
+        })
+        .collect()
 }
 
 /// How far the preview's planes reach from their point (`tessellate`'s `extent`) and its far
