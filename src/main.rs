@@ -358,6 +358,7 @@ fn main() -> ExitCode {
             let reflections = chambre::gpu::preview::ReflectionOptions {
                 subdivision,
                 steps: fermat_steps,
+                ..Default::default()
             };
             match (window, output) {
                 (true, _) => run_window(&scene, &set, &keys, screenshot, save, reflections),

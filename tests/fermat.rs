@@ -296,6 +296,52 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
     }
 }
 
+/// The preview solves and culls the teapot's 32 patches in one dispatch, or in batches (5 a
+/// dispatch, the last batch 2; or one a dispatch): the same image to the pixel, and one with
+/// reflections in it (hundreds of pixels differ from the teapot without its mirror term).
+#[test]
+fn batching_the_searches_changes_no_pixel() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fermat_teapot.toml");
+    let draw = |extra: &[&str], searches_per_dispatch| {
+        let overrides: Vec<String> = ["render.width=160", "render.height=120"]
+            .iter()
+            .chain(extra)
+            .map(|o| o.to_string())
+            .collect();
+        let scene = chambre::scene::Scene::load(&path, &overrides).unwrap();
+        let options = chambre::gpu::preview::ReflectionOptions {
+            subdivision: Some(2),
+            searches_per_dispatch,
+            ..Default::default()
+        };
+        let flat = chambre::pack::flatten(&scene);
+        chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options)
+            .unwrap()
+            .image
+    };
+    let all = draw(&[], None);
+    let no_mirror = draw(&["materials[0].mirror=[0.0,0.0,0.0]"], None);
+    let reflected = all
+        .pixels
+        .iter()
+        .zip(&no_mirror.pixels)
+        .filter(|(a, b)| a != b)
+        .count();
+    eprintln!("{reflected} pixels show reflections");
+    assert!(reflected > 300, "{reflected} pixels show reflections");
+    assert!(
+        all.pixels == draw(&[], Some(5)).pixels,
+        "5 searches a dispatch"
+    );
+    assert!(
+        all.pixels == draw(&[], Some(1)).pixels,
+        "1 search a dispatch"
+    );
+}
+
 #[test]
 fn alhazens_point_obeys_the_law_of_reflection() {
     let sphere = Sphere::new(DVec3::ZERO, 1.0);
@@ -338,6 +384,7 @@ fn compare_small_with(
         runs: 1,
         frames: 2,
         reference_spp: 32,
+        searches_per_dispatch: None,
     };
     let report = chambre::bench::fermat::run(&config, context).unwrap();
     eprintln!("{}", report.to_markdown());

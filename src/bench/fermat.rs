@@ -110,6 +110,8 @@ pub struct FermatConfig<'a> {
     pub frames: u32,
     /// Samples per pixel of the ray-traced reference.
     pub reference_spp: u32,
+    /// Searches solved in one dispatch at most (`ReflectionOptions::searches_per_dispatch`).
+    pub searches_per_dispatch: Option<usize>,
 }
 
 /// Runs the comparison on `context`'s device.
@@ -165,6 +167,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
         let options = ReflectionOptions {
             subdivision: Some(subdivision),
             steps: config.steps,
+            searches_per_dispatch: config.searches_per_dispatch,
         };
         let frame = draw_with(context, &scene, &flat, config.frames.max(1), options)?;
         let placed = displacements(context, &scene, &flat, &reflector, &clip, options)?;

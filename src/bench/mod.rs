@@ -80,6 +80,11 @@ pub struct FermatArgs {
     /// Samples per pixel of the ray-traced reference for FLIP.
     #[arg(long, default_value_t = 256)]
     pub reference_spp: u32,
+    /// Searches (surfaces: a teapot's 32 patches) solved and culled in one dispatch at most;
+    /// by default as many as the bindings hold. 1 measures the preview as it ran before it
+    /// batched them.
+    #[arg(long)]
+    pub searches_per_dispatch: Option<usize>,
     /// Override any scene field, e.g. --set render.width=640 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,
@@ -428,6 +433,7 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 runs: args.runs,
                 frames: args.frames,
                 reference_spp: args.reference_spp,
+                searches_per_dispatch: args.searches_per_dispatch,
             };
             let report = fermat::run(&config, usable(&context)?)?;
             finish(

@@ -221,6 +221,19 @@ impl FermatPass {
     }
 }
 
+/// How many searches one solve and its cull take: as many as keep their reflection points
+/// (`vertices` per search) and their lists of shown triangles (`triangles` per search) within
+/// one binding each, and the dispatch's rows within the adapter's limit; at least one (a search
+/// too large for a binding alone is refused by `FermatPass::solve` or `FermatPass::cull`).
+pub fn searches_per_solve(context: &GpuContext, vertices: u32, triangles: u32) -> usize {
+    let limits = context.device.limits();
+    let binding = limits.max_storage_buffer_binding_size;
+    let points = binding / (vertices.max(1) as u64 * size_of::<GpuReflection>() as u64);
+    let lists = binding / (triangles.max(1) as u64 * 4);
+    let rows = limits.max_compute_workgroups_per_dimension as u64;
+    points.min(lists).min(rows).max(1) as usize
+}
+
 /// The vertices' positions as the kernel reads them (w unused), in a storage buffer.
 pub fn vertex_buffer(context: &GpuContext, vertices: &[Vec3]) -> Result<wgpu::Buffer> {
     let points: Vec<[f32; 4]> = vertices.iter().map(|v| v.extend(0.0).to_array()).collect();

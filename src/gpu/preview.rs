@@ -41,6 +41,10 @@ pub struct ReflectionOptions {
     pub subdivision: Option<u32>,
     /// The Fermat search's steps at most (the seed: 4–5).
     pub steps: u32,
+    /// Searches (surfaces of mirrors: a teapot has 32) solved, and culled, in one dispatch at
+    /// most; `None`: as many as the bindings hold (`gpu::fermat::searches_per_solve`). One a
+    /// dispatch is how the preview ran before it batched them (BENCHMARKS.md measures both).
+    pub searches_per_dispatch: Option<usize>,
 }
 
 impl Default for ReflectionOptions {
@@ -50,6 +54,7 @@ impl Default for ReflectionOptions {
         ReflectionOptions {
             subdivision: None,
             steps: 12,
+            searches_per_dispatch: None,
         }
     }
 }
@@ -271,7 +276,7 @@ impl PreviewRenderer {
             },
             reflectors(flat),
             &reflected_triangles(flat, extent, options.subdivision),
-            options.steps,
+            options,
         )?;
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
@@ -394,11 +399,11 @@ struct ReflectionSetup<'a> {
 /// each mirror, all in one dispatch per kind of surface), the cull of the reflected triangles
 /// for every search in one dispatch, the reflected triangles' pipeline and its own depth buffer
 /// (|P − V|); it draws over the main pass's colour target, each search's shown triangles by an
-/// indirect draw.
+/// indirect draw. (Searches come in batches where their buffers would outgrow a binding: a
+/// solve and a cull per batch.)
 struct Reflections {
     fermat: FermatPass,
-    solve: FermatSolve,
-    cull: FermatCull,
+    batches: Vec<SearchBatch>,
     /// Per search: 1 + its mirror's index (the id the main pass wrote), and its surface.
     searches: Vec<(u32, MirrorSurface)>,
     pipeline: wgpu::RenderPipeline,
@@ -418,7 +423,7 @@ impl Reflections {
         setup: &ReflectionSetup,
         reflectors: Vec<Reflector>,
         triangles: &[PreviewVertex],
-        steps: u32,
+        options: ReflectionOptions,
     ) -> Result<Option<Reflections>> {
         if reflectors.is_empty() || triangles.is_empty() {
             return Ok(None);
@@ -428,7 +433,7 @@ impl Reflections {
             .iter()
             .flat_map(|r| r.searches.iter().map(MirrorSurface::kind))
             .collect();
-        let fermat = FermatPass::new(context, steps, &kinds);
+        let fermat = FermatPass::new(context, options.steps, &kinds);
         let (positions, solve_of) = shared_positions(triangles);
         let fermat_vertices = super::fermat::vertex_buffer(context, &positions)?;
         let solve_buffer = context.storage_buffer("solve of", bytemuck::cast_slice(&solve_of))?;
@@ -439,11 +444,6 @@ impl Reflections {
             .enumerate()
             .flat_map(|(k, r)| r.searches.iter().map(move |&s| (k as u32 + 1, s)))
             .collect();
-        let solve = fermat.solve(
-            context,
-            &search_uniforms(&searches, setup.eye, positions.len()),
-            &fermat_vertices,
-        )?;
         let table: Vec<[u32; 4]> = solve_of
             .chunks(3)
             .zip(triangles.chunks(3))
@@ -454,7 +454,27 @@ impl Reflections {
             bytemuck::cast_slice(&table),
         )?;
         let triangle_count = triangles.len() as u32 / 3;
-        let cull = fermat.cull(context, &solve, &fermat_vertices, &table, triangle_count)?;
+        let fitting =
+            super::fermat::searches_per_solve(context, positions.len() as u32, triangle_count);
+        let per_batch = options
+            .searches_per_dispatch
+            .map_or(fitting, |n| n.clamp(1, fitting));
+        let batches = (0..searches.len())
+            .step_by(per_batch)
+            .map(|first| {
+                let range = first..(first + per_batch).min(searches.len());
+                let uniforms =
+                    search_uniforms(&searches[range.clone()], setup.eye, positions.len());
+                let solve = fermat.solve(context, &uniforms, &fermat_vertices)?;
+                let cull =
+                    fermat.cull(context, &solve, &fermat_vertices, &table, triangle_count)?;
+                Ok(SearchBatch {
+                    solve,
+                    cull,
+                    searches: range,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
         let pipeline = render_pipeline(
             device,
             setup.module,
@@ -471,15 +491,16 @@ impl Reflections {
                 buffer_entry(2, setup.lights),
             ],
         });
-        let reflector_groups = searches
+        let reflector_groups = batches
             .iter()
-            .enumerate()
-            .map(|(search, &(id, _))| {
+            .flat_map(|batch| batch.searches.clone().map(move |search| (batch, search)))
+            .map(|(batch, search)| {
+                let id = searches[search].0;
                 let pass = ReflectorPass {
                     far: setup.far as f32,
                     id,
                     material: reflectors[id as usize - 1].material,
-                    search: search as u32,
+                    search: (search - batch.searches.start) as u32,
                     solves: positions.len() as u32,
                     _pad: [0; 3],
                 };
@@ -489,10 +510,10 @@ impl Reflections {
                     layout: &pipeline.get_bind_group_layout(1),
                     entries: &[
                         buffer_entry(0, &vertices),
-                        buffer_entry(1, &solve.output),
+                        buffer_entry(1, &batch.solve.output),
                         buffer_entry(2, &uniforms),
                         buffer_entry(4, &solve_buffer),
-                        buffer_entry(5, &cull.shown),
+                        buffer_entry(5, &batch.cull.shown),
                         texture_entry(3, setup.id_view),
                     ],
                 })
@@ -513,8 +534,7 @@ impl Reflections {
         let depth = target(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
         Ok(Some(Reflections {
             fermat,
-            solve,
-            cull,
+            batches,
             searches,
             pipeline,
             shared_group,
@@ -528,16 +548,23 @@ impl Reflections {
 
     /// Every reflector's solves see the eye at `eye` from the next frame on.
     fn set_eye(&self, context: &GpuContext, eye: glam::Vec3) {
-        let reflectors = search_uniforms(&self.searches, eye, self.solve_count as usize);
-        context
-            .queue
-            .write_buffer(&self.solve.reflectors, 0, bytemuck::cast_slice(&reflectors));
+        for batch in &self.batches {
+            let searches = &self.searches[batch.searches.clone()];
+            let reflectors = search_uniforms(searches, eye, self.solve_count as usize);
+            context.queue.write_buffer(
+                &batch.solve.reflectors,
+                0,
+                bytemuck::cast_slice(&reflectors),
+            );
+        }
     }
 
     /// Records the Fermat solves of every search, then their cull.
     fn solve(&self, encoder: &mut wgpu::CommandEncoder) {
-        self.fermat.encode(encoder, &self.solve);
-        self.fermat.encode_cull(encoder, &self.cull);
+        for batch in &self.batches {
+            self.fermat.encode(encoder, &batch.solve);
+            self.fermat.encode_cull(encoder, &batch.cull);
+        }
     }
 
     /// Records the reflection passes, after the main pass: reflected fragments replace the
@@ -554,12 +581,23 @@ impl Reflections {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.shared_group, &[]);
-        for (search, group) in self.reflector_groups.iter().enumerate() {
+        let draws = self
+            .batches
+            .iter()
+            .flat_map(|batch| (0..batch.searches.len()).map(move |row| (&batch.cull.args, row)));
+        for (group, (args, row)) in self.reflector_groups.iter().zip(draws) {
             pass.set_bind_group(1, group, &[]);
-            let offset = search * size_of::<GpuDrawArgs>();
-            pass.draw_indirect(&self.cull.args, offset as u64);
+            pass.draw_indirect(args, (row * size_of::<GpuDrawArgs>()) as u64);
         }
     }
+}
+
+/// Searches solved and culled together: their rows of the solve's and the cull's buffers.
+struct SearchBatch {
+    solve: FermatSolve,
+    cull: FermatCull,
+    /// The searches (indices into `Reflections::searches`), row after row.
+    searches: std::ops::Range<usize>,
 }
 
 /// The Fermat kernel's searches: each surface of `searches` as a part of its mirror (1 + the
