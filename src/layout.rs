@@ -617,8 +617,9 @@ pub struct GpuReflection {
     pub steps: u32,
     /// The reflector's outward unit normal at P.
     pub normal: [f32; 3],
-    /// Padding to the WGSL layout.
-    pub _pad: u32,
+    /// 1 where the preview draws this reflection (E and V see P from outside and the law of
+    /// reflection holds to `REFLECTION_TOLERANCE`; CPU twin `fermat::drawn_in_preview`), else 0.
+    pub shown: u32,
     /// P's parameters (u, v) in the vertex's facing frame (`fermat::Sphere::facing`).
     pub uv: [f32; 2],
     /// |P − V|, the reflected point's depth for hidden-surface removal among reflections.

@@ -178,9 +178,10 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points() {
     );
 }
 
-/// The preview's cull (`fermat_cull`) lists exactly the reflected triangles whose three
-/// vertices' reflections it draws — the CPU twin `fermat::drawn_in_preview` judging the
-/// kernel's own points — and that do not lie on the searched mirror itself: a floor of 1,800
+/// The `fermat` kernel marks each vertex's reflection shown or not as the CPU twin
+/// `fermat::drawn_in_preview` judges the kernel's own point, and the preview's cull
+/// (`fermat_cull`) lists exactly the reflected triangles whose three vertices' reflections are
+/// shown and that do not lie on the searched mirror itself: a floor of 1,800
 /// triangles under a sphere and under one of the teapot's patches, a seventh of them tagged as
 /// lying on the mirror (left out), a seventh on another mirror (kept). Triangles with a vertex
 /// within 2% of the tolerance, or within 1e-4 of being unseen, where the kernel's f32 and the
@@ -254,6 +255,12 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
                 (!close).then(|| drawn_in_preview(p, normal, eye, v))
             })
             .collect();
+        // The kernel's own mark on each vertex is the twin's judgement.
+        for (k, (judgement, r)) in judged.iter().zip(&points).enumerate() {
+            if let Some(drawn) = judgement {
+                assert_eq!(r.shown, *drawn as u32, "{name}: vertex {k}");
+            }
+        }
         let (mut compared, mut own_left_out) = (0, 0);
         let mut expected = Vec::new();
         for (t, tri) in triangles.iter().enumerate() {

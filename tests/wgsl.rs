@@ -260,7 +260,7 @@ fn shared_structs_have_identical_layouts() {
             point,
             steps,
             normal,
-            _pad,
+            shown,
             uv,
             depth,
             degenerate

@@ -335,18 +335,19 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         && (best.y < -margin * h || best.y > (1.0 + margin) * h)) {
         normal = vec3<f32>(0.0);
     }
-    reflections[id.y * reflector.count + i] = GpuReflection(point, steps, normal, 0u, best,
+    let world_vertex = fermat_vertices[i].xyz;
+    let shown = u32(reflection_shows(point, normal, reflector.eye, world_vertex));
+    reflections[id.y * reflector.count + i] = GpuReflection(point, steps, normal, shown, best,
         length(vertex - own_point), degenerate);
 }
 
-// The reflection `r` of `vertex` is drawn: E and V both see P from outside the mirror and the
-// law of reflection holds at P to REFLECTION_TOLERANCE. (A search whose triangle shrank below
-// f32's resolution reports its step system singular; its point still counts if the law holds
-// there.) CPU twin: `fermat::drawn_in_preview`.
-fn reflection_shows(r: GpuReflection, eye: vec3<f32>, vertex: vec3<f32>) -> bool {
-    let n = r.normal;
-    let to_eye = normalize(eye - r.point);
-    let to_vertex = normalize(vertex - r.point);
+// The reflection of `vertex` at `point` (outward normal `n`) is drawn: E and V both see P from
+// outside the mirror and the law of reflection holds at P to REFLECTION_TOLERANCE. (A search
+// whose triangle shrank below f32's resolution reports its step system singular; its point
+// still counts if the law holds there.) CPU twin: `fermat::drawn_in_preview`.
+fn reflection_shows(point: vec3<f32>, n: vec3<f32>, eye: vec3<f32>, vertex: vec3<f32>) -> bool {
+    let to_eye = normalize(eye - point);
+    let to_vertex = normalize(vertex - point);
     let half = to_eye + to_vertex;
     return dot(n, to_eye) > 0.0 && dot(n, to_vertex) > 0.0
         && length(cross(n, normalize(half))) < REFLECTION_TOLERANCE;
@@ -354,7 +355,8 @@ fn reflection_shows(r: GpuReflection, eye: vec3<f32>, vertex: vec3<f32>) -> bool
 
 // One reflected triangle of one search per invocation (x the triangle, y the search): listed in
 // the search's part of `shown_triangles` (and its three vertices counted into its indirect
-// draw) when all three vertices' reflections show on the search's surface and the triangle
+// draw) when all three vertices' reflections show on the search's surface (`fermat` marked
+// each, `GpuReflection::shown`) and the triangle
 // does not lie on that mirror itself (a mirror does not reflect itself in the preview). Runs
 // after `fermat` has solved the vertices; the preview draws only the listed triangles, so the
 // vertex stage no longer runs for the many whose reflection is not on a surface (most of a
@@ -377,9 +379,7 @@ fn fermat_cull(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     for (var k = 0u; k < 3u; k += 1u) {
-        let solve = triangle[k];
-        let r = reflections[s * reflector.count + solve];
-        if (!reflection_shows(r, reflector.eye, fermat_vertices[solve].xyz)) {
+        if (reflections[s * reflector.count + triangle[k]].shown == 0u) {
             return;
         }
     }

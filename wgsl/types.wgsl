@@ -167,7 +167,7 @@ struct GpuReflection {
     point: vec3<f32>,
     steps: u32,
     normal: vec3<f32>,
-    _pad: u32,
+    shown: u32,
     uv: vec2<f32>,
     depth: f32,
     degenerate: u32,

@@ -170,7 +170,6 @@ impl FermatPass {
         &self,
         context: &GpuContext,
         solve: &FermatSolve,
-        vertices: &wgpu::Buffer,
         triangles: &wgpu::Buffer,
         count: u32,
     ) -> Result<FermatCull> {
@@ -193,7 +192,6 @@ impl FermatPass {
             &context.device,
             &[
                 ("reflectors", &solve.reflectors),
-                ("fermat_vertices", vertices),
                 ("reflections", &solve.output),
                 ("reflected_triangles", triangles),
                 ("shown_triangles", &shown),
@@ -271,7 +269,7 @@ pub fn shown_triangles(
     } else {
         let table =
             context.storage_buffer("reflected triangles", bytemuck::cast_slice(triangles))?;
-        let cull = pass.cull(context, &solve, &input, &table, triangles.len() as u32)?;
+        let cull = pass.cull(context, &solve, &table, triangles.len() as u32)?;
         pass.encode_cull(&mut encoder, &cull);
         Some(cull)
     };

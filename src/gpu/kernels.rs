@@ -143,10 +143,10 @@ const TRACE_CW_BINDINGS: [Binding; 7] = [
 /// The bindings of the Fermat kernel.
 const FERMAT_BINDINGS: [Binding; 3] = [BINDINGS[15], BINDINGS[16], BINDINGS[17]];
 
-/// The bindings of the Fermat cull: the reflector's eye and id, the solves, and the triangles.
-const FERMAT_CULL_BINDINGS: [Binding; 6] = [
+/// The bindings of the Fermat cull: the searches (their mirrors' ids), the solves' points
+/// (whether each shows), and the triangles.
+const FERMAT_CULL_BINDINGS: [Binding; 5] = [
     BINDINGS[15],
-    BINDINGS[16],
     BINDINGS[17],
     BINDINGS[19],
     BINDINGS[20],

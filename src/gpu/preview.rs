@@ -466,8 +466,7 @@ impl Reflections {
                 let uniforms =
                     search_uniforms(&searches[range.clone()], setup.eye, positions.len());
                 let solve = fermat.solve(context, &uniforms, &fermat_vertices)?;
-                let cull =
-                    fermat.cull(context, &solve, &fermat_vertices, &table, triangle_count)?;
+                let cull = fermat.cull(context, &solve, &table, triangle_count)?;
                 Ok(SearchBatch {
                     solve,
                     cull,
