@@ -766,7 +766,7 @@ fn run_preview(
     target.write(&frame.image)?;
     let reflected = match frame.reflected_triangles {
         0 => String::new(),
-        n => format!(" and {n} reflected"),
+        n => format!(" and {n} reflected ({} drawn)", frame.reflected_drawn),
     };
     note!(
         "{}: {}x{}, {} triangles{reflected} in {:.2} ms a frame (median of {frames}, drawn and \

@@ -50,8 +50,10 @@ const POINT_OFFSET: f32 = 0.382;
 pub struct FermatRow {
     /// Pieces each reflected triangle's edge is cut into.
     pub subdivision: u32,
-    /// Reflected triangles drawn a frame.
+    /// Reflected triangles a frame, summed over the mirror's searches (what the cull considers).
     pub reflected_triangles: usize,
+    /// Of those, the ones drawn (the cull's lists).
+    pub reflected_drawn: usize,
     /// The preview's frame time (Fermat solves, main and reflection passes), milliseconds.
     pub preview_ms: Spread,
     /// Features whose true reflection is in the frame.
@@ -187,6 +189,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
         rows.push(FermatRow {
             subdivision,
             reflected_triangles: frame.reflected_triangles,
+            reflected_drawn: frame.reflected_drawn,
             preview_ms: Spread::of(&frame.frame_times_ms),
             features: placed.len(),
             drawn: drawn.len(),
@@ -423,7 +426,7 @@ impl FermatReport {
         let mut out = format!(
             "Fermat reflections against the ray tracer: {} ({}x{}), at most {} steps\n\n\
              Ray-traced frame, 1 spp: GPU {:.2} ms, CPU {:.2} ms (median of runs)\n\n\
-             | subdivision | reflected triangles | preview (ms) | ray-traced GPU / preview | \
+             | subdivision | reflected triangles (drawn) | preview (ms) | ray-traced GPU / preview | \
              features drawn | corners: max (px) | all features: median (px) | p99 (px) | \
              max (px) | FLIP of the mirror's pixels vs {} spp |\n\
              |---|---|---|---|---|---|---|---|---|---|\n",
@@ -437,9 +440,10 @@ impl FermatReport {
         );
         for r in &self.rows {
             out += &format!(
-                "| {} | {} | {:.2} | {:.1}x | {}/{} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} |\n",
+                "| {} | {} ({}) | {:.2} | {:.1}x | {}/{} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} |\n",
                 r.subdivision,
                 r.reflected_triangles,
+                r.reflected_drawn,
                 r.preview_ms.median,
                 gpu / r.preview_ms.median,
                 r.drawn,

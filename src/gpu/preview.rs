@@ -70,8 +70,11 @@ pub struct PreviewFrame {
     pub frame_time: Duration,
     /// Every timed frame's time, milliseconds.
     pub frame_times_ms: Vec<f64>,
-    /// Reflected triangles drawn a frame (Fermat reflections on curved mirrors).
+    /// Reflected triangles a frame (Fermat reflections on curved mirrors), summed over the
+    /// searches: what the cull considers.
     pub reflected_triangles: usize,
+    /// Of those, the ones the last frame drew: the cull's lists.
+    pub reflected_drawn: usize,
 }
 
 /// The shader's source: constants, the shared types, the preview's stages and its reflection
@@ -125,6 +128,7 @@ pub fn draw_with(
         frame_time: times[times.len() / 2],
         frame_times_ms,
         reflected_triangles: renderer.reflected_triangles(),
+        reflected_drawn: renderer.reflected_drawn()?,
     })
 }
 
@@ -371,6 +375,25 @@ impl PreviewRenderer {
     /// Triangles drawn a frame.
     pub fn triangles(&self) -> usize {
         self.vertex_count as usize / 3
+    }
+
+    /// The reflected triangles the last frame drew, summed over the searches (the cull's
+    /// counts, read back).
+    pub fn reflected_drawn(&self) -> Result<usize> {
+        let Some(reflections) = &self.reflections else {
+            return Ok(0);
+        };
+        let mut drawn = 0;
+        for batch in &reflections.batches {
+            let bytes = self.context.read_buffer(&batch.cull.args)?;
+            let args: Vec<GpuDrawArgs> = bytemuck::pod_collect_to_vec(&bytes);
+            let rows = &args[..batch.searches.len()];
+            drawn += rows
+                .iter()
+                .map(|a| a.vertex_count as usize / 3)
+                .sum::<usize>();
+        }
+        Ok(drawn)
     }
 
     /// Reflected triangles a frame, summed over the curved mirrors' searches: each search's
