@@ -91,7 +91,7 @@ impl FermatPass {
         vertices: &wgpu::Buffer,
     ) -> Result<FermatSolve> {
         let count = reflectors.first().map_or(0, |r| r.count);
-        let uniforms = context
+        let searches = context
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("reflectors"),
@@ -119,7 +119,7 @@ impl FermatPass {
                 let bind_group = self.pipelines[pipeline].1.bind_group(
                     &context.device,
                     &[
-                        ("reflectors", &uniforms),
+                        ("reflectors", &searches),
                         ("fermat_vertices", vertices),
                         ("reflections", &output),
                     ],
@@ -128,7 +128,7 @@ impl FermatPass {
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(FermatSolve {
-            reflectors: uniforms,
+            reflectors: searches,
             output,
             bind_groups,
             count,
