@@ -11,9 +11,10 @@ override FERMAT_STEPS: u32 = 5u;
 // only its own surface's code (`gpu::fermat::FermatPass`).
 override REFLECTOR_KIND: u32 = 0u;
 const FERMAT_MIN_SIZE: f32 = 1e-7;
-// The invocation's search (`reflectors[global_invocation_id.y]`), which the surface functions
-// below read.
-var<private> reflector: GpuReflector;
+// The invocation's search (its row of the dispatch, `global_invocation_id.y`): the surface
+// functions below read `reflectors[search]`, the same element across a workgroup, rather than
+// a private copy of it per invocation.
+var<private> search: u32;
 const TAU: f32 = 6.283185307179586;
 
 // The parametrisation's frame for one vertex: a sphere's faces E and V, x toward the
@@ -45,12 +46,12 @@ fn facing(e: vec3<f32>, v: vec3<f32>) -> Frame {
 
 fn frame_for(eye: vec3<f32>, vertex: vec3<f32>) -> Frame {
     if (REFLECTOR_KIND == REFLECTOR_SPHERE) {
-        return facing(eye - reflector.center, vertex - reflector.center);
+        return facing(eye - reflectors[search].center, vertex - reflectors[search].center);
     }
     if (REFLECTOR_KIND == REFLECTOR_ELLIPSOID) {
         // The unit sphere's frame facing E and V mapped into it (`Ellipsoid::facing`).
-        let radii = reflector.radii.xyz;
-        return facing((eye - reflector.center) / radii, (vertex - reflector.center) / radii);
+        let radii = reflectors[search].radii.xyz;
+        return facing((eye - reflectors[search].center) / radii, (vertex - reflectors[search].center) / radii);
     }
     return Frame(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
 }
@@ -74,22 +75,22 @@ fn surface(f: Frame, uv: vec2<f32>) -> SurfacePoint {
     let around = cu * f.x + su * f.z;
     let along = -su * f.x + cu * f.z;
     if (REFLECTOR_KIND == REFLECTOR_TORUS) {
-        let r = reflector.minor;
-        let ring = reflector.radius + r * cv;
-        return SurfacePoint(reflector.center + ring * around + r * sv * f.y, ring * along,
+        let r = reflectors[search].minor;
+        let ring = reflectors[search].radius + r * cv;
+        return SurfacePoint(reflectors[search].center + ring * around + r * sv * f.y, ring * along,
             r * (-sv * around + cv * f.y));
     }
     if (REFLECTOR_KIND == REFLECTOR_CYLINDER) {
-        let r = reflector.radius;
-        return SurfacePoint(reflector.center + r * around + uv.y * f.y, r * along, f.y);
+        let r = reflectors[search].radius;
+        return SurfacePoint(reflectors[search].center + r * around + uv.y * f.y, r * along, f.y);
     }
     if (REFLECTOR_KIND == REFLECTOR_ELLIPSOID) {
-        let a = reflector.radii.xyz;
-        return SurfacePoint(reflector.center + a * (sv * around + cv * f.y), a * (sv * along),
+        let a = reflectors[search].radii.xyz;
+        return SurfacePoint(reflectors[search].center + a * (sv * around + cv * f.y), a * (sv * along),
             a * (cv * around - sv * f.y));
     }
-    let r = reflector.radius;
-    return SurfacePoint(reflector.center + r * (sv * around + cv * f.y), r * sv * along,
+    let r = reflectors[search].radius;
+    return SurfacePoint(reflectors[search].center + r * (sv * around + cv * f.y), r * sv * along,
         r * (cv * around - sv * f.y));
 }
 
@@ -111,7 +112,7 @@ fn patch_mix(a: vec4<f32>, b: vec4<f32>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     for (var i = 0u; i < 4u; i += 1u) {
         for (var j = 0u; j < 4u; j += 1u) {
-            sum += a[i] * b[j] * reflector.control[4u * i + j].xyz;
+            sum += a[i] * b[j] * reflectors[search].control[4u * i + j].xyz;
         }
     }
     return sum;
@@ -126,7 +127,7 @@ fn patch_surface(uv: vec2<f32>) -> SurfacePoint {
 // A patch has no inside: O a patch-size behind its centre, against the normal there.
 fn patch_inside() -> vec3<f32> {
     let centre = patch_surface(vec2<f32>(0.5));
-    let size = length(reflector.control[15].xyz - reflector.control[0].xyz);
+    let size = length(reflectors[search].control[15].xyz - reflectors[search].control[0].xyz);
     return centre.p - size * normalize(cross(centre.fu, centre.fv));
 }
 
@@ -171,7 +172,7 @@ fn surface_normal(f: Frame, uv: vec2<f32>) -> vec3<f32> {
     let unit = sin(uv.y) * around + cos(uv.y) * f.y;
     if (REFLECTOR_KIND == REFLECTOR_ELLIPSOID) {
         // The gradient of |(x - c) / a|^2: (x - c) / a^2, with x - c = a * unit.
-        return normalize(unit / reflector.radii.xyz);
+        return normalize(unit / reflectors[search].radii.xyz);
     }
     return unit;
 }
@@ -183,10 +184,10 @@ fn crossing(f: Frame, outside: vec3<f32>) -> vec2<f32> {
     if (REFLECTOR_KIND == REFLECTOR_PATCH) {
         return patch_crossing(outside);
     }
-    var d = outside - reflector.center;
+    var d = outside - reflectors[search].center;
     if (REFLECTOR_KIND == REFLECTOR_ELLIPSOID) {
         // In the unit sphere's coordinates the crossing is the direction itself.
-        d /= reflector.radii.xyz;
+        d /= reflectors[search].radii.xyz;
     }
     let u = atan2(dot(d, f.z), dot(d, f.x));
     if (REFLECTOR_KIND == REFLECTOR_CYLINDER) {
@@ -195,7 +196,7 @@ fn crossing(f: Frame, outside: vec3<f32>) -> vec2<f32> {
     if (REFLECTOR_KIND == REFLECTOR_TORUS) {
         let flat = vec3<f32>(d.x, 0.0, d.z);
         let radial = select(vec3<f32>(1.0, 0.0, 0.0), normalize(flat), length(flat) > 0.0);
-        let w = d - reflector.radius * radial;
+        let w = d - reflectors[search].radius * radial;
         return vec2<f32>(u, atan2(w.y, dot(w, vec3<f32>(cos(u), 0.0, sin(u)))));
     }
     let n = normalize(d);
@@ -248,16 +249,16 @@ fn replaced_corner(corners: array<vec2<f32>, 3>, p: vec2<f32>) -> u32 {
 @compute @workgroup_size(64, 1, 1)
 fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     // One row of the dispatch per search; a pipeline solves its kind's searches only.
-    reflector = reflectors[id.y];
+    search = id.y;
     let i = id.x;
-    if (reflector.kind != REFLECTOR_KIND || i >= reflector.count) {
+    if (reflectors[search].kind != REFLECTOR_KIND || i >= reflectors[search].count) {
         return;
     }
     // The search runs in the reflector's own frame (a turned torus, ellipsoid or cylinder;
     // others have the identity orientation): E and V are taken into it, P and its normal out.
-    let q = reflector.orientation;
-    let c = reflector.center;
-    let eye = c + turn(conjugate(q), reflector.eye - c);
+    let q = reflectors[search].orientation;
+    let c = reflectors[search].center;
+    let eye = c + turn(conjugate(q), reflectors[search].eye - c);
     let vertex = c + turn(conjugate(q), fermat_vertices[i].xyz - c);
     let f = frame_for(eye, vertex);
     // The initial triangle: A and B where E -> O and V -> O cross the reflector, C off AB.
@@ -330,14 +331,14 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         normal = vec3<f32>(0.0);
     }
     // So is a cylinder's beyond its height (`fermat::on_cylinder`).
-    let h = reflector.height;
+    let h = reflectors[search].height;
     if (REFLECTOR_KIND == REFLECTOR_CYLINDER
         && (best.y < -margin * h || best.y > (1.0 + margin) * h)) {
         normal = vec3<f32>(0.0);
     }
     let world_vertex = fermat_vertices[i].xyz;
-    let shown = u32(reflection_shows(point, normal, reflector.eye, world_vertex));
-    reflections[id.y * reflector.count + i] = GpuReflection(point, steps, normal, shown, best,
+    let shown = u32(reflection_shows(point, normal, reflectors[search].eye, world_vertex));
+    reflections[id.y * reflectors[search].count + i] = GpuReflection(point, steps, normal, shown, best,
         length(vertex - own_point), degenerate);
 }
 
@@ -370,16 +371,16 @@ fn fermat_cull(@builtin(global_invocation_id) id: vec3<u32>) {
     if (t == 0u) {
         draw_args[s].instance_count = 1u;
     }
-    reflector = reflectors[s];
+    search = s;
     if (t >= triangles) {
         return;
     }
     let triangle = reflected_triangles[t];
-    if (triangle.w == reflector.mirror) {
+    if (triangle.w == reflectors[search].mirror) {
         return;
     }
     for (var k = 0u; k < 3u; k += 1u) {
-        if (reflections[s * reflector.count + triangle[k]].shown == 0u) {
+        if (reflections[s * reflectors[search].count + triangle[k]].shown == 0u) {
             return;
         }
     }
