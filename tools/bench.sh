@@ -37,6 +37,9 @@ mkdir -p bench
     for mirror in torus ellipsoid cylinder teapot; do
         "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --json "bench/fermat_$mirror.json"
     done
+    # The teapot's 32 searches one a dispatch, as before they were batched (BENCHMARKS.md).
+    "$chambre" bench fermat --scene scenes/fermat_teapot.toml --subdivisions 1,4,16 \
+        --searches-per-dispatch 1 --json bench/fermat_teapot_unbatched.json
     echo
     "$chambre" bench rays --runs "$runs" --json bench/rays.json
     echo
