@@ -91,6 +91,7 @@ impl FermatPass {
         vertices: &wgpu::Buffer,
     ) -> Result<FermatSolve> {
         let count = reflectors.first().map_or(0, |r| r.count);
+        within_one_dispatch(context, "vertices to solve", count)?;
         let searches = context
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -173,6 +174,7 @@ impl FermatPass {
         triangles: &wgpu::Buffer,
         count: u32,
     ) -> Result<FermatCull> {
+        within_one_dispatch(context, "reflected triangles to cull", count)?;
         let what = format!("the lists of {count} reflected triangles");
         let shown = self.storage(
             context,
@@ -217,6 +219,20 @@ impl FermatPass {
         pass.set_bind_group(0, &cull.bind_group, &[]);
         pass.dispatch_workgroups(cull.triangles.div_ceil(WORKGROUP), cull.searches, 1);
     }
+}
+
+/// Refuses `count` items of one dispatch row (`WORKGROUP` an invocation group) beyond the
+/// adapter's workgroups per dimension, which would fail the dispatch's validation.
+fn within_one_dispatch(context: &GpuContext, what: &str, count: u32) -> Result<()> {
+    let groups = context.device.limits().max_compute_workgroups_per_dimension;
+    if count.div_ceil(WORKGROUP) > groups {
+        return Err(Error::Gpu(format!(
+            "{count} {what}: one dispatch takes at most {} on this adapter \
+             (max_compute_workgroups_per_dimension = {groups}); use a lower --subdivision",
+            groups as u64 * WORKGROUP as u64
+        )));
+    }
+    Ok(())
 }
 
 /// How many searches one solve and its cull take: as many as keep their reflection points
