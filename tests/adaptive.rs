@@ -2,13 +2,11 @@
 //! uniform sampling needs, puts the samples where the variance is, its estimate matches the
 //! error against a converged reference, and the GPU makes the CPU's decisions.
 
-use std::sync::atomic::AtomicBool;
-
 use chambre::adaptive::pixel_error;
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::GpuRenderer;
 use chambre::pack::{FlatScene, flatten};
-use chambre::render::{Backend, Image, RayBudgets, RenderOutput, render};
+use chambre::render::{Image, RayBudgets, RenderOutput};
 
 mod common;
 
@@ -31,15 +29,8 @@ fn adaptive_scene(extra: &[&str]) -> FlatScene {
     flatten(&common::load(SCENE, &overrides))
 }
 
-fn run(flat: &FlatScene, backend: &mut dyn Backend) -> RenderOutput {
-    let output = render(flat, backend, &mut |_, _| {}, &AtomicBool::new(false)).expect("render");
-    assert!(output.stopped.is_none(), "{:?}", output.stopped);
-    assert_eq!(output.status_flags, 0);
-    output
-}
-
 fn cpu(flat: &FlatScene) -> RenderOutput {
-    run(flat, &mut CpuRenderer::new(flat))
+    common::render_clean(flat, &mut CpuRenderer::new(flat))
 }
 
 /// The converged image: uniform sampling at 4096 spp.
@@ -161,7 +152,7 @@ fn the_gpu_makes_the_cpu_paths_decisions() {
     };
     let flat = adaptive_scene(&[]);
     let cpu = cpu(&flat);
-    let gpu = run(&flat, &mut GpuRenderer::new(context, &flat).unwrap());
+    let gpu = common::render_clean(&flat, &mut GpuRenderer::new(context, &flat).unwrap());
     assert_same_render(&cpu, &gpu, "GPU");
 }
 
@@ -178,12 +169,12 @@ fn light_windows_and_a_crop_window_keep_the_decisions() {
     assert!(plan.light_windows.len() > 1, "{plan:?}");
     let whole = cpu(&flat);
     assert_eq!(whole.sample_counts.len(), 24 * 24);
-    let split = run(&flat, &mut CpuRenderer::new(&flat).with_budgets(budgets));
+    let split = common::render_clean(&flat, &mut CpuRenderer::new(&flat).with_budgets(budgets));
     assert_same_render(&whole, &split, "split into light windows");
     if let Some(context) = common::gpu_context() {
         let features = flat.features();
         let mut gpu = GpuRenderer::with_budgets(context, &flat, features, budgets).unwrap();
-        assert_same_render(&whole, &run(&flat, &mut gpu), "GPU, split");
+        assert_same_render(&whole, &common::render_clean(&flat, &mut gpu), "GPU, split");
     }
 }
 

@@ -4,12 +4,11 @@
 
 use std::path::Path;
 use std::process::Command;
-use std::sync::atomic::AtomicBool;
 
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::GpuRenderer;
 use chambre::pack::{FlatScene, flatten};
-use chambre::render::{Aovs, Backend, RayBudgets, RenderOutput, render};
+use chambre::render::{Aovs, RayBudgets};
 use chambre::scene::Scene;
 use glam::Vec3;
 
@@ -51,16 +50,10 @@ fn scene(overrides: &[&str]) -> FlatScene {
     flat
 }
 
-fn run(flat: &FlatScene, backend: &mut dyn Backend) -> RenderOutput {
-    let output = render(flat, backend, &mut |_, _| {}, &AtomicBool::new(false)).unwrap();
-    assert!(output.stopped.is_none() && output.status_flags == 0);
-    output
-}
-
 #[test]
 fn the_layers_hold_the_first_hits_depth_normal_and_albedo() {
     let flat = scene(&[]);
-    let output = run(&flat, &mut CpuRenderer::new(&flat));
+    let output = common::render_clean(&flat, &mut CpuRenderer::new(&flat));
     let aovs = output.aovs.expect("AOVs were asked for");
     let tan_half = 15f32.to_radians().tan();
     for y in 0..32u32 {
@@ -126,7 +119,7 @@ fn both_paths_and_split_passes_give_the_same_layers() {
         "render.noise_target=0.05",
     ];
     let flat = scene(&overrides);
-    let whole = run(&flat, &mut CpuRenderer::new(&flat));
+    let whole = common::render_clean(&flat, &mut CpuRenderer::new(&flat));
     let budgets = RayBudgets {
         per_invocation: 4,
         ..RayBudgets::DEFAULT
@@ -137,7 +130,7 @@ fn both_paths_and_split_passes_give_the_same_layers() {
             .len()
             > 1
     );
-    let split = run(&flat, &mut CpuRenderer::new(&flat).with_budgets(budgets));
+    let split = common::render_clean(&flat, &mut CpuRenderer::new(&flat).with_budgets(budgets));
     assert_eq!(whole.sample_counts, split.sample_counts);
     let reference = whole.aovs.as_ref().unwrap();
     assert_close(reference, split.aovs.as_ref().unwrap(), 1e-6, "split");
@@ -146,7 +139,7 @@ fn both_paths_and_split_passes_give_the_same_layers() {
             let mut gpu =
                 GpuRenderer::with_budgets(context.clone(), &flat, flat.features(), budgets)
                     .unwrap();
-            let output = run(&flat, &mut gpu);
+            let output = common::render_clean(&flat, &mut gpu);
             let same = output
                 .sample_counts
                 .iter()
@@ -231,7 +224,7 @@ fn the_exr_carries_the_layers_as_named_channels() {
     };
     // The library's layers, written as they are.
     let flat = scene(&[]);
-    let output = run(&flat, &mut CpuRenderer::new(&flat));
+    let output = common::render_clean(&flat, &mut CpuRenderer::new(&flat));
     let aovs = output.aovs.unwrap();
     assert_eq!(channel("depth.Z"), aovs.depth);
     let normal_z: Vec<f32> = aovs.normal.iter().map(|n| n.z).collect();

@@ -4,12 +4,10 @@
 
 mod common;
 
-use std::sync::atomic::AtomicBool;
-
 use chambre::gpu::GpuRenderer;
 use chambre::layout::STATUS_LOOP_LIMIT;
 use chambre::pack::flatten;
-use chambre::render::{RayBound, RayBudgets, describe_status_flags, plan_passes, render};
+use chambre::render::{RayBound, RayBudgets, describe_status_flags, plan_passes};
 
 /// An area light with 4096 samples (the most a scene may ask) rendered on lavapipe with a mean
 /// of 0.047 against the CPU's 0.127, exit 0, before light samples were split into windows: every
@@ -143,13 +141,7 @@ material = "mirror"
     };
     let lavapipe = format!("{:?}", context.adapter_description).contains("llvmpipe");
     let mut renderer = GpuRenderer::new(context, &flat).unwrap();
-    let output = render(
-        &flat,
-        &mut renderer,
-        &mut |_, _| {},
-        &AtomicBool::new(false),
-    )
-    .unwrap();
+    let output = common::render_through(&flat, &mut renderer);
     let flagged = output.status_flags & STATUS_LOOP_LIMIT != 0;
     eprintln!(
         "corridor: flags {:#x}, {} rays, lavapipe {lavapipe}",
@@ -277,9 +269,7 @@ fn real_gpu_budgets_fill_a_dispatch_and_change_no_pixel() {
     let real = plan_passes(&scene, &RayBudgets::REAL_GPU);
     assert!(real.passes.len() > plan_passes(&scene, &RayBudgets::DEFAULT).passes.len());
     let mut cpu = chambre::cpu::CpuRenderer::new(&scene).with_budgets(RayBudgets::REAL_GPU);
-    let split = render(&scene, &mut cpu, &mut |_, _| {}, &AtomicBool::new(false))
-        .unwrap()
-        .image;
+    let split = common::render_through(&scene, &mut cpu).image;
     let (within, mean_abs) = common::agreement(&common::render_cpu(&scene), &split, 1e-5);
     assert!(within >= 0.999 && mean_abs < 1e-6, "{within} {mean_abs:e}");
 }

@@ -17,9 +17,7 @@ fn render_with(flat: &chambre::pack::FlatScene, features: u32) -> Option<(Image,
     let context = common::gpu_context()?;
     let mut renderer = GpuRenderer::with_features(context, flat, features).unwrap();
     assert_eq!(renderer.features(), features);
-    let output = render(flat, &mut renderer, &mut |_, _| {}, &AtomicBool::new(false)).unwrap();
-    assert!(output.stopped.is_none());
-    assert_eq!(output.status_flags, 0);
+    let output = common::render_clean(flat, &mut renderer);
     Some((output.image, output.rays))
 }
 
@@ -174,13 +172,7 @@ fn the_split_kernels_render_the_megakernels_image() {
                 kernels,
             )
             .unwrap();
-            let output = render(
-                &flat,
-                &mut renderer,
-                &mut |_, _| {},
-                &AtomicBool::new(false),
-            )
-            .unwrap();
+            let output = common::render_through(&flat, &mut renderer);
             assert!(output.stopped.is_none(), "{path}: {:?}", output.stopped);
             assert_eq!(output.status_flags, 0, "{path}");
             output

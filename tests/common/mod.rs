@@ -8,7 +8,7 @@ use std::sync::atomic::AtomicBool;
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::{GpuContext, GpuRenderer};
 use chambre::pack::{FlatScene, flatten};
-use chambre::render::{Image, render};
+use chambre::render::{Backend, Image, RenderOutput, render};
 use chambre::scene::Scene;
 
 /// The test binary's GPU context (one device shared by its tests, as an application would:
@@ -59,12 +59,26 @@ pub fn render_gpu_with_flags(flat: &FlatScene) -> Option<(Image, u32, bool)> {
     let context = gpu_context()?;
     let lavapipe = context.adapter_name.contains("llvmpipe");
     let mut renderer = GpuRenderer::new(context, flat).unwrap_or_else(|e| panic!("{e}"));
-    let output =
-        render(flat, &mut renderer, &mut |_, _| {}, &AtomicBool::new(false)).expect("GPU render");
+    let output = render_through(flat, &mut renderer);
     if let Some(e) = output.stopped {
         panic!("GPU render stopped: {e}");
     }
     Some((output.image, output.status_flags, lavapipe))
+}
+
+/// `flat` rendered whole through `backend`: no progress shown, never interrupted; a render that
+/// fails fails the test.
+pub fn render_through(flat: &FlatScene, backend: &mut dyn Backend) -> RenderOutput {
+    render(flat, backend, &mut |_, _| {}, &AtomicBool::new(false))
+        .unwrap_or_else(|e| panic!("render: {e}"))
+}
+
+/// [`render_through`], which must also end cleanly: not stopped, no kernel status flag.
+pub fn render_clean(flat: &FlatScene, backend: &mut dyn Backend) -> RenderOutput {
+    let output = render_through(flat, backend);
+    assert!(output.stopped.is_none(), "stopped: {:?}", output.stopped);
+    assert_eq!(output.status_flags, 0, "kernel status flags");
+    output
 }
 
 pub fn render_both(path: &str, overrides: &[&str]) -> Option<(Image, Image)> {
