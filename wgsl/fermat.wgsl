@@ -107,21 +107,28 @@ fn bernstein(t: f32) -> Bernstein {
         3.0 * t * t));
 }
 
-// Σ a_i b_j P_ij over the patch's control points.
-fn patch_mix(a: vec4<f32>, b: vec4<f32>) -> vec3<f32> {
-    var sum = vec3<f32>(0.0);
-    for (var i = 0u; i < 4u; i += 1u) {
-        for (var j = 0u; j < 4u; j += 1u) {
-            sum += a[i] * b[j] * reflectors[search].control[4u * i + j].xyz;
-        }
-    }
-    return sum;
-}
-
+// The point and tangents at (u, v): Σ B_i(u) B_j(v) P_ij and its derivatives, each row of
+// control points first summed over j (once with B_j(v), once with B_j'(v)), so that every
+// control point is read once.
 fn patch_surface(uv: vec2<f32>) -> SurfacePoint {
     let bu = bernstein(uv.x);
     let bv = bernstein(uv.y);
-    return SurfacePoint(patch_mix(bu.b, bv.b), patch_mix(bu.d, bv.b), patch_mix(bu.b, bv.d));
+    var p = vec3<f32>(0.0);
+    var fu = vec3<f32>(0.0);
+    var fv = vec3<f32>(0.0);
+    for (var i = 0u; i < 4u; i += 1u) {
+        var row = vec3<f32>(0.0);
+        var row_dv = vec3<f32>(0.0);
+        for (var j = 0u; j < 4u; j += 1u) {
+            let point = reflectors[search].control[4u * i + j].xyz;
+            row += bv.b[j] * point;
+            row_dv += bv.d[j] * point;
+        }
+        p += bu.b[i] * row;
+        fu += bu.d[i] * row;
+        fv += bu.b[i] * row_dv;
+    }
+    return SurfacePoint(p, fu, fv);
 }
 
 // A patch has no inside: O a patch-size behind its centre, against the normal there.
@@ -209,41 +216,58 @@ fn fermat_gradient(f: Frame, eye: vec3<f32>, vertex: vec3<f32>, uv: vec2<f32>) -
     return vec2<f32>(-dot(s.fu, pull), -dot(s.fv, pull));
 }
 
+// The search's triangle. Its corners are three variables, not an array: a private array
+// indexed at run time (the corner a step replaces) is kept in memory, each lane's element
+// gathered and scattered apart, where three variables stay in registers.
+struct Triangle {
+    a: vec2<f32>,
+    b: vec2<f32>,
+    c: vec2<f32>,
+}
+
+// The triangle with corner k replaced by p.
+fn with_corner(t: Triangle, k: u32, p: vec2<f32>) -> Triangle {
+    return Triangle(select(t.a, p, k == 0u), select(t.b, p, k == 1u), select(t.c, p, k == 2u));
+}
+
 // Twice the area of the corners with corner k replaced by p, against its longest side squared.
-fn flat_with(corners: array<vec2<f32>, 3>, k: u32, p: vec2<f32>) -> bool {
-    var t = corners;
-    t[k] = p;
-    let longest = max(max(dot(t[1] - t[0], t[1] - t[0]), dot(t[2] - t[1], t[2] - t[1])),
-        dot(t[0] - t[2], t[0] - t[2]));
-    let e0 = t[1] - t[0];
-    let e1 = t[2] - t[0];
+fn flat_with(corners: Triangle, k: u32, p: vec2<f32>) -> bool {
+    let t = with_corner(corners, k, p);
+    let longest = max(max(dot(t.b - t.a, t.b - t.a), dot(t.c - t.b, t.c - t.b)),
+        dot(t.a - t.c, t.a - t.c));
+    let e0 = t.b - t.a;
+    let e1 = t.c - t.a;
     return abs(e0.x * e1.y - e0.y * e1.x) < FERMAT_FLAT * longest;
 }
 
 // The corner p replaces: the farthest from it, or the next farthest where that would leave a
 // flat triangle (src/fermat.rs `replaced_corner`; ties go to the later corner on both sides).
-fn replaced_corner(corners: array<vec2<f32>, 3>, p: vec2<f32>) -> u32 {
-    var taken = array<bool, 3>(false, false, false);
-    var farthest = 0u;
-    for (var rank = 0u; rank < 3u; rank += 1u) {
-        var pick = 0u;
-        var far = -1.0;
-        for (var k = 0u; k < 3u; k += 1u) {
-            let d = length(corners[k] - p);
-            if (!taken[k] && d >= far) {
-                far = d;
-                pick = k;
-            }
-        }
-        taken[pick] = true;
-        if (rank == 0u) {
-            farthest = pick;
-        }
-        if (!flat_with(corners, pick, p)) {
-            return pick;
-        }
+fn replaced_corner(corners: Triangle, p: vec2<f32>) -> u32 {
+    let d = vec3<f32>(length(corners.a - p), length(corners.b - p), length(corners.c - p));
+    var first = 0u;
+    if (d.y >= d.x) {
+        first = 1u;
     }
-    return farthest;
+    if (d.z >= max(d.x, d.y)) {
+        first = 2u;
+    }
+    // The other two, the later one taken on a tie.
+    let low = select(0u, 1u, first == 0u);
+    let high = select(2u, 1u, first == 2u);
+    let high_is_farther = select(select(d.x, d.y, high == 1u), d.z, high == 2u)
+        >= select(d.x, d.y, low == 1u);
+    let second = select(low, high, high_is_farther);
+    let third = 3u - first - second;
+    if (!flat_with(corners, first, p)) {
+        return first;
+    }
+    if (!flat_with(corners, second, p)) {
+        return second;
+    }
+    if (!flat_with(corners, third, p)) {
+        return third;
+    }
+    return first;
 }
 
 @compute @workgroup_size(64, 1, 1)
@@ -269,34 +293,27 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         b0.x += TAU * round((a0.x - b0.x) / TAU);
     }
     let side = b0 - a0;
-    var corners: array<vec2<f32>, 3>;
-    corners[0] = a0;
+    var corners = Triangle(a0, a0 + vec2<f32>(FERMAT_SPREAD, 0.0),
+        a0 + vec2<f32>(FERMAT_SPREAD, FERMAT_SPREAD));
     if (length(side) > FERMAT_SPREAD) {
-        corners[1] = b0;
-        corners[2] = (a0 + b0) / 2.0 + vec2<f32>(-side.y, side.x) * FERMAT_C_OFFSET;
-    } else {
-        corners[1] = a0 + vec2<f32>(FERMAT_SPREAD, 0.0);
-        corners[2] = a0 + vec2<f32>(FERMAT_SPREAD, FERMAT_SPREAD);
+        corners = Triangle(a0, b0,
+            (a0 + b0) / 2.0 + vec2<f32>(-side.y, side.x) * FERMAT_C_OFFSET);
     }
     // Each step replaces one corner: the other two keep their gradients.
-    var gradients: array<vec2<f32>, 3>;
-    for (var k = 0u; k < 3u; k += 1u) {
-        gradients[k] = fermat_gradient(f, eye, vertex, corners[k]);
-    }
-    var best = corners[0];
+    var ga = fermat_gradient(f, eye, vertex, corners.a);
+    var gb = fermat_gradient(f, eye, vertex, corners.b);
+    var gc = fermat_gradient(f, eye, vertex, corners.c);
+    var best = corners.a;
     var moved = 3.0e38;
     var steps = FERMAT_STEPS;
     var degenerate = 0u;
     for (var step = 0u; step < FERMAT_STEPS; step += 1u) {
-        let size = max(max(length(corners[0] - corners[1]), length(corners[1] - corners[2])),
-            length(corners[2] - corners[0]));
+        let size = max(max(length(corners.a - corners.b), length(corners.b - corners.c)),
+            length(corners.c - corners.a));
         if (min(size, moved) < FERMAT_MIN_SIZE) {
             steps = step;
             break;
         }
-        let ga = gradients[0];
-        let gb = gradients[1];
-        let gc = gradients[2];
         let m0 = gb - ga;
         let m1 = gc - ga;
         let det = m0.x * m1.y - m1.x * m0.y;
@@ -307,10 +324,13 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         let alpha = (-ga.x * m1.y + m1.x * ga.y) / det;
         let beta = (-m0.x * ga.y + ga.x * m0.y) / det;
-        let p = (1.0 - alpha - beta) * corners[0] + alpha * corners[1] + beta * corners[2];
+        let p = (1.0 - alpha - beta) * corners.a + alpha * corners.b + beta * corners.c;
         let replaced = replaced_corner(corners, p);
-        corners[replaced] = p;
-        gradients[replaced] = fermat_gradient(f, eye, vertex, p);
+        corners = with_corner(corners, replaced, p);
+        let g = fermat_gradient(f, eye, vertex, p);
+        ga = select(ga, g, replaced == 0u);
+        gb = select(gb, g, replaced == 1u);
+        gc = select(gc, g, replaced == 2u);
         moved = length(p - best);
         best = p;
         // A patch's search a square's width beyond it has left it (`beyond_reach`).
