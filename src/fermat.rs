@@ -437,7 +437,8 @@ impl Reflector for BezierPatch {
     }
 
     /// Where the segment from `outside` to O crosses the patch, by a few Newton steps on
-    /// f(u, v) = O + t (outside − O) from the patch's centre (clamped to the patch).
+    /// f(u, v) = O + t (outside − O) from the patch's centre (clamped to the patch), ending
+    /// once a step moves less than `PATCH_CROSSING_DONE`.
     fn crossing(&self, outside: DVec3) -> DVec2 {
         let o = self.inside(outside);
         let d = outside - o;
@@ -450,8 +451,12 @@ impl Reflector for BezierPatch {
             if jacobian.determinant().abs() < 1e-300 {
                 break;
             }
-            uvt -= jacobian.inverse() * r;
-            uvt = uvt.clamp(DVec3::new(0.0, 0.0, 0.0), DVec3::new(1.0, 1.0, 1.0));
+            let next = (uvt - jacobian.inverse() * r).clamp(DVec3::ZERO, DVec3::ONE);
+            let moved = (next - uvt).length();
+            uvt = next;
+            if moved < f64::from(crate::layout::PATCH_CROSSING_DONE) {
+                break;
+            }
         }
         uvt.truncate()
     }

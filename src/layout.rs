@@ -696,6 +696,11 @@ pub const PATCH_MARGIN: f32 = 1e-4;
 /// (`fermat::Reflector::beyond_reach`).
 pub const PATCH_REACH: f32 = 1.0;
 
+/// The Newton steps that find where a segment crosses a Bézier patch (the search's initial
+/// corners A and B) stop once a step moves (u, v, t) less than this: f32's rounding keeps
+/// later steps from improving on it, and each costs a patch evaluation.
+pub const PATCH_CROSSING_DONE: f32 = 1e-6;
+
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
 pub fn wgsl_prelude() -> String {
     let u32s = [
@@ -764,6 +769,7 @@ pub fn wgsl_prelude() -> String {
         ("FERMAT_FLAT", FERMAT_FLAT),
         ("PATCH_MARGIN", PATCH_MARGIN),
         ("PATCH_REACH", PATCH_REACH),
+        ("PATCH_CROSSING_DONE", PATCH_CROSSING_DONE),
         ("TORUS_MARGIN", TORUS_MARGIN),
         ("TORUS_POLISH_REACH", TORUS_POLISH_REACH),
     ] {
