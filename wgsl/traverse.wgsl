@@ -3,6 +3,11 @@
 // below (nearer child first, far child pushed) is that function's.
 // Reads the bindings `nodes`, `prims` and `frame`; reports caps through status.wgsl.
 
+// The traversal stack, one per invocation for every ray it traces (the two queries never
+// nest). A function's `var` is zeroed at each call: 64 words a ray, which lavapipe writes out
+// in full; a private variable is zeroed once, when the invocation starts.
+var<private> bvh_stack: array<u32, BVH_STACK_SIZE>;
+
 fn closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
     var best = PrimHit(NONE, Hit(t_max_in, 0.0, 0.0));
     if (frame.node_count > 0u) {
@@ -11,7 +16,6 @@ fn closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
             if (root.prim_count > 0u) {
                 best = closest_in_leaf(ray, root, skip, best);
             } else {
-                var stack: array<u32, BVH_STACK_SIZE>;
                 var stack_size = 0u;
                 var current = root.first_index;
                 for (var visits = 0u; ; visits += 1u) {
@@ -52,7 +56,7 @@ fn closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
                             flag_status(STATUS_STACK_OVERFLOW);
                             break;
                         }
-                        stack[stack_size] = far.first_index;
+                        bvh_stack[stack_size] = far.first_index;
                         stack_size += 1u;
                         current = near.first_index;
                     } else if (go_near) {
@@ -64,7 +68,7 @@ fn closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
                             break;
                         }
                         stack_size -= 1u;
-                        current = stack[stack_size];
+                        current = bvh_stack[stack_size];
                     }
                 }
             }
@@ -104,7 +108,6 @@ fn occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
                     return true;
                 }
             } else {
-                var stack: array<u32, BVH_STACK_SIZE>;
                 var stack_size = 0u;
                 var current = root.first_index;
                 for (var visits = 0u; ; visits += 1u) {
@@ -149,7 +152,7 @@ fn occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
                             flag_status(STATUS_STACK_OVERFLOW);
                             break;
                         }
-                        stack[stack_size] = far.first_index;
+                        bvh_stack[stack_size] = far.first_index;
                         stack_size += 1u;
                         current = near.first_index;
                     } else if (go_near) {
@@ -161,7 +164,7 @@ fn occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
                             break;
                         }
                         stack_size -= 1u;
-                        current = stack[stack_size];
+                        current = bvh_stack[stack_size];
                     }
                 }
             }

@@ -52,6 +52,12 @@ fn cw_child_hits(ray: RayQuery, node: GpuCwNode, oct_inv4: u32, t_max: f32) -> u
         | cw_child_hit(ray, node, e, 7u, oct_inv4, t_max);
 }
 
+// The traversal stack, one per invocation for every ray it traces (the two queries never
+// nest). A function's `var` is zeroed at each call, which lavapipe does in full for every ray
+// (the cornell_direct frame 1.33x slower, area_light 1.48x, the bunny 1.15x); a private
+// variable is zeroed once, when the invocation starts.
+var<private> cw_stack: array<vec2<u32>, CWBVH_STACK_SIZE>;
+
 // Traversal state: the node group being expanded, (child_base, hit bits 24..32 | inner mask
 // 0..8), and the primitives of the last node's leaves, (prim_base, bits 0..24).
 struct CwState {
@@ -63,7 +69,7 @@ struct CwState {
 // Expands the current group's nearest child: pushes the rest of the group, intersects the
 // child's children. Returns false on a stack overflow (flagged).
 fn cw_step(ray: RayQuery, oct_inv4: u32, t_max: f32, state: ptr<function, CwState>,
-           stack: ptr<function, array<vec2<u32>, CWBVH_STACK_SIZE>>) -> bool {
+           stack: ptr<private, array<vec2<u32>, CWBVH_STACK_SIZE>>) -> bool {
     let hits = (*state).current.y;
     let bit = firstLeadingBit(hits);
     (*state).current.y = hits & ~(1u << bit);
@@ -87,7 +93,7 @@ fn cw_step(ray: RayQuery, oct_inv4: u32, t_max: f32, state: ptr<function, CwStat
 // Once the current group has no child left, the next from the stack; false when the stack is
 // empty too (the traversal is over).
 fn cw_next_group(state: ptr<function, CwState>,
-                 stack: ptr<function, array<vec2<u32>, CWBVH_STACK_SIZE>>) -> bool {
+                 stack: ptr<private, array<vec2<u32>, CWBVH_STACK_SIZE>>) -> bool {
     if (((*state).current.y & 0xff000000u) != 0u) {
         return true;
     }
@@ -102,7 +108,7 @@ fn cw_next_group(state: ptr<function, CwState>,
 // One loop iteration's node work, shared by both queries: the visit cap (flagged), then the
 // current group's nearest child expanded into `state.prims`. False ends the traversal.
 fn cw_advance(ray: RayQuery, oct_inv4: u32, t_max: f32, visits: u32, state: ptr<function, CwState>,
-              stack: ptr<function, array<vec2<u32>, CWBVH_STACK_SIZE>>) -> bool {
+              stack: ptr<private, array<vec2<u32>, CWBVH_STACK_SIZE>>) -> bool {
     if (visits >= frame.traversal_cap) {
         flag_status(STATUS_TRAVERSAL_CAP);
         return false;
@@ -119,9 +125,8 @@ fn cw_advance(ray: RayQuery, oct_inv4: u32, t_max: f32, visits: u32, state: ptr<
 fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
     var best = PrimHit(NONE, Hit(t_max_in, 0.0, 0.0));
     let oct_inv4 = cw_octant_inv4(ray.direction);
-    var stack: array<vec2<u32>, CWBVH_STACK_SIZE>;
     var state = CwState(vec2<u32>(0u, 0x80000000u), vec2<u32>(0u, 0u), 0u);
-    for (var visits = 0u; cw_advance(ray, oct_inv4, best.hit.t, visits, &state, &stack); visits += 1u) {
+    for (var visits = 0u; cw_advance(ray, oct_inv4, best.hit.t, visits, &state, &cw_stack); visits += 1u) {
         while (state.prims.y != 0u) {
             let bit = firstLeadingBit(state.prims.y);
             state.prims.y &= ~(1u << bit);
@@ -133,7 +138,7 @@ fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
                 }
             }
         }
-        if (!cw_next_group(&state, &stack)) {
+        if (!cw_next_group(&state, &cw_stack)) {
             break;
         }
     }
@@ -143,9 +148,8 @@ fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
 // Whether anything but `skip_a` and `skip_b` lies along `ray` before `t_max`.
 fn cw_occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
     let oct_inv4 = cw_octant_inv4(ray.direction);
-    var stack: array<vec2<u32>, CWBVH_STACK_SIZE>;
     var state = CwState(vec2<u32>(0u, 0x80000000u), vec2<u32>(0u, 0u), 0u);
-    for (var visits = 0u; cw_advance(ray, oct_inv4, t_max, visits, &state, &stack); visits += 1u) {
+    for (var visits = 0u; cw_advance(ray, oct_inv4, t_max, visits, &state, &cw_stack); visits += 1u) {
         while (state.prims.y != 0u) {
             let bit = firstLeadingBit(state.prims.y);
             state.prims.y &= ~(1u << bit);
@@ -154,7 +158,7 @@ fn cw_occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
                 return true;
             }
         }
-        if (!cw_next_group(&state, &stack)) {
+        if (!cw_next_group(&state, &cw_stack)) {
             break;
         }
     }
