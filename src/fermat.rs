@@ -21,7 +21,7 @@
 //! turned by an orientation: their parameters are the own frame's, so a search on a turned
 //! shape takes the steps it takes on the unturned one (docs/fermat.md).
 
-use crate::layout::{FERMAT_C_OFFSET, FERMAT_FLAT, FERMAT_SPREAD};
+use crate::layout::{FERMAT_C_OFFSET, FERMAT_FLAT, FERMAT_INSIDE, FERMAT_SPREAD};
 use glam::{DQuat, DVec2, DVec3};
 
 /// A smooth parametric surface a reflection is searched on.
@@ -31,8 +31,9 @@ pub trait Reflector {
     /// ∂f/∂u and ∂f/∂v at (u, v).
     fn tangents(&self, uv: DVec2) -> (DVec3, DVec3);
     /// The point O inside the reflector that the initial corner for `outside` aims at (a
-    /// sphere's or ellipsoid's centre; the point of a cylinder's axis or a torus's tube circle
-    /// nearest to `outside`).
+    /// sphere's or ellipsoid's, `FERMAT_INSIDE` of the way from its centre toward the bisector
+    /// of E and V; the point of a cylinder's axis or a torus's tube circle nearest to
+    /// `outside`; a patch-size behind a patch's centre).
     fn inside(&self, outside: DVec3) -> DVec3;
     /// The parameters of the surface point where the segment from `outside` to
     /// `inside(outside)` crosses the surface.
@@ -104,6 +105,16 @@ impl Sphere {
     }
 }
 
+/// Where the segment from `outside` (|outside| > 1) to `inside` (|inside| < 1) crosses the
+/// unit sphere about the origin: the nearer root of |d + t w|² = 1, w = inside − outside, in the
+/// form without cancellation (d · w < 0 there, so q > 0).
+fn unit_sphere_crossing(outside: DVec3, inside: DVec3) -> DVec3 {
+    let w = inside - outside;
+    let (a, b, c) = (w.dot(w), outside.dot(w), outside.dot(outside) - 1.0);
+    let q = -b + (b * b - a * c).max(0.0).sqrt();
+    outside + (c / q) * w
+}
+
 impl Reflector for Sphere {
     fn point(&self, uv: DVec2) -> DVec3 {
         let (su, cu) = uv.x.sin_cos();
@@ -122,8 +133,10 @@ impl Reflector for Sphere {
         )
     }
 
+    /// `FERMAT_INSIDE` of the radius from the centre along the frame's x axis: for a sphere
+    /// facing E and V ([`Sphere::facing`]), toward their bisector.
     fn inside(&self, _outside: DVec3) -> DVec3 {
-        self.center
+        self.center + f64::from(FERMAT_INSIDE) * self.radius * self.frame[0]
     }
 
     fn outward_normal(&self, uv: DVec2) -> DVec3 {
@@ -131,7 +144,11 @@ impl Reflector for Sphere {
     }
 
     fn crossing(&self, outside: DVec3) -> DVec2 {
-        self.parameters_of(outside - self.center)
+        let o = f64::from(FERMAT_INSIDE) * self.frame[0];
+        self.parameters_of(unit_sphere_crossing(
+            (outside - self.center) / self.radius,
+            o,
+        ))
     }
 
     fn u_period(&self) -> Option<f64> {
@@ -208,13 +225,17 @@ impl Reflector for Ellipsoid {
         )
     }
 
+    /// As a sphere's, in the unit sphere's coordinates.
     fn inside(&self, _outside: DVec3) -> DVec3 {
-        self.center
+        let o = f64::from(FERMAT_INSIDE) * self.frame[0];
+        self.center + self.orientation * (self.radii * o)
     }
 
     fn crossing(&self, outside: DVec3) -> DVec2 {
-        // In the unit sphere's coordinates the crossing is the direction itself.
-        self.unit().parameters_of(self.to_own(outside) / self.radii)
+        // The map to the unit sphere keeps segments and where they cross.
+        let o = f64::from(FERMAT_INSIDE) * self.frame[0];
+        self.unit()
+            .parameters_of(unit_sphere_crossing(self.to_own(outside) / self.radii, o))
     }
 
     fn outward_normal(&self, uv: DVec2) -> DVec3 {

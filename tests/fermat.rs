@@ -1,8 +1,8 @@
 //! The Fermat solver on a sphere: where it converged to the side E and V see, the law of
 //! reflection holds to 1e-4 rad and the point is Alhazen's (solved independently in f64). Within
-//! the seed's 5 steps it does so for 96.9% of the random configurations that have a reflection
-//! (the issue asks 99%: not yet; the rest are printed with where they are, and the rate per band
-//! of the angle of incidence); the test keeps a floor of 96%.
+//! the seed's 5 steps it does so for all 1,747 random configurations that have a reflection
+//! (the issue asks 99%; with O at the centre it was 96.9%; the failures, if any, are printed
+//! with where they are, and the rate per band of the angle of incidence); the test asserts 99%.
 
 use chambre::bench::fermat::{FermatConfig, FermatReport};
 use chambre::fermat::{
@@ -36,7 +36,7 @@ fn points_around(center: DVec3, count: usize, seed: u32) -> Vec<DVec3> {
 /// The seed's search on random configurations around a sphere (E at 2–6 radii, V at 1.2–4.2,
 /// at most 150° apart seen from the centre). Where V shows in the mirror at all (E and V see a
 /// common point of the sphere: the angles their tangent cones reach from the centre add up to
-/// more than the angle between them), it finds Alhazen's point within 5 steps in 96% or more
+/// more than the angle between them), it finds Alhazen's point within 5 steps in 99% or more
 /// of them (the rest are printed, by angle of incidence and by how far the pair is from having
 /// no common point: grazing); where V does not show, it never claims a reflection seen from
 /// outside.
@@ -113,7 +113,7 @@ fn the_solver_finds_alhazens_point_within_five_steps() {
     );
     assert!(total > 1500, "{total} configurations with a reflection");
     assert!(
-        converged as f64 >= 0.96 * total as f64,
+        converged as f64 >= 0.99 * total as f64,
         "{converged} of {total}"
     );
 }

@@ -191,16 +191,29 @@ fn surface_normal(f: Frame, uv: vec2<f32>) -> vec3<f32> {
     return unit;
 }
 
+// Where the segment from `outside` (|outside| > 1) to `inside` (|inside| < 1) crosses the unit
+// sphere about the origin (`unit_sphere_crossing` in src/fermat.rs).
+fn unit_sphere_crossing(outside: vec3<f32>, inside: vec3<f32>) -> vec3<f32> {
+    let w = inside - outside;
+    let a = dot(w, w);
+    let b = dot(outside, w);
+    let c = dot(outside, outside) - 1.0;
+    let q = -b + sqrt(max(b * b - a * c, 0.0));
+    return outside + (c / q) * w;
+}
+
 // The parameters where the segment from `outside` to the point O inside the reflector crosses
-// it: O the sphere's or ellipsoid's centre, the point of the torus's tube circle at
-// `outside`'s azimuth, or the cylinder's axis point at `outside`'s height.
+// it: O FERMAT_INSIDE of the sphere's or ellipsoid's radius from the centre toward the
+// bisector of E and V (the frame's x; in the ellipsoid's unit sphere's coordinates), the point
+// of the torus's tube circle at `outside`'s azimuth, or the cylinder's axis point at
+// `outside`'s height.
 fn crossing(f: Frame, outside: vec3<f32>) -> vec2<f32> {
     if (REFLECTOR_KIND == REFLECTOR_PATCH) {
         return patch_crossing(outside);
     }
     var d = outside - reflectors[search].center;
     if (REFLECTOR_KIND == REFLECTOR_ELLIPSOID) {
-        // In the unit sphere's coordinates the crossing is the direction itself.
+        // Its unit sphere's coordinates.
         d /= reflectors[search].radii.xyz;
     }
     let u = atan2(dot(d, f.z), dot(d, f.x));
@@ -213,8 +226,14 @@ fn crossing(f: Frame, outside: vec3<f32>) -> vec2<f32> {
         let w = d - reflectors[search].radius * radial;
         return vec2<f32>(u, atan2(w.y, dot(w, vec3<f32>(cos(u), 0.0, sin(u)))));
     }
-    let n = normalize(d);
-    return vec2<f32>(u, acos(clamp(dot(n, f.y), -1.0, 1.0)));
+    // The unit sphere's coordinates: a sphere's d divided by its radius (an ellipsoid's is
+    // in them already).
+    var unit = d;
+    if (REFLECTOR_KIND == REFLECTOR_SPHERE) {
+        unit = d / reflectors[search].radius;
+    }
+    let n = normalize(unit_sphere_crossing(unit, FERMAT_INSIDE * f.x));
+    return vec2<f32>(atan2(dot(n, f.z), dot(n, f.x)), acos(clamp(dot(n, f.y), -1.0, 1.0)));
 }
 
 fn fermat_gradient(f: Frame, eye: vec3<f32>, vertex: vec3<f32>, uv: vec2<f32>) -> vec2<f32> {
