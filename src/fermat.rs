@@ -144,10 +144,10 @@ impl Reflector for Sphere {
     }
 
     fn crossing(&self, outside: DVec3) -> DVec2 {
-        let o = f64::from(FERMAT_INSIDE) * self.frame[0];
+        let to_unit = |x: DVec3| (x - self.center) / self.radius;
         self.parameters_of(unit_sphere_crossing(
-            (outside - self.center) / self.radius,
-            o,
+            to_unit(outside),
+            to_unit(self.inside(outside)),
         ))
     }
 
@@ -233,9 +233,11 @@ impl Reflector for Ellipsoid {
 
     fn crossing(&self, outside: DVec3) -> DVec2 {
         // The map to the unit sphere keeps segments and where they cross.
-        let o = f64::from(FERMAT_INSIDE) * self.frame[0];
-        self.unit()
-            .parameters_of(unit_sphere_crossing(self.to_own(outside) / self.radii, o))
+        let to_unit = |x: DVec3| self.to_own(x) / self.radii;
+        self.unit().parameters_of(unit_sphere_crossing(
+            to_unit(outside),
+            to_unit(self.inside(outside)),
+        ))
     }
 
     fn outward_normal(&self, uv: DVec2) -> DVec3 {

@@ -330,13 +330,7 @@ fn batching_the_searches_changes_no_pixel() {
     };
     let all = draw(&[], None);
     let no_mirror = draw(&["materials[0].mirror=[0.0,0.0,0.0]"], None);
-    let reflected = all
-        .image
-        .pixels
-        .iter()
-        .zip(&no_mirror.image.pixels)
-        .filter(|(a, b)| a != b)
-        .count();
+    let reflected = common::differing_pixels(&all.image, &no_mirror.image);
     eprintln!("{reflected} pixels show reflections");
     assert!(reflected > 300, "{reflected} pixels show reflections");
     // The cull drew some of the 32 searches' reflected triangles, not all.

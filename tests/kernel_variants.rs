@@ -75,12 +75,7 @@ fn specialised_kernels_render_the_general_kernels_image() {
         };
         let (specialised, rays) = render_with(&flat, flat.features()).unwrap();
         assert_eq!(rays, general_rays, "{path}: rays traced");
-        let differing = general
-            .pixels
-            .iter()
-            .zip(&specialised.pixels)
-            .filter(|(a, b)| a != b)
-            .count();
+        let differing = common::differing_pixels(&general, &specialised);
         eprintln!(
             "{path} {overrides:?}: features {:#x}, {differing} of {} pixels differ",
             flat.features(),
@@ -179,13 +174,7 @@ fn the_split_kernels_render_the_megakernels_image() {
         };
         let mega = run(PathKernels::Megakernel);
         let split = run(PathKernels::Split);
-        let differing = mega
-            .image
-            .pixels
-            .iter()
-            .zip(&split.image.pixels)
-            .filter(|(a, b)| a != b)
-            .count();
+        let differing = common::differing_pixels(&mega.image, &split.image);
         eprintln!(
             "{path}: {differing} of {} pixels differ, {} rays, {} cut off",
             mega.image.pixels.len(),

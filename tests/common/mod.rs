@@ -87,6 +87,16 @@ pub fn render_both(path: &str, overrides: &[&str]) -> Option<(Image, Image)> {
     Some((render_cpu(&flat), gpu))
 }
 
+/// How many pixels of `a` and `b` differ at all (both the same size).
+pub fn differing_pixels(a: &Image, b: &Image) -> usize {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .filter(|(x, y)| x != y)
+        .count()
+}
+
 /// Agreement figures: fraction of pixels whose every channel is within `relative` (relative to
 /// the larger value, with a 1e-6 absolute floor), and the mean absolute difference.
 pub fn agreement(a: &Image, b: &Image, relative: f32) -> (f64, f64) {
