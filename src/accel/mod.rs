@@ -11,6 +11,7 @@ pub mod build;
 pub mod curved;
 pub mod cwbvh;
 pub mod intersect;
+pub mod octet;
 pub mod traverse;
 pub mod wide;
 

@@ -2,8 +2,9 @@
 //! dequantised once into f32 planes stored lane by lane, so that one node test is a handful of
 //! 8-wide vector operations (AVX2 where the CPU has it, chosen at run time; SSE otherwise)
 //! instead of the BVH2's two scalar box tests per node and three times as many nodes.
-//! The primitive tests are the scalar ones every path uses (`intersect::intersect_primitive`),
-//! so the hits are the BVH2's: the boxes are the CWBVH's, dequantised with the very arithmetic
+//! The primitive tests are the ones every path uses (`intersect::intersect_primitive`), the
+//! static triangles of a node's leaves tested eight at a time (`octet`: the same test, lane by
+//! lane), so the hits are the BVH2's: the boxes are the CWBVH's, dequantised with the very arithmetic
 //! of `cwbvh::child_hits` (`p + e * q`) and tested with `intersect::intersect_box`'s slab test
 //! (the same operations in the same order), so a child this traversal skips is one the GPU's
 //! CWBVH skips too.
@@ -17,8 +18,11 @@ use glam::Vec3;
 
 use super::cwbvh::CwGeometry;
 use super::intersect::{Hit, RayQuery, SLAB_FAR_SCALE, intersect_primitive};
+use super::octet::TriangleOctet;
 use super::traverse::{closest_plane, plane_occludes};
-use crate::layout::{CWBVH_STACK_SIZE, GpuCwNode, GpuPrimitive, NONE};
+use crate::layout::{
+    CWBVH_STACK_SIZE, FEATURE_TRIANGLES, GpuCwNode, GpuPrimitive, NONE, PRIM_TRIANGLE, has,
+};
 
 /// Lanes of a node: the CWBVH's eight children.
 const LANES: usize = 8;
@@ -30,7 +34,8 @@ const LEAF_FIRST: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
 /// Entries the traversal stack can hold: each level of the tree pushes at most seven siblings.
 const STACK_ENTRIES: usize = (LANES - 1) * CWBVH_STACK_SIZE as usize + 1;
 
-/// One node: its children's boxes as planes (`lo[axis][lane]`), and what each child is.
+/// One node: its children's boxes as planes (`lo[axis][lane]`), what each child is, and the
+/// octets that hold its leaves' static triangles.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
 struct WideNode {
@@ -40,11 +45,20 @@ struct WideNode {
     child: [u32; LANES],
     /// Bit per lane: the lane holds a child.
     valid: u32,
+    /// Bit per lane: a leaf whose triangles are in the octets from `octet_start` on (it is
+    /// never pushed); the other leaves hold another kind of primitive or moving ones.
+    packed: u32,
+    /// The node's first octet in `WideBvh::octets`.
+    octet_start: u32,
+    /// The node's octets: as many as its packed leaves' triangles fill, eight a piece.
+    octet_count: u32,
 }
 
 /// The wide BVH of a scene and the primitives its leaves index.
 pub struct WideBvh {
     nodes: Vec<WideNode>,
+    /// The static triangles of the nodes' leaves, node by node.
+    octets: Vec<TriangleOctet>,
     /// Bounded primitives in leaf order, then the planes.
     prims: Vec<GpuPrimitive>,
     /// For each of `prims`, its index in the scene's primitives (`FlatScene::prims`).
@@ -87,9 +101,13 @@ impl WideBvh {
                 .map(|&i| Vec3::from(scene_prims[(motion_base + i) as usize].p0))
                 .collect()
         };
+        let mut nodes: Vec<WideNode> = cw.nodes.iter().map(wide_node).collect();
+        let prims = cw.prims[..count].to_vec();
+        let octets = pack_octets(&mut nodes, &prims, !velocities.is_empty());
         Ok(WideBvh {
-            nodes: cw.nodes.iter().map(wide_node).collect(),
-            prims: cw.prims[..count].to_vec(),
+            nodes,
+            octets,
+            prims,
             ids,
             slot_of,
             velocities,
@@ -142,9 +160,13 @@ impl WideBvh {
         }
     }
 
-    /// Bytes the nodes take.
-    pub fn node_bytes(&self) -> usize {
-        self.nodes.len() * std::mem::size_of::<WideNode>()
+    /// The octets of `node` holding a leaf of `mask`.
+    #[inline(always)]
+    fn octets_of(&self, node: &WideNode, mask: u32) -> impl Iterator<Item = &TriangleOctet> {
+        let start = node.octet_start as usize;
+        self.octets[start..start + node.octet_count as usize]
+            .iter()
+            .filter(move |octet| octet.leaves & mask != 0)
     }
 
     fn planes(&self) -> std::ops::Range<u32> {
@@ -207,6 +229,41 @@ fn wide_node(node: &GpuCwNode) -> WideNode {
         };
     }
     wide
+}
+
+/// Packs the triangles of each node's leaves that hold only triangles into octets, node by
+/// node (none when primitives move: their rays are moved per primitive), and marks those
+/// leaves `packed`.
+fn pack_octets(nodes: &mut [WideNode], prims: &[GpuPrimitive], moving: bool) -> Vec<TriangleOctet> {
+    let mut octets = Vec::new();
+    if moving {
+        return octets;
+    }
+    for node in nodes.iter_mut() {
+        let mut triangles = Vec::new();
+        for lane in 0..LANES {
+            let code = node.child[lane];
+            if node.valid & (1 << lane) == 0 || code & LEAF == 0 {
+                continue;
+            }
+            let slots = leaf_slots(code);
+            if slots
+                .clone()
+                .all(|slot| prims[slot as usize].kind == PRIM_TRIANGLE)
+            {
+                node.packed |= 1 << lane;
+                triangles.extend(slots.map(|slot| (slot, &prims[slot as usize], lane as u32)));
+            }
+        }
+        node.octet_start = octets.len() as u32;
+        octets.extend(
+            triangles
+                .chunks(super::octet::LANES)
+                .map(TriangleOctet::pack),
+        );
+        node.octet_count = octets.len() as u32 - node.octet_start;
+    }
+    octets
 }
 
 /// The primitive slots of a leaf's code.
@@ -434,7 +491,22 @@ fn closest_hit_inline<const F: u32>(
         }
         let node = &bvh.nodes[code as usize];
         let (mask, near) = test_node(node, origin, inv, best.t, bvh.avx2);
-        stack.push_nearest_last(&bvh.nodes, node, mask, &near);
+        if has(F, FEATURE_TRIANGLES) && mask & node.packed != 0 {
+            for octet in bvh.octets_of(node, mask) {
+                let lanes = octet.lanes & !octet.skipping(skip);
+                let (mut hits, found) = octet.hits(ray, best.t, lanes, bvh.avx2);
+                // Lane order, as the leaves' own loop would take them.
+                while hits != 0 {
+                    let lane = hits.trailing_zeros() as usize;
+                    hits &= hits - 1;
+                    if found[lane].t < best.t {
+                        best = found[lane];
+                        best_slot = octet.slot[lane];
+                    }
+                }
+            }
+        }
+        stack.push_nearest_last(&bvh.nodes, node, mask & !node.packed, &near);
     }
     closest_plane::<F>(
         &bvh.prims,
@@ -473,6 +545,15 @@ fn occluded_inline<const F: u32>(
         }
         let node = &bvh.nodes[code as usize];
         let (mut mask, near) = test_node(node, origin, inv, t_max, bvh.avx2);
+        if has(F, FEATURE_TRIANGLES) && mask & node.packed != 0 {
+            for octet in bvh.octets_of(node, mask) {
+                let lanes = octet.lanes & !(octet.skipping(skip[0]) | octet.skipping(skip[1]));
+                if octet.hits(ray, t_max, lanes, bvh.avx2).0 != 0 {
+                    return true;
+                }
+            }
+        }
+        mask &= !node.packed;
         while mask != 0 {
             let lane = mask.trailing_zeros() as usize;
             mask &= mask - 1;
@@ -523,6 +604,7 @@ mod tests {
         let wide = flat.wide().unwrap();
         let portable = WideBvh {
             nodes: wide.nodes.clone(),
+            octets: wide.octets.clone(),
             prims: wide.prims.clone(),
             ids: wide.ids.clone(),
             slot_of: wide.slot_of.clone(),
