@@ -3,8 +3,8 @@
 //! 8-wide vector operations (AVX2 where the CPU has it, chosen at run time; SSE otherwise)
 //! instead of the BVH2's two scalar box tests per node and three times as many nodes.
 //! The primitive tests are the ones every path uses (`intersect::intersect_primitive`), the
-//! static triangles of a node's leaves tested eight at a time (`octet`: the same test, lane by
-//! lane), so the hits are the BVH2's: the boxes are the CWBVH's, dequantised with the very arithmetic
+//! static triangles and quads of a node's leaves tested eight at a time (`octet`: the same
+//! tests, lane by lane), so the hits are the BVH2's: the boxes are the CWBVH's, dequantised with the very arithmetic
 //! of `cwbvh::child_hits` (`p + e * q`) and tested with `intersect::intersect_box`'s slab test
 //! (the same operations in the same order), so a child this traversal skips is one the GPU's
 //! CWBVH skips too.
@@ -18,10 +18,11 @@ use glam::Vec3;
 
 use super::cwbvh::CwGeometry;
 use super::intersect::{Hit, RayQuery, SLAB_FAR_SCALE, intersect_primitive};
-use super::octet::TriangleOctet;
+use super::octet::{QuadOctet, TriangleOctet};
 use super::traverse::{closest_plane, plane_occludes};
 use crate::layout::{
-    CWBVH_STACK_SIZE, FEATURE_TRIANGLES, GpuCwNode, GpuPrimitive, NONE, PRIM_TRIANGLE, has,
+    CWBVH_STACK_SIZE, FEATURE_TRIANGLES, GpuCwNode, GpuPrimitive, NONE, PRIM_QUAD, PRIM_TRIANGLE,
+    has,
 };
 
 /// Lanes of a node: the CWBVH's eight children.
@@ -45,13 +46,18 @@ struct WideNode {
     child: [u32; LANES],
     /// Bit per lane: the lane holds a child.
     valid: u32,
-    /// Bit per lane: a leaf whose triangles are in the octets from `octet_start` on (it is
-    /// never pushed); the other leaves hold another kind of primitive or moving ones.
+    /// Bit per lane: a leaf whose triangles are in the octets from `octet_start` on, or whose
+    /// quads are in those from `quad_start` on (it is never pushed); the other leaves hold
+    /// another kind of primitive, several kinds, or moving ones.
     packed: u32,
     /// The node's first octet in `WideBvh::octets`.
     octet_start: u32,
     /// The node's octets: as many as its packed leaves' triangles fill, eight a piece.
     octet_count: u32,
+    /// The node's first quad octet in `WideBvh::quads`.
+    quad_start: u32,
+    /// The node's quad octets.
+    quad_count: u32,
 }
 
 /// The wide BVH of a scene and the primitives its leaves index.
@@ -59,6 +65,8 @@ pub struct WideBvh {
     nodes: Vec<WideNode>,
     /// The static triangles of the nodes' leaves, node by node.
     octets: Vec<TriangleOctet>,
+    /// The static quads of the nodes' leaves, node by node.
+    quads: Vec<QuadOctet>,
     /// Bounded primitives in leaf order, then the planes.
     prims: Vec<GpuPrimitive>,
     /// For each of `prims`, its index in the scene's primitives (`FlatScene::prims`).
@@ -103,10 +111,11 @@ impl WideBvh {
         };
         let mut nodes: Vec<WideNode> = cw.nodes.iter().map(wide_node).collect();
         let prims = cw.prims[..count].to_vec();
-        let octets = pack_octets(&mut nodes, &prims, !velocities.is_empty());
+        let (octets, quads) = pack_octets(&mut nodes, &prims, !velocities.is_empty());
         Ok(WideBvh {
             nodes,
             octets,
+            quads,
             prims,
             ids,
             slot_of,
@@ -165,6 +174,15 @@ impl WideBvh {
     fn octets_of(&self, node: &WideNode, mask: u32) -> impl Iterator<Item = &TriangleOctet> {
         let start = node.octet_start as usize;
         self.octets[start..start + node.octet_count as usize]
+            .iter()
+            .filter(move |octet| octet.leaves & mask != 0)
+    }
+
+    /// The quad octets of `node` holding a leaf of `mask`.
+    #[inline(always)]
+    fn quads_of(&self, node: &WideNode, mask: u32) -> impl Iterator<Item = &QuadOctet> {
+        let start = node.quad_start as usize;
+        self.quads[start..start + node.quad_count as usize]
             .iter()
             .filter(move |octet| octet.leaves & mask != 0)
     }
@@ -231,28 +249,36 @@ fn wide_node(node: &GpuCwNode) -> WideNode {
     wide
 }
 
-/// Packs the triangles of each node's leaves that hold only triangles into octets, node by
-/// node (none when primitives move: their rays are moved per primitive), and marks those
-/// leaves `packed`.
-fn pack_octets(nodes: &mut [WideNode], prims: &[GpuPrimitive], moving: bool) -> Vec<TriangleOctet> {
-    let mut octets = Vec::new();
+/// Packs the triangles of each node's leaves that hold only triangles into octets, and the
+/// quads of those that hold only quads into quad octets, node by node (none when primitives
+/// move: their rays are moved per primitive), and marks those leaves `packed`.
+fn pack_octets(
+    nodes: &mut [WideNode],
+    prims: &[GpuPrimitive],
+    moving: bool,
+) -> (Vec<TriangleOctet>, Vec<QuadOctet>) {
+    let (mut octets, mut quad_octets) = (Vec::new(), Vec::new());
     if moving {
-        return octets;
+        return (octets, quad_octets);
     }
     for node in nodes.iter_mut() {
-        let mut triangles = Vec::new();
+        let (mut triangles, mut quads) = (Vec::new(), Vec::new());
         for lane in 0..LANES {
             let code = node.child[lane];
             if node.valid & (1 << lane) == 0 || code & LEAF == 0 {
                 continue;
             }
             let slots = leaf_slots(code);
-            if slots
+            let entries = slots
                 .clone()
-                .all(|slot| prims[slot as usize].kind == PRIM_TRIANGLE)
-            {
+                .map(|slot| (slot, &prims[slot as usize], lane as u32));
+            let all = |kind| slots.clone().all(|slot| prims[slot as usize].kind == kind);
+            if all(PRIM_TRIANGLE) {
                 node.packed |= 1 << lane;
-                triangles.extend(slots.map(|slot| (slot, &prims[slot as usize], lane as u32)));
+                triangles.extend(entries);
+            } else if all(PRIM_QUAD) {
+                node.packed |= 1 << lane;
+                quads.extend(entries);
             }
         }
         node.octet_start = octets.len() as u32;
@@ -262,8 +288,11 @@ fn pack_octets(nodes: &mut [WideNode], prims: &[GpuPrimitive], moving: bool) -> 
                 .map(TriangleOctet::pack),
         );
         node.octet_count = octets.len() as u32 - node.octet_start;
+        node.quad_start = quad_octets.len() as u32;
+        quad_octets.extend(quads.chunks(super::octet::LANES).map(QuadOctet::pack));
+        node.quad_count = quad_octets.len() as u32 - node.quad_start;
     }
-    octets
+    (octets, quad_octets)
 }
 
 /// The primitive slots of a leaf's code.
@@ -454,6 +483,26 @@ impl Stack {
     }
 }
 
+/// Takes the nearest of an octet's `hits` that is nearer than `best`, in lane order (as the
+/// leaves' own loop would take them: the first of equal distances).
+#[inline(always)]
+fn take_nearest(
+    mut hits: u32,
+    found: &[Hit; LANES],
+    slot: &[u32; LANES],
+    best: &mut Hit,
+    best_slot: &mut u32,
+) {
+    while hits != 0 {
+        let lane = hits.trailing_zeros() as usize;
+        hits &= hits - 1;
+        if found[lane].t < best.t {
+            *best = found[lane];
+            *best_slot = slot[lane];
+        }
+    }
+}
+
 #[inline(always)]
 fn closest_hit_inline<const F: u32>(
     bvh: &WideBvh,
@@ -491,19 +540,18 @@ fn closest_hit_inline<const F: u32>(
         }
         let node = &bvh.nodes[code as usize];
         let (mask, near) = test_node(node, origin, inv, best.t, bvh.avx2);
-        if has(F, FEATURE_TRIANGLES) && mask & node.packed != 0 {
-            for octet in bvh.octets_of(node, mask) {
-                let lanes = octet.lanes & !octet.skipping(skip);
-                let (mut hits, found) = octet.hits(ray, best.t, lanes, bvh.avx2);
-                // Lane order, as the leaves' own loop would take them.
-                while hits != 0 {
-                    let lane = hits.trailing_zeros() as usize;
-                    hits &= hits - 1;
-                    if found[lane].t < best.t {
-                        best = found[lane];
-                        best_slot = octet.slot[lane];
-                    }
+        if mask & node.packed != 0 {
+            if has(F, FEATURE_TRIANGLES) {
+                for octet in bvh.octets_of(node, mask) {
+                    let lanes = octet.lanes & !octet.skipping(skip);
+                    let (hits, found) = octet.hits(ray, best.t, lanes, bvh.avx2);
+                    take_nearest(hits, &found, &octet.slot, &mut best, &mut best_slot);
                 }
+            }
+            for octet in bvh.quads_of(node, mask) {
+                let lanes = octet.lanes & !octet.skipping(skip);
+                let (hits, found) = octet.hits(ray, best.t, lanes, bvh.avx2);
+                take_nearest(hits, &found, &octet.slot, &mut best, &mut best_slot);
             }
         }
         stack.push_nearest_last(&bvh.nodes, node, mask & !node.packed, &near);
@@ -545,8 +593,16 @@ fn occluded_inline<const F: u32>(
         }
         let node = &bvh.nodes[code as usize];
         let (mut mask, near) = test_node(node, origin, inv, t_max, bvh.avx2);
-        if has(F, FEATURE_TRIANGLES) && mask & node.packed != 0 {
-            for octet in bvh.octets_of(node, mask) {
+        if mask & node.packed != 0 {
+            if has(F, FEATURE_TRIANGLES) {
+                for octet in bvh.octets_of(node, mask) {
+                    let lanes = octet.lanes & !(octet.skipping(skip[0]) | octet.skipping(skip[1]));
+                    if octet.hits(ray, t_max, lanes, bvh.avx2).0 != 0 {
+                        return true;
+                    }
+                }
+            }
+            for octet in bvh.quads_of(node, mask) {
                 let lanes = octet.lanes & !(octet.skipping(skip[0]) | octet.skipping(skip[1]));
                 if octet.hits(ray, t_max, lanes, bvh.avx2).0 != 0 {
                     return true;
@@ -605,6 +661,7 @@ mod tests {
         let portable = WideBvh {
             nodes: wide.nodes.clone(),
             octets: wide.octets.clone(),
+            quads: wide.quads.clone(),
             prims: wide.prims.clone(),
             ids: wide.ids.clone(),
             slot_of: wide.slot_of.clone(),
@@ -657,6 +714,8 @@ mod tests {
         check("bunny", &scene("bunny.toml", &[]));
         // Spheres, a plane and triangles together.
         check("tabletop", &scene("tabletop.toml", &[]));
+        // Quads (the walls and the light) and spheres.
+        check("cornell_direct", &scene("cornell_direct.toml", &[]));
         check(
             "tabletop, moving",
             &scene(
