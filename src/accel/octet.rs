@@ -12,41 +12,59 @@
 
 use glam::Vec3;
 
-use super::intersect::{Hit, RayQuery, gamma, intersect_quad, intersect_triangle};
+use super::intersect::{Hit, MISS, RayQuery, gamma, intersect_quad, intersect_triangle};
 use crate::layout::GpuPrimitive;
 
 /// Lanes of an octet.
 pub const LANES: usize = 8;
 
-/// Up to eight triangles, `v[vertex][axis][lane]`, in the vertex order `pack` stores
-/// (lexicographic, which the watertight test needs), and which primitives they are.
+/// Up to eight primitives of one kind, stored lane by lane (`R`: the kind's rows and tests),
+/// and which primitives they are.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(32))]
-pub struct TriangleOctet {
-    v: [[[f32; LANES]; 3]; 3],
-    /// Per lane: the triangle's slot in the wide BVH's primitives.
+pub struct Octet<R> {
+    rows: R,
+    /// Per lane: the primitive's slot in the wide BVH's primitives.
     pub slot: [u32; LANES],
-    /// Bit per lane: the lane holds a triangle (empty lanes repeat lane 0's, so they stay
+    /// Bit per lane: the lane holds a primitive (empty lanes repeat lane 0's, so they stay
     /// finite, and are masked out).
     pub lanes: u32,
-    /// Bit per lane of the node whose leaves the triangles come from: the leaves in this octet.
+    /// Bit per lane of the node whose leaves the primitives come from: the leaves in this
+    /// octet.
     pub leaves: u32,
 }
 
-impl TriangleOctet {
-    /// The octet of `triangles` (at most eight: (slot, primitive, the node lane of its leaf)).
-    pub fn pack(triangles: &[(u32, &GpuPrimitive, u32)]) -> TriangleOctet {
-        assert!(!triangles.is_empty() && triangles.len() <= LANES);
-        let mut octet = TriangleOctet::default();
+/// Eight triangles for the watertight test.
+pub type TriangleOctet = Octet<TriangleRows>;
+/// Eight quads for `intersect_quad`.
+pub type QuadOctet = Octet<QuadRows>;
+
+/// A kind of primitive an octet holds: how one is stored in a lane, the scalar test of one
+/// lane, and the same test on eight lanes in AVX2.
+pub trait Rows: Copy + Default {
+    /// Stores `prim` in lane `lane`.
+    fn store(&mut self, lane: usize, prim: &GpuPrimitive);
+    /// The scalar test of lane `lane`.
+    fn test(&self, lane: usize, ray: &RayQuery, t_max: f32) -> Hit;
+    /// The scalar test's operations on the lanes of `lanes`, eight at once: a bit per lane
+    /// hit before `t_max`, and the hits.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn test_avx2(&self, ray: &RayQuery, t_max: f32, lanes: u32) -> (u32, [Hit; LANES]);
+}
+
+impl<R: Rows> Octet<R> {
+    /// The octet of `prims` (at most eight: (slot, primitive, the node lane of its leaf)).
+    pub fn pack(prims: &[(u32, &GpuPrimitive, u32)]) -> Octet<R> {
+        assert!(!prims.is_empty() && prims.len() <= LANES);
+        let mut octet = Octet::<R>::default();
         for lane in 0..LANES {
-            let (slot, prim, leaf_lane) = triangles[if lane < triangles.len() { lane } else { 0 }];
-            for (vertex, p) in [prim.p0, prim.p1, prim.p2].iter().enumerate() {
-                for (row, &coordinate) in octet.v[vertex].iter_mut().zip(p) {
-                    row[lane] = coordinate;
-                }
-            }
+            let (slot, prim, leaf_lane) = prims[if lane < prims.len() { lane } else { 0 }];
+            octet.rows.store(lane, prim);
             octet.slot[lane] = slot;
-            if lane < triangles.len() {
+            if lane < prims.len() {
                 octet.lanes |= 1 << lane;
                 octet.leaves |= 1 << leaf_lane;
             }
@@ -57,24 +75,23 @@ impl TriangleOctet {
     /// Bit per lane holding primitive slot `skip` (none for `NONE`).
     #[inline(always)]
     pub fn skipping(&self, skip: u32) -> u32 {
-        lanes_holding(&self.slot, skip)
+        let mut mask = 0;
+        for (lane, &slot) in self.slot.iter().enumerate() {
+            mask |= ((slot == skip) as u32) << lane;
+        }
+        mask
     }
 
-    fn vertex(&self, vertex: usize, lane: usize) -> Vec3 {
-        let v = &self.v[vertex];
-        Vec3::new(v[0][lane], v[1][lane], v[2][lane])
-    }
-
-    /// `intersect_triangle` on the lanes of `lanes` (a subset of `self.lanes`): a bit per lane
-    /// hit before `t_max` (at most `T_FAR`, the distance of a miss), and the hits. The lanes
-    /// of leaves whose boxes the ray missed may be asked too: a hit there is a true hit, and
-    /// leaving them out costs more than it saves.
+    /// The scalar test on the lanes of `lanes` (lanes holding a primitive): a bit per lane hit
+    /// before `t_max` (at most `T_FAR`, the distance of a miss), and the hits; in AVX2 where
+    /// `avx2` says the CPU has it. The lanes of leaves whose boxes the ray missed may be asked
+    /// too: a hit there is a true hit, and leaving them out costs more than it saves.
     #[inline(always)]
     pub fn hits(&self, ray: &RayQuery, t_max: f32, lanes: u32, avx2: bool) -> (u32, [Hit; LANES]) {
         #[cfg(target_arch = "x86_64")]
         if avx2 {
             // SAFETY: `avx2` is true only where the CPU has AVX2.
-            return unsafe { self.hits_avx2(ray, t_max, lanes) };
+            return unsafe { self.rows.test_avx2(ray, t_max, lanes) };
         }
         let _ = avx2;
         self.hits_scalar(ray, t_max, lanes)
@@ -83,16 +100,41 @@ impl TriangleOctet {
     /// The scalar test lane by lane: what the AVX2 test must equal.
     #[inline(always)]
     fn hits_scalar(&self, ray: &RayQuery, t_max: f32, mut lanes: u32) -> (u32, [Hit; LANES]) {
-        let mut hits = [super::intersect::MISS; LANES];
+        let mut hits = [MISS; LANES];
         let mut mask = 0;
         while lanes != 0 {
             let lane = lanes.trailing_zeros() as usize;
             lanes &= lanes - 1;
-            let [v0, v1, v2] = [0, 1, 2].map(|vertex| self.vertex(vertex, lane));
-            hits[lane] = intersect_triangle(ray, v0, v1, v2, t_max);
+            hits[lane] = self.rows.test(lane, ray, t_max);
             mask |= ((hits[lane].t < t_max) as u32) << lane;
         }
         (mask, hits)
+    }
+}
+
+/// Triangles, `v[vertex][axis][lane]`, in the vertex order `pack` stores (lexicographic, which
+/// the watertight test needs).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TriangleRows {
+    v: [[[f32; LANES]; 3]; 3],
+}
+
+impl TriangleRows {
+    fn vertex(&self, vertex: usize, lane: usize) -> Vec3 {
+        let v = &self.v[vertex];
+        Vec3::new(v[0][lane], v[1][lane], v[2][lane])
+    }
+}
+
+impl Rows for TriangleRows {
+    fn store(&mut self, lane: usize, prim: &GpuPrimitive) {
+        store_rows(&mut self.v, lane, [prim.p0, prim.p1, prim.p2]);
+    }
+
+    #[inline(always)]
+    fn test(&self, lane: usize, ray: &RayQuery, t_max: f32) -> Hit {
+        let [v0, v1, v2] = [0, 1, 2].map(|vertex| self.vertex(vertex, lane));
+        intersect_triangle(ray, v0, v1, v2, t_max)
     }
 
     /// The watertight test on eight lanes in AVX2 intrinsics, each operation the scalar
@@ -100,7 +142,7 @@ impl TriangleOctet {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     #[inline]
-    fn hits_avx2(&self, ray: &RayQuery, t_max: f32, lanes: u32) -> (u32, [Hit; LANES]) {
+    unsafe fn test_avx2(&self, ray: &RayQuery, t_max: f32, lanes: u32) -> (u32, [Hit; LANES]) {
         use std::arch::x86_64::*;
         let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
         let s = ray.shear;
@@ -206,100 +248,37 @@ impl TriangleOctet {
         let missed = or3(mixed_signs, flat, _mm256_or_ps(behind_or_far, too_near));
         let hit = _mm256_andnot_ps(missed, lt(t, _mm256_set1_ps(t_max)));
         let mask = _mm256_movemask_ps(hit) as u32 & lanes;
-        let mut lanes = [[0.0f32; LANES]; 3];
-        // SAFETY: each row holds eight f32s.
-        unsafe {
-            _mm256_storeu_ps(lanes[0].as_mut_ptr(), t);
-            _mm256_storeu_ps(lanes[1].as_mut_ptr(), mul(e1, inv_det));
-            _mm256_storeu_ps(lanes[2].as_mut_ptr(), mul(e2, inv_det));
-        }
-        let hits = std::array::from_fn(|lane| Hit {
-            t: lanes[0][lane],
-            b1: lanes[1][lane],
-            b2: lanes[2][lane],
-        });
-        (mask, hits)
+        (mask, hit_lanes(t, mul(e1, inv_det), mul(e2, inv_det)))
     }
 }
 
-/// Up to eight quads (parallelograms), `corner`, `edge_u`, `edge_v` and their normal
-/// `n = edge_u × edge_v` with its square length lane by lane: n and n · n are computed once
-/// here, with `intersect_quad`'s operations, so the test finds the very values it would.
+/// Quads (parallelograms): `corner`, `edge_u`, `edge_v` and their normal `n = edge_u × edge_v`,
+/// `rows[vector][axis][lane]`, and n's square length: n and n · n are computed once here, with
+/// `intersect_quad`'s operations, so the test finds the very values it would.
 #[derive(Clone, Copy, Debug, Default)]
-#[repr(C, align(32))]
-pub struct QuadOctet {
-    /// corner, edge_u, edge_v, n: `rows[vector][axis][lane]`.
+pub struct QuadRows {
     rows: [[[f32; LANES]; 3]; 4],
-    /// n · n per lane.
     nn: [f32; LANES],
-    /// Per lane: the quad's slot in the wide BVH's primitives.
-    pub slot: [u32; LANES],
-    /// Bit per lane: the lane holds a quad (empty lanes repeat lane 0's).
-    pub lanes: u32,
-    /// Bit per lane of the node whose leaves the quads come from: the leaves in this octet.
-    pub leaves: u32,
 }
 
-impl QuadOctet {
-    /// The octet of `quads` (at most eight: (slot, primitive, the node lane of its leaf)).
-    pub fn pack(quads: &[(u32, &GpuPrimitive, u32)]) -> QuadOctet {
-        assert!(!quads.is_empty() && quads.len() <= LANES);
-        let mut octet = QuadOctet::default();
-        for lane in 0..LANES {
-            let (slot, prim, leaf_lane) = quads[if lane < quads.len() { lane } else { 0 }];
-            let (edge_u, edge_v) = (Vec3::from(prim.p1), Vec3::from(prim.p2));
-            let n = edge_u.cross(edge_v);
-            for (vector, p) in [prim.p0, prim.p1, prim.p2, n.into()].iter().enumerate() {
-                for (row, &coordinate) in octet.rows[vector].iter_mut().zip(p) {
-                    row[lane] = coordinate;
-                }
-            }
-            octet.nn[lane] = n.dot(n);
-            octet.slot[lane] = slot;
-            if lane < quads.len() {
-                octet.lanes |= 1 << lane;
-                octet.leaves |= 1 << leaf_lane;
-            }
-        }
-        octet
-    }
-
-    /// Bit per lane holding primitive slot `skip` (none for `NONE`).
-    #[inline(always)]
-    pub fn skipping(&self, skip: u32) -> u32 {
-        lanes_holding(&self.slot, skip)
-    }
-
+impl QuadRows {
     fn vector(&self, vector: usize, lane: usize) -> Vec3 {
         let v = &self.rows[vector];
         Vec3::new(v[0][lane], v[1][lane], v[2][lane])
     }
+}
 
-    /// `intersect_quad` on the lanes of `lanes`, as [`TriangleOctet::hits`].
-    #[inline(always)]
-    pub fn hits(&self, ray: &RayQuery, t_max: f32, lanes: u32, avx2: bool) -> (u32, [Hit; LANES]) {
-        #[cfg(target_arch = "x86_64")]
-        if avx2 {
-            // SAFETY: `avx2` is true only where the CPU has AVX2.
-            return unsafe { self.hits_avx2(ray, t_max, lanes) };
-        }
-        let _ = avx2;
-        self.hits_scalar(ray, t_max, lanes)
+impl Rows for QuadRows {
+    fn store(&mut self, lane: usize, prim: &GpuPrimitive) {
+        let n = Vec3::from(prim.p1).cross(Vec3::from(prim.p2));
+        store_rows(&mut self.rows, lane, [prim.p0, prim.p1, prim.p2, n.into()]);
+        self.nn[lane] = n.dot(n);
     }
 
-    /// The scalar test lane by lane: what the AVX2 test must equal.
     #[inline(always)]
-    fn hits_scalar(&self, ray: &RayQuery, t_max: f32, mut lanes: u32) -> (u32, [Hit; LANES]) {
-        let mut hits = [super::intersect::MISS; LANES];
-        let mut mask = 0;
-        while lanes != 0 {
-            let lane = lanes.trailing_zeros() as usize;
-            lanes &= lanes - 1;
-            let [corner, edge_u, edge_v] = [0, 1, 2].map(|vector| self.vector(vector, lane));
-            hits[lane] = intersect_quad(ray, corner, edge_u, edge_v, t_max);
-            mask |= ((hits[lane].t < t_max) as u32) << lane;
-        }
-        (mask, hits)
+    fn test(&self, lane: usize, ray: &RayQuery, t_max: f32) -> Hit {
+        let [corner, edge_u, edge_v] = [0, 1, 2].map(|vector| self.vector(vector, lane));
+        intersect_quad(ray, corner, edge_u, edge_v, t_max)
     }
 
     /// `intersect_quad` on eight lanes in AVX2 intrinsics, each operation the scalar test's
@@ -307,7 +286,7 @@ impl QuadOctet {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     #[inline]
-    fn hits_avx2(&self, ray: &RayQuery, t_max: f32, lanes: u32) -> (u32, [Hit; LANES]) {
+    unsafe fn test_avx2(&self, ray: &RayQuery, t_max: f32, lanes: u32) -> (u32, [Hit; LANES]) {
         use std::arch::x86_64::*;
         type V3 = [__m256; 3];
         let load = |row: &[f32; LANES]| {
@@ -357,36 +336,52 @@ impl QuadOctet {
         };
         let hit = _mm256_and_ps(in_range, _mm256_and_ps(inside(u), inside(v)));
         let mask = _mm256_movemask_ps(hit) as u32 & lanes;
-        let mut rows = [[0.0f32; LANES]; 3];
-        // SAFETY: each row holds eight f32s.
-        unsafe {
-            _mm256_storeu_ps(rows[0].as_mut_ptr(), t);
-            _mm256_storeu_ps(rows[1].as_mut_ptr(), u);
-            _mm256_storeu_ps(rows[2].as_mut_ptr(), v);
+        (mask, hit_lanes(t, u, v))
+    }
+}
+
+/// Stores the vectors `points` in lane `lane` of `rows` (`rows[vector][axis][lane]`).
+fn store_rows<const N: usize>(
+    rows: &mut [[[f32; LANES]; 3]; N],
+    lane: usize,
+    points: [[f32; 3]; N],
+) {
+    for (vector, point) in rows.iter_mut().zip(points) {
+        for (row, coordinate) in vector.iter_mut().zip(point) {
+            row[lane] = coordinate;
         }
-        let hits = std::array::from_fn(|lane| Hit {
-            t: rows[0][lane],
-            b1: rows[1][lane],
-            b2: rows[2][lane],
-        });
-        (mask, hits)
     }
 }
 
-/// Bit per lane whose slot is `skip`.
-#[inline(always)]
-fn lanes_holding(slot: &[u32; LANES], skip: u32) -> u32 {
-    let mut mask = 0;
-    for (lane, &s) in slot.iter().enumerate() {
-        mask |= ((s == skip) as u32) << lane;
+/// Eight lanes' hits from their t, b1 and b2 vectors.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn hit_lanes(
+    t: std::arch::x86_64::__m256,
+    b1: std::arch::x86_64::__m256,
+    b2: std::arch::x86_64::__m256,
+) -> [Hit; LANES] {
+    use std::arch::x86_64::_mm256_storeu_ps;
+    let mut rows = [[0.0f32; LANES]; 3];
+    // SAFETY: each row holds eight f32s.
+    unsafe {
+        _mm256_storeu_ps(rows[0].as_mut_ptr(), t);
+        _mm256_storeu_ps(rows[1].as_mut_ptr(), b1);
+        _mm256_storeu_ps(rows[2].as_mut_ptr(), b2);
     }
-    mask
+    std::array::from_fn(|lane| Hit {
+        t: rows[0][lane],
+        b1: rows[1][lane],
+        b2: rows[2][lane],
+    })
 }
 
-#[cfg(test)]
+// The AVX2 tests exist only on x86-64: there is nothing to compare elsewhere.
+#[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use super::*;
-    use crate::layout::{PRIM_TRIANGLE, T_FAR};
+    use crate::layout::{PRIM_QUAD, PRIM_TRIANGLE, T_FAR};
     use crate::math::rng::Rng;
 
     fn triangle(v: [Vec3; 3]) -> GpuPrimitive {
@@ -400,55 +395,34 @@ mod tests {
         }
     }
 
-    /// Each lane of the AVX2 test returns the scalar test's hit, bit for bit, on random rays
-    /// through random triangles: near and far, thin, degenerate (a repeated vertex, a line),
-    /// seen edge on, with vertices shared by neighbouring lanes (rays through common edges),
-    /// at scales from 1e-6 to 1e6, with the hit limit before, at and after the hits.
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn the_avx2_octet_equals_the_scalar_test_lane_by_lane() {
+    /// Draws 8,000 octets of `R` (`primitives(point, scale)`: eight primitives, `point` a
+    /// uniform point of [-1, 1]^3) of one to eight lanes at scales from 1e-6 to 1e6, and a ray
+    /// at each, from 1 to 21 scales away, at the point `aim(rows, lane, round, a, b)` of a lane's
+    /// primitive (a, b uniform in [0, 1]); every sixteenth round asks only some lanes (as a
+    /// skipped primitive leaves out), and the hit limit is beyond, at and before the aimed
+    /// point. Asserts that each lane of the AVX2 test returns the scalar test's hit bit for bit,
+    /// and that at least `min_compared` hits were compared.
+    fn avx2_equals_scalar<R: Rows>(
+        seed: u32,
+        mut primitives: impl FnMut(&mut dyn FnMut() -> Vec3, f32) -> Vec<GpuPrimitive>,
+        aim: impl Fn(&R, usize, u32, f32, f32) -> Vec3,
+        min_compared: usize,
+    ) {
         if !std::arch::is_x86_feature_detected!("avx2") {
             eprintln!("no AVX2 on this CPU: only the scalar octet test runs");
             return;
         }
-        let mut rng = Rng::new(5, 0, 0);
+        let mut rng = Rng::new(seed, 0, 0);
         let mut unit = move || rng.next_f32();
         let mut point = move || Vec3::new(unit(), unit(), unit()) * 2.0 - 1.0;
         let (mut hits, mut compared) = (0, 0);
-        for round in 0..8000 {
-            let scale = 10f32.powi((round % 13) - 6);
-            let shared = [point() * scale, point() * scale];
-            let prims: Vec<GpuPrimitive> = (0..LANES)
-                .map(|lane| {
-                    let mut v = [point() * scale, point() * scale, point() * scale];
-                    match lane {
-                        // Fans around one edge: rays near it meet two triangles.
-                        0 | 1 => (v[0], v[1]) = (shared[0], shared[1]),
-                        2 => v[2] = v[1],
-                        3 => v[2] = v[0] + (v[1] - v[0]) * 0.5,
-                        4 => v[2] = v[0] + (v[1] - v[0]) * 1e-7 + v[2] * 1e-7,
-                        _ => {}
-                    }
-                    triangle(v)
-                })
-                .collect();
-            let packed: Vec<_> = prims
-                .iter()
-                .enumerate()
-                .map(|(i, p)| (i as u32, p, 0))
-                .collect();
-            let octet = TriangleOctet::pack(&packed[..1 + round as usize % LANES]);
-            // Aim inside a lane's triangle, on its edge, at its vertex, or just beside it.
-            let lane = round as usize % LANES;
-            let [v0, v1, v2] = [0, 1, 2].map(|vertex| octet.vertex(vertex, lane));
+        for round in 0..8000u32 {
+            let scale = 10f32.powi((round % 13) as i32 - 6);
+            let prims = primitives(&mut point, scale);
+            let packed: Vec<_> = (0..LANES).map(|i| (i as u32, &prims[i], 0)).collect();
+            let octet = Octet::<R>::pack(&packed[..1 + round as usize % LANES]);
             let (a, b) = (0.5 * (point().x + 1.0), 0.5 * (point().y + 1.0));
-            let (a, b) = match round % 4 {
-                0 => (a * (1.0 - b), b),
-                1 => (a, 0.0),
-                2 => (0.0, 0.0),
-                _ => (a * (1.0 - b), b + 1e-6),
-            };
-            let target = v0 + (v1 - v0) * a + (v2 - v0) * b;
+            let target = aim(&octet.rows, round as usize % LANES, round, a, b);
             let distance = 1.0 + 10.0 * (point().x + 1.0);
             let origin = target + point().normalize_or(Vec3::X) * scale * distance;
             let mut direction = target - origin;
@@ -457,10 +431,9 @@ mod tests {
             }
             let ray = RayQuery::new(origin, direction);
             let t_max = [T_FAR, 2.0, 1.0, 0.5][round as usize / 4 % 4];
-            // SAFETY: the CPU has AVX2 (checked above).
-            // Every lane, or some (as a skipped primitive leaves out).
             let lanes = octet.lanes & [u32::MAX, 0b1011_0101][round as usize / 16 % 2];
-            let (mask, found) = unsafe { octet.hits_avx2(&ray, t_max, lanes) };
+            // SAFETY: the CPU has AVX2 (checked above).
+            let (mask, found) = unsafe { octet.rows.test_avx2(&ray, t_max, lanes) };
             let (expected_mask, expected) = octet.hits_scalar(&ray, t_max, lanes);
             assert_eq!(mask, expected_mask, "round {round}: hit lanes");
             for lane in 0..LANES {
@@ -478,26 +451,49 @@ mod tests {
         }
         // The draws must exercise hits and misses alike.
         assert!(hits > 1500 && hits < 7800, "{hits} rounds with a hit");
-        assert!(compared > 2000, "{compared} hits compared");
+        assert!(compared > min_compared, "{compared} hits compared");
     }
 
-    /// As above for quads: each lane of the AVX2 test returns `intersect_quad`'s hit, bit for
-    /// bit, on rays aimed inside random quads, on their edges and corners and just beside
-    /// them, for flat quads (parallel edges, a zero edge) too, at scales from 1e-6 to 1e6.
-    #[cfg(target_arch = "x86_64")]
+    /// Triangles near and far, thin, degenerate (a repeated vertex, a line), seen edge on,
+    /// with an edge shared by two lanes (rays through it meet both); rays aimed inside a lane's
+    /// triangle, on its edge, at its vertex, and just beside it.
     #[test]
-    fn the_avx2_quad_octet_equals_the_scalar_test_lane_by_lane() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
-            eprintln!("no AVX2 on this CPU: only the scalar octet test runs");
-            return;
-        }
-        let mut rng = Rng::new(7, 0, 0);
-        let mut unit = move || rng.next_f32();
-        let mut point = move || Vec3::new(unit(), unit(), unit()) * 2.0 - 1.0;
-        let (mut hits, mut compared) = (0, 0);
-        for round in 0..8000 {
-            let scale = 10f32.powi((round % 13) - 6);
-            let prims: Vec<GpuPrimitive> = (0..LANES)
+    fn the_avx2_triangle_test_equals_the_scalar_test_lane_by_lane() {
+        let primitives = |point: &mut dyn FnMut() -> Vec3, scale: f32| {
+            let shared = [point() * scale, point() * scale];
+            (0..LANES)
+                .map(|lane| {
+                    let mut v = [point() * scale, point() * scale, point() * scale];
+                    match lane {
+                        0 | 1 => (v[0], v[1]) = (shared[0], shared[1]),
+                        2 => v[2] = v[1],
+                        3 => v[2] = v[0] + (v[1] - v[0]) * 0.5,
+                        4 => v[2] = v[0] + (v[1] - v[0]) * 1e-7 + v[2] * 1e-7,
+                        _ => {}
+                    }
+                    triangle(v)
+                })
+                .collect()
+        };
+        let aim = |rows: &TriangleRows, lane: usize, round: u32, a: f32, b: f32| {
+            let [v0, v1, v2] = [0, 1, 2].map(|vertex| rows.vertex(vertex, lane));
+            let (a, b) = match round % 4 {
+                0 => (a * (1.0 - b), b),
+                1 => (a, 0.0),
+                2 => (0.0, 0.0),
+                _ => (a * (1.0 - b), b + 1e-6),
+            };
+            v0 + (v1 - v0) * a + (v2 - v0) * b
+        };
+        avx2_equals_scalar(5, primitives, aim, 2000);
+    }
+
+    /// Quads, flat ones too (parallel edges, a zero edge, nearly parallel); rays aimed inside
+    /// a lane's quad, on its far edge, at its corner, and just beside it.
+    #[test]
+    fn the_avx2_quad_test_equals_the_scalar_test_lane_by_lane() {
+        let primitives = |point: &mut dyn FnMut() -> Vec3, scale: f32| {
+            (0..LANES)
                 .map(|lane| {
                     let (corner, mut edge_u, mut edge_v) =
                         (point() * scale, point() * scale, point() * scale);
@@ -508,53 +504,25 @@ mod tests {
                         _ => {}
                     }
                     GpuPrimitive {
-                        kind: crate::layout::PRIM_QUAD,
+                        kind: PRIM_QUAD,
                         p0: corner.into(),
                         p1: edge_u.into(),
                         p2: edge_v.into(),
                         ..Default::default()
                     }
                 })
-                .collect();
-            let packed: Vec<_> = prims
-                .iter()
-                .enumerate()
-                .map(|(i, p)| (i as u32, p, 0))
-                .collect();
-            let octet = QuadOctet::pack(&packed[..1 + round as usize % LANES]);
-            let lane = round as usize % LANES;
-            let [corner, edge_u, edge_v] = [0, 1, 2].map(|vector| octet.vector(vector, lane));
-            let (a, b) = (0.5 * (point().x + 1.0), 0.5 * (point().y + 1.0));
+                .collect()
+        };
+        let aim = |rows: &QuadRows, lane: usize, round: u32, a: f32, b: f32| {
+            let [corner, edge_u, edge_v] = [0, 1, 2].map(|vector| rows.vector(vector, lane));
             let (a, b) = match round % 4 {
                 0 => (a, b),
                 1 => (a, 1.0),
                 2 => (0.0, 0.0),
                 _ => (a, b * 1e-6 - 1e-7),
             };
-            let target = corner + edge_u * a + edge_v * b;
-            let distance = 1.0 + 10.0 * (point().x + 1.0);
-            let origin = target + point().normalize_or(Vec3::X) * scale * distance;
-            let ray = RayQuery::new(origin, target - origin);
-            let t_max = [T_FAR, 2.0, 1.0, 0.5][round as usize / 4 % 4];
-            let lanes = octet.lanes & [u32::MAX, 0b1011_0101][round as usize / 16 % 2];
-            // SAFETY: the CPU has AVX2 (checked above).
-            let (mask, found) = unsafe { octet.hits_avx2(&ray, t_max, lanes) };
-            let (expected_mask, expected) = octet.hits_scalar(&ray, t_max, lanes);
-            assert_eq!(mask, expected_mask, "round {round}: hit lanes");
-            for lane in 0..LANES {
-                if expected_mask & (1 << lane) != 0 {
-                    compared += 1;
-                    let bits = |h: Hit| [h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()];
-                    assert_eq!(
-                        bits(found[lane]),
-                        bits(expected[lane]),
-                        "round {round} lane {lane}"
-                    );
-                }
-            }
-            hits += (mask != 0) as usize;
-        }
-        assert!(hits > 1500 && hits < 7800, "{hits} rounds with a hit");
-        assert!(compared > 1500, "{compared} hits compared");
+            corner + edge_u * a + edge_v * b
+        };
+        avx2_equals_scalar(7, primitives, aim, 1500);
     }
 }

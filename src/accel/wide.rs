@@ -18,7 +18,7 @@ use glam::Vec3;
 
 use super::cwbvh::CwGeometry;
 use super::intersect::{Hit, RayQuery, SLAB_FAR_SCALE, intersect_primitive};
-use super::octet::{QuadOctet, TriangleOctet};
+use super::octet::{Octet, QuadOctet, Rows, TriangleOctet};
 use super::traverse::{closest_plane, plane_occludes};
 use crate::layout::{
     CWBVH_STACK_SIZE, FEATURE_TRIANGLES, GpuCwNode, GpuPrimitive, NONE, PRIM_QUAD, PRIM_TRIANGLE,
@@ -169,22 +169,18 @@ impl WideBvh {
         }
     }
 
-    /// The octets of `node` holding a leaf of `mask`.
+    /// The triangle octets of `node`.
     #[inline(always)]
-    fn octets_of(&self, node: &WideNode, mask: u32) -> impl Iterator<Item = &TriangleOctet> {
+    fn triangles_of(&self, node: &WideNode) -> &[TriangleOctet] {
         let start = node.octet_start as usize;
-        self.octets[start..start + node.octet_count as usize]
-            .iter()
-            .filter(move |octet| octet.leaves & mask != 0)
+        &self.octets[start..start + node.octet_count as usize]
     }
 
-    /// The quad octets of `node` holding a leaf of `mask`.
+    /// The quad octets of `node`.
     #[inline(always)]
-    fn quads_of(&self, node: &WideNode, mask: u32) -> impl Iterator<Item = &QuadOctet> {
+    fn quads_of(&self, node: &WideNode) -> &[QuadOctet] {
         let start = node.quad_start as usize;
-        self.quads[start..start + node.quad_count as usize]
-            .iter()
-            .filter(move |octet| octet.leaves & mask != 0)
+        &self.quads[start..start + node.quad_count as usize]
     }
 
     fn planes(&self) -> std::ops::Range<u32> {
@@ -483,24 +479,51 @@ impl Stack {
     }
 }
 
-/// Takes the nearest of an octet's `hits` that is nearer than `best`, in lane order (as the
-/// leaves' own loop would take them: the first of equal distances).
+/// The nearest hit nearer than `best` in those of `octets` that hold a leaf of `mask`, but in
+/// slot `skip`, taken in lane order (as the leaves' own loop would take them: the first of
+/// equal distances).
 #[inline(always)]
-fn take_nearest(
-    mut hits: u32,
-    found: &[Hit; LANES],
-    slot: &[u32; LANES],
+fn nearest_in<R: Rows>(
+    octets: &[Octet<R>],
+    mask: u32,
+    ray: &RayQuery,
+    skip: u32,
     best: &mut Hit,
     best_slot: &mut u32,
+    avx2: bool,
 ) {
-    while hits != 0 {
-        let lane = hits.trailing_zeros() as usize;
-        hits &= hits - 1;
-        if found[lane].t < best.t {
-            *best = found[lane];
-            *best_slot = slot[lane];
+    for octet in octets.iter().filter(|octet| octet.leaves & mask != 0) {
+        let lanes = octet.lanes & !octet.skipping(skip);
+        let (mut hits, found) = octet.hits(ray, best.t, lanes, avx2);
+        while hits != 0 {
+            let lane = hits.trailing_zeros() as usize;
+            hits &= hits - 1;
+            if found[lane].t < best.t {
+                *best = found[lane];
+                *best_slot = octet.slot[lane];
+            }
         }
     }
+}
+
+/// Whether anything but slots `skip` in those of `octets` that hold a leaf of `mask` lies
+/// along `ray` before `t_max`.
+#[inline(always)]
+fn any_in<R: Rows>(
+    octets: &[Octet<R>],
+    mask: u32,
+    ray: &RayQuery,
+    skip: [u32; 2],
+    t_max: f32,
+    avx2: bool,
+) -> bool {
+    for octet in octets.iter().filter(|octet| octet.leaves & mask != 0) {
+        let lanes = octet.lanes & !(octet.skipping(skip[0]) | octet.skipping(skip[1]));
+        if octet.hits(ray, t_max, lanes, avx2).0 != 0 {
+            return true;
+        }
+    }
+    false
 }
 
 #[inline(always)]
@@ -541,18 +564,12 @@ fn closest_hit_inline<const F: u32>(
         let node = &bvh.nodes[code as usize];
         let (mask, near) = test_node(node, origin, inv, best.t, bvh.avx2);
         if mask & node.packed != 0 {
+            let (best, best_slot, avx2) = (&mut best, &mut best_slot, bvh.avx2);
             if has(F, FEATURE_TRIANGLES) {
-                for octet in bvh.octets_of(node, mask) {
-                    let lanes = octet.lanes & !octet.skipping(skip);
-                    let (hits, found) = octet.hits(ray, best.t, lanes, bvh.avx2);
-                    take_nearest(hits, &found, &octet.slot, &mut best, &mut best_slot);
-                }
+                let triangles = bvh.triangles_of(node);
+                nearest_in(triangles, mask, ray, skip, best, best_slot, avx2);
             }
-            for octet in bvh.quads_of(node, mask) {
-                let lanes = octet.lanes & !octet.skipping(skip);
-                let (hits, found) = octet.hits(ray, best.t, lanes, bvh.avx2);
-                take_nearest(hits, &found, &octet.slot, &mut best, &mut best_slot);
-            }
+            nearest_in(bvh.quads_of(node), mask, ray, skip, best, best_slot, avx2);
         }
         stack.push_nearest_last(&bvh.nodes, node, mask & !node.packed, &near);
     }
@@ -594,19 +611,10 @@ fn occluded_inline<const F: u32>(
         let node = &bvh.nodes[code as usize];
         let (mut mask, near) = test_node(node, origin, inv, t_max, bvh.avx2);
         if mask & node.packed != 0 {
-            if has(F, FEATURE_TRIANGLES) {
-                for octet in bvh.octets_of(node, mask) {
-                    let lanes = octet.lanes & !(octet.skipping(skip[0]) | octet.skipping(skip[1]));
-                    if octet.hits(ray, t_max, lanes, bvh.avx2).0 != 0 {
-                        return true;
-                    }
-                }
-            }
-            for octet in bvh.quads_of(node, mask) {
-                let lanes = octet.lanes & !(octet.skipping(skip[0]) | octet.skipping(skip[1]));
-                if octet.hits(ray, t_max, lanes, bvh.avx2).0 != 0 {
-                    return true;
-                }
+            let triangles = has(F, FEATURE_TRIANGLES)
+                && any_in(bvh.triangles_of(node), mask, ray, skip, t_max, bvh.avx2);
+            if triangles || any_in(bvh.quads_of(node), mask, ray, skip, t_max, bvh.avx2) {
+                return true;
             }
         }
         mask &= !node.packed;
