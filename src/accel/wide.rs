@@ -4,10 +4,10 @@
 //! instead of the BVH2's two scalar box tests per node and three times as many nodes.
 //! The primitive tests are the ones every path uses (`intersect::intersect_primitive`), the
 //! static triangles and quads of a node's leaves tested eight at a time (`octet`: the same
-//! tests, lane by lane), so the hits are the BVH2's: the boxes are the CWBVH's, dequantised with the very arithmetic
-//! of `cwbvh::child_hits` (`p + e * q`) and tested with `intersect::intersect_box`'s slab test
-//! (the same operations in the same order), so a child this traversal skips is one the GPU's
-//! CWBVH skips too.
+//! tests, lane by lane), so the hits are the BVH2's: the boxes are the CWBVH's, dequantised
+//! with the very arithmetic of `cwbvh::child_hits` (`p + e * q`) and tested with
+//! `intersect::intersect_box`'s slab test (the same operations in the same order), so a child
+//! this traversal skips is one the GPU's CWBVH skips too.
 //!
 //! No GPU twin: the GPU traverses the compressed nodes (`wgsl/traverse_cwbvh.wgsl`), 80 bytes
 //! where these take 256, because its bottleneck is memory traffic; a CPU's is the node test.
@@ -36,7 +36,7 @@ const LEAF_FIRST: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
 const STACK_ENTRIES: usize = (LANES - 1) * CWBVH_STACK_SIZE as usize + 1;
 
 /// One node: its children's boxes as planes (`lo[axis][lane]`), what each child is, and the
-/// octets that hold its leaves' static triangles.
+/// octets that hold its leaves' static triangles and quads.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
 struct WideNode {
