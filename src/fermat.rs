@@ -21,7 +21,9 @@
 //! turned by an orientation: their parameters are the own frame's, so a search on a turned
 //! shape takes the steps it takes on the unturned one (docs/fermat.md).
 
-use crate::layout::{FERMAT_C_OFFSET, FERMAT_FLAT, FERMAT_INSIDE, FERMAT_SPREAD};
+use crate::layout::{
+    FERMAT_C_OFFSET, FERMAT_FLAT, FERMAT_INSIDE, FERMAT_SPREAD, PATCH_CROSSING_DONE,
+};
 use glam::{DQuat, DVec2, DVec3};
 
 /// A smooth parametric surface a reflection is searched on.
@@ -477,7 +479,7 @@ impl Reflector for BezierPatch {
             let next = (uvt - jacobian.inverse() * r).clamp(DVec3::ZERO, DVec3::ONE);
             let moved = (next - uvt).length();
             uvt = next;
-            if moved < f64::from(crate::layout::PATCH_CROSSING_DONE) {
+            if moved < f64::from(PATCH_CROSSING_DONE) {
                 break;
             }
         }

@@ -211,29 +211,22 @@ fn crossing(f: Frame, outside: vec3<f32>) -> vec2<f32> {
     if (REFLECTOR_KIND == REFLECTOR_PATCH) {
         return patch_crossing(outside);
     }
-    var d = outside - reflectors[search].center;
-    if (REFLECTOR_KIND == REFLECTOR_ELLIPSOID) {
-        // Its unit sphere's coordinates.
-        d /= reflectors[search].radii.xyz;
+    let d = outside - reflectors[search].center;
+    if (REFLECTOR_KIND == REFLECTOR_SPHERE || REFLECTOR_KIND == REFLECTOR_ELLIPSOID) {
+        // In the unit sphere's coordinates (the frame's too): d over the radius, or the radii.
+        let radii = select(vec3<f32>(reflectors[search].radius), reflectors[search].radii.xyz,
+            REFLECTOR_KIND == REFLECTOR_ELLIPSOID);
+        let n = normalize(unit_sphere_crossing(d / radii, FERMAT_INSIDE * f.x));
+        return vec2<f32>(atan2(dot(n, f.z), dot(n, f.x)), acos(clamp(dot(n, f.y), -1.0, 1.0)));
     }
     let u = atan2(dot(d, f.z), dot(d, f.x));
-    if (REFLECTOR_KIND == REFLECTOR_CYLINDER) {
-        return vec2<f32>(u, d.y);
-    }
     if (REFLECTOR_KIND == REFLECTOR_TORUS) {
         let flat = vec3<f32>(d.x, 0.0, d.z);
         let radial = select(vec3<f32>(1.0, 0.0, 0.0), normalize(flat), length(flat) > 0.0);
         let w = d - reflectors[search].radius * radial;
         return vec2<f32>(u, atan2(w.y, dot(w, vec3<f32>(cos(u), 0.0, sin(u)))));
     }
-    // The unit sphere's coordinates: a sphere's d divided by its radius (an ellipsoid's is
-    // in them already).
-    var unit = d;
-    if (REFLECTOR_KIND == REFLECTOR_SPHERE) {
-        unit = d / reflectors[search].radius;
-    }
-    let n = normalize(unit_sphere_crossing(unit, FERMAT_INSIDE * f.x));
-    return vec2<f32>(atan2(dot(n, f.z), dot(n, f.x)), acos(clamp(dot(n, f.y), -1.0, 1.0)));
+    return vec2<f32>(u, d.y);
 }
 
 fn fermat_gradient(f: Frame, eye: vec3<f32>, vertex: vec3<f32>, uv: vec2<f32>) -> vec2<f32> {

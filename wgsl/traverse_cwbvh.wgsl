@@ -68,8 +68,7 @@ struct CwState {
 
 // Expands the current group's nearest child: pushes the rest of the group, intersects the
 // child's children. Returns false on a stack overflow (flagged).
-fn cw_step(ray: RayQuery, oct_inv4: u32, t_max: f32, state: ptr<function, CwState>,
-           stack: ptr<private, array<vec2<u32>, CWBVH_STACK_SIZE>>) -> bool {
+fn cw_step(ray: RayQuery, oct_inv4: u32, t_max: f32, state: ptr<function, CwState>) -> bool {
     let hits = (*state).current.y;
     let bit = firstLeadingBit(hits);
     (*state).current.y = hits & ~(1u << bit);
@@ -78,7 +77,7 @@ fn cw_step(ray: RayQuery, oct_inv4: u32, t_max: f32, state: ptr<function, CwStat
             flag_status(STATUS_STACK_OVERFLOW);
             return false;
         }
-        (*stack)[(*state).stack_size] = (*state).current;
+        cw_stack[(*state).stack_size] = (*state).current;
         (*state).stack_size += 1u;
     }
     let slot = (bit - 24u) ^ (oct_inv4 & 0xffu);
@@ -92,8 +91,7 @@ fn cw_step(ray: RayQuery, oct_inv4: u32, t_max: f32, state: ptr<function, CwStat
 
 // Once the current group has no child left, the next from the stack; false when the stack is
 // empty too (the traversal is over).
-fn cw_next_group(state: ptr<function, CwState>,
-                 stack: ptr<private, array<vec2<u32>, CWBVH_STACK_SIZE>>) -> bool {
+fn cw_next_group(state: ptr<function, CwState>) -> bool {
     if (((*state).current.y & 0xff000000u) != 0u) {
         return true;
     }
@@ -101,21 +99,21 @@ fn cw_next_group(state: ptr<function, CwState>,
         return false;
     }
     (*state).stack_size -= 1u;
-    (*state).current = (*stack)[(*state).stack_size];
+    (*state).current = cw_stack[(*state).stack_size];
     return true;
 }
 
 // One loop iteration's node work, shared by both queries: the visit cap (flagged), then the
 // current group's nearest child expanded into `state.prims`. False ends the traversal.
-fn cw_advance(ray: RayQuery, oct_inv4: u32, t_max: f32, visits: u32, state: ptr<function, CwState>,
-              stack: ptr<private, array<vec2<u32>, CWBVH_STACK_SIZE>>) -> bool {
+fn cw_advance(ray: RayQuery, oct_inv4: u32, t_max: f32, visits: u32,
+              state: ptr<function, CwState>) -> bool {
     if (visits >= frame.traversal_cap) {
         flag_status(STATUS_TRAVERSAL_CAP);
         return false;
     }
     (*state).prims = vec2<u32>(0u, 0u);
     if (((*state).current.y & 0xff000000u) != 0u) {
-        return cw_step(ray, oct_inv4, t_max, state, stack);
+        return cw_step(ray, oct_inv4, t_max, state);
     }
     return true;
 }
@@ -126,7 +124,7 @@ fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
     var best = PrimHit(NONE, Hit(t_max_in, 0.0, 0.0));
     let oct_inv4 = cw_octant_inv4(ray.direction);
     var state = CwState(vec2<u32>(0u, 0x80000000u), vec2<u32>(0u, 0u), 0u);
-    for (var visits = 0u; cw_advance(ray, oct_inv4, best.hit.t, visits, &state, &cw_stack); visits += 1u) {
+    for (var visits = 0u; cw_advance(ray, oct_inv4, best.hit.t, visits, &state); visits += 1u) {
         while (state.prims.y != 0u) {
             let bit = firstLeadingBit(state.prims.y);
             state.prims.y &= ~(1u << bit);
@@ -138,7 +136,7 @@ fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
                 }
             }
         }
-        if (!cw_next_group(&state, &cw_stack)) {
+        if (!cw_next_group(&state)) {
             break;
         }
     }
@@ -149,7 +147,7 @@ fn cw_closest_hit(ray: RayQuery, skip: u32, t_max_in: f32) -> PrimHit {
 fn cw_occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
     let oct_inv4 = cw_octant_inv4(ray.direction);
     var state = CwState(vec2<u32>(0u, 0x80000000u), vec2<u32>(0u, 0u), 0u);
-    for (var visits = 0u; cw_advance(ray, oct_inv4, t_max, visits, &state, &cw_stack); visits += 1u) {
+    for (var visits = 0u; cw_advance(ray, oct_inv4, t_max, visits, &state); visits += 1u) {
         while (state.prims.y != 0u) {
             let bit = firstLeadingBit(state.prims.y);
             state.prims.y &= ~(1u << bit);
@@ -158,7 +156,7 @@ fn cw_occluded(ray: RayQuery, skip_a: u32, skip_b: u32, t_max: f32) -> bool {
                 return true;
             }
         }
-        if (!cw_next_group(&state, &cw_stack)) {
+        if (!cw_next_group(&state)) {
             break;
         }
     }
