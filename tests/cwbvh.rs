@@ -50,7 +50,7 @@ fn check_agreement(name: &str, scene: &FlatScene, position: [f32; 3], look_at: [
             let hits = bvh2.iter().filter(|&&t| t < T_FAR).count();
             assert!(hits > rays.len() / 20, "{name} {set}: only {hits} hits");
             assert!(hits < rays.len(), "{name} {set}: every ray hits");
-            for other in [Bvh::Cwbvh, Bvh::Wide] {
+            for other in [Bvh::Cwbvh, Bvh::Wide, Bvh::Packets] {
                 let found = trace_cpu(scene, other, &rays, query).unwrap();
                 let differing = bvh2.iter().zip(&found).filter(|(a, b)| a != b).count();
                 assert_eq!(

@@ -7,7 +7,8 @@
 //! tests, lane by lane), so the hits are the BVH2's: the boxes are the CWBVH's, dequantised
 //! with the very arithmetic of `cwbvh::child_hits` (`p + e * q`) and tested with
 //! `intersect::intersect_box`'s slab test (the same operations in the same order), so a child
-//! this traversal skips is one the GPU's CWBVH skips too.
+//! this traversal skips is one the GPU's CWBVH skips too. Coherent rays can also go through
+//! in packets of eight (`packet`), each node tested once for the packet.
 //!
 //! No GPU twin: the GPU traverses the compressed nodes (`wgsl/traverse_cwbvh.wgsl`), 80 bytes
 //! where these take 256, because its bottleneck is memory traffic; a CPU's is the node test.
@@ -24,6 +25,9 @@ use crate::layout::{
     CWBVH_STACK_SIZE, FEATURE_TRIANGLES, GpuCwNode, GpuPrimitive, NONE, PRIM_QUAD, PRIM_TRIANGLE,
     has,
 };
+
+mod packet;
+pub use packet::PACKET;
 
 /// Lanes of a node: the CWBVH's eight children.
 const LANES: usize = 8;

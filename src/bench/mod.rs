@@ -279,7 +279,7 @@ pub struct RaysArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u32,
     /// Acceleration structures to traverse, side by side (`wide` on the CPU only).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh, Bvh::Wide])]
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh, Bvh::Wide, Bvh::Packets])]
     pub bvh: Vec<Bvh>,
     /// Backends to measure.
     #[command(flatten)]

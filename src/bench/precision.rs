@@ -444,6 +444,7 @@ pub fn run(
         let set = RaySet {
             origins: rays.iter().map(|r| r.0.as_vec3()).collect(),
             directions: rays.iter().map(|r| r.1.as_vec3()).collect(),
+            image_width: 0,
         };
         let scene = placed_scene(mesh, p)?;
         let size = mesh_size * p.scale;

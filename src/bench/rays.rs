@@ -18,6 +18,7 @@ use super::Spread;
 use crate::accel::cwbvh::{self, CwGeometry};
 use crate::accel::intersect::RayQuery;
 use crate::accel::traverse::{closest_hit, occluded};
+use crate::accel::wide::{PACKET, WideBvh};
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
 use crate::gpu::trace::GpuTracer;
@@ -84,6 +85,9 @@ pub enum Bvh {
     Cwbvh,
     /// The CWBVH's tree with f32 child boxes, tested eight at a time (the CPU only).
     Wide,
+    /// The wide BVH traced in packets of eight rays (`accel::wide::packet`; the CPU only):
+    /// 4x2 pixels of a frame for the camera's rays, eight consecutive rays otherwise.
+    Packets,
 }
 
 /// Rays as structure of arrays.
@@ -93,6 +97,9 @@ pub struct RaySet {
     pub origins: Vec<Vec3>,
     /// Unit ray directions, one per origin.
     pub directions: Vec<Vec3>,
+    /// The camera's rays: each frame's rays are its pixels, in rows of this width (0: the
+    /// rays are no image's).
+    pub image_width: u32,
 }
 
 impl RaySet {
@@ -117,7 +124,10 @@ pub fn coherent_rays(camera: &Pinhole, frames: u32, seed: u32) -> RaySet {
     let half_height = (0.5 * camera.vertical_fov_deg).to_radians().tan();
     let half_width = half_height * camera.width as f32 / camera.height as f32;
     let (w, h) = (camera.width, camera.height);
-    let mut set = RaySet::default();
+    let mut set = RaySet {
+        image_width: w,
+        ..RaySet::default()
+    };
     for frame in 0..frames {
         for y in 0..h {
             for x in 0..w {
@@ -155,6 +165,29 @@ pub fn incoherent_rays(lo: Vec3, hi: Vec3, count: usize, seed: u32) -> RaySet {
     set
 }
 
+/// The rays of `rays` in the order packets take them, [`PACKET`] at a time: blocks of 4x2
+/// pixels (the frames' rows one after another; the last blocks of a row or column cut short
+/// where the width or the rows are not a multiple), or the set's order when its rays are no
+/// image's.
+pub fn packet_order(rays: &RaySet) -> Vec<u32> {
+    let width = rays.image_width as usize;
+    if width == 0 {
+        return (0..rays.len() as u32).collect();
+    }
+    let rows = rays.len() / width;
+    let mut order = Vec::with_capacity(rays.len());
+    for block_y in (0..rows).step_by(2) {
+        for block_x in (0..width).step_by(4) {
+            for y in block_y..(block_y + 2).min(rows) {
+                for x in block_x..(block_x + 4).min(width) {
+                    order.push((y * width + x) as u32);
+                }
+            }
+        }
+    }
+    order
+}
+
 /// Closest hit or any hit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -188,6 +221,9 @@ impl Checksum {
 /// Per ray: the closest-hit distance (`T_FAR` on a miss), or 0 / `T_FAR` for occluded / free;
 /// through `bvh`.
 pub fn trace_cpu(scene: &FlatScene, bvh: Bvh, rays: &RaySet, query: Query) -> Result<Vec<f32>> {
+    if bvh == Bvh::Packets {
+        return trace_packets(scene.wide().map_err(Error::Gpu)?, rays, query);
+    }
     let cw = match bvh {
         Bvh::Cwbvh => Some(scene.cwbvh().map_err(Error::Gpu)?),
         _ => None,
@@ -223,6 +259,49 @@ pub fn trace_cpu(scene: &FlatScene, bvh: Bvh, rays: &RaySet, query: Query) -> Re
             }
         })
         .collect())
+}
+
+/// [`trace_cpu`] through the wide BVH in packets of [`PACKET`] rays, taken in
+/// [`packet_order`].
+fn trace_packets(wide: &WideBvh, rays: &RaySet, query: Query) -> Result<Vec<f32>> {
+    let order = packet_order(rays);
+    let traced: Vec<[f32; PACKET]> = order
+        .par_chunks(PACKET)
+        .with_min_len(128)
+        .map(|packet| {
+            let queries: Vec<RayQuery> = packet
+                .iter()
+                .map(|&i| RayQuery::new(rays.origins[i as usize], rays.directions[i as usize]))
+                .collect();
+            let mut distances = [T_FAR; PACKET];
+            match query {
+                Query::ClosestHit => {
+                    let mut hits = [None; PACKET];
+                    let hits = &mut hits[..packet.len()];
+                    wide.closest_hits::<FEATURES_ALL>(&queries, T_FAR, hits);
+                    for (d, hit) in distances.iter_mut().zip(hits.iter()) {
+                        *d = hit.map_or(T_FAR, |(_, hit)| hit.t);
+                    }
+                }
+                Query::AnyHit => {
+                    let mut blocked = [false; PACKET];
+                    let blocked = &mut blocked[..packet.len()];
+                    wide.occluded_packet::<FEATURES_ALL>(&queries, T_FAR, blocked);
+                    for (d, &b) in distances.iter_mut().zip(blocked.iter()) {
+                        *d = if b { 0.0 } else { T_FAR };
+                    }
+                }
+            }
+            distances
+        })
+        .collect();
+    let mut distances = vec![T_FAR; rays.len()];
+    for (packet, traced) in order.chunks(PACKET).zip(traced) {
+        for (&i, d) in packet.iter().zip(traced) {
+            distances[i as usize] = d;
+        }
+    }
+    Ok(distances)
 }
 
 /// What every CPU query pays before traversing, as Embree's benchmark measures it: each ray
@@ -440,7 +519,7 @@ pub fn run(
         }
         for &backend in backends {
             for &bvh in &config.bvhs {
-                if bvh == Bvh::Wide && backend == Backend::Gpu {
+                if matches!(bvh, Bvh::Wide | Bvh::Packets) && backend == Backend::Gpu {
                     continue;
                 }
                 let cwbvh = (bvh == Bvh::Cwbvh).then_some(cw);
@@ -532,6 +611,7 @@ impl RaysReport {
                 Bvh::Bvh2 => "BVH2",
                 Bvh::Cwbvh => "CWBVH",
                 Bvh::Wide => "wide (CPU)",
+                Bvh::Packets => "wide, packets of 8 (CPU)",
             };
             let reads = self
                 .cwbvh_reads
@@ -627,5 +707,36 @@ mod tests {
     fn the_checksum_counts_hits_and_sums_their_distances() {
         let c = Checksum::of(&[1.0, T_FAR, 2.5, T_FAR]);
         assert_eq!((c.hits, c.sum_t), (2, 3.5));
+    }
+
+    #[test]
+    fn packets_take_every_ray_once_in_blocks_of_four_by_two_pixels() {
+        // A frame of 10x3: blocks cut short at the right edge and, the rows being odd, at
+        // the last row.
+        let set = RaySet {
+            origins: vec![Vec3::ZERO; 30],
+            directions: vec![Vec3::Z; 30],
+            image_width: 10,
+        };
+        let order = packet_order(&set);
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..30).collect::<Vec<u32>>());
+        assert_eq!(&order[..8], &[0, 1, 2, 3, 10, 11, 12, 13]);
+        assert_eq!(&order[16..20], &[8, 9, 18, 19]);
+        assert_eq!(&order[20..24], &[20, 21, 22, 23]);
+        // Every block's pixels lie within 4 columns and 2 rows of each other.
+        let blocks: Vec<&[u32]> = order.chunks(PACKET).collect();
+        for block in &blocks[..2] {
+            let (xs, ys): (Vec<u32>, Vec<u32>) = block.iter().map(|&i| (i % 10, i / 10)).unzip();
+            assert!(xs.iter().max().unwrap() - xs.iter().min().unwrap() < 4);
+            assert!(ys.iter().max().unwrap() - ys.iter().min().unwrap() < 2);
+        }
+        // Rays of no image keep their order.
+        let plain = RaySet {
+            image_width: 0,
+            ..set
+        };
+        assert_eq!(packet_order(&plain), (0..30).collect::<Vec<u32>>());
     }
 }
