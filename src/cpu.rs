@@ -9,7 +9,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::error::Result;
-use crate::integrator::{FirstHit, LightWindow, SampleStats, trace_sample};
+use crate::integrator::{FirstHit, LightWindow, SampleStats, trace_pixel};
 use crate::layout::{FEATURES_ALL, GpuPass};
 use crate::pack::FlatScene;
 use crate::render::{AccumulationLayout, Backend, DispatchStatus, RayBudgets};
@@ -28,30 +28,37 @@ pub struct CpuRenderer<'a> {
     /// Status of each batch run and not yet collected by `finish`.
     finished: VecDeque<DispatchStatus>,
     /// The integrator instance for the scene's features (`layout::FEATURE_*`).
-    trace: TraceSample,
+    trace: TracePixel,
     features: u32,
     budgets: RayBudgets,
 }
 
-/// `integrator::trace_sample` for one feature set.
-type TraceSample =
-    fn(&FlatScene, u32, u32, u32, LightWindow, &mut SampleStats, &mut FirstHit) -> glam::Vec3;
+/// `integrator::trace_pixel` for one feature set.
+type TracePixel = fn(
+    &FlatScene,
+    u32,
+    u32,
+    std::ops::Range<u32>,
+    LightWindow,
+    &mut SampleStats,
+    &mut dyn FnMut(Vec3, &FirstHit),
+);
 
 macro_rules! instances {
     ($($features:literal)*) => {
-        [$(trace_sample::<$features> as TraceSample),*]
+        [$(trace_pixel::<$features> as TracePixel),*]
     };
 }
 
-/// `trace_sample` compiled for each of the 128 feature sets, indexed by the set.
-const TRACE_SAMPLE: [TraceSample; 128] = instances!(
+/// `trace_pixel` compiled for each of the 128 feature sets, indexed by the set.
+const TRACE_PIXEL: [TracePixel; 128] = instances!(
     0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32 33
     34 35 36 37 38 39 40 41 42 43 44 45 46 47 48 49 50 51 52 53 54 55 56 57 58 59 60 61 62 63 64
     65 66 67 68 69 70 71 72 73 74 75 76 77 78 79 80 81 82 83 84 85 86 87 88 89 90 91 92 93 94 95
     96 97 98 99 100 101 102 103 104 105 106 107 108 109 110 111 112 113 114 115 116 117 118 119
     120 121 122 123 124 125 126 127
 );
-const _: () = assert!(TRACE_SAMPLE.len() == FEATURES_ALL as usize + 1);
+const _: () = assert!(TRACE_PIXEL.len() == FEATURES_ALL as usize + 1);
 
 /// What one dispatch adds to one pixel: radiance, and the AOVs' (normal, depth) and albedo.
 #[derive(Clone, Copy, Debug, Default)]
@@ -79,7 +86,7 @@ impl<'a> CpuRenderer<'a> {
             pixel_list: Vec::new(),
             cancel: None,
             finished: VecDeque::new(),
-            trace: TRACE_SAMPLE[scene.features() as usize],
+            trace: TRACE_PIXEL[scene.features() as usize],
             features: scene.features(),
             budgets: RayBudgets::DEFAULT,
         }
@@ -94,7 +101,7 @@ impl<'a> CpuRenderer<'a> {
                 "an integrator without features {missing:#x} cannot render this scene"
             )));
         }
-        self.trace = TRACE_SAMPLE[(features & FEATURES_ALL) as usize];
+        self.trace = TRACE_PIXEL[(features & FEATURES_ALL) as usize];
         self.features = features;
         Ok(self)
     }
@@ -164,14 +171,12 @@ impl<'a> CpuRenderer<'a> {
                             pixel,
                             ..Default::default()
                         };
-                        for s in 0..pass.sample_count {
-                            let sample = pass.sample_start + s;
-                            let mut hit = FirstHit::default();
-                            sums.radiance +=
-                                (self.trace)(scene, x, y, sample, window, &mut stats, &mut hit);
+                        let samples = pass.sample_start..pass.sample_start + pass.sample_count;
+                        (self.trace)(scene, x, y, samples, window, &mut stats, &mut |r, hit| {
+                            sums.radiance += r;
                             sums.normal_depth += hit.normal.extend(hit.depth);
                             sums.albedo += hit.albedo;
-                        }
+                        });
                         sums
                     })
                     .collect();

@@ -6,7 +6,7 @@ use std::f32::consts::PI;
 
 use chambre::camera::Ray;
 use chambre::camera::{film_position_mm, generate_ray};
-use chambre::integrator::{FirstHit, LightWindow, SampleStats, trace_path};
+use chambre::integrator::{CameraHit, FirstHit, LightWindow, SampleStats, trace_path};
 use chambre::layout::FEATURES_ALL;
 use chambre::math::rng::Rng;
 use chambre::pack::flatten;
@@ -70,6 +70,7 @@ fn lambert_sphere_under_point_light_matches_closed_form_on_cpu() {
                 origin,
                 direction: (p - origin).normalize(),
             },
+            CameraHit::Trace,
             0.0,
             LightWindow::ALL,
             &mut Rng::new(0, 0, 0),
@@ -198,6 +199,7 @@ fn point_in_shadow_gets_only_the_ambient_term() {
             origin: Vec3::new(3.0, 1.0, 0.0),
             direction: Vec3::new(-3.0, -1.0, 0.0).normalize(),
         },
+        CameraHit::Trace,
         0.0,
         LightWindow::ALL,
         &mut Rng::new(0, 0, 0),
@@ -215,6 +217,7 @@ fn point_in_shadow_gets_only_the_ambient_term() {
             origin: Vec3::new(3.0, 1.0, 0.0),
             direction: Vec3::new(-1.0, -1.0, 0.0).normalize(),
         },
+        CameraHit::Trace,
         0.0,
         LightWindow::ALL,
         &mut Rng::new(0, 0, 0),
@@ -339,6 +342,7 @@ fn a_spot_light_falls_off_between_its_cones_as_khr_lights_punctual_says() {
                 origin: p + Vec3::new(0.0, 5.0, 0.0),
                 direction: Vec3::NEG_Y,
             },
+            CameraHit::Trace,
             0.0,
             LightWindow::ALL,
             &mut Rng::new(0, 0, 0),

@@ -217,7 +217,8 @@ fn camera_query(camera_ray: CameraRay) -> RayQuery {
 // `primary` kernel of a split render traced); else the path traces it, `camera_hit` unused.
 // Callers pass a constant: the megakernel's loop then compiles to one traversal call site, which
 // lavapipe runs 15-25% faster on mirror scenes than a traversal skipped at depth 0. The CPU twin
-// (trace_path in src/integrator.rs) always traces the camera ray itself.
+// (trace_path in src/integrator.rs) takes the same choice as `CameraHit`: its `trace_pixel`
+// traces a pixel's camera rays in packets and passes each path its hit.
 fn trace_path(camera_ray: CameraRay, camera_hit_known: bool, camera_hit: PrimHit, window: LightWindow,
               rng: ptr<function, Rng>, counters: ptr<function, PathCounters>,
               first_hit: ptr<function, FirstHit>) -> vec3<f32> {

@@ -36,7 +36,7 @@ const MIN_DIRECTION: f32 = 1.0e-20;
 pub const SLAB_FAR_SCALE: f32 = 1.0 + 4.0 * 3.0 * f32::EPSILON * 0.5;
 
 /// Per-ray constants of the watertight triangle test and the slab test.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct RayQuery {
     /// Ray origin (scene units).
     pub origin: Vec3,

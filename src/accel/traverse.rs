@@ -32,6 +32,25 @@ impl Tracer<'_> {
         }
     }
 
+    /// The closest hit along each of `rays` (at most `wide::PACKET`) before `t_max`, with no
+    /// primitive skipped, into `hits`: traced as one packet through the wide BVH, one by one
+    /// through the BVH2.
+    pub fn closest_hits<const F: u32>(
+        &self,
+        rays: &[RayQuery],
+        t_max: f32,
+        hits: &mut [Option<(u32, Hit)>],
+    ) {
+        match self {
+            Tracer::Wide(wide) => wide.closest_hits::<F>(rays, t_max, hits),
+            Tracer::Bvh2(geometry) => {
+                for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
+                    *hit = closest_hit::<F>(*geometry, ray, NONE, t_max);
+                }
+            }
+        }
+    }
+
     /// [`occluded`] through the tracer's BVH.
     pub fn occluded<const F: u32>(
         &self,

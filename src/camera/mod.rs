@@ -287,7 +287,7 @@ impl CameraSpec {
 }
 
 /// A ray in world space; `direction` is unit length.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Ray {
     /// Origin (world, scene units).
     pub origin: Vec3,
