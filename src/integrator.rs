@@ -31,6 +31,8 @@ use crate::math::rng::Rng;
 use crate::pack::FlatScene;
 use crate::sampler::{PatternSource, light_sample_2d, pixel_hash, sample_2d, sample_aperture};
 
+mod batch;
+
 /// Counters a sample adds to (rays traced, paths cut off at `max_depth`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SampleStats {
@@ -542,16 +544,24 @@ pub fn trace_pixel<const F: u32>(
 ) {
     let frame = &scene.frame;
     let pixel = y * frame.width + x;
+    let batches = batch::batches::<F>(scene);
     let mut start = samples.start;
     while start < samples.end {
         let count = (samples.end - start).min(PACKET as u32) as usize;
         let mut rngs = [Rng::new(frame.seed, pixel, start); PACKET];
         let mut cameras = [CameraRay::default(); PACKET];
+        if batches && count == PACKET {
+            batch::camera_samples::<F>(scene, x, y, start, &mut rngs, &mut cameras);
+        } else {
+            for k in 0..count {
+                let sample = start + k as u32;
+                rngs[k] = Rng::new(frame.seed, pixel, sample);
+                cameras[k] =
+                    camera_sample::<F>(scene, x, y, sample, &mut rngs[k], &mut stats.flags);
+            }
+        }
         let mut queries = [RayQuery::default(); PACKET];
         for k in 0..count {
-            let sample = start + k as u32;
-            rngs[k] = Rng::new(frame.seed, pixel, sample);
-            cameras[k] = camera_sample::<F>(scene, x, y, sample, &mut rngs[k], &mut stats.flags);
             let ray = cameras[k].ray;
             queries[k] = RayQuery::new(ray.origin, ray.direction).at_time(cameras[k].time);
         }

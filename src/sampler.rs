@@ -294,7 +294,7 @@ pub fn pixel_hash(seed: u32, pixel: u32, dim: u32) -> u32 {
     pcg_hash(pcg_hash(pcg_hash(seed) ^ pixel) ^ (dim | 0x8000_0000))
 }
 
-fn unit_float(bits: u32) -> f32 {
+pub(crate) fn unit_float(bits: u32) -> f32 {
     (bits >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
@@ -312,29 +312,36 @@ pub fn permute(i: u32, n: u32, key: u32) -> Option<u32> {
     w |= w >> 16;
     let mut i = i;
     for _ in 0..PERMUTE_WALK_CAP {
-        i ^= key;
-        i = i.wrapping_mul(0xe170_893d);
-        i ^= key >> 16;
-        i ^= (i & w) >> 4;
-        i ^= key >> 8;
-        i = i.wrapping_mul(0x0929_eb3f);
-        i ^= key >> 23;
-        i ^= (i & w) >> 1;
-        i = i.wrapping_mul(1 | key >> 27);
-        i = i.wrapping_mul(0x6935_fa69);
-        i ^= (i & w) >> 11;
-        i = i.wrapping_mul(0x74dc_b303);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0x9e50_1cc3);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0xc860_a3df);
-        i &= w;
-        i ^= i >> 5;
+        i = permute_round(i, w, key);
         if i < n {
             return Some(div_rem(i.wrapping_add(key), n).1);
         }
     }
     None
+}
+
+/// One step of [`permute`]'s walk: the keyed bijection of [0, w] (w one less than a power of
+/// two) applied to `i`.
+#[inline(always)]
+pub(crate) fn permute_round(mut i: u32, w: u32, key: u32) -> u32 {
+    i ^= key;
+    i = i.wrapping_mul(0xe170_893d);
+    i ^= key >> 16;
+    i ^= (i & w) >> 4;
+    i ^= key >> 8;
+    i = i.wrapping_mul(0x0929_eb3f);
+    i ^= key >> 23;
+    i ^= (i & w) >> 1;
+    i = i.wrapping_mul(1 | key >> 27);
+    i = i.wrapping_mul(0x6935_fa69);
+    i ^= (i & w) >> 11;
+    i = i.wrapping_mul(0x74dc_b303);
+    i ^= (i & w) >> 2;
+    i = i.wrapping_mul(0x9e50_1cc3);
+    i ^= (i & w) >> 2;
+    i = i.wrapping_mul(0xc860_a3df);
+    i &= w;
+    i ^ (i >> 5)
 }
 
 fn laine_karras_permutation(mut x: u32, seed: u32) -> u32 {

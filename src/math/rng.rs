@@ -5,10 +5,23 @@
 //! Rendering", JCGT 9(3), 2020: <https://jcgt.org/published/0009/03/02/>
 
 /// PCG hash of one 32-bit word.
+#[inline(always)]
 pub fn pcg_hash(v: u32) -> u32 {
     let state = v.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
     let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277_803_737);
     (word >> 22) ^ word
+}
+
+/// The key of the stream of sample `sample` of pixel `pixel` in the render seeded `seed`.
+#[inline(always)]
+pub(crate) fn stream_key(seed: u32, pixel: u32, sample: u32) -> u32 {
+    pcg_hash(pcg_hash(pcg_hash(seed) ^ pixel) ^ sample)
+}
+
+/// The 32 random bits of dimension `dim` of the stream keyed `key`.
+#[inline(always)]
+pub(crate) fn draw_bits(key: u32, dim: u32) -> u32 {
+    pcg_hash(key ^ pcg_hash(dim))
 }
 
 /// The random stream of one camera sample: dimension `dim` of sample `sample` of pixel `pixel`.
@@ -29,10 +42,15 @@ impl Rng {
     /// The stream of sample `sample` of pixel `pixel` (`y * width + x`) in the render seeded
     /// `seed`, at dimension 0.
     pub fn new(seed: u32, pixel: u32, sample: u32) -> Self {
-        let key = pcg_hash(pcg_hash(pcg_hash(seed) ^ pixel) ^ sample);
+        Rng::with_key(stream_key(seed, pixel, sample), 0, pixel, sample)
+    }
+
+    /// The stream of key `key` (`stream_key(seed, pixel, sample)`) at dimension `dim`, for code
+    /// that computes keys and draws several streams at a time.
+    pub(crate) fn with_key(key: u32, dim: u32, pixel: u32, sample: u32) -> Self {
         Rng {
             key,
-            dim: 0,
+            dim,
             pixel,
             sample,
         }
@@ -45,7 +63,7 @@ impl Rng {
 
     /// The next dimension's 32 random bits.
     pub fn next_u32(&mut self) -> u32 {
-        let h = pcg_hash(self.key ^ pcg_hash(self.dim));
+        let h = draw_bits(self.key, self.dim);
         self.dim += 1;
         h
     }
