@@ -410,11 +410,11 @@ mod tests {
         flatten(&Scene::load(&path, &[]).unwrap())
     }
 
-    /// A camera 2.5 sizes from the scene's centre, whose 48x32 rays all meet its box.
-    fn camera_rays(flat: &FlatScene) -> RaySet {
+    /// A camera 2.5 sizes from the scene's centre along `axis`, looking at it, 48x32 rays.
+    fn camera_rays(flat: &FlatScene, axis: Vec3) -> RaySet {
         let (lo, hi) = bounds(flat);
         let centre = 0.5 * (lo + hi);
-        let position = centre + 2.5 * (hi - lo).length() * Vec3::new(0.3, 0.4, 1.0).normalize();
+        let position = centre + 2.5 * (hi - lo).length() * axis.normalize();
         let camera = Pinhole {
             position: position.to_array(),
             look_at: centre.to_array(),
@@ -498,7 +498,7 @@ mod tests {
     fn a_packet_finds_what_its_rays_find_one_by_one() {
         for name in ["bunny.toml", "tabletop.toml", "cornell_direct.toml"] {
             let flat = scene(name);
-            let rays = camera_rays(&flat);
+            let rays = camera_rays(&flat, Vec3::new(0.3, 0.4, 1.0));
             let (hits, one_way) = check_builds(name, &flat, &rays);
             // The camera's packets point one way (traced as packets), and most rays hit.
             assert!(
@@ -512,6 +512,15 @@ mod tests {
                 (hi - lo).length()
             };
             check_builds(name, &flat, &spread_origins(&rays, spread));
+            // Looking down the z axis: the directions' x and y change sign at the middle
+            // column and row, so packets there fall back, and those beside them hold
+            // reciprocals of the smallest components (hundreds) in their intervals.
+            let axial = camera_rays(&flat, Vec3::Z);
+            let (_, one_way) = check_builds(name, &flat, &axial);
+            assert!(
+                one_way < axial.len() / PACKET,
+                "{name}: every packet one way"
+            );
             // Rays every way: most packets fall back to one ray at a time.
             let (lo, hi) = bounds(&flat);
             check_builds(name, &flat, &incoherent_rays(lo, hi, 1500, 7));
