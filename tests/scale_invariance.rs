@@ -321,3 +321,65 @@ fn a_point_light_on_a_wall_is_not_shadowed_by_it() {
         }
     }
 }
+
+/// The CPU path traces a pixel's camera rays in packets and draws its camera samples eight at a
+/// time (`integrator::trace_pixel`): at every scale, and far from the origin, each sample is
+/// the one `trace_sample` traces alone, bit for bit but at a tie (the same depth, another
+/// primitive's shading).
+#[test]
+fn packets_trace_what_each_sample_traces_alone_at_every_scale_and_offset() {
+    use chambre::integrator::{FirstHit, LightWindow, SampleStats, trace_pixel, trace_sample};
+    use chambre::layout::FEATURES_ALL;
+    let cases =
+        SCALES
+            .iter()
+            .map(|&scale| (scale, 0.0))
+            .chain([(1.0, 1e4), (1.0, 1e6), (1e3, 1e8)]);
+    for (scale, offset) in cases {
+        let text = scaled_scene(scale, offset).replace("spp = 2\n", "spp = 16\n");
+        let scene = flat(&text);
+        let (mut hits, mut differing) = (0, 0);
+        for y in 0..scene.frame.height {
+            for x in 0..scene.frame.width {
+                let mut packed = Vec::new();
+                let mut stats = SampleStats::default();
+                trace_pixel::<FEATURES_ALL>(
+                    &scene,
+                    x,
+                    y,
+                    0..16,
+                    LightWindow::ALL,
+                    &mut stats,
+                    &mut |radiance, hit| packed.push((radiance, *hit)),
+                );
+                for (sample, &(radiance, hit)) in packed.iter().enumerate() {
+                    let mut alone = FirstHit::default();
+                    let mut alone_stats = SampleStats::default();
+                    let expected = trace_sample::<FEATURES_ALL>(
+                        &scene,
+                        x,
+                        y,
+                        sample as u32,
+                        LightWindow::ALL,
+                        &mut alone_stats,
+                        &mut alone,
+                    );
+                    hits += (alone.depth > 0.0) as usize;
+                    if (radiance, hit) != (expected, alone) {
+                        assert_eq!(hit.depth, alone.depth, "scale {scale:e}, offset {offset:e}");
+                        differing += 1;
+                    }
+                }
+            }
+        }
+        let samples = (scene.frame.width * scene.frame.height * 16) as usize;
+        assert!(
+            hits > samples / 2,
+            "scale {scale:e}, offset {offset:e}: {hits} hits"
+        );
+        assert!(
+            differing <= 4,
+            "scale {scale:e}: {differing} samples differ"
+        );
+    }
+}
