@@ -364,7 +364,22 @@ fn node_hits_avx2(
         t_near = _mm256_max_ps(_mm256_min_ps(t1, t2), t_near);
         t_far = _mm256_min_ps(_mm256_max_ps(t1, t2), t_far);
     }
-    t_far = _mm256_mul_ps(t_far, _mm256_set1_ps(SLAB_FAR_SCALE));
+    slab_hits_avx2(t_near, t_far, t_max, node.valid)
+}
+
+/// The end of an eight-child slab test in AVX2, from each child's entry and exit distances: a
+/// bit per child of `valid` whose exit (scaled by `SLAB_FAR_SCALE`) is neither before its entry
+/// nor behind the ray and whose entry is before `t_max`, and the entry distances.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn slab_hits_avx2(
+    t_near: std::arch::x86_64::__m256,
+    t_far: std::arch::x86_64::__m256,
+    t_max: f32,
+    valid: u32,
+) -> (u32, [f32; LANES]) {
+    use std::arch::x86_64::*;
+    let t_far = _mm256_mul_ps(t_far, _mm256_set1_ps(SLAB_FAR_SCALE));
     let hit = _mm256_and_ps(
         _mm256_and_ps(
             _mm256_cmp_ps::<_CMP_GE_OQ>(t_far, t_near),
@@ -375,7 +390,7 @@ fn node_hits_avx2(
     let mut near = [0.0; LANES];
     // SAFETY: `near` holds eight f32s.
     unsafe { _mm256_storeu_ps(near.as_mut_ptr(), t_near) };
-    (_mm256_movemask_ps(hit) as u32 & node.valid, near)
+    (_mm256_movemask_ps(hit) as u32 & valid, near)
 }
 
 /// The node test of the build in use: AVX2 intrinsics, or the lane loop.

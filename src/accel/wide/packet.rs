@@ -147,18 +147,7 @@ fn interval_hits_avx2<const SHARED: bool>(
         t_near = _mm256_max_ps(_mm256_min_ps(lo_min, hi_min), t_near);
         t_far = _mm256_min_ps(_mm256_max_ps(lo_max, hi_max), t_far);
     }
-    t_far = _mm256_mul_ps(t_far, _mm256_set1_ps(SLAB_FAR_SCALE));
-    let hit = _mm256_and_ps(
-        _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_GE_OQ>(t_far, t_near),
-            _mm256_cmp_ps::<_CMP_GE_OQ>(t_far, _mm256_setzero_ps()),
-        ),
-        _mm256_cmp_ps::<_CMP_LT_OQ>(t_near, _mm256_set1_ps(t_max)),
-    );
-    let mut near = [0.0; LANES];
-    // SAFETY: `near` holds eight f32s.
-    unsafe { _mm256_storeu_ps(near.as_mut_ptr(), t_near) };
-    (_mm256_movemask_ps(hit) as u32 & node.valid, near)
+    slab_hits_avx2(t_near, t_far, t_max, node.valid)
 }
 
 /// The interval test of the build in use.
