@@ -1,42 +1,44 @@
-//! A pixel's camera samples eight at a time, for the common camera: a pinhole (no lens point
-//! drawn), an instant shutter, a plane of focus, and random or stratified pixel positions with a
-//! power-of-two sample count. Each step of [`camera_sample`](super::camera_sample) (the random stream's keys and
-//! draws, the stratum's permutation, the film position, the ray) runs as a loop over the eight
+//! A pixel's camera samples eight at a time, for the common cameras: an instant shutter, a
+//! plane of focus, and random or stratified pixel and lens points with a power-of-two sample
+//! count (the aperture's shape is drawn lane by lane with the scalar function). Each step of [`camera_sample`](super::camera_sample) (the random stream's keys and
+//! draws, the strata's permutation, the film position, the thin lens, the ray) runs as a loop over the eight
 //! lanes with the scalar code's operations in its order, which the compiler turns into 8-wide
 //! vector instructions (AVX2 where the CPU has it); so each lane's ray is `camera_sample`'s, bit
 //! for bit (`tests` below). The scalar code chains a division, a square root and another
 //! division per ray and waits on each; eight lanes wait once.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use super::CameraRay;
 use crate::accel::wide::PACKET;
-use crate::camera::{Ray, generate_ray};
+use crate::camera::Ray;
 use crate::layout::{
-    FEATURE_LENS, FOCUS_PLANE, PIXEL_DIMENSION, SAMPLER_RANDOM, SAMPLER_STRATIFIED, has,
+    FEATURE_LENS, FOCUS_PLANE, LENS_DIMENSION, PIXEL_DIMENSION, SAMPLER_RANDOM, SAMPLER_STRATIFIED,
+    has,
 };
 use crate::math::rng::{Rng, draw_bits, stream_key};
 use crate::pack::FlatScene;
-use crate::sampler::{permute_round, pixel_hash, unit_float};
+use crate::sampler::{permute_round, pixel_hash, sample_aperture, unit_float};
 
 /// Whether [`camera_samples`] takes the scene's camera samples eight at a time (else they are
 /// drawn one by one).
 pub fn batches<const F: u32>(scene: &FlatScene) -> bool {
     let (frame, camera) = (&scene.frame, &scene.camera);
     let lens = has(F, FEATURE_LENS) && camera.lens_radius_mm > 0.0;
-    let pattern = match frame.pixel_sampler {
+    let pattern = |sampler: u32, columns: u32| match sampler {
         SAMPLER_RANDOM => true,
-        SAMPLER_STRATIFIED => {
-            frame.spp.is_power_of_two() && frame.pixel_strata_columns.is_power_of_two()
-        }
+        SAMPLER_STRATIFIED => frame.spp.is_power_of_two() && columns.is_power_of_two(),
         _ => false,
     };
-    !lens && camera.shutter_span == 0.0 && camera.focus_surface == FOCUS_PLANE && pattern
+    pattern(frame.pixel_sampler, frame.pixel_strata_columns)
+        && (!lens || pattern(frame.lens_sampler, frame.lens_strata_columns))
+        && camera.shutter_span == 0.0
+        && camera.focus_surface == FOCUS_PLANE
 }
 
 /// Camera samples `first..first + PACKET` of pixel (x, y) and their random streams, as
-/// [`camera_sample`](super::camera_sample) draws each (the streams left where it leaves them); the scene must be one
-/// that [`batches`].
+/// [`camera_sample`](super::camera_sample) draws each (the streams left where it leaves
+/// them); the scene must be one that [`batches`].
 pub fn camera_samples<const F: u32>(
     scene: &FlatScene,
     x: u32,
@@ -45,17 +47,27 @@ pub fn camera_samples<const F: u32>(
     rngs: &mut [Rng; PACKET],
     cameras: &mut [CameraRay; PACKET],
 ) {
+    // The lens's code is compiled in only where there is a lens.
+    let lens = has(F, FEATURE_LENS) && scene.camera.lens_radius_mm > 0.0;
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2.
-        return unsafe { camera_samples_avx2(scene, x, y, first, rngs, cameras) };
+        return unsafe {
+            match lens {
+                true => camera_samples_avx2::<true>(scene, x, y, first, rngs, cameras),
+                false => camera_samples_avx2::<false>(scene, x, y, first, rngs, cameras),
+            }
+        };
     }
-    camera_samples_lanes(scene, x, y, first, rngs, cameras)
+    match lens {
+        true => camera_samples_lanes::<true>(scene, x, y, first, rngs, cameras),
+        false => camera_samples_lanes::<false>(scene, x, y, first, rngs, cameras),
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn camera_samples_avx2(
+fn camera_samples_avx2<const LENS: bool>(
     scene: &FlatScene,
     x: u32,
     y: u32,
@@ -63,11 +75,47 @@ fn camera_samples_avx2(
     rngs: &mut [Rng; PACKET],
     cameras: &mut [CameraRay; PACKET],
 ) {
-    camera_samples_lanes(scene, x, y, first, rngs, cameras)
+    camera_samples_lanes::<LENS>(scene, x, y, first, rngs, cameras)
+}
+
+/// `sample_2d`'s random or stratified point for each lane from dimensions `dim` and `dim + 1`
+/// of its stream (`keys`), the pattern's columns `columns`: with a power-of-two sample count
+/// the permutation's walk ends at its first round and the strata's divisions are shifts.
+#[inline(always)]
+fn pattern_lanes(
+    scene: &FlatScene,
+    pixel: u32,
+    (sampler, columns, dim): (u32, u32, u32),
+    keys: &[u32; PACKET],
+    samples: &[u32; PACKET],
+) -> [[f32; 2]; PACKET] {
+    let frame = &scene.frame;
+    let mut u = [[0.0f32; 2]; PACKET];
+    for k in 0..PACKET {
+        u[k] = [
+            unit_float(draw_bits(keys[k], dim)),
+            unit_float(draw_bits(keys[k], dim + 1)),
+        ];
+    }
+    if sampler == SAMPLER_STRATIFIED {
+        let key = pixel_hash(frame.seed, pixel, dim);
+        let w = frame.spp - 1;
+        let shift = columns.trailing_zeros();
+        let rows = frame.spp >> shift;
+        for k in 0..PACKET {
+            let stratum = permute_round(samples[k], w, key).wrapping_add(key) & w;
+            let (cy, cx) = (stratum >> shift, stratum & (columns - 1));
+            u[k] = [
+                (cx as f32 + u[k][0]) * (1.0 / columns as f32),
+                (cy as f32 + u[k][1]) * (1.0 / rows as f32),
+            ];
+        }
+    }
+    u
 }
 
 #[inline(always)]
-fn camera_samples_lanes(
+fn camera_samples_lanes<const LENS: bool>(
     scene: &FlatScene,
     x: u32,
     y: u32,
@@ -77,43 +125,66 @@ fn camera_samples_lanes(
 ) {
     let (frame, camera) = (&scene.frame, &scene.camera);
     let pixel = y * frame.width + x;
-    let lanes = std::array::from_fn::<u32, PACKET, _>(|k| first + k as u32);
-    // `Rng::new`, then `next_2d`: dimensions 0 and 1.
-    let keys = lanes.map(|sample| stream_key(frame.seed, pixel, sample));
-    let mut u = [[0.0f32; 2]; PACKET];
-    for k in 0..PACKET {
-        u[k] = [
-            unit_float(draw_bits(keys[k], 0)),
-            unit_float(draw_bits(keys[k], 1)),
-        ];
-    }
-    // `sample_2d`'s stratified pattern: a power-of-two count, so the permutation's walk ends
-    // at its first round and the strata's divisions are shifts.
-    if frame.pixel_sampler == SAMPLER_STRATIFIED {
-        let key = pixel_hash(frame.seed, pixel, PIXEL_DIMENSION);
-        let (n, columns) = (frame.spp, frame.pixel_strata_columns);
-        let w = n - 1;
-        let shift = columns.trailing_zeros();
-        let rows = n >> shift;
+    let samples = std::array::from_fn::<u32, PACKET, _>(|k| first + k as u32);
+    let keys = samples.map(|sample| stream_key(frame.seed, pixel, sample));
+    // `Rng::new`, then the pixel's point (dimensions 0 and 1) and the lens's (2 and 3).
+    let pixel_pattern = (
+        frame.pixel_sampler,
+        frame.pixel_strata_columns,
+        PIXEL_DIMENSION,
+    );
+    let u = pattern_lanes(scene, pixel, pixel_pattern, &keys, &samples);
+    if LENS {
+        let lens_pattern = (
+            frame.lens_sampler,
+            frame.lens_strata_columns,
+            LENS_DIMENSION,
+        );
+        let points = pattern_lanes(scene, pixel, lens_pattern, &keys, &samples);
+        let lens = points.map(|u| sample_aperture(camera, &scene.sample_table, u));
+        rays_lanes::<true>(scene, x, y, &u, &lens, cameras);
         for k in 0..PACKET {
-            let stratum = permute_round(lanes[k], w, key).wrapping_add(key) & w;
-            let (cy, cx) = (stratum >> shift, stratum & (columns - 1));
-            u[k] = [
-                (cx as f32 + u[k][0]) * (1.0 / columns as f32),
-                (cy as f32 + u[k][1]) * (1.0 / rows as f32),
-            ];
+            rngs[k] = Rng::with_key(keys[k], LENS_DIMENSION + 2, pixel, samples[k]);
+        }
+    } else {
+        rays_lanes::<false>(scene, x, y, &u, &[[0.0; 2]; PACKET], cameras);
+        for k in 0..PACKET {
+            rngs[k] = Rng::with_key(keys[k], LENS_DIMENSION, pixel, samples[k]);
         }
     }
-    // `film_position_mm`, then `generate_ray` through the lens centre.
+}
+
+/// `film_position_mm`, then `generate_ray`, for the lanes' pixel points `u` and lens points
+/// `lens` (all zero unless `LENS`; without it the origin and the lens's term of the slope are
+/// the same for every lane, computed once).
+#[inline(always)]
+fn rays_lanes<const LENS: bool>(
+    scene: &FlatScene,
+    x: u32,
+    y: u32,
+    u: &[[f32; 2]; PACKET],
+    lens: &[[f32; 2]; PACKET],
+    cameras: &mut [CameraRay; PACKET],
+) {
+    let (frame, camera) = (&scene.frame, &scene.camera);
     let centre = Vec3::from(camera.film_center);
     let (film_u, film_v) = (Vec3::from(camera.film_u), Vec3::from(camera.film_v));
-    let (to_x, to_y, to_z) = (
+    let lens_centre = Vec3::from(camera.lens_center);
+    let to_world = [
         Vec3::from(camera.lens_to_world_x),
         Vec3::from(camera.lens_to_world_y),
         Vec3::from(camera.lens_to_world_z),
-    );
-    let origin = generate_ray(camera, Vec2::ZERO, Vec2::ZERO).origin;
-    let lens_term = 0.0 * camera.inv_focal_length_mm;
+    ];
+    let turn = |v: [f32; 3]| {
+        [0, 1, 2].map(|a| v[0] * to_world[0][a] + v[1] * to_world[1][a] + v[2] * to_world[2][a])
+    };
+    // `lens_mm.extend(0.0) * units_per_mm` taken to the world, and `lens_mm / f`.
+    let origin_of = |lens: [f32; 2]| {
+        let local = [lens[0], lens[1], 0.0].map(|c| c * camera.units_per_mm);
+        lens_centre + Vec3::from(turn(local))
+    };
+    let bend = |lens: f32| lens * camera.inv_focal_length_mm;
+    let (centre_origin, centre_bend) = (origin_of([0.0; 2]), bend(0.0));
     for k in 0..PACKET {
         let raster = [x as f32 + u[k][0], y as f32 + u[k][1]];
         let film = [
@@ -121,19 +192,24 @@ fn camera_samples_lanes(
             (0.5 - raster[1] / frame.height as f32) * camera.film_height_mm,
         ];
         let point = [0, 1, 2].map(|a| centre[a] + film[0] * film_u[a] + film[1] * film_v[a]);
-        let slope = [0, 1].map(|a| (0.0 - point[a]) / -point[2] - lens_term);
+        // The thin lens: outgoing slope = incoming slope - h / f.
+        let slope = [0, 1].map(|a| {
+            let h = lens[k][a];
+            (h - point[a]) / -point[2] - if LENS { bend(h) } else { centre_bend }
+        });
         let d = [slope[0], slope[1], 1.0];
         let recip = 1.0 / (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        let d = d.map(|c| c * recip);
-        let direction = [0, 1, 2].map(|a| d[0] * to_x[a] + d[1] * to_y[a] + d[2] * to_z[a]);
         cameras[k] = CameraRay {
             ray: Ray {
-                origin,
-                direction: Vec3::from(direction),
+                origin: if LENS {
+                    origin_of(lens[k])
+                } else {
+                    centre_origin
+                },
+                direction: Vec3::from(turn(d.map(|c| c * recip))),
             },
             time: camera.shutter_open,
         };
-        rngs[k] = Rng::with_key(keys[k], 2, pixel, lanes[k]);
     }
 }
 
@@ -149,14 +225,19 @@ mod tests {
     /// builds, for the scenes' cameras (film tilt, swing, shift) and both patterns.
     #[test]
     fn eight_camera_samples_are_the_scalar_ones() {
-        let cases: [(&str, &[&str]); 4] = [
+        let cases: [(&str, &[&str]); 7] = [
             ("cornell_direct.toml", &[]),
+            // A pinhole with film and lens movements.
             ("miniature.toml", &["camera.f_number=0"]),
             (
                 "bunny.toml",
                 &["render.pixel_sampler=\"random\"", "render.spp=8"],
             ),
             ("architecture.toml", &["render.spp=32"]),
+            // A lens: a disk, tilted with the film moved, a hexagon; random and stratified.
+            ("thin_lens.toml", &[]),
+            ("miniature.toml", &["camera.lens_sampler=\"random\""]),
+            ("bokeh.toml", &["render.spp=16"]),
         ];
         let mut batched = 0;
         for (name, overrides) in cases {
@@ -180,7 +261,25 @@ mod tests {
                     let mut lanes_rngs = rngs;
                     let mut lanes_cameras = cameras;
                     camera_samples::<FEATURES_ALL>(&flat, x, y, first, &mut rngs, &mut cameras);
-                    camera_samples_lanes(&flat, x, y, first, &mut lanes_rngs, &mut lanes_cameras);
+                    let (lanes_rngs_ref, lanes_cameras_ref) = (&mut lanes_rngs, &mut lanes_cameras);
+                    match flat.camera.lens_radius_mm > 0.0 {
+                        true => camera_samples_lanes::<true>(
+                            &flat,
+                            x,
+                            y,
+                            first,
+                            lanes_rngs_ref,
+                            lanes_cameras_ref,
+                        ),
+                        false => camera_samples_lanes::<false>(
+                            &flat,
+                            x,
+                            y,
+                            first,
+                            lanes_rngs_ref,
+                            lanes_cameras_ref,
+                        ),
+                    }
                     for k in 0..PACKET {
                         let sample = first + k as u32;
                         let mut rng = Rng::new(flat.frame.seed, y * flat.frame.width + x, sample);
@@ -218,6 +317,6 @@ mod tests {
                 }
             }
         }
-        assert_eq!(batched, 4, "every case's camera is one the batch takes");
+        assert_eq!(batched, 7, "every case's camera is one the batch takes");
     }
 }
