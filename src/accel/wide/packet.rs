@@ -2,14 +2,15 @@
 //! rays) traced through the wide BVH together. The packet descends as one: each node's eight
 //! children are tested once against the interval that holds every ray of the packet (the box
 //! of their origins, the range of their reciprocal directions per axis), instead of once per
-//! ray. Only where a node holds leaves does each ray test the node's boxes itself, and then the
-//! primitives of the leaves it hits, as the one-ray traversal does.
+//! ray. Where the interval hits a node's packed leaves, each ray tests their octets (a few more
+//! leaves than its own box test would have let through: the octet test rejects a missed
+//! triangle about as fast as the box test would have), with its own nearest hit so far.
 //!
 //! Each ray's result is the one-ray traversal's: the interval test is conservative in f32 (the
 //! slab test's subtractions and products round monotonically, so the products at the
 //! interval's ends bound every ray's own, and min and max keep those bounds), so the packet
-//! reaches every leaf any of its rays would, and each ray tests a leaf's primitives with its
-//! own box test and its own nearest hit so far. Only the order leaves are met in differs: at
+//! reaches every leaf any of its rays would, and the primitive tests are the one-ray traversal's
+//! (a hit they find is a true hit). Only the order leaves are met in differs: at
 //! an exact tie (a ray through the edge two triangles share) another primitive may win at the
 //! same distance.
 //!
@@ -256,8 +257,8 @@ fn closest_hits_inline<const F: u32>(
         let node = &bvh.nodes[code as usize];
         let (mask, near) = test_interval(node, &interval, reach, bvh.avx2);
         if mask & node.packed != 0 {
+            let leaves = mask & node.packed;
             for (r, ray) in rays.iter().enumerate() {
-                let leaves = mask & node.packed;
                 let (best, best_slot) = (&mut best[r], &mut best_slot[r]);
                 if has(F, FEATURE_TRIANGLES) {
                     let triangles = bvh.triangles_of(node);
@@ -327,11 +328,11 @@ fn occluded_packet_inline<const F: u32>(
         let node = &bvh.nodes[code as usize];
         let (mut mask, near) = test_interval(node, &interval, t_max, bvh.avx2);
         if mask & node.packed != 0 {
+            let leaves = mask & node.packed;
             for (r, ray) in rays.iter().enumerate() {
                 if done & (1 << r) != 0 {
                     continue;
                 }
-                let leaves = mask & node.packed;
                 let triangles = has(F, FEATURE_TRIANGLES)
                     && any_in(
                         bvh.triangles_of(node),
