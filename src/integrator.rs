@@ -548,7 +548,8 @@ pub fn trace_pixel<const F: u32>(
     let mut start = samples.start;
     while start < samples.end {
         let count = (samples.end - start).min(PACKET as u32) as usize;
-        let mut rngs = [Rng::new(frame.seed, pixel, start); PACKET];
+        // Placeholders, each set below (hashing a stream here would be wasted).
+        let mut rngs = [Rng::with_key(0, 0, pixel, start); PACKET];
         let mut cameras = [CameraRay::default(); PACKET];
         if batches && count == PACKET {
             batch::camera_samples::<F>(scene, x, y, start, &mut rngs, &mut cameras);
@@ -592,7 +593,7 @@ pub fn trace_pixel<const F: u32>(
 mod tests {
     use super::*;
     use crate::pack::flatten;
-    use crate::scene::Scene;
+    use crate::scene::sample_scene;
 
     /// Each sample [`trace_pixel`] traces (camera rays in packets) has the radiance and first
     /// hit [`trace_sample`] gives it alone, bit for bit but at a tie: on triangles (packed
@@ -613,11 +614,7 @@ mod tests {
             ),
         ];
         for (name, overrides) in cases {
-            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("scenes")
-                .join(name);
-            let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-            let mut scene = Scene::load(&path, &overrides).unwrap();
+            let mut scene = sample_scene(name, overrides);
             scene.render.width = 24;
             scene.render.height = 16;
             let flat = flatten(&scene);

@@ -309,6 +309,15 @@ fn max(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
+/// The end of a child's slab test, from its entry and exit distances: the exit (scaled by
+/// `SLAB_FAR_SCALE`) is neither before the entry nor behind the ray, and the entry is before
+/// `t_max`. (`slab_hits_avx2` is the same on eight children.)
+#[inline(always)]
+fn slab_hit(t_near: f32, t_far: f32, t_max: f32) -> bool {
+    let t_far = t_far * SLAB_FAR_SCALE;
+    t_far >= t_near && t_far >= 0.0 && t_near < t_max
+}
+
 /// The slab test of `intersect::intersect_box` on the eight children at once: a bit per child
 /// hit before `t_max`, and each child's entry distance. Lane loops the compiler vectorises
 /// (no NaN can arise: the reciprocals are finite and non-zero, the planes finite).
@@ -325,10 +334,8 @@ fn node_hits(node: &WideNode, origin: [f32; 3], inv: [f32; 3], t_max: f32) -> (u
             t_near = max(t_near, min(t1, t2));
             t_far = min(t_far, max(t1, t2));
         }
-        t_far *= SLAB_FAR_SCALE;
         *near = t_near;
-        let hit = t_far >= t_near && t_far >= 0.0 && t_near < t_max;
-        mask |= (hit as u32) << lane;
+        mask |= (slab_hit(t_near, t_far, t_max) as u32) << lane;
     }
     (mask & node.valid, near)
 }
@@ -670,14 +677,10 @@ mod tests {
     use crate::bench::rays::{bounds, incoherent_rays};
     use crate::layout::{FEATURES_ALL, T_FAR};
     use crate::pack::{FlatScene, flatten};
-    use crate::scene::Scene;
+    use crate::scene::sample_scene;
 
     fn scene(name: &str, overrides: &[&str]) -> FlatScene {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("scenes")
-            .join(name);
-        let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-        flatten(&Scene::load(&path, &overrides).unwrap())
+        flatten(&sample_scene(name, overrides))
     }
 
     /// Every query of the wide BVH, with the AVX2 node test and with the portable one, finds

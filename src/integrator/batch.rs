@@ -219,7 +219,7 @@ mod tests {
     use crate::integrator::camera_sample;
     use crate::layout::FEATURES_ALL;
     use crate::pack::flatten;
-    use crate::scene::Scene;
+    use crate::scene::sample_scene;
 
     /// Every lane's ray, time and stream equal `camera_sample`'s bit for bit, through both
     /// builds, for the scenes' cameras (film tilt, swing, shift) and both patterns.
@@ -241,11 +241,7 @@ mod tests {
         ];
         let mut batched = 0;
         for (name, overrides) in cases {
-            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("scenes")
-                .join(name);
-            let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
-            let flat = flatten(&Scene::load(&path, &overrides).unwrap());
+            let flat = flatten(&sample_scene(name, overrides));
             if !batches::<FEATURES_ALL>(&flat) {
                 continue;
             }

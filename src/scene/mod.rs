@@ -282,3 +282,14 @@ impl Scene {
             .sum()
     }
 }
+
+/// Sample scene `name` of the project's `scenes/` with `overrides` (`--set` style), for unit
+/// tests.
+#[cfg(test)]
+pub(crate) fn sample_scene(name: &str, overrides: &[&str]) -> Scene {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name);
+    let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    Scene::load(&path, &overrides).unwrap_or_else(|e| panic!("{name}: {e}"))
+}

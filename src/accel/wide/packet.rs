@@ -98,10 +98,8 @@ fn interval_hits(node: &WideNode, interval: &Interval, t_max: f32) -> (u32, [f32
             t_near = max(t_near, min(lo_min, hi_min));
             t_far = min(t_far, max(lo_max, hi_max));
         }
-        t_far *= SLAB_FAR_SCALE;
         *near = t_near;
-        let hit = t_far >= t_near && t_far >= 0.0 && t_near < t_max;
-        mask |= (hit as u32) << lane;
+        mask |= (slab_hit(t_near, t_far, t_max) as u32) << lane;
     }
     (mask & node.valid, near)
 }
@@ -391,13 +389,10 @@ mod tests {
     use crate::layout::{FEATURES_ALL, T_FAR};
     use crate::math::rng::Rng;
     use crate::pack::{FlatScene, flatten};
-    use crate::scene::Scene;
+    use crate::scene::sample_scene;
 
     fn scene(name: &str) -> FlatScene {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("scenes")
-            .join(name);
-        flatten(&Scene::load(&path, &[]).unwrap())
+        flatten(&sample_scene(name, &[]))
     }
 
     /// A camera 2.5 sizes from the scene's centre along `axis`, looking at it, 48x32 rays.
