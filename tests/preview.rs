@@ -127,3 +127,27 @@ fn the_preview_says_what_it_cannot_show() {
         "{lens:?}"
     );
 }
+
+/// A scene with nothing in it previews as its background, as the ray tracer renders it (wgpu
+/// refuses an empty vertex buffer: the preview draws no triangles rather than panic).
+#[test]
+fn an_empty_scene_previews_as_its_background() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let text = "[render]\nwidth = 12\nheight = 8\nbackground = [0.25, 0.5, 0.75]\n\
+                [camera]\nposition = [0.0, 0.0, 1.0]\nlook_at = [0.0, 0.0, 0.0]\n";
+    let scene =
+        Scene::from_str(Path::new("empty.toml"), text, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let frame = chambre::gpu::preview::draw(&context, &scene, &flatten(&scene), 1).unwrap();
+    assert_eq!(frame.triangles, 0);
+    for y in 0..frame.image.height {
+        for x in 0..frame.image.width {
+            assert_eq!(
+                frame.image.get(x, y).to_array(),
+                [0.25, 0.5, 0.75],
+                "({x}, {y})"
+            );
+        }
+    }
+}
