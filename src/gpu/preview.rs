@@ -139,7 +139,8 @@ pub struct PreviewRenderer {
     context: GpuContext,
     pipeline: wgpu::RenderPipeline,
     vertex_buffer: wgpu::Buffer,
-    vertex_count: u32,
+    index_buffer: wgpu::Buffer,
+    index_count: u32,
     uniform_buffer: wgpu::Buffer,
     uniforms: PreviewUniforms,
     far: f64,
@@ -203,10 +204,16 @@ impl PreviewRenderer {
             &[Some(vertex_layout)],
             &[Some(COLOR_FORMAT.into()), Some(ID_FORMAT.into())],
         );
+        let (distinct, indices) = indexed(&vertices);
         let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("preview vertices"),
-            contents: bytemuck::cast_slice(&vertices),
+            contents: bytemuck::cast_slice(&distinct),
             usage: wgpu::BufferUsages::VERTEX,
+        });
+        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("preview indices"),
+            contents: bytemuck::cast_slice(&indices),
+            usage: wgpu::BufferUsages::INDEX,
         });
         let uniform_buffer =
             context.uniform_buffer("preview uniforms", bytemuck::bytes_of(&uniforms));
@@ -293,7 +300,8 @@ impl PreviewRenderer {
             context: context.clone(),
             pipeline,
             vertex_buffer,
-            vertex_count: vertices.len() as u32,
+            index_buffer,
+            index_count: indices.len() as u32,
             uniform_buffer,
             uniforms,
             far,
@@ -344,11 +352,12 @@ impl PreviewRenderer {
                 multiview_mask: None,
             });
             // A scene without shapes draws the background only (wgpu refuses an empty slice).
-            if self.vertex_count > 0 {
+            if self.index_count > 0 {
                 pass.set_pipeline(&self.pipeline);
                 pass.set_bind_group(0, &self.bind_group, &[]);
                 pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
-                pass.draw(0..self.vertex_count, 0..1);
+                pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..self.index_count, 0, 0..1);
             }
         }
         if let Some(reflections) = &self.reflections {
@@ -377,7 +386,7 @@ impl PreviewRenderer {
 
     /// Triangles drawn a frame.
     pub fn triangles(&self) -> usize {
-        self.vertex_count as usize / 3
+        self.index_count as usize / 3
     }
 
     /// The reflected triangles the last frame drew, summed over the searches (the cull's
@@ -780,20 +789,75 @@ fn depth_attachment(
 /// a vertex shared by the triangles around it (n² pieces of a subdivided triangle share most of
 /// theirs) is solved once. Positions are equal when their bits are.
 fn shared_positions(triangles: &[PreviewVertex]) -> (Vec<glam::Vec3>, Vec<u32>) {
-    let mut index = std::collections::HashMap::new();
-    let mut positions = Vec::new();
-    let solve_of = triangles
+    let (distinct, solve_of) = distinct_by(triangles, |v| v.position.map(f32::to_bits));
+    let positions = distinct
         .iter()
-        .map(|v| {
-            *index
-                .entry(v.position.map(f32::to_bits))
-                .or_insert_with(|| {
-                    positions.push(glam::Vec3::from(v.position));
-                    positions.len() as u32 - 1
-                })
-        })
+        .map(|v| glam::Vec3::from(v.position))
         .collect();
     (positions, solve_of)
+}
+
+/// `triangles`' distinct vertices and, per corner, the index of its vertex: the main pass
+/// draws them indexed, so a corner shared by several triangles (six around a tessellated
+/// sphere's or patch's vertex) is shaded once (lavapipe: the teapot's 4,066 triangles 1.55 →
+/// 0.73 ms a frame, `BENCHMARKS.md`). Vertices are equal when their bits are.
+fn indexed(triangles: &[PreviewVertex]) -> (Vec<PreviewVertex>, Vec<u32>) {
+    distinct_by(triangles, |v| bytemuck::bytes_of(v).to_vec())
+}
+
+/// The first of each class of `items` with equal keys, in order, and per item the index of its
+/// class.
+fn distinct_by<T: Copy, K: std::hash::Hash + Eq>(
+    items: &[T],
+    key: impl Fn(&T) -> K,
+) -> (Vec<T>, Vec<u32>) {
+    let mut index = std::collections::HashMap::new();
+    let mut distinct = Vec::new();
+    let indices = items
+        .iter()
+        .map(|item| {
+            *index.entry(key(item)).or_insert_with(|| {
+                distinct.push(*item);
+                distinct.len() as u32 - 1
+            })
+        })
+        .collect();
+    (distinct, indices)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Indexing loses no corner: the indices give back the triangle list, vertex for vertex,
+    /// and each distinct vertex is stored once.
+    #[test]
+    fn indexing_gives_back_every_corner() {
+        let corner = |x: f32, material| PreviewVertex {
+            position: [x, 0.0, 1.0],
+            material,
+            normal: [0.0, 0.0, 1.0],
+            reflector: 0,
+        };
+        // Two triangles sharing an edge; the fourth corner differs from the first only by its
+        // material, which keeps it apart.
+        let triangles = [
+            corner(0.0, 0),
+            corner(1.0, 0),
+            corner(2.0, 0),
+            corner(2.0, 0),
+            corner(1.0, 0),
+            corner(0.0, 1),
+        ];
+        let (distinct, indices) = indexed(&triangles);
+        assert_eq!(distinct.len(), 4);
+        assert_eq!(indices, [0, 1, 2, 2, 1, 3]);
+        let rebuilt: Vec<PreviewVertex> = indices.iter().map(|&i| distinct[i as usize]).collect();
+        assert_eq!(rebuilt, triangles);
+        let (positions, solve_of) = shared_positions(&triangles);
+        assert_eq!(positions.len(), 3);
+        assert_eq!(solve_of, [0, 1, 2, 2, 1, 0]);
+    }
 }
 
 fn buffer_entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
