@@ -825,6 +825,20 @@ fn distinct_by<T: Copy, K: std::hash::Hash + Eq>(
     (distinct, indices)
 }
 
+fn buffer_entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}
+
+fn texture_entry(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: wgpu::BindingResource::TextureView(view),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -857,19 +871,5 @@ mod tests {
         let (positions, solve_of) = shared_positions(&triangles);
         assert_eq!(positions.len(), 3);
         assert_eq!(solve_of, [0, 1, 2, 2, 1, 0]);
-    }
-}
-
-fn buffer_entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: buffer.as_entire_binding(),
-    }
-}
-
-fn texture_entry(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: wgpu::BindingResource::TextureView(view),
     }
 }
