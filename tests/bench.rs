@@ -166,6 +166,10 @@ fn bench_scale_measures_each_size_and_plots_them() {
         );
         assert!(r["bvh_nodes"].as_u64().unwrap() >= 1);
         assert!(r["scene_bytes"].as_u64().unwrap() >= 48 * r["triangles"].as_u64().unwrap());
+        // The renderer's layouts: the CPU's packets through the wide BVH, the GPU's CWBVH.
+        assert_eq!(r["cpu_bvh"], "packets", "{r}");
+        assert_eq!(r["gpu_bvh"], "cwbvh", "{r}");
+        assert!(r["wide_build_ms"].as_f64().unwrap() > 0.0, "{r}");
     }
     let svg = std::fs::read_to_string(&plot).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("closest-hit throughput"));

@@ -90,6 +90,18 @@ pub enum Bvh {
     Packets,
 }
 
+impl Bvh {
+    /// Its name in the reports' tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            Bvh::Bvh2 => "BVH2",
+            Bvh::Cwbvh => "CWBVH",
+            Bvh::Wide => "wide (CPU)",
+            Bvh::Packets => "wide, packets of 8 (CPU)",
+        }
+    }
+}
+
 /// Rays as structure of arrays.
 #[derive(Clone, Debug, Default)]
 pub struct RaySet {
@@ -607,12 +619,7 @@ impl RaysReport {
                 Query::ClosestHit => "closest",
                 Query::AnyHit => "any",
             };
-            let bvh = match r.bvh {
-                Bvh::Bvh2 => "BVH2",
-                Bvh::Cwbvh => "CWBVH",
-                Bvh::Wide => "wide (CPU)",
-                Bvh::Packets => "wide, packets of 8 (CPU)",
-            };
+            let bvh = r.bvh.label();
             let reads = self
                 .cwbvh_reads
                 .iter()

@@ -3,6 +3,10 @@
 //!
 //! Below the full mesh, the sizes are prefixes of its triangle list (spatially coherent pieces of
 //! it); above, copies of it on a grid beside the first, which the camera keeps looking at.
+//!
+//! Each path traces as the renderer traces camera rays: the CPU through the wide BVH in packets
+//! of eight rays, the GPU through the CWBVH; both through the BVH2 where a scene's CWBVH is
+//! refused (deeper than the traversal's stack), as the renderer falls back.
 
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -16,7 +20,7 @@ use super::rays::{Bvh, Checksum, Pinhole, Query, coherent_rays, trace_cpu};
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
 use crate::gpu::trace::GpuTracer;
-use crate::layout::{GpuBvhNode, GpuNormals, GpuPrimitive};
+use crate::layout::{GpuBvhNode, GpuCwNode, GpuNormals, GpuPrimitive};
 use crate::pack::{FlatScene, flatten};
 use crate::plot::{Figure, log_log_panel};
 use crate::scene::mesh::{TriangleMesh, load_mesh};
@@ -32,11 +36,17 @@ pub const COPIES: [usize; 2] = [4, 12];
 pub struct ScaleResult {
     /// Triangles of the scene.
     pub triangles: usize,
-    /// The BVH build (ms).
+    /// The BVH2 build by obvhs (ms).
     pub build_ms: f64,
-    /// Nodes of the BVH.
+    /// The CWBVH made from the BVH2, and the CPU's wide BVH from that (ms).
+    pub wide_build_ms: f64,
+    /// What the CPU path traced.
+    pub cpu_bvh: Bvh,
+    /// What the GPU path traced.
+    pub gpu_bvh: Bvh,
+    /// Nodes of the BVH the GPU traced.
     pub bvh_nodes: usize,
-    /// Bytes of the arrays a traversal reads (nodes and primitives, normals included).
+    /// Bytes of the arrays the GPU's traversal reads (nodes and primitives, normals included).
     pub scene_bytes: usize,
     /// The process's peak resident memory so far (Linux `VmHWM`), where the system says.
     pub peak_rss_bytes: Option<u64>,
@@ -131,27 +141,49 @@ fn measure(
     gpu: Option<&Result<GpuContext>>,
 ) -> Result<ScaleResult> {
     let scene = meshes_scene(meshes)?;
+    let start = Instant::now();
+    let cwbvh = scene.cwbvh().ok();
+    let cpu_bvh = match scene.wide() {
+        Ok(_) => Bvh::Packets,
+        Err(_) => Bvh::Bvh2,
+    };
+    let wide_build_ms = start.elapsed().as_secs_f64() * 1e3;
     let rays = coherent_rays(camera, 1, 1);
-    let checksum = Checksum::of(&trace_cpu(&scene, Bvh::Bvh2, &rays, Query::ClosestHit)?);
+    let checksum = Checksum::of(&trace_cpu(&scene, cpu_bvh, &rays, Query::ClosestHit)?);
     let cpu_mrays_per_s = mrays(runs, rays.len(), || {
         let start = Instant::now();
-        trace_cpu(&scene, Bvh::Bvh2, &rays, Query::ClosestHit)?;
+        trace_cpu(&scene, cpu_bvh, &rays, Query::ClosestHit)?;
         Ok(start.elapsed())
     })?;
     let (mut gpu_mrays_per_s, mut gpu_refused) = (None, None);
     if let Some(context) = gpu {
-        match super::usable(context).and_then(|c| GpuTracer::new(c.clone(), &scene, None, &rays)) {
+        match super::usable(context).and_then(|c| GpuTracer::new(c.clone(), &scene, cwbvh, &rays)) {
             Ok(tracer) => {
                 gpu_mrays_per_s = Some(mrays(runs, rays.len(), || tracer.trace(Query::ClosestHit))?)
             }
             Err(e) => gpu_refused = Some(e.to_string()),
         }
     }
+    let (gpu_bvh, bvh_nodes, node_bytes) = match cwbvh {
+        Some(cw) => (
+            Bvh::Cwbvh,
+            cw.nodes.len(),
+            cw.nodes.len() * size_of::<GpuCwNode>(),
+        ),
+        None => (
+            Bvh::Bvh2,
+            scene.nodes.len(),
+            scene.nodes.len() * size_of::<GpuBvhNode>(),
+        ),
+    };
     Ok(ScaleResult {
         triangles: scene.triangle_count,
         build_ms: scene.build_time.as_secs_f64() * 1e3,
-        bvh_nodes: scene.nodes.len(),
-        scene_bytes: scene.nodes.len() * size_of::<GpuBvhNode>()
+        wide_build_ms,
+        cpu_bvh,
+        gpu_bvh,
+        bvh_nodes,
+        scene_bytes: node_bytes
             + scene.prims.len() * size_of::<GpuPrimitive>()
             + scene.normals.len() * size_of::<GpuNormals>(),
         peak_rss_bytes: peak_rss_bytes(),
@@ -196,11 +228,12 @@ impl ScaleReport {
     pub fn to_markdown(&self) -> String {
         let mut out = format!(
             "scale: {} (prefixes of its triangles, then copies beside it), {} coherent \
-             closest-hit rays of the camera, BVH preset medium; Mrays/s median of the runs\n\n",
+             closest-hit rays of the camera, BVH preset medium; Mrays/s median of the runs; \
+             the GPU's BVH nodes and arrays\n\n",
             self.mesh, self.rays
         );
-        out += "| triangles | build ms | BVH nodes | scene MiB | peak RSS MiB | CPU Mrays/s | GPU Mrays/s | hits |\n";
-        out += "|---|---|---|---|---|---|---|---|\n";
+        out += "| triangles | build ms | wide BVHs ms | BVH nodes | scene MiB | peak RSS MiB | CPU BVH | CPU Mrays/s | GPU BVH | GPU Mrays/s | hits |\n";
+        out += "|---|---|---|---|---|---|---|---|---|---|---|\n";
         let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
         for r in &self.results {
             let gpu = match (&r.gpu_mrays_per_s, &r.gpu_refused) {
@@ -209,14 +242,17 @@ impl ScaleReport {
                 (None, None) => "-".into(),
             };
             out += &format!(
-                "| {} | {:.1} | {} | {:.1} | {} | {:.2} | {gpu} | {} |\n",
+                "| {} | {:.1} | {:.1} | {} | {:.1} | {} | {} | {:.2} | {} | {gpu} | {} |\n",
                 r.triangles,
                 r.build_ms,
+                r.wide_build_ms,
                 r.bvh_nodes,
                 mib(r.scene_bytes as u64),
                 r.peak_rss_bytes
                     .map_or("-".into(), |b| format!("{:.0}", mib(b))),
+                r.cpu_bvh.label(),
                 r.cpu_mrays_per_s.median,
+                r.gpu_bvh.label(),
                 r.checksum.hits
             );
         }
@@ -244,6 +280,11 @@ impl Figure for ScaleReport {
             .iter()
             .map(|r| (r.triangles as f64, r.build_ms.max(1e-3)))
             .collect();
+        let wide: Vec<(f64, f64)> = self
+            .results
+            .iter()
+            .map(|r| (r.triangles as f64, r.wide_build_ms.max(1e-3)))
+            .collect();
         let cpu: Vec<(f64, f64)> = self
             .results
             .iter()
@@ -259,7 +300,10 @@ impl Figure for ScaleReport {
             "BVH build time",
             "triangles",
             "ms",
-            &[("build (medium preset)", &build, BLUE)],
+            &[
+                ("BVH2 (obvhs, medium preset)", &build, BLUE),
+                ("CWBVH and wide BVH from it", &wide, GREEN),
+            ],
             x_range.clone(),
         )?;
         log_log_panel(
@@ -267,7 +311,10 @@ impl Figure for ScaleReport {
             "closest-hit throughput",
             "triangles",
             "Mrays/s",
-            &[("CPU path", &cpu, BLUE), ("GPU path", &gpu, RED)],
+            &[
+                ("CPU path (wide BVH, packets)", &cpu, BLUE),
+                ("GPU path (CWBVH)", &gpu, RED),
+            ],
             x_range,
         )
     }
