@@ -75,7 +75,7 @@ enum Command {
         #[arg(short, long, required_unless_present = "window")]
         output: Option<PathBuf>,
         /// Timed frames after a warm-up; the median is reported.
-        #[arg(long, default_value_t = 5)]
+        #[arg(long, value_parser = chambre::bench::positive(), default_value_t = 5)]
         frames: u32,
         /// Open a window to compose the shot: arrows tilt and swing the film, i/k and j/l
         /// shift it, a/d pan and w/x pitch the camera, r resets, s saves the scene, q quits.
@@ -92,12 +92,12 @@ enum Command {
         /// NAME.composed.toml, so its relative mesh paths still hold).
         #[arg(long, requires = "window")]
         save: Option<PathBuf>,
-        /// Mirror spheres' Fermat reflections: pieces each reflected triangle's edge is cut
+        /// Curved mirrors' Fermat reflections: pieces each reflected triangle's edge is cut
         /// into (default: enough that none is longer than 1/16 of the scene's radius).
-        #[arg(long)]
+        #[arg(long, value_parser = chambre::bench::positive())]
         subdivision: Option<u32>,
-        /// Mirror spheres' Fermat reflections: the search's steps at most.
-        #[arg(long, default_value_t = chambre::gpu::preview::ReflectionOptions::default().steps)]
+        /// Curved mirrors' Fermat reflections: the search's steps at most.
+        #[arg(long, value_parser = chambre::bench::positive(), default_value_t = chambre::gpu::preview::ReflectionOptions::default().steps)]
         fermat_steps: u32,
         /// Override any scene field, e.g. --set camera.film_tilt=10 (also -D).
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]

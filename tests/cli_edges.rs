@@ -1,8 +1,9 @@
 //! The `chambre` command line at its edges: output paths that cannot take the image fail before
 //! the render, writes are atomic and every write error is an error, SIGINT and SIGTERM stop a
 //! long render promptly and keep its samples, a closed stdout or stderr is not a panic, a far
-//! plane before the near plane is refused, `--backend auto` survives a GPU refusal, and
-//! non-finite pixels are written and reported.
+//! plane before the near plane is refused, `--backend auto` survives a GPU refusal,
+//! non-finite pixels are written and reported, and counts of 0 (runs, frames, sizes,
+//! subdivisions) are refused before anything runs.
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Output, Stdio};
@@ -878,4 +879,58 @@ fn a_failing_progressive_write_stops_the_render_with_its_error() {
     assert!(stopped.contains("disk full (a test)"), "{stopped}");
     assert_eq!(output.snapshots, 0);
     assert!(output.max_samples_per_pixel == 4 && output.pixels_without_samples > 0);
+}
+
+/// A count of 0 would measure nothing (NaN rates), or be taken silently as 1 (a subdivision, a
+/// run): every such flag of `preview`, `bench` and `converge` refuses it, naming the flag,
+/// before any scene is loaded or GPU opened.
+#[test]
+fn counts_of_zero_are_refused_with_the_flag_named() {
+    let cases: [&[&str]; 9] = [
+        &[
+            "preview",
+            "scenes/fermat_sphere.toml",
+            "-o",
+            "x.png",
+            "--subdivision",
+            "0",
+        ],
+        &[
+            "preview",
+            "scenes/fermat_sphere.toml",
+            "-o",
+            "x.png",
+            "--frames",
+            "0",
+        ],
+        &[
+            "preview",
+            "scenes/fermat_sphere.toml",
+            "-o",
+            "x.png",
+            "--fermat-steps",
+            "0",
+        ],
+        &["bench", "fermat", "--subdivisions", "1,0"],
+        &["bench", "rays", "--width", "0"],
+        &["bench", "scale", "--prefixes", "1000,0"],
+        &["bench", "scale", "--copies", "0"],
+        &["bench", "motion", "--slices", "0"],
+        &["converge", "scenes/bokeh.toml", "--runs", "0"],
+    ];
+    for args in cases {
+        let output = chambre().args(args).output().unwrap();
+        let flag = args.iter().rev().nth(1).unwrap();
+        assert_eq!(
+            output.status.code(),
+            Some(2),
+            "{args:?}: {}",
+            stderr_of(&output)
+        );
+        let stderr = stderr_of(&output);
+        assert!(
+            stderr.contains("invalid value '") && stderr.contains(flag),
+            "{args:?}: {stderr}"
+        );
+    }
 }

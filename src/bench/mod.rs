@@ -66,24 +66,24 @@ pub struct FermatArgs {
     #[arg(long, default_value = "scenes/fermat_sphere.toml")]
     pub scene: PathBuf,
     /// Subdivisions of the reflected triangles to compare.
-    #[arg(long, value_delimiter = ',', default_values_t = [1, 2, 4, 8, 16, 32])]
+    #[arg(long, value_parser = positive(), value_delimiter = ',', default_values_t = [1, 2, 4, 8, 16, 32])]
     pub subdivisions: Vec<u32>,
     /// The Fermat search's steps at most.
-    #[arg(long, default_value_t = crate::gpu::preview::ReflectionOptions::default().steps)]
+    #[arg(long, value_parser = positive(), default_value_t = crate::gpu::preview::ReflectionOptions::default().steps)]
     pub steps: u32,
     /// Timed ray-traced frames after a warm-up.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, value_parser = positive(), default_value_t = 5)]
     pub runs: u32,
     /// Timed preview frames per subdivision after a warm-up.
-    #[arg(long, default_value_t = 21)]
+    #[arg(long, value_parser = positive(), default_value_t = 21)]
     pub frames: u32,
     /// Samples per pixel of the ray-traced reference for FLIP.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, value_parser = positive(), default_value_t = 256)]
     pub reference_spp: u32,
     /// Searches (surfaces: a teapot's 32 patches) solved and culled in one dispatch at most;
     /// by default as many as the bindings hold. 1 measures the preview as it ran before it
     /// batched them.
-    #[arg(long)]
+    #[arg(long, value_parser = at_least_one)]
     pub searches_per_dispatch: Option<usize>,
     /// Override any scene field, e.g. --set render.width=640 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
@@ -103,13 +103,13 @@ pub struct MotionArgs {
     #[arg(long, default_value_t = 0.3)]
     pub travel: f64,
     /// Time slices to compare, each with its own BVH (1: one BVH over the whole shutter).
-    #[arg(long, value_delimiter = ',', default_values_t = [1, 2, 4, 8, 16])]
+    #[arg(long, value_parser = positive(), value_delimiter = ',', default_values_t = [1, 2, 4, 8, 16])]
     pub slices: Vec<u32>,
     /// Camera rays: SIZE x SIZE.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, value_parser = positive(), default_value_t = 256)]
     pub size: u32,
     /// Timed runs after one warm-up.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, value_parser = positive(), default_value_t = 3)]
     pub runs: u32,
     /// Where the report goes.
     #[command(flatten)]
@@ -123,7 +123,7 @@ pub struct PrecisionArgs {
     #[arg(long, default_value = "scenes/meshes/bunny-npm-lowres.obj")]
     pub mesh: PathBuf,
     /// Camera rays per placement: SIZE x SIZE.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, value_parser = positive(), default_value_t = 64)]
     pub size: u32,
     /// The camera's height above the mesh's centre, in mesh sizes (it looks along -z from 2.5
     /// sizes away): a small height over a flat mesh in the xz plane makes grazing rays.
@@ -161,6 +161,22 @@ impl Backends {
     }
 }
 
+/// The parser of a `u32` count given on the command line that must be at least 1 (clap says
+/// which flag and why, and exits non-zero).
+pub fn positive() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..)
+}
+
+/// A count given on the command line that must be at least 1 (a size, a number of runs or
+/// copies): 0 would measure nothing and report NaN, or be taken silently as 1.
+pub fn at_least_one(text: &str) -> std::result::Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(0) => Err("must be at least 1".into()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 /// The benchmarks' default mesh: 871k triangles, large enough to fill a GPU.
 const DRAGON_MESH: &str = "scenes/meshes/dragon_vrip.obj.gz";
 
@@ -171,16 +187,16 @@ pub struct ScaleArgs {
     #[arg(long, default_value = DRAGON_MESH)]
     pub mesh: PathBuf,
     /// Triangle counts taken from the mesh (larger than the mesh: the whole mesh).
-    #[arg(long, value_delimiter = ',', default_values_t = scale::PREFIXES)]
+    #[arg(long, value_parser = at_least_one, value_delimiter = ',', default_values_t = scale::PREFIXES)]
     pub prefixes: Vec<usize>,
     /// Copies of the whole mesh side by side.
-    #[arg(long, value_delimiter = ',', default_values_t = scale::COPIES)]
+    #[arg(long, value_parser = at_least_one, value_delimiter = ',', default_values_t = scale::COPIES)]
     pub copies: Vec<usize>,
     /// Image size of the camera rays (one per pixel; the rays benchmark's camera).
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, value_parser = positive(), default_value_t = 512)]
     pub size: u32,
     /// Timed runs after one warm-up.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, value_parser = positive(), default_value_t = 3)]
     pub runs: u32,
     /// Backends to measure.
     #[command(flatten)]
@@ -197,7 +213,7 @@ pub struct ScaleArgs {
 #[derive(Debug, clap::Args)]
 pub struct SamplersArgs {
     /// Samples per pixel of the reference image.
-    #[arg(long, default_value_t = 4096)]
+    #[arg(long, value_parser = positive(), default_value_t = 4096)]
     pub reference_spp: u32,
     /// Where the report goes.
     #[command(flatten)]
@@ -211,7 +227,7 @@ pub struct BuildArgs {
     #[arg(long, default_value = DRAGON_MESH)]
     pub mesh: PathBuf,
     /// Timed runs after one warm-up.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, value_parser = positive(), default_value_t = 5)]
     pub runs: u32,
     /// Where the report goes.
     #[command(flatten)]
@@ -225,11 +241,11 @@ pub struct FrameArgs {
     #[arg(long, value_delimiter = ',')]
     pub scenes: Vec<String>,
     /// Timed runs after one warm-up, interleaved across backends.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, value_parser = positive(), default_value_t = 3)]
     pub runs: u32,
     /// Also render on the GPU with at most N rays per invocation whatever the image size, for
     /// each N given: the dispatch shapes behind `RayBudgets::for_adapter`.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..), value_delimiter = ',')]
     pub gpu_rays_per_invocation: Vec<u64>,
     /// Override a field of every scene, e.g. --set camera.shutter=[0.0,1.0] (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
@@ -264,16 +280,16 @@ pub struct RaysArgs {
     #[arg(long, default_value_t = Pinhole::DRAGON.vertical_fov_deg)]
     pub vertical_fov: f32,
     /// Image width in pixels: one camera ray per pixel and frame.
-    #[arg(long, default_value_t = Pinhole::DRAGON.width)]
+    #[arg(long, value_parser = positive(), default_value_t = Pinhole::DRAGON.width)]
     pub width: u32,
     /// Image height in pixels.
-    #[arg(long, default_value_t = Pinhole::DRAGON.height)]
+    #[arg(long, value_parser = positive(), default_value_t = Pinhole::DRAGON.height)]
     pub height: u32,
     /// Coherent frames (one jittered ray per pixel each); the incoherent set has as many rays.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, value_parser = positive(), default_value_t = 8)]
     pub frames: u32,
     /// Timed runs after one warm-up.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, value_parser = positive(), default_value_t = 5)]
     pub runs: u32,
     /// Seed of the pixel jitter and of the incoherent rays.
     #[arg(long, default_value_t = 1)]
