@@ -375,6 +375,29 @@ fn compare_small(context: &chambre::gpu::GpuContext, scene: &str) -> FermatRepor
     compare_small_with(context, scene, &[])
 }
 
+/// With the eye inside the mirror sphere nothing reflects (E sees no point from outside): the
+/// comparison says so, no feature drawn and no displacement figures, rather than NaN or a
+/// corner error of 0.
+#[test]
+fn a_comparison_with_nothing_drawn_reports_no_figures() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let inside = [
+        "camera.position=[0.0, 0.5, 0.1]",
+        "camera.look_at=[0.0, 0.5, -1.0]",
+    ];
+    let report = compare_small_with(&context, "scenes/fermat_sphere.toml", &inside);
+    for row in &report.rows {
+        assert_eq!((row.drawn, row.reflected_drawn), (0, 0), "{row:?}");
+        assert_eq!(row.corner_max_px, None, "{row:?}");
+        assert_eq!(row.displacement_median_px, None, "{row:?}");
+        assert_eq!(row.displacement_max_px, None, "{row:?}");
+    }
+    let table = report.to_markdown();
+    assert!(!table.contains("NaN") && table.contains("| - |"), "{table}");
+}
+
 /// `compare_small` with the scene's fields overridden as `-D` does.
 fn compare_small_with(
     context: &chambre::gpu::GpuContext,
@@ -416,16 +439,22 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
     let [coarse, fine] = [&report.rows[0], &report.rows[1]];
     for row in [coarse, fine] {
         assert!(row.features > 300, "{row:?}");
-        assert!(row.corner_max_px < 0.05, "{row:?}");
+        assert!(row.corner_max_px.is_some_and(|d| d < 0.05), "{row:?}");
         assert!(row.preview_ms.median > 0.0);
     }
     assert!(fine.drawn as f64 >= 0.9 * fine.features as f64, "{fine:?}");
-    assert!(fine.displacement_p99_px < 1.0, "{fine:?}");
     assert!(
-        fine.displacement_median_px < coarse.displacement_median_px,
+        fine.displacement_p99_px.is_some_and(|d| d < 1.0),
+        "{fine:?}"
+    );
+    assert!(
+        fine.displacement_median_px.unwrap() < coarse.displacement_median_px.unwrap(),
         "{report:?}"
     );
-    assert!(coarse.displacement_max_px > 1.0, "{coarse:?}");
+    assert!(
+        coarse.displacement_max_px.is_some_and(|d| d > 1.0),
+        "{coarse:?}"
+    );
     assert!(fine.flip_reflector < coarse.flip_reflector, "{report:?}");
     assert!(fine.flip_reflector < 0.08, "{fine:?}");
     assert!(report.ray_traced_gpu_ms.median > 0.0 && report.ray_traced_cpu_ms.median > 0.0);
@@ -459,13 +488,19 @@ fn assert_reflections_land(mirror: &str, report: &FermatReport, features: usize,
     let [coarse, fine] = [&report.rows[0], &report.rows[1]];
     for row in [coarse, fine] {
         assert!(row.features > features, "{mirror}: {row:?}");
-        assert!(row.corner_max_px < 0.05, "{mirror}: {row:?}");
+        assert!(
+            row.corner_max_px.is_some_and(|d| d < 0.05),
+            "{mirror}: {row:?}"
+        );
     }
     assert!(
         fine.drawn as f64 >= drawn * fine.features as f64,
         "{mirror}: {fine:?}"
     );
-    assert!(fine.displacement_p99_px < 1.0, "{mirror}: {fine:?}");
+    assert!(
+        fine.displacement_p99_px.is_some_and(|d| d < 1.0),
+        "{mirror}: {fine:?}"
+    );
     assert!(
         fine.flip_reflector < coarse.flip_reflector,
         "{mirror}: {report:?}"
@@ -520,11 +555,14 @@ fn preview_reflections_on_a_teapot_land_where_the_ray_tracer_puts_them() {
     let [coarse, fine] = [&report.rows[0], &report.rows[1]];
     for row in [coarse, fine] {
         assert!(row.features > 300, "{row:?}");
-        assert!(row.corner_max_px < 0.05, "{row:?}");
+        assert!(row.corner_max_px.is_some_and(|d| d < 0.05), "{row:?}");
     }
     assert!(fine.drawn as f64 >= 0.6 * fine.features as f64, "{fine:?}");
     assert!(fine.drawn > coarse.drawn, "{report:?}");
-    assert!(fine.displacement_p99_px < 1.0, "{fine:?}");
+    assert!(
+        fine.displacement_p99_px.is_some_and(|d| d < 1.0),
+        "{fine:?}"
+    );
     assert!(fine.flip_reflector < coarse.flip_reflector, "{report:?}");
 }
 

@@ -61,14 +61,16 @@ pub struct FermatRow {
     /// Of those, the ones the preview draws (every corner of their sub-triangle converged).
     pub drawn: usize,
     /// Distance from the ray tracer's position of the drawn corners (vertices of the scene's
-    /// triangles), pixels: largest.
-    pub corner_max_px: f64,
-    /// Distance from the ray tracer's position of every drawn feature, pixels: median.
-    pub displacement_median_px: f64,
+    /// triangles), pixels: largest; `None` where no corner is drawn (the eye inside the
+    /// mirror, or the mirror out of the frame).
+    pub corner_max_px: Option<f64>,
+    /// Distance from the ray tracer's position of every drawn feature, pixels: median; `None`
+    /// where none is drawn.
+    pub displacement_median_px: Option<f64>,
     /// 99th percentile.
-    pub displacement_p99_px: f64,
+    pub displacement_p99_px: Option<f64>,
     /// Largest.
-    pub displacement_max_px: f64,
+    pub displacement_max_px: Option<f64>,
     /// Mean FLIP over the mirror's pixels against the ray-traced reference.
     pub flip_reflector: f64,
 }
@@ -177,14 +179,12 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             .iter()
             .filter(|(corner, _)| *corner)
             .filter_map(|(_, d)| *d)
-            .fold(0.0, f64::max);
+            .max_by(f64::total_cmp);
         let mut drawn: Vec<f64> = placed.iter().filter_map(|(_, d)| *d).collect();
         drawn.sort_by(f64::total_cmp);
         let quantile = |q: f64| {
-            drawn
-                .get(((drawn.len() as f64 - 1.0) * q).round() as usize)
-                .copied()
-                .unwrap_or(f64::NAN)
+            let last = drawn.len().checked_sub(1)?;
+            drawn.get((last as f64 * q).round() as usize).copied()
         };
         rows.push(FermatRow {
             subdivision,
@@ -438,9 +438,10 @@ impl FermatReport {
             self.ray_traced_cpu_ms.median,
             self.reference_spp
         );
+        let px = |d: Option<f64>| d.map_or("-".into(), |d| format!("{d:.3}"));
         for r in &self.rows {
             out += &format!(
-                "| {} | {} ({}) | {:.2} | {:.1}x | {}/{} | {:.3} | {:.3} | {:.3} | {:.3} | {:.4} |\n",
+                "| {} | {} ({}) | {:.2} | {:.1}x | {}/{} | {} | {} | {} | {} | {:.4} |\n",
                 r.subdivision,
                 r.reflected_triangles,
                 r.reflected_drawn,
@@ -448,10 +449,10 @@ impl FermatReport {
                 gpu / r.preview_ms.median,
                 r.drawn,
                 r.features,
-                r.corner_max_px,
-                r.displacement_median_px,
-                r.displacement_p99_px,
-                r.displacement_max_px,
+                px(r.corner_max_px),
+                px(r.displacement_median_px),
+                px(r.displacement_p99_px),
+                px(r.displacement_max_px),
                 r.flip_reflector
             );
         }
