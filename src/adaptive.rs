@@ -167,7 +167,12 @@ impl AdaptiveReport {
             } else {
                 f32::INFINITY
             },
-            max_error: errors.iter().copied().fold(0.0, f32::max),
+            // f32::max would pass over a NaN estimate (a pixel whose radiance is NaN).
+            max_error: if finite.len() == errors.len() {
+                finite.iter().copied().fold(0.0, f32::max)
+            } else {
+                f32::INFINITY
+            },
             mean_spp: samples.iter().map(|&n| n as f64).sum::<f64>() / samples.len().max(1) as f64,
             decisions,
         }

@@ -377,7 +377,7 @@ fn compare_small(context: &chambre::gpu::GpuContext, scene: &str) -> FermatRepor
 
 /// With the eye inside the mirror sphere nothing reflects (E sees no point from outside): the
 /// comparison says so, no feature drawn and no displacement figures, rather than NaN or a
-/// corner error of 0.
+/// corner error of 0; with the mirror out of the frame, no FLIP over its pixels either.
 #[test]
 fn a_comparison_with_nothing_drawn_reports_no_figures() {
     let Some(context) = common::gpu_context() else {
@@ -396,6 +396,13 @@ fn a_comparison_with_nothing_drawn_reports_no_figures() {
     }
     let table = report.to_markdown();
     assert!(!table.contains("NaN") && table.contains("| - |"), "{table}");
+    // Looking away, the mirror has no pixel to take FLIP over.
+    let away = ["camera.look_at=[0.0, 1.6, 12.0]"];
+    let report = compare_small_with(&context, "scenes/fermat_sphere.toml", &away);
+    for row in &report.rows {
+        assert_eq!((row.features, row.flip_reflector), (0, None), "{row:?}");
+    }
+    assert!(!report.to_markdown().contains("NaN"));
 }
 
 /// `compare_small` with the scene's fields overridden as `-D` does.
@@ -455,8 +462,11 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
         coarse.displacement_max_px.is_some_and(|d| d > 1.0),
         "{coarse:?}"
     );
-    assert!(fine.flip_reflector < coarse.flip_reflector, "{report:?}");
-    assert!(fine.flip_reflector < 0.08, "{fine:?}");
+    assert!(
+        fine.flip_reflector.unwrap() < coarse.flip_reflector.unwrap(),
+        "{report:?}"
+    );
+    assert!(fine.flip_reflector.is_some_and(|f| f < 0.08), "{fine:?}");
     assert!(report.ray_traced_gpu_ms.median > 0.0 && report.ray_traced_cpu_ms.median > 0.0);
     let json = serde_json::to_value(&report).unwrap();
     for field in ["ray_traced_gpu_ms", "reference_spp", "rows"] {
@@ -502,7 +512,7 @@ fn assert_reflections_land(mirror: &str, report: &FermatReport, features: usize,
         "{mirror}: {fine:?}"
     );
     assert!(
-        fine.flip_reflector < coarse.flip_reflector,
+        fine.flip_reflector.unwrap() < coarse.flip_reflector.unwrap(),
         "{mirror}: {report:?}"
     );
 }
@@ -563,7 +573,10 @@ fn preview_reflections_on_a_teapot_land_where_the_ray_tracer_puts_them() {
         fine.displacement_p99_px.is_some_and(|d| d < 1.0),
         "{fine:?}"
     );
-    assert!(fine.flip_reflector < coarse.flip_reflector, "{report:?}");
+    assert!(
+        fine.flip_reflector.unwrap() < coarse.flip_reflector.unwrap(),
+        "{report:?}"
+    );
 }
 
 /// On a torus, an ellipsoid (solved in its facing frame) and a cylinder (its reflections

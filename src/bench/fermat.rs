@@ -72,7 +72,7 @@ pub struct FermatRow {
     /// Largest.
     pub displacement_max_px: Option<f64>,
     /// Mean FLIP over the mirror's pixels against the ray-traced reference.
-    pub flip_reflector: f64,
+    pub flip_reflector: Option<f64>,
 }
 
 /// The comparison's report.
@@ -404,19 +404,16 @@ fn reflector_mask(flat: &FlatScene, clip: &DMat4, reflector: &Reflector) -> Vec<
         .collect()
 }
 
-/// Mean FLIP of `image` against `reference` over the pixels of `mask`.
-fn masked_flip(image: &Image, reference: &Image, mask: &[bool]) -> f64 {
+/// Mean FLIP of `image` against `reference` over the pixels of `mask`; `None` where the mask
+/// is empty (the mirror out of the frame).
+fn masked_flip(image: &Image, reference: &Image, mask: &[bool]) -> Option<f64> {
     let map = crate::converge::flip_map(image, reference);
     let (sum, count) = map
         .iter()
         .zip(mask)
         .filter(|(_, m)| **m)
         .fold((0.0, 0usize), |(s, c), (v, _)| (s + *v as f64, c + 1));
-    if count == 0 {
-        f64::NAN
-    } else {
-        sum / count as f64
-    }
+    (count > 0).then(|| sum / count as f64)
 }
 
 impl FermatReport {
@@ -441,7 +438,7 @@ impl FermatReport {
         let px = |d: Option<f64>| d.map_or("-".into(), |d| format!("{d:.3}"));
         for r in &self.rows {
             out += &format!(
-                "| {} | {} ({}) | {:.2} | {:.1}x | {}/{} | {} | {} | {} | {} | {:.4} |\n",
+                "| {} | {} ({}) | {:.2} | {:.1}x | {}/{} | {} | {} | {} | {} | {} |\n",
                 r.subdivision,
                 r.reflected_triangles,
                 r.reflected_drawn,
@@ -453,7 +450,7 @@ impl FermatReport {
                 px(r.displacement_median_px),
                 px(r.displacement_p99_px),
                 px(r.displacement_max_px),
-                r.flip_reflector
+                r.flip_reflector.map_or("-".into(), |f| format!("{f:.4}"))
             );
         }
         out
