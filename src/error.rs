@@ -79,10 +79,10 @@ pub enum Error {
     #[error("GPU error: {0}")]
     Gpu(String),
 
-    /// Writing the output image failed.
-    #[error("{path}: cannot write image: {message}")]
+    /// Writing an output file failed: an image, a report, a plot or a composed scene.
+    #[error("{path}: cannot write: {message}")]
     Output {
-        /// The image file.
+        /// The file.
         path: PathBuf,
         /// What the encoder or the file system reported.
         message: String,
