@@ -79,6 +79,25 @@ pub enum Error {
     #[error("GPU error: {0}")]
     Gpu(String),
 
+    /// An array larger than one storage binding may hold on this adapter, refused before any
+    /// work: what, how large, the limit, and what the user can do about it.
+    #[error(
+        "GPU error: {what} takes {:.1} MiB, more than this adapter's largest storage binding \
+         (max_storage_buffer_binding_size = {:.1} MiB); {advice}",
+        mib(*.bytes),
+        mib(*.limit)
+    )]
+    BindingLimit {
+        /// The array.
+        what: String,
+        /// Its size.
+        bytes: u64,
+        /// The adapter's `max_storage_buffer_binding_size`.
+        limit: u64,
+        /// What to do: the command's own remedy ([`Error::with_advice`]).
+        advice: String,
+    },
+
     /// Writing an output file failed: an image, a report, a plot or a composed scene.
     #[error("{path}: cannot write: {message}")]
     Output {
@@ -98,7 +117,28 @@ pub enum Error {
     },
 }
 
+fn mib(bytes: u64) -> f64 {
+    bytes as f64 / (1u64 << 20) as f64
+}
+
 impl Error {
+    /// A [`Error::BindingLimit`] refusal with `advice` in place of the renderer's (the raster
+    /// preview, whose arrays grow with its subdivision, has no `--backend`); other errors as
+    /// they are.
+    pub fn with_advice(self, advice: &str) -> Self {
+        match self {
+            Error::BindingLimit {
+                what, bytes, limit, ..
+            } => Error::BindingLimit {
+                what,
+                bytes,
+                limit,
+                advice: advice.to_string(),
+            },
+            other => other,
+        }
+    }
+
     /// An [`Error::Io`] about `path`.
     pub fn io(path: impl Into<PathBuf>, cause: std::io::Error) -> Self {
         Error::Io {

@@ -151,3 +151,47 @@ fn an_empty_scene_previews_as_its_background() {
         }
     }
 }
+
+/// Fermat reflections whose arrays outgrow the adapter's largest storage binding are refused
+/// before any work, with what, its size, the limit, and the preview's own remedy (a smaller
+/// `--subdivision`; the preview has no `--backend`). 210 pieces an edge make the sphere
+/// scene's 1.5 million reflected triangles, whose vertices take 137 MiB: over lavapipe's
+/// 128 MiB binding; an adapter with larger bindings draws them (the refusal's words are tested
+/// on every adapter through `Error::with_advice`).
+#[test]
+fn reflections_over_the_binding_limit_are_refused_with_the_previews_remedy() {
+    let refusal = chambre::error::Error::BindingLimit {
+        what: "fermat vertices".into(),
+        bytes: 260 << 20,
+        limit: 128 << 20,
+        advice: "render it with --backend cpu".into(),
+    }
+    .with_advice("draw it with a smaller --subdivision")
+    .to_string();
+    assert!(
+        refusal.contains("fermat vertices takes 260.0 MiB")
+            && refusal.contains("= 128.0 MiB")
+            && refusal.ends_with("draw it with a smaller --subdivision"),
+        "{refusal}"
+    );
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    if context.device.limits().max_storage_buffer_binding_size > 256 << 20 {
+        return;
+    }
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fermat_sphere.toml");
+    let scene = Scene::load(&path, &[]).unwrap();
+    let options = chambre::gpu::preview::ReflectionOptions {
+        subdivision: Some(210),
+        ..Default::default()
+    };
+    let result = chambre::gpu::preview::draw_with(&context, &scene, &flatten(&scene), 1, options);
+    let message = result.err().expect("refused").to_string();
+    assert!(
+        message.contains("largest storage binding")
+            && message.contains("--subdivision")
+            && !message.contains("--backend"),
+        "{message}"
+    );
+}

@@ -59,14 +59,14 @@ pub fn describe_adapter(adapter: &wgpu::Adapter) -> String {
 /// The refusal of an array larger than one storage binding may hold on this adapter: what,
 /// how large, the limit, and what to do.
 fn over_binding_limit(what: &str, bytes: u64, limit: u64) -> Error {
-    let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
-    Error::Gpu(format!(
-        "{what} takes {:.1} MiB, more than this adapter's largest storage binding \
-         (max_storage_buffer_binding_size = {:.1} MiB); render it with --backend cpu \
-         (--backend auto falls back to the CPU by itself) or make the scene or image smaller",
-        mib(bytes),
-        mib(limit)
-    ))
+    Error::BindingLimit {
+        what: what.to_string(),
+        bytes,
+        limit,
+        advice: "render it with --backend cpu (--backend auto falls back to the CPU by itself) \
+                 or make the scene or image smaller"
+            .into(),
+    }
 }
 
 /// wgpu's own Display of a validation error is only "Validation Error"; the description

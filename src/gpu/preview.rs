@@ -132,6 +132,12 @@ pub fn draw_with(
     })
 }
 
+/// What to do when the Fermat reflections' arrays outgrow a storage binding: they grow with
+/// the pieces each reflected triangle is cut into (n² per triangle, each vertex solved for each
+/// curved surface).
+const FERMAT_ARRAYS_ADVICE: &str = "draw it with a smaller --subdivision (each reflected \
+     triangle is cut into n² pieces, every vertex solved for each curved surface)";
+
 /// The preview's pipeline, its buffers and its targets: draws a scene's triangles through a
 /// camera (set again with [`PreviewRenderer::set_camera`] as a user composes a shot) into a
 /// linear float image.
@@ -288,7 +294,8 @@ impl PreviewRenderer {
             reflectors(flat),
             &reflected_triangles(flat, extent, options.subdivision),
             options,
-        )?;
+        )
+        .map_err(|e| e.with_advice(FERMAT_ARRAYS_ADVICE))?;
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
                 "creating the preview pipeline: {}",
