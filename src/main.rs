@@ -96,8 +96,8 @@ enum Command {
         /// into (default: enough that none is longer than 1/16 of the scene's radius).
         #[arg(long, value_parser = chambre::bench::positive())]
         subdivision: Option<u32>,
-        /// Curved mirrors' Fermat reflections: the search's steps at most.
-        #[arg(long, value_parser = chambre::bench::positive(), default_value_t = chambre::gpu::preview::ReflectionOptions::default().steps)]
+        /// Curved mirrors' Fermat reflections: the search's steps at most (1 to 1000).
+        #[arg(long, value_parser = chambre::bench::fermat_steps(), default_value_t = chambre::gpu::preview::ReflectionOptions::default().steps)]
         fermat_steps: u32,
         /// Override any scene field, e.g. --set camera.film_tilt=10 (also -D).
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]

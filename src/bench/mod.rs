@@ -68,8 +68,8 @@ pub struct FermatArgs {
     /// Subdivisions of the reflected triangles to compare.
     #[arg(long, value_parser = positive(), value_delimiter = ',', default_values_t = [1, 2, 4, 8, 16, 32])]
     pub subdivisions: Vec<u32>,
-    /// The Fermat search's steps at most.
-    #[arg(long, value_parser = positive(), default_value_t = crate::gpu::preview::ReflectionOptions::default().steps)]
+    /// The Fermat search's steps at most (1 to 1000).
+    #[arg(long, value_parser = fermat_steps(), default_value_t = crate::gpu::preview::ReflectionOptions::default().steps)]
     pub steps: u32,
     /// Timed ray-traced frames after a warm-up.
     #[arg(long, value_parser = positive(), default_value_t = 5)]
@@ -165,6 +165,12 @@ impl Backends {
 /// which flag and why, and exits non-zero).
 pub fn positive() -> clap::builder::RangedI64ValueParser<u32> {
     clap::value_parser!(u32).range(1..)
+}
+
+/// The parser of `--fermat-steps` and `bench fermat --steps`: 1 to
+/// [`crate::gpu::fermat::MAX_FERMAT_STEPS`].
+pub fn fermat_steps() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..=i64::from(crate::gpu::fermat::MAX_FERMAT_STEPS))
 }
 
 /// A count given on the command line that must be at least 1 (a size, a number of runs or

@@ -22,6 +22,12 @@ pub const SEED_STEPS: u32 = 5;
 /// Vertices an invocation group of the kernel takes (its `@workgroup_size`).
 const WORKGROUP: u32 = 64;
 
+/// The Fermat search's steps at most that the command lines take (`--fermat-steps`,
+/// `bench fermat --steps`): the preview's default is 12 and the f64 truth of `bench fermat`
+/// runs 60; more only lets searches that do not converge run on, and far more would meet
+/// lavapipe's silent cut of an invocation's loops at 65,535 iterations.
+pub const MAX_FERMAT_STEPS: u32 = 1000;
+
 /// The fermat kernel's pipelines, one per kind of reflector (`layout::REFLECTOR_*`, the
 /// kernel's `REFLECTOR_KIND`): specialised, a sphere's search carries none of a patch's code
 /// (on lavapipe the general kernel took a sphere's preview frame from 4 to 12 ms).
@@ -63,6 +69,10 @@ impl FermatPass {
     /// Builds the kernel for each of `kinds` of reflector, to take at most `steps` steps
     /// (validation errors surface through the caller's error scope).
     pub fn new(context: &GpuContext, steps: u32, kinds: &[u32]) -> FermatPass {
+        assert!(
+            (1..=MAX_FERMAT_STEPS).contains(&steps),
+            "{steps} Fermat steps: the command lines take 1..={MAX_FERMAT_STEPS}"
+        );
         let mut kinds = kinds.to_vec();
         kinds.sort_unstable();
         kinds.dedup();
