@@ -883,10 +883,20 @@ fn a_failing_progressive_write_stops_the_render_with_its_error() {
 
 /// A count of 0 would measure nothing (NaN rates), or be taken silently as 1 (a subdivision, a
 /// run): every such flag of `preview`, `bench` and `converge` refuses it, naming the flag,
-/// before any scene is loaded or GPU opened.
+/// before any scene is loaded or GPU opened; so is a Fermat step count over 1000.
 #[test]
 fn counts_of_zero_are_refused_with_the_flag_named() {
-    let cases: [&[&str]; 9] = [
+    // Past lavapipe's silent loop cut's reach, Fermat steps are refused too (1..=1000).
+    let too_many_steps = [
+        "preview",
+        "scenes/fermat_sphere.toml",
+        "-o",
+        "x.png",
+        "--fermat-steps",
+        "100000",
+    ];
+    let cases: [&[&str]; 10] = [
+        &too_many_steps,
         &[
             "preview",
             "scenes/fermat_sphere.toml",
