@@ -2,7 +2,7 @@
 // matrix (film tilt, swing and shift as the ray tracer defines them), shaded per fragment with
 // Lambert's BRDF, the ambient term, emission, and every light without shadows (area lights as
 // points at their centres with their cosine falloff).
-// Mirror spheres show Fermat reflections: this pass writes each pixel's reflector id, and
+// Curved mirrors show Fermat reflections: this pass writes each pixel's reflector id, and
 // wgsl/preview_reflect.wgsl draws the reflected triangles where their reflector is seen.
 // Mirrors: src/preview.rs (tessellation, the clip matrix), src/gpu/preview.rs (the pipeline).
 

@@ -1,13 +1,16 @@
 //! The raster preview's GPU side: a wgpu render pipeline (not a compute kernel: it rasterises)
-//! that draws `preview::tessellate`'s triangles through the view camera's clip matrix into a
-//! float target with a depth buffer, and reads the image back. Shader: `wgsl/preview.wgsl`,
-//! composed after the generated constants and the shared struct types, as the kernels are.
+//! that draws `preview::tessellate`'s triangles, indexed, through the view camera's clip matrix
+//! into a float target with a depth buffer, and reads the image back. Shader:
+//! `wgsl/preview.wgsl`, composed after the generated constants and the shared struct types, as
+//! the kernels are.
 //!
-//! Mirror spheres show reflections by Fermat's principle (seed 004), all in one submission a
-//! frame: the `fermat` kernel finds each reflected vertex's point on each sphere, the main pass
-//! writes which reflector each pixel sees (and the sphere's colour as if it reflected the
-//! background), and a reflection pass per sphere rasterises the reflected triangles over the
-//! sphere's pixels (`wgsl/preview_reflect.wgsl`).
+//! Curved mirrors (spheres, tori, ellipsoids, cylinders, Bézier patches) show reflections by
+//! Fermat's principle (seed 004), all in one submission a frame: the `fermat` kernel finds each
+//! reflected vertex's point on each mirror surface (a search each: a teapot has 32) and
+//! `fermat_cull` lists the reflected triangles each shows, the main pass writes which mirror
+//! each pixel sees (and the mirror's colour as if it reflected the background), and the
+//! reflection pass draws each search's listed triangles over its mirror's pixels
+//! (`wgsl/preview_reflect.wgsl`).
 
 use std::time::{Duration, Instant};
 
