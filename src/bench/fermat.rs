@@ -435,7 +435,9 @@ impl FermatReport {
             self.ray_traced_cpu_ms.median,
             self.reference_spp
         );
-        let px = |d: Option<f64>| d.map_or("-".into(), |d| format!("{d:.3}"));
+        let figure =
+            |d: Option<f64>, digits: usize| d.map_or("-".into(), |d| format!("{d:.digits$}"));
+        let px = |d: Option<f64>| figure(d, 3);
         for r in &self.rows {
             out += &format!(
                 "| {} | {} ({}) | {:.2} | {:.1}x | {}/{} | {} | {} | {} | {} | {} |\n",
@@ -450,7 +452,7 @@ impl FermatReport {
                 px(r.displacement_median_px),
                 px(r.displacement_p99_px),
                 px(r.displacement_max_px),
-                r.flip_reflector.map_or("-".into(), |f| format!("{f:.4}"))
+                figure(r.flip_reflector, 4)
             );
         }
         out

@@ -812,7 +812,7 @@ fn shared_positions(triangles: &[PreviewVertex]) -> (Vec<glam::Vec3>, Vec<u32>) 
 /// sphere's or patch's vertex) is shaded once (lavapipe: the teapot's 4,066 triangles 1.55 →
 /// 0.73 ms a frame, `BENCHMARKS.md`). Vertices are equal when their bits are.
 fn indexed(triangles: &[PreviewVertex]) -> (Vec<PreviewVertex>, Vec<u32>) {
-    distinct_by(triangles, |v| bytemuck::bytes_of(v).to_vec())
+    distinct_by(triangles, |v| bytemuck::cast::<PreviewVertex, [u32; 8]>(*v))
 }
 
 /// The first of each class of `items` with equal keys, in order, and per item the index of its
