@@ -97,8 +97,13 @@ enum Command {
         #[arg(long, value_parser = chambre::bench::positive())]
         subdivision: Option<u32>,
         /// Curved mirrors' Fermat reflections: the search's steps at most (1 to 1000).
-        #[arg(long, value_parser = chambre::bench::fermat_steps(), default_value_t = chambre::gpu::preview::ReflectionOptions::default().steps)]
+        #[arg(long, value_parser = chambre::bench::fermat_steps(), default_value_t = chambre::gpu::preview::PreviewOptions::default().steps)]
         fermat_steps: u32,
+        /// How far (pixels on the film) the triangles of a curved shape (sphere, torus,
+        /// ellipsoid, cylinder, Bézier patch) may stray from it: each is cut as coarsely as
+        /// that allows, for the camera that sees it.
+        #[arg(long, value_parser = chambre::bench::tolerance_px, default_value_t = chambre::preview::DEFAULT_TOLERANCE_PX)]
+        tessellation_tolerance: f64,
         /// Override any scene field, e.g. --set camera.film_tilt=10 (also -D).
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -353,16 +358,18 @@ fn main() -> ExitCode {
             save,
             subdivision,
             fermat_steps,
+            tessellation_tolerance,
             set,
         } => {
-            let reflections = chambre::gpu::preview::ReflectionOptions {
+            let options = chambre::gpu::preview::PreviewOptions {
+                tolerance_px: tessellation_tolerance,
                 subdivision,
                 steps: fermat_steps,
                 ..Default::default()
             };
             match (window, output) {
-                (true, _) => run_window(&scene, &set, &keys, screenshot, save, reflections),
-                (false, Some(output)) => run_preview(&scene, &output, frames, &set, reflections),
+                (true, _) => run_window(&scene, &set, &keys, screenshot, save, options),
+                (false, Some(output)) => run_preview(&scene, &output, frames, &set, options),
                 (false, None) => unreachable!("clap requires --output without --window"),
             }
         }
@@ -753,7 +760,7 @@ fn run_preview(
     output: &Path,
     frames: u32,
     overrides: &[String],
-    reflections: chambre::gpu::preview::ReflectionOptions,
+    options: chambre::gpu::preview::PreviewOptions,
 ) -> anyhow::Result<ExitCode> {
     let target = OutputTarget::prepare(output)?;
     let scene = load_and_note(path, overrides)?;
@@ -762,8 +769,12 @@ fn run_preview(
     }
     let flat = flatten(&scene);
     let context = chambre::gpu::GpuContext::new()?;
-    let frame = chambre::gpu::preview::draw_with(&context, &scene, &flat, frames, reflections)?;
+    let frame = chambre::gpu::preview::draw_with(&context, &scene, &flat, frames, options)?;
     target.write(&frame.image)?;
+    if frame.coarse_shapes > 0 {
+        let note = chambre::preview::coarse_note(frame.coarse_shapes, options.tolerance_px);
+        note!("{note}");
+    }
     let reflected = match frame.reflected_triangles {
         0 => String::new(),
         n => format!(" and {n} reflected ({} drawn)", frame.reflected_drawn),
@@ -788,7 +799,7 @@ fn run_window(
     keys: &[String],
     screenshot: Option<PathBuf>,
     save: Option<PathBuf>,
-    reflections: chambre::gpu::preview::ReflectionOptions,
+    drawing: chambre::gpu::preview::PreviewOptions,
 ) -> anyhow::Result<ExitCode> {
     let keys = keys
         .iter()
@@ -820,7 +831,7 @@ fn run_window(
         keys,
         screenshot: screenshot.clone(),
         save,
-        reflections,
+        drawing,
     };
     let report = chambre::gpu::window::run(path, overrides, &scene, &flat, options)?;
     note!(

@@ -886,7 +886,8 @@ fn a_failing_progressive_write_stops_the_render_with_its_error() {
 /// before any scene is loaded or GPU opened; so is a Fermat step count over 1000.
 #[test]
 fn counts_of_zero_are_refused_with_the_flag_named() {
-    // Past lavapipe's silent loop cut's reach, Fermat steps are refused too (1..=1000).
+    // Past lavapipe's silent loop cut's reach, Fermat steps are refused too (1..=1000); a
+    // tessellation tolerance must be a finite number of pixels above 0.
     let too_many_steps = [
         "preview",
         "scenes/fermat_sphere.toml",
@@ -895,8 +896,25 @@ fn counts_of_zero_are_refused_with_the_flag_named() {
         "--fermat-steps",
         "100000",
     ];
-    let cases: [&[&str]; 10] = [
+    let cases: [&[&str]; 13] = [
         &too_many_steps,
+        &[
+            "preview",
+            "scenes/fermat_sphere.toml",
+            "-o",
+            "x.png",
+            "--tessellation-tolerance",
+            "0",
+        ],
+        &[
+            "preview",
+            "scenes/fermat_sphere.toml",
+            "-o",
+            "x.png",
+            "--tessellation-tolerance",
+            "inf",
+        ],
+        &["bench", "fermat", "--tessellation-tolerance", "nan"],
         &[
             "preview",
             "scenes/fermat_sphere.toml",

@@ -238,7 +238,7 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
             (eye.as_vec3(), 1),
             &vertices,
             &triangles,
-            chambre::gpu::preview::ReflectionOptions::default().steps,
+            chambre::gpu::preview::PreviewOptions::default().steps,
         )
         .unwrap();
         // Per vertex: drawn by the twin's judgement, or too close to call.
@@ -320,7 +320,7 @@ fn batching_the_searches_changes_no_pixel() {
             .map(|o| o.to_string())
             .collect();
         let scene = chambre::scene::Scene::load(&path, &overrides).unwrap();
-        let options = chambre::gpu::preview::ReflectionOptions {
+        let options = chambre::gpu::preview::PreviewOptions {
             subdivision: Some(2),
             searches_per_dispatch,
             ..Default::default()
@@ -421,11 +421,12 @@ fn compare_small_with(
         scene: &scene,
         overrides: &overrides,
         subdivisions: &[1, 4],
-        steps: chambre::gpu::preview::ReflectionOptions::default().steps,
+        steps: chambre::gpu::preview::PreviewOptions::default().steps,
         runs: 1,
         frames: 2,
         reference_spp: 32,
         searches_per_dispatch: None,
+        tolerance_px: chambre::preview::DEFAULT_TOLERANCE_PX,
     };
     let report = chambre::bench::fermat::run(&config, context).unwrap();
     eprintln!("{}", report.to_markdown());
@@ -911,7 +912,7 @@ fn mirrors_reflect_each_other_in_the_preview() {
     };
     let preview = |scene: &chambre::scene::Scene| {
         let flat = chambre::pack::flatten(scene);
-        let options = chambre::gpu::preview::ReflectionOptions::default();
+        let options = chambre::gpu::preview::PreviewOptions::default();
         chambre::gpu::preview::draw_with(&context, scene, &flat, 1, options)
             .unwrap()
             .image

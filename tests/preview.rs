@@ -85,8 +85,18 @@ fn silhouettes_land_where_the_ray_traced_pinhole_puts_them() {
         let scene = scene(camera);
         let flat = flatten(&scene);
         let traced = common::render_cpu(&flat);
-        let preview = chambre::gpu::preview::draw(&context, &scene, &flat, 1).unwrap();
+        // Spheres cut finely enough that their facets do not count (0.02 px), and as the
+        // preview cuts them unless told (0.5 px): their silhouettes then shrink by at most that.
+        let draw = |tolerance_px| {
+            let options = chambre::gpu::preview::PreviewOptions {
+                tolerance_px,
+                ..Default::default()
+            };
+            chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options).unwrap()
+        };
+        let (preview, coarse) = (draw(0.02), draw(chambre::preview::DEFAULT_TOLERANCE_PX));
         assert_eq!((preview.image.width, preview.image.height), (96, 64));
+        assert!(coarse.triangles < preview.triangles / 4);
         let projection = scene.camera.raster_projection(100.0);
         for center in [
             DVec3::new(-1.2, 0.9, 0.0),
@@ -110,6 +120,15 @@ fn silhouettes_land_where_the_ray_traced_pinhole_puts_them() {
                 (mass_p - mass_t).abs() < 0.05 * mass_t,
                 "{camera:?}, sphere at {center}: area {mass_p} against {mass_t}"
             );
+            let (mass_c, xc, yc) = blob(&coarse.image, (p.x, p.y), 9.0);
+            let radius = (mass_t / std::f64::consts::PI).sqrt();
+            let shrunk = ((radius - chambre::preview::DEFAULT_TOLERANCE_PX) / radius).powi(2);
+            assert!(
+                mass_c > 0.97 * shrunk * mass_t && mass_c < 1.03 * mass_t,
+                "{camera:?}, sphere at {center} within half a pixel: area {mass_c} against \
+                 {mass_t} ({shrunk:.3} of it at least)"
+            );
+            assert!(((xt - xc).powi(2) + (yt - yc).powi(2)).sqrt() < 0.25);
         }
     }
 }
@@ -182,7 +201,7 @@ fn reflections_over_the_binding_limit_are_refused_with_the_previews_remedy() {
     }
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fermat_sphere.toml");
     let scene = Scene::load(&path, &[]).unwrap();
-    let options = chambre::gpu::preview::ReflectionOptions {
+    let options = chambre::gpu::preview::PreviewOptions {
         subdivision: Some(210),
         ..Default::default()
     };
@@ -193,5 +212,40 @@ fn reflections_over_the_binding_limit_are_refused_with_the_previews_remedy() {
             && message.contains("--subdivision")
             && !message.contains("--backend"),
         "{message}"
+    );
+}
+
+/// A camera that comes nearer a curved shape gets it cut finer, and the window's renderer,
+/// re-cutting on the camera change, draws what a preview made for that camera draws.
+#[test]
+fn curved_shapes_are_cut_anew_when_the_camera_comes_nearer() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let far = scene("");
+    let mut near = scene("");
+    near.camera.position = DVec3::new(0.0, 0.5, 2.0);
+    let options = chambre::gpu::preview::PreviewOptions::default();
+    let mut moved =
+        chambre::gpu::preview::PreviewRenderer::new(&context, &far, &flatten(&far), options)
+            .unwrap();
+    let triangles_far = moved.triangles();
+    moved.set_camera(&near.camera);
+    moved.draw().unwrap();
+    let made =
+        chambre::gpu::preview::PreviewRenderer::new(&context, &near, &flatten(&near), options)
+            .unwrap();
+    made.draw().unwrap();
+    assert!(
+        moved.triangles() > 2 * triangles_far,
+        "{} against {triangles_far}",
+        moved.triangles()
+    );
+    assert_eq!(moved.triangles(), made.triangles());
+    assert_eq!(moved.coarse_shapes(), 0);
+    let (a, b) = (moved.image().unwrap(), made.image().unwrap());
+    assert!(
+        a.pixels == b.pixels,
+        "the re-cut preview differs from one made for its camera"
     );
 }

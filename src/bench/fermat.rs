@@ -29,12 +29,12 @@ use crate::fermat::{
     seen_from_outside,
 };
 use crate::gpu::GpuContext;
-use crate::gpu::preview::{ReflectionOptions, draw_with, extent_and_far};
+use crate::gpu::preview::{PreviewOptions, draw_with, extent_and_far};
 use crate::gpu::render::PathKernels;
 use crate::layout::{FEATURES_ALL, NONE, T_FAR};
 use crate::pack::{FlatScene, flatten};
 use crate::preview::{
-    MirrorSurface, Reflector, clip_matrix, grid_point, reflectors, sub_triangle, tessellate,
+    Detail, MirrorSurface, Reflector, clip_matrix, grid_point, reflectors, sub_triangle, tessellate,
 };
 use crate::render::Image;
 use crate::scene::Scene;
@@ -50,6 +50,10 @@ const POINT_OFFSET: f32 = 0.382;
 pub struct FermatRow {
     /// Pieces each reflected triangle's edge is cut into.
     pub subdivision: u32,
+    /// The main pass's triangles (curved shapes cut within the tolerance).
+    pub triangles: usize,
+    /// Coarse shapes: curved shapes that stray further than the tolerance at their finest.
+    pub coarse_shapes: usize,
     /// Reflected triangles a frame, summed over the mirror's searches (what the cull considers).
     pub reflected_triangles: usize,
     /// Of those, the ones drawn (the cull's lists).
@@ -86,6 +90,8 @@ pub struct FermatReport {
     pub height: u32,
     /// The Fermat search's steps at most.
     pub steps: u32,
+    /// How far (pixels) the preview's triangles may stray from a curved shape.
+    pub tolerance_px: f64,
     /// The ray-traced frame at 1 sample per pixel on the GPU (the preview's device),
     /// milliseconds.
     pub ray_traced_gpu_ms: Spread,
@@ -114,8 +120,11 @@ pub struct FermatConfig<'a> {
     pub frames: u32,
     /// Samples per pixel of the ray-traced reference.
     pub reference_spp: u32,
-    /// Searches solved in one dispatch at most (`ReflectionOptions::searches_per_dispatch`).
+    /// Searches solved in one dispatch at most (`PreviewOptions::searches_per_dispatch`).
     pub searches_per_dispatch: Option<usize>,
+    /// How far (pixels) the preview's triangles may stray from a curved shape
+    /// (`PreviewOptions::tolerance_px`).
+    pub tolerance_px: f64,
 }
 
 /// Runs the comparison on `context`'s device.
@@ -168,7 +177,8 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
     let mask = reflector_mask(&flat, &clip, &reflector);
     let mut rows = Vec::new();
     for &subdivision in config.subdivisions {
-        let options = ReflectionOptions {
+        let options = PreviewOptions {
+            tolerance_px: config.tolerance_px,
             subdivision: Some(subdivision),
             steps: config.steps,
             searches_per_dispatch: config.searches_per_dispatch,
@@ -188,6 +198,8 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
         };
         rows.push(FermatRow {
             subdivision,
+            triangles: frame.triangles,
+            coarse_shapes: frame.coarse_shapes,
             reflected_triangles: frame.reflected_triangles,
             reflected_drawn: frame.reflected_drawn,
             preview_ms: Spread::of(&frame.frame_times_ms),
@@ -205,6 +217,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
         width,
         height,
         steps: config.steps,
+        tolerance_px: config.tolerance_px,
         ray_traced_gpu_ms: Spread::of(&gpu_ms),
         ray_traced_cpu_ms: Spread::of(&cpu_ms),
         reference_spp: config.reference_spp,
@@ -232,7 +245,7 @@ fn displacements(
     flat: &FlatScene,
     reflector: &Reflector,
     clip: &DMat4,
-    options: ReflectionOptions,
+    options: PreviewOptions,
 ) -> Result<Vec<(bool, Option<f64>)>> {
     let (width, height) = (flat.frame.width, flat.frame.height);
     let eye = crate::gpu::preview::eye_of(&scene.camera);
@@ -241,7 +254,8 @@ fn displacements(
     let mut features = Vec::new();
     let mut corners = Vec::new();
     let (extent, _) = extent_and_far(scene, flat);
-    for t in tessellate(flat, extent).chunks_exact(3) {
+    let detail = Detail::new(*clip, (width, height), options.tolerance_px);
+    for t in tessellate(flat, extent, &detail).chunks_exact(3) {
         if t[0].reflector != 0 {
             continue;
         }
@@ -421,16 +435,18 @@ impl FermatReport {
     pub fn to_markdown(&self) -> String {
         let gpu = self.ray_traced_gpu_ms.median;
         let mut out = format!(
-            "Fermat reflections against the ray tracer: {} ({}x{}), at most {} steps\n\n\
+            "Fermat reflections against the ray tracer: {} ({}x{}), at most {} steps, curved \
+             shapes within {} px\n\n\
              Ray-traced frame, 1 spp: GPU {:.2} ms, CPU {:.2} ms (median of runs)\n\n\
-             | subdivision | reflected triangles (drawn) | preview (ms) | ray-traced GPU / preview | \
+             | subdivision | triangles | reflected triangles (drawn) | preview (ms) | ray-traced GPU / preview | \
              features drawn | corners: max (px) | all features: median (px) | p99 (px) | \
              max (px) | FLIP of the mirror's pixels vs {} spp |\n\
-             |---|---|---|---|---|---|---|---|---|---|\n",
+             |---|---|---|---|---|---|---|---|---|---|---|\n",
             self.scene,
             self.width,
             self.height,
             self.steps,
+            self.tolerance_px,
             gpu,
             self.ray_traced_cpu_ms.median,
             self.reference_spp
@@ -440,8 +456,9 @@ impl FermatReport {
         let px = |d: Option<f64>| figure(d, 3);
         for r in &self.rows {
             out += &format!(
-                "| {} | {} ({}) | {:.2} | {:.1}x | {}/{} | {} | {} | {} | {} | {} |\n",
+                "| {} | {} | {} ({}) | {:.2} | {:.1}x | {}/{} | {} | {} | {} | {} | {} |\n",
                 r.subdivision,
+                r.triangles,
                 r.reflected_triangles,
                 r.reflected_drawn,
                 r.preview_ms.median,

@@ -69,7 +69,7 @@ pub struct FermatArgs {
     #[arg(long, value_parser = positive(), value_delimiter = ',', default_values_t = [1, 2, 4, 8, 16, 32])]
     pub subdivisions: Vec<u32>,
     /// The Fermat search's steps at most (1 to 1000).
-    #[arg(long, value_parser = fermat_steps(), default_value_t = crate::gpu::preview::ReflectionOptions::default().steps)]
+    #[arg(long, value_parser = fermat_steps(), default_value_t = crate::gpu::preview::PreviewOptions::default().steps)]
     pub steps: u32,
     /// Timed ray-traced frames after a warm-up.
     #[arg(long, value_parser = positive(), default_value_t = 5)]
@@ -85,6 +85,9 @@ pub struct FermatArgs {
     /// batched them.
     #[arg(long, value_parser = at_least_one)]
     pub searches_per_dispatch: Option<usize>,
+    /// How far (pixels on the film) the preview's triangles may stray from a curved shape.
+    #[arg(long, value_parser = tolerance_px, default_value_t = crate::preview::DEFAULT_TOLERANCE_PX)]
+    pub tessellation_tolerance: f64,
     /// Override any scene field, e.g. --set render.width=640 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,
@@ -179,6 +182,16 @@ pub fn at_least_one(text: &str) -> std::result::Result<usize, String> {
     match text.parse::<usize>() {
         Ok(0) => Err("must be at least 1".into()),
         Ok(n) => Ok(n),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// The parser of `--tessellation-tolerance`: a finite number of pixels above 0 (0 would ask
+/// every curved shape for its finest grid, and say each strays too far).
+pub fn tolerance_px(text: &str) -> std::result::Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(px) if px.is_finite() && px > 0.0 => Ok(px),
+        Ok(_) => Err("must be a number of pixels above 0".into()),
         Err(e) => Err(e.to_string()),
     }
 }
@@ -456,6 +469,7 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 frames: args.frames,
                 reference_spp: args.reference_spp,
                 searches_per_dispatch: args.searches_per_dispatch,
+                tolerance_px: args.tessellation_tolerance,
             };
             let report = fermat::run(&config, usable(&context)?)?;
             finish(

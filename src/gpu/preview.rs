@@ -23,8 +23,9 @@ use crate::error::{Error, Result};
 use crate::layout::{GpuDrawArgs, GpuReflector, wgsl_prelude};
 use crate::pack::FlatScene;
 use crate::preview::{
-    MirrorSurface, PreviewUniforms, PreviewVertex, Reflector, ReflectorPass, bounded_radius,
-    clip_matrix, reflected_triangles, reflectors, tessellate,
+    CurvedShapes, DEFAULT_TOLERANCE_PX, Detail, Grid, MirrorSurface, PreviewUniforms,
+    PreviewVertex, Reflector, ReflectorPass, bounded_radius, clip_matrix, flat_triangles,
+    reflected_triangles, reflectors,
 };
 use crate::render::Image;
 use crate::scene::Scene;
@@ -36,9 +37,13 @@ const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// from the eye it sees it at.
 const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 
-/// How the preview draws the reflections of curved mirrors.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ReflectionOptions {
+/// How the preview draws: how finely it cuts curved shapes, and the reflections of curved
+/// mirrors.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PreviewOptions {
+    /// How far (pixels on the film) the triangles of a curved shape may stray from it
+    /// (`preview::Detail`).
+    pub tolerance_px: f64,
     /// Pieces each edge of a reflected triangle is cut into; `None`: as many as keep every
     /// piece under 1/16 of the scene's radius (`preview::reflected_triangles`).
     pub subdivision: Option<u32>,
@@ -50,11 +55,13 @@ pub struct ReflectionOptions {
     pub searches_per_dispatch: Option<usize>,
 }
 
-impl Default for ReflectionOptions {
-    /// Automatic subdivision; 12 steps, where the seed's 5 leave 13% of a fine floor's
-    /// vertices unconverged (holes in the reflection) and 12 leave 0.5% (docs/fermat.md).
-    fn default() -> ReflectionOptions {
-        ReflectionOptions {
+impl Default for PreviewOptions {
+    /// Curved shapes within half a pixel; automatic subdivision; 12 steps, where the seed's 5
+    /// leave 13% of a fine floor's vertices unconverged (holes in the reflection) and 12 leave
+    /// 0.5% (docs/fermat.md).
+    fn default() -> PreviewOptions {
+        PreviewOptions {
+            tolerance_px: DEFAULT_TOLERANCE_PX,
             subdivision: None,
             steps: 12,
             searches_per_dispatch: None,
@@ -78,6 +85,9 @@ pub struct PreviewFrame {
     pub reflected_triangles: usize,
     /// Of those, the ones the last frame drew: the cull's lists.
     pub reflected_drawn: usize,
+    /// Curved shapes cut as finely as allowed that still stray further than the tolerance (or
+    /// reach the eye's plane).
+    pub coarse_shapes: usize,
 }
 
 /// The shader's source: constants, the shared types, the preview's stages and its reflection
@@ -104,7 +114,7 @@ pub fn draw(
     flat: &FlatScene,
     frames: u32,
 ) -> Result<PreviewFrame> {
-    draw_with(context, scene, flat, frames, ReflectionOptions::default())
+    draw_with(context, scene, flat, frames, PreviewOptions::default())
 }
 
 /// [`draw`], with reflections drawn as `options` say.
@@ -113,7 +123,7 @@ pub fn draw_with(
     scene: &Scene,
     flat: &FlatScene,
     frames: u32,
-    options: ReflectionOptions,
+    options: PreviewOptions,
 ) -> Result<PreviewFrame> {
     let renderer = PreviewRenderer::new(context, scene, flat, options)?;
     renderer.draw()?;
@@ -132,6 +142,7 @@ pub fn draw_with(
         frame_times_ms,
         reflected_triangles: renderer.reflected_triangles(),
         reflected_drawn: renderer.reflected_drawn()?,
+        coarse_shapes: renderer.coarse_shapes(),
     })
 }
 
@@ -147,9 +158,13 @@ const FERMAT_ARRAYS_ADVICE: &str = "draw it with a smaller --subdivision (each r
 pub struct PreviewRenderer {
     context: GpuContext,
     pipeline: wgpu::RenderPipeline,
-    vertex_buffer: wgpu::Buffer,
-    index_buffer: wgpu::Buffer,
-    index_count: u32,
+    /// The triangles, quads and planes, drawn as they are whatever the camera.
+    flat_mesh: Option<MainMesh>,
+    /// The curved shapes, cut anew when the camera asks for other grids.
+    curved_mesh: Option<MainMesh>,
+    curved: CurvedShapes,
+    grids: Vec<Grid>,
+    tolerance_px: f64,
     uniform_buffer: wgpu::Buffer,
     uniforms: PreviewUniforms,
     far: f64,
@@ -169,15 +184,18 @@ impl PreviewRenderer {
         context: &GpuContext,
         scene: &Scene,
         flat: &FlatScene,
-        options: ReflectionOptions,
+        options: PreviewOptions,
     ) -> Result<PreviewRenderer> {
         let device = &context.device;
         let (width, height) = (flat.frame.width, flat.frame.height);
         let eye = eye_of(&scene.camera);
         let (extent, far) = extent_and_far(scene, flat);
-        let vertices = tessellate(flat, extent);
+        let clip = clip_matrix(&scene.camera, far);
+        let detail = Detail::new(clip, (width, height), options.tolerance_px);
+        let curved = CurvedShapes::of(flat);
+        let grids = curved.grids(&detail);
         let uniforms = PreviewUniforms {
-            clip: clip_matrix(&scene.camera, far).as_mat4().to_cols_array_2d(),
+            clip: clip.as_mat4().to_cols_array_2d(),
             light_count: flat.frame.light_count,
             ambient: [
                 flat.frame.ambient[0],
@@ -213,17 +231,8 @@ impl PreviewRenderer {
             &[Some(vertex_layout)],
             &[Some(COLOR_FORMAT.into()), Some(ID_FORMAT.into())],
         );
-        let (distinct, indices) = indexed(&vertices);
-        let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("preview vertices"),
-            contents: bytemuck::cast_slice(&distinct),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let index_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("preview indices"),
-            contents: bytemuck::cast_slice(&indices),
-            usage: wgpu::BufferUsages::INDEX,
-        });
+        let flat_mesh = MainMesh::new(device, &flat_triangles(flat, extent));
+        let curved_mesh = MainMesh::new(device, &curved.triangles(&grids));
         let uniform_buffer =
             context.uniform_buffer("preview uniforms", bytemuck::bytes_of(&uniforms));
         let materials =
@@ -295,7 +304,7 @@ impl PreviewRenderer {
                 size,
             },
             reflectors(flat),
-            &reflected_triangles(flat, extent, options.subdivision),
+            &reflected_triangles(flat, extent, &detail, options.subdivision),
             options,
         )
         .map_err(|e| e.with_advice(FERMAT_ARRAYS_ADVICE))?;
@@ -309,9 +318,11 @@ impl PreviewRenderer {
         Ok(PreviewRenderer {
             context: context.clone(),
             pipeline,
-            vertex_buffer,
-            index_buffer,
-            index_count: indices.len() as u32,
+            flat_mesh,
+            curved_mesh,
+            curved,
+            grids,
+            tolerance_px: options.tolerance_px,
             uniform_buffer,
             uniforms,
             far,
@@ -325,10 +336,20 @@ impl PreviewRenderer {
         })
     }
 
-    /// Draws through `camera` from now on (the scene's geometry and lights stay).
+    /// Draws through `camera` from now on (the scene's geometry and lights stay; its curved
+    /// shapes are cut anew where the camera needs other grids, the reflected ones stay as the
+    /// first camera had them).
     pub fn set_camera(&mut self, camera: &CameraSpec) {
         let eye = eye_of(camera);
-        self.uniforms.clip = clip_matrix(camera, self.far).as_mat4().to_cols_array_2d();
+        let clip = clip_matrix(camera, self.far);
+        let grids = self
+            .curved
+            .grids(&Detail::new(clip, self.image_size(), self.tolerance_px));
+        if grids != self.grids {
+            self.curved_mesh = MainMesh::new(&self.context.device, &self.curved.triangles(&grids));
+            self.grids = grids;
+        }
+        self.uniforms.clip = clip.as_mat4().to_cols_array_2d();
         self.uniforms.eye = [eye.x, eye.y, eye.z, 0.0];
         self.context.queue.write_buffer(
             &self.uniform_buffer,
@@ -361,13 +382,10 @@ impl PreviewRenderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            // A scene without shapes draws the background only (wgpu refuses an empty slice).
-            if self.index_count > 0 {
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &self.bind_group, &[]);
-                pass.set_vertex_buffer(0, self.vertex_buffer.slice(..));
-                pass.set_index_buffer(self.index_buffer.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..self.index_count, 0, 0..1);
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            for mesh in [&self.flat_mesh, &self.curved_mesh].into_iter().flatten() {
+                mesh.draw(&mut pass);
             }
         }
         if let Some(reflections) = &self.reflections {
@@ -396,7 +414,17 @@ impl PreviewRenderer {
 
     /// Triangles drawn a frame.
     pub fn triangles(&self) -> usize {
-        self.index_count as usize / 3
+        [&self.flat_mesh, &self.curved_mesh]
+            .into_iter()
+            .flatten()
+            .map(|mesh| mesh.index_count as usize / 3)
+            .sum()
+    }
+
+    /// Curved shapes cut as finely as allowed that still stray further than the tolerance (or
+    /// reach the eye's plane).
+    pub fn coarse_shapes(&self) -> usize {
+        self.grids.iter().filter(|g| !g.within).count()
     }
 
     /// The reflected triangles the last frame drew, summed over the searches (the cull's
@@ -424,6 +452,50 @@ impl PreviewRenderer {
         self.reflections
             .as_ref()
             .map_or(0, |r| r.vertex_count as usize / 3 * r.searches.len())
+    }
+}
+
+/// Triangles of the main pass, drawn indexed.
+struct MainMesh {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+}
+
+impl MainMesh {
+    /// `triangles` in a vertex and an index buffer; `None` for none (wgpu refuses an empty
+    /// slice: a scene without shapes draws the background only).
+    fn new(device: &wgpu::Device, triangles: &[PreviewVertex]) -> Option<MainMesh> {
+        if triangles.is_empty() {
+            return None;
+        }
+        let (distinct, indices) = indexed(triangles);
+        let buffer = |label, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        Some(MainMesh {
+            vertices: buffer(
+                "preview vertices",
+                bytemuck::cast_slice(&distinct),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            indices: buffer(
+                "preview indices",
+                bytemuck::cast_slice(&indices),
+                wgpu::BufferUsages::INDEX,
+            ),
+            index_count: indices.len() as u32,
+        })
+    }
+
+    fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..self.index_count, 0, 0..1);
     }
 }
 
@@ -468,7 +540,7 @@ impl Reflections {
         setup: &ReflectionSetup,
         reflectors: Vec<Reflector>,
         triangles: &[PreviewVertex],
-        options: ReflectionOptions,
+        options: PreviewOptions,
     ) -> Result<Option<Reflections>> {
         if reflectors.is_empty() || triangles.is_empty() {
             return Ok(None);

@@ -19,7 +19,7 @@ use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use super::GpuContext;
-use super::preview::{PreviewRenderer, ReflectionOptions};
+use super::preview::{PreviewOptions, PreviewRenderer};
 use crate::error::{Error, Result};
 use crate::output::OutputTarget;
 use crate::pack::FlatScene;
@@ -35,8 +35,8 @@ pub struct WindowOptions {
     pub screenshot: Option<PathBuf>,
     /// Where `s` saves the composed scene.
     pub save: PathBuf,
-    /// How curved mirrors' reflections are drawn.
-    pub reflections: ReflectionOptions,
+    /// How the preview draws (curved shapes' tolerance, mirrors' reflections).
+    pub drawing: PreviewOptions,
 }
 
 /// What happened in the window.
@@ -84,7 +84,7 @@ pub fn run(
         script: options.keys.into_iter().rev().collect(),
         scripted: false,
         save: options.save,
-        reflections: options.reflections,
+        drawing: options.drawing,
         screen: None,
         report: WindowReport::default(),
         error: None,
@@ -126,7 +126,7 @@ struct App<'a> {
     /// A script was given: the window closes when it ends.
     scripted: bool,
     save: PathBuf,
-    reflections: ReflectionOptions,
+    drawing: PreviewOptions,
     screen: Option<Screen>,
     report: WindowReport,
     error: Option<Error>,
@@ -191,7 +191,9 @@ impl App<'_> {
             ComposeAction::Changed => {
                 println!("{}", self.composer.figures());
                 if let Some(screen) = &mut self.screen {
+                    let coarse = screen.preview.coarse_shapes();
                     screen.preview.set_camera(&self.composer.camera());
+                    note_coarse_shapes(&screen.preview, coarse, self.drawing.tolerance_px);
                     screen.window.request_redraw();
                 }
             }
@@ -258,8 +260,9 @@ impl App<'_> {
             config.format = srgb;
         }
         surface.configure(&context.device, &config);
-        let mut preview = PreviewRenderer::new(&context, self.scene, self.flat, self.reflections)?;
+        let mut preview = PreviewRenderer::new(&context, self.scene, self.flat, self.drawing)?;
         preview.set_camera(&self.composer.camera());
+        note_coarse_shapes(&preview, 0, self.drawing.tolerance_px);
         let (present, present_layout) = present_pipeline(&context, config.format);
         let present_uniforms = context.uniform_buffer(
             "present uniforms",
@@ -452,4 +455,13 @@ fn present_pipeline(
         cache: None,
     });
     (pipeline, layout)
+}
+
+/// Says so when the preview's curved shapes stray further than the tolerance, and their count
+/// was `before` (not said again while it stays).
+fn note_coarse_shapes(preview: &PreviewRenderer, before: usize, tolerance_px: f64) {
+    let now = preview.coarse_shapes();
+    if now > 0 && now != before {
+        eprintln!("{}", crate::preview::coarse_note(now, tolerance_px));
+    }
 }

@@ -92,19 +92,54 @@ impl Surface {
     /// The surface as a mesh of `round` quads around and across a round surface, `patch`
     /// quads along each side of a patch.
     pub fn mesh_of(&self, round: [u32; 2], patch: u32) -> TriangleMesh {
-        use std::f64::consts::{PI, TAU};
-        match self {
-            Surface::Torus(torus) => grid_mesh(torus, round, Across::Around(TAU), true),
-            Surface::Patches(patches) => patches_mesh(patches, patch),
-            Surface::Ellipsoid(e) => grid_mesh(e, round, Across::Span(0.0, PI), false),
-            Surface::Cylinder { cylinder, height } => {
-                grid_mesh(cylinder, round, Across::Span(0.0, *height), true)
-            }
+        match (self, self.round_grid()) {
+            (Surface::Patches(patches), _) => patches_mesh(patches, patch),
+            (_, Some(grid)) => grid_mesh(grid.surface, round, grid.across, grid.inward),
+            (_, None) => unreachable!("every surface but patches is round"),
         }
+    }
+
+    /// How `mesh_of` grids a round surface (a torus, ellipsoid or cylinder); `None` for
+    /// patches, each gridded over its own unit square.
+    pub fn round_grid(&self) -> Option<RoundGrid<'_>> {
+        use std::f64::consts::{PI, TAU};
+        let (surface, across, inward): (&dyn Reflector, _, _) = match self {
+            Surface::Patches(_) => return None,
+            Surface::Torus(torus) => (torus, Across::Around(TAU), true),
+            Surface::Ellipsoid(e) => (e, Across::Span(0.0, PI), false),
+            Surface::Cylinder { cylinder, height } => (cylinder, Across::Span(0.0, *height), true),
+        };
+        Some(RoundGrid {
+            surface,
+            across,
+            inward,
+        })
+    }
+}
+
+/// A round surface as `Surface::mesh_of` grids it: u once around its axis (period 2π), v
+/// across.
+#[derive(Clone, Copy)]
+pub struct RoundGrid<'a> {
+    /// The surface's point and normal functions.
+    pub surface: &'a dyn Reflector,
+    across: Across,
+    inward: bool,
+}
+
+impl RoundGrid<'_> {
+    /// The parameter rectangle gridded: its lowest and highest (u, v).
+    pub fn span(&self) -> [DVec2; 2] {
+        let (from, to) = match self.across {
+            Across::Around(period) => (0.0, period),
+            Across::Span(from, to) => (from, to),
+        };
+        [DVec2::new(0.0, from), DVec2::new(std::f64::consts::TAU, to)]
     }
 }
 
 /// How a round surface's v runs: around a closed curve of this period, or over a span.
+#[derive(Clone, Copy)]
 enum Across {
     Around(f64),
     Span(f64, f64),
@@ -114,7 +149,7 @@ enum Across {
 /// outward normals at the vertices; triangles that collapse (an ellipsoid's poles) are left
 /// out. `inward` says that f_u × f_v points into the surface: the triangles are then wound the
 /// other way, so that their geometric normals point out as the vertex normals do.
-fn grid_mesh(surface: &impl Reflector, quads: [u32; 2], v: Across, inward: bool) -> TriangleMesh {
+fn grid_mesh(surface: &dyn Reflector, quads: [u32; 2], v: Across, inward: bool) -> TriangleMesh {
     let [nu, nv] = quads;
     let rows = match v {
         Across::Around(_) => nv,

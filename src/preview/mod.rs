@@ -1,5 +1,6 @@
 //! The raster preview's CPU side (`chambre preview`): the scene's primitives as triangles for
-//! wgpu's render pipeline (spheres and quads tessellated, planes as large quads), and the view
+//! wgpu's render pipeline (`tessellate`: curved shapes cut as finely as the camera needs, quads
+//! as two triangles, planes as large quads), and the view
 //! camera's projection as the ray tracer defines it (`CameraSpec::raster_projection`: film tilt,
 //! swing and shift are a rotation of the view and an off-axis frustum). The GPU side is
 //! `gpu::preview`, its shader `wgsl/preview.wgsl`.
@@ -18,12 +19,20 @@ use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 use crate::camera::CameraSpec;
 use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use crate::layout::{
-    GpuPrimitive, GpuReflector, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE,
-    REFLECTOR_CYLINDER, REFLECTOR_ELLIPSOID, REFLECTOR_PATCH, REFLECTOR_SPHERE, REFLECTOR_TORUS,
+    GpuReflector, PRIM_SPHERE, REFLECTOR_CYLINDER, REFLECTOR_ELLIPSOID, REFLECTOR_PATCH,
+    REFLECTOR_SPHERE, REFLECTOR_TORUS,
 };
 use crate::pack::FlatScene;
 use crate::scene::Scene;
 use crate::scene::surface::Surface;
+
+mod tessellate;
+
+use tessellate::vertex;
+pub use tessellate::{
+    CurvedShapes, DEFAULT_TOLERANCE_PX, Detail, Grid, PATCH_QUADS, ROUND_QUADS, SurfaceAt,
+    coarse_note, fitting_grid, flat_triangles, grid_deviation, tessellate,
+};
 
 /// One vertex of the preview's triangle list.
 #[repr(C)]
@@ -40,18 +49,6 @@ pub struct PreviewVertex {
     /// visible (the Fermat pass's second level of hidden-surface removal).
     pub reflector: u32,
 }
-
-/// Segments around a tessellated sphere (and half as many from pole to pole).
-pub const SPHERE_SEGMENTS: u32 = 64;
-
-/// Quads around a torus's axis and its tube (an ellipsoid's or cylinder's axis and meridian)
-/// in the preview: a torus within (R + r)(1 − cos(π/64)) ≈ 1.2e-3 (R + r) (the ray tracers
-/// intersect it exactly).
-pub const PREVIEW_ROUND_QUADS: [u32; 2] = [64, 32];
-
-/// Quads along each side of a Bézier patch in the preview (`scene::surface::PATCH_QUADS` in
-/// the ray tracers' mesh).
-pub const PREVIEW_PATCH_QUADS: u32 = 8;
 
 /// The preview's uniforms: the clip matrix and what shading needs of the frame.
 #[repr(C)]
@@ -89,52 +86,6 @@ pub struct ReflectorPass {
     pub solves: u32,
     /// Padding to the WGSL layout.
     pub _pad: [u32; 3],
-}
-
-/// Every bounded primitive and plane of `scene` as triangles; `extent` sizes the planes (they
-/// reach `extent` from their point each way).
-pub fn tessellate(scene: &FlatScene, extent: f32) -> Vec<PreviewVertex> {
-    let end = (scene.frame.plane_start + scene.frame.plane_count) as usize;
-    let tags = reflector_tags(scene, &reflectors(scene));
-    // A parametric surface's fine mesh is the ray tracers'; the preview draws a coarser one.
-    let mut on_surface = vec![false; scene.prims.len()];
-    let mut vertices = Vec::new();
-    for s in &scene.surfaces {
-        s.prims.iter().for_each(|&p| on_surface[p as usize] = true);
-        let Some(&first) = s.prims.first() else {
-            continue;
-        };
-        let (material, tag) = (scene.prims[first as usize].material, tags[first as usize]);
-        let mesh = s.surface.mesh_of(PREVIEW_ROUND_QUADS, PREVIEW_PATCH_QUADS);
-        let normals = mesh.normals.as_deref().unwrap_or_default();
-        for t in &mesh.triangles {
-            for &k in t {
-                let (p, n) = (mesh.positions[k as usize], normals[k as usize]);
-                vertices.push(PreviewVertex {
-                    reflector: tag,
-                    ..vertex(p, n, material)
-                });
-            }
-        }
-    }
-    for (i, p) in scene.prims[..end].iter().enumerate() {
-        if on_surface[i] {
-            continue;
-        }
-        let normals = scene.normals.get(p.normals as usize);
-        let first = vertices.len();
-        match p.kind {
-            PRIM_TRIANGLE => triangle(&mut vertices, p, normals.map(|n| n.n)),
-            PRIM_QUAD => quad(&mut vertices, p),
-            PRIM_SPHERE => sphere(&mut vertices, p),
-            PRIM_PLANE => plane(&mut vertices, p, extent),
-            _ => unreachable!("primitive {i} of kind {}", p.kind),
-        }
-        for v in &mut vertices[first..] {
-            v.reflector = tags[i];
-        }
-    }
-    vertices
 }
 
 /// A curved mirror the preview reflects in by Fermat's principle.
@@ -289,9 +240,10 @@ fn reflector_tags(scene: &FlatScene, reflectors: &[Reflector]) -> Vec<u32> {
     tags
 }
 
-/// The triangles the reflectors reflect: every triangle of `tessellate` that is not on a
-/// reflector, each cut into n² triangles (and, where the scene has several curved mirrors,
-/// theirs uncut: each mirror reflects the others once, showing them as the main pass does) (n pieces along each edge): n = `subdivision`, or
+/// The triangles the reflectors reflect: every triangle of `tessellate` (curved shapes cut for
+/// `detail`) that is not on a reflector, each cut into n² triangles, n pieces along each edge
+/// (and, where the scene has several curved mirrors, theirs uncut: each mirror reflects the
+/// others once, showing them as the main pass does): n = `subdivision`, or
 /// where it is `None`, the fewest pieces that leave no edge longer than `AUTO_PIECE` of the
 /// scene's radius (at most `MAX_AUTO_PIECES`). The raster pipeline draws a reflected triangle
 /// straight between its vertices' reflection points, where the true reflection of a straight
@@ -300,12 +252,13 @@ fn reflector_tags(scene: &FlatScene, reflectors: &[Reflector]) -> Vec<u32> {
 pub fn reflected_triangles(
     scene: &FlatScene,
     extent: f32,
+    detail: &Detail,
     subdivision: Option<u32>,
 ) -> Vec<PreviewVertex> {
     let longest = AUTO_PIECE * bounded_radius(scene);
     let several_mirrors = reflectors(scene).len() > 1;
     let mut out = Vec::new();
-    for t in tessellate(scene, extent).chunks_exact(3) {
+    for t in tessellate(scene, extent, detail).chunks_exact(3) {
         if t[0].reflector != 0 {
             // A mirror's triangles, already fine, are reflected in the other mirrors as they
             // are (its own reflection pass leaves them out); a lone mirror reflects none.
@@ -369,80 +322,6 @@ pub fn sub_triangle(a: f32, b: f32, n: u32) -> ([(u32, u32); 3], [f32; 3]) {
             [(i + 1, j), (i + 1, j + 1), (i, j + 1)],
             [1.0 - fb, fa + fb - 1.0, 1.0 - fa],
         )
-    }
-}
-
-fn vertex(position: Vec3, normal: Vec3, material: u32) -> PreviewVertex {
-    PreviewVertex {
-        position: position.to_array(),
-        material,
-        normal: normal.to_array(),
-        reflector: 0,
-    }
-}
-
-fn triangle(out: &mut Vec<PreviewVertex>, p: &GpuPrimitive, normals: Option<[f32; 9]>) {
-    let [a, b, c] = [p.p0, p.p1, p.p2].map(Vec3::from);
-    let face = (b - a).cross(c - a).normalize_or_zero();
-    for (k, v) in [a, b, c].into_iter().enumerate() {
-        let n = normals.map_or(face, |n| Vec3::from_slice(&n[3 * k..3 * k + 3]));
-        out.push(vertex(v, n, p.material));
-    }
-}
-
-fn quad(out: &mut Vec<PreviewVertex>, p: &GpuPrimitive) {
-    let [corner, u, v] = [p.p0, p.p1, p.p2].map(Vec3::from);
-    let n = u.cross(v).normalize_or_zero();
-    for point in [
-        corner,
-        corner + u,
-        corner + u + v,
-        corner,
-        corner + u + v,
-        corner + v,
-    ] {
-        out.push(vertex(point, n, p.material));
-    }
-}
-
-fn sphere(out: &mut Vec<PreviewVertex>, p: &GpuPrimitive) {
-    let (centre, radius) = (Vec3::from(p.p0), p.p1[0]);
-    let (around, down) = (SPHERE_SEGMENTS, SPHERE_SEGMENTS / 2);
-    let at = |i: u32, j: u32| {
-        let phi = std::f32::consts::TAU * i as f32 / around as f32;
-        let theta = std::f32::consts::PI * j as f32 / down as f32;
-        Vec3::new(
-            theta.sin() * phi.cos(),
-            theta.cos(),
-            theta.sin() * phi.sin(),
-        )
-    };
-    for j in 0..down {
-        for i in 0..around {
-            let corners = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
-            for k in [0, 1, 2, 0, 2, 3] {
-                let n = corners[k];
-                out.push(vertex(centre + radius * n, n, p.material));
-            }
-        }
-    }
-}
-
-fn plane(out: &mut Vec<PreviewVertex>, p: &GpuPrimitive, extent: f32) {
-    let (point, n) = (Vec3::from(p.p0), Vec3::from(p.p1).normalize());
-    let u = n.any_orthonormal_vector() * extent;
-    let v = n.cross(u);
-    let corner = point - u - v;
-    let (u2, v2) = (2.0 * u, 2.0 * v);
-    for q in [
-        corner,
-        corner + u2,
-        corner + u2 + v2,
-        corner,
-        corner + u2 + v2,
-        corner + v2,
-    ] {
-        out.push(vertex(q, n, p.material));
     }
 }
 
