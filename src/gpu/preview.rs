@@ -23,9 +23,9 @@ use crate::error::{Error, Result};
 use crate::layout::{GpuDrawArgs, GpuReflector, wgsl_prelude};
 use crate::pack::FlatScene;
 use crate::preview::{
-    CurvedShapes, DEFAULT_TOLERANCE_PX, Detail, Grid, MirrorSurface, PreviewUniforms,
-    PreviewVertex, Reflector, ReflectorPass, bounded_radius, clip_matrix, flat_triangles,
-    reflected_triangles, reflectors,
+    CurvedShapes, Cut, DEFAULT_TOLERANCE_PX, Detail, MirrorSurface, PreviewUniforms, PreviewVertex,
+    Reflector, ReflectorPass, bounded_radius, clip_matrix, flat_triangles, reflected_triangles,
+    reflectors,
 };
 use crate::render::Image;
 use crate::scene::Scene;
@@ -163,7 +163,7 @@ pub struct PreviewRenderer {
     /// The curved shapes, cut anew when the camera asks for other grids.
     curved_mesh: Option<MainMesh>,
     curved: CurvedShapes,
-    grids: Vec<Grid>,
+    cuts: Vec<Cut>,
     tolerance_px: f64,
     uniform_buffer: wgpu::Buffer,
     uniforms: PreviewUniforms,
@@ -193,7 +193,7 @@ impl PreviewRenderer {
         let clip = clip_matrix(&scene.camera, far);
         let detail = Detail::new(clip, (width, height), options.tolerance_px);
         let curved = CurvedShapes::of(flat);
-        let grids = curved.grids(&detail);
+        let cuts = curved.cuts(&detail);
         let uniforms = PreviewUniforms {
             clip: clip.as_mat4().to_cols_array_2d(),
             light_count: flat.frame.light_count,
@@ -232,7 +232,7 @@ impl PreviewRenderer {
             &[Some(COLOR_FORMAT.into()), Some(ID_FORMAT.into())],
         );
         let flat_mesh = MainMesh::new(device, &flat_triangles(flat, extent));
-        let curved_mesh = MainMesh::new(device, &curved.triangles(&grids));
+        let curved_mesh = MainMesh::new(device, &curved.triangles(&cuts));
         let uniform_buffer =
             context.uniform_buffer("preview uniforms", bytemuck::bytes_of(&uniforms));
         let materials =
@@ -321,7 +321,7 @@ impl PreviewRenderer {
             flat_mesh,
             curved_mesh,
             curved,
-            grids,
+            cuts,
             tolerance_px: options.tolerance_px,
             uniform_buffer,
             uniforms,
@@ -342,12 +342,12 @@ impl PreviewRenderer {
     pub fn set_camera(&mut self, camera: &CameraSpec) {
         let eye = eye_of(camera);
         let clip = clip_matrix(camera, self.far);
-        let grids = self
+        let cuts = self
             .curved
-            .grids(&Detail::new(clip, self.image_size(), self.tolerance_px));
-        if grids != self.grids {
-            self.curved_mesh = MainMesh::new(&self.context.device, &self.curved.triangles(&grids));
-            self.grids = grids;
+            .cuts(&Detail::new(clip, self.image_size(), self.tolerance_px));
+        if cuts != self.cuts {
+            self.curved_mesh = MainMesh::new(&self.context.device, &self.curved.triangles(&cuts));
+            self.cuts = cuts;
         }
         self.uniforms.clip = clip.as_mat4().to_cols_array_2d();
         self.uniforms.eye = [eye.x, eye.y, eye.z, 0.0];
@@ -424,7 +424,7 @@ impl PreviewRenderer {
     /// Curved shapes cut as finely as allowed that still stray further than the tolerance (or
     /// reach the eye's plane).
     pub fn coarse_shapes(&self) -> usize {
-        self.grids.iter().filter(|g| !g.within).count()
+        self.cuts.iter().filter(|c| !c.within).count()
     }
 
     /// The reflected triangles the last frame drew, summed over the searches (the cull's

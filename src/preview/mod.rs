@@ -30,7 +30,7 @@ mod tessellate;
 
 use tessellate::vertex;
 pub use tessellate::{
-    CurvedShapes, DEFAULT_TOLERANCE_PX, Detail, Grid, PATCH_QUADS, ROUND_QUADS, SurfaceAt,
+    CurvedShapes, Cut, DEFAULT_TOLERANCE_PX, Detail, Grid, PATCH_QUADS, ROUND_QUADS, SurfaceAt,
     coarse_note, fitting_grid, flat_triangles, grid_deviation, tessellate,
 };
 

@@ -11,7 +11,7 @@ use super::{PreviewVertex, reflector_tags, reflectors};
 use crate::fermat::Reflector as _;
 use crate::layout::{GpuPrimitive, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
 use crate::pack::FlatScene;
-use crate::scene::surface::Surface;
+use crate::scene::surface::{Surface, alike_sides, patches_mesh_cut};
 
 /// How far (pixels on the film) the preview's triangles may stray from a curved surface unless
 /// told otherwise (`chambre preview --tessellation-tolerance`).
@@ -31,7 +31,7 @@ pub const PATCH_QUADS: [u32; 2] = [1, crate::scene::surface::PATCH_QUADS];
 pub fn tessellate(scene: &FlatScene, extent: f32, detail: &Detail) -> Vec<PreviewVertex> {
     let curved = CurvedShapes::of(scene);
     let mut vertices = flat_triangles(scene, extent);
-    vertices.extend(curved.triangles(&curved.grids(detail)));
+    vertices.extend(curved.triangles(&curved.cuts(detail)));
     vertices
 }
 
@@ -147,6 +147,18 @@ pub struct Grid {
 
 /// A surface's point and unit normal (zero where it has none, as at a pole) at (u, v).
 pub type SurfaceAt<'a> = &'a dyn Fn(DVec2) -> (DVec3, DVec3);
+
+/// How finely a curved shape is cut: `grids` holds a sphere's or round surface's grid, or
+/// each patch's of a Bézier shape ([along u, along v] quads); `within`, whether its triangles
+/// keep within the tolerance (false: some stopped at the most quads allowed, or reach the
+/// eye's plane).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Cut {
+    /// The grid of each part.
+    pub grids: Vec<[u32; 2]>,
+    /// Whether the triangles keep within the tolerance.
+    pub within: bool,
+}
 
 /// The coarsest grid, from `least` to `most` quads, over the parameter rectangle `span`
 /// (lowest and highest (u, v)) whose triangles keep within `tolerance` of the surface `at`
@@ -296,22 +308,25 @@ impl CurvedShapes {
         CurvedShapes(spheres.chain(surfaces).collect())
     }
 
-    /// Each shape's grid for `detail`, in order.
-    pub fn grids(&self, detail: &Detail) -> Vec<Grid> {
-        self.0.iter().map(|s| s.form.grid(detail)).collect()
+    /// How finely each shape is cut for `detail`, in order.
+    pub fn cuts(&self, detail: &Detail) -> Vec<Cut> {
+        self.0.iter().map(|s| s.form.cut(detail)).collect()
     }
 
-    /// The shapes cut as `grids` (from [`CurvedShapes::grids`]) say.
-    pub fn triangles(&self, grids: &[Grid]) -> Vec<PreviewVertex> {
+    /// The shapes cut as `cuts` (from [`CurvedShapes::cuts`]) say.
+    pub fn triangles(&self, cuts: &[Cut]) -> Vec<PreviewVertex> {
         let mut out = Vec::new();
-        for (shape, grid) in self.0.iter().zip(grids) {
+        for (shape, cut) in self.0.iter().zip(cuts) {
             let first = out.len();
             match &shape.form {
                 CurvedForm::Sphere { center, radius } => {
-                    sphere(&mut out, (*center, *radius), grid.quads, shape.material);
+                    sphere(&mut out, (*center, *radius), cut.grids[0], shape.material);
                 }
                 CurvedForm::Surface(surface) => {
-                    let mesh = surface.mesh_of(grid.quads, grid.quads[0]);
+                    let mesh = match surface {
+                        Surface::Patches(patches) => patches_mesh_cut(patches, &cut.grids),
+                        round => round.mesh_of(cut.grids[0], 1),
+                    };
                     let normals = mesh.normals.as_deref().unwrap_or_default();
                     for &k in mesh.triangles.iter().flatten() {
                         let (p, n) = (mesh.positions[k as usize], normals[k as usize]);
@@ -328,9 +343,8 @@ impl CurvedShapes {
 }
 
 impl CurvedForm {
-    fn grid(&self, detail: &Detail) -> Grid {
-        let unit_square = [DVec2::ZERO, DVec2::ONE];
-        match self {
+    fn cut(&self, detail: &Detail) -> Cut {
+        let grid = match self {
             CurvedForm::Sphere { center, radius } => fitting_grid(
                 &|uv| {
                     let normal = sphere_point(DVec3::ZERO, 1.0, uv);
@@ -341,32 +355,11 @@ impl CurvedForm {
                 ROUND_QUADS[0],
                 ROUND_QUADS[1],
             ),
-            CurvedForm::Surface(Surface::Patches(patches)) => {
-                // One grid for every patch, so that neighbours meet without cracks: the finest
-                // any of them needs.
-                let [least, most] = PATCH_QUADS;
-                let each = patches.iter().map(|patch| {
-                    let (center, radius) = ball_around(patch.points.iter().flatten().copied());
-                    let grid = fitting_grid(
-                        &|uv| (patch.point(uv), patch.outward_normal(uv)),
-                        unit_square,
-                        detail.tolerance_at(center, radius),
-                        [least; 2],
-                        [most; 2],
-                    );
-                    (grid.quads[0].max(grid.quads[1]), grid.within)
-                });
-                let (n, within) = each.fold((least, true), |(n, all), (m, w)| (n.max(m), all && w));
-                Grid {
-                    quads: [n; 2],
-                    within,
-                }
-            }
+            CurvedForm::Surface(Surface::Patches(patches)) => return patches_cut(patches, detail),
             CurvedForm::Surface(surface) => {
                 let round = surface
                     .round_grid()
                     .expect("every surface but patches is round");
-                let at = |uv| (round.surface.point(uv), round.surface.outward_normal(uv));
                 let span = round.span();
                 // Its ball from a 32 x 16 sample (the surface bulges past it by far less than
                 // the box's slack).
@@ -377,15 +370,67 @@ impl CurvedForm {
                 });
                 let (center, radius) = ball_around(samples.map(|uv| round.surface.point(uv)));
                 fitting_grid(
-                    &at,
+                    &|uv| (round.surface.point(uv), round.surface.outward_normal(uv)),
                     span,
                     detail.tolerance_at(center, radius),
                     ROUND_QUADS[0],
                     ROUND_QUADS[1],
                 )
             }
+        };
+        Cut {
+            grids: vec![grid.quads],
+            within: grid.within,
         }
     }
+}
+
+/// The patches of a Bézier shape each cut as coarsely as its tolerance allows, then each
+/// direction as finely as any other it must match ([`alike_sides`]): neighbours meet without
+/// cracks, and a patch far from the finest (most of the teapot, beside its spout) is not cut
+/// as finely.
+fn patches_cut(patches: &[crate::fermat::BezierPatch], detail: &Detail) -> Cut {
+    let [least, most] = PATCH_QUADS;
+    let unit_square = [DVec2::ZERO, DVec2::ONE];
+    let surface = |k: usize| {
+        let patch = patches[k];
+        move |uv| (patch.point(uv), patch.outward_normal(uv))
+    };
+    let tolerances: Vec<f64> = patches
+        .iter()
+        .map(|p| {
+            let (center, radius) = ball_around(p.points.iter().flatten().copied());
+            detail.tolerance_at(center, radius)
+        })
+        .collect();
+    let own: Vec<Grid> = (0..patches.len())
+        .map(|k| {
+            fitting_grid(
+                &surface(k),
+                unit_square,
+                tolerances[k],
+                [least; 2],
+                [most; 2],
+            )
+        })
+        .collect();
+    let classes = alike_sides(patches);
+    let mut finest = std::collections::HashMap::new();
+    for (grid, class) in own.iter().zip(&classes) {
+        for (&class, &quads) in class.iter().zip(&grid.quads) {
+            let n = finest.entry(class).or_insert(0);
+            *n = quads.max(*n);
+        }
+    }
+    let grids: Vec<[u32; 2]> = classes
+        .iter()
+        .map(|c| c.map(|class| finest[&class]))
+        .collect();
+    // A finer grid strays less, but measure rather than assume.
+    let within = (0..patches.len()).all(|k| {
+        own[k].within && grid_deviation(&surface(k), unit_square, grids[k])[2] <= tolerances[k]
+    });
+    Cut { grids, within }
 }
 
 /// The centre and half diagonal of the box around `points`: a ball holding them.
@@ -597,9 +642,9 @@ film = [36.0, 24.0]
             radius: 1.0,
         };
         assert_eq!(
-            at_eye.grid(&d),
-            Grid {
-                quads: ROUND_QUADS[1],
+            at_eye.cut(&d),
+            Cut {
+                grids: vec![ROUND_QUADS[1]],
                 within: false
             }
         );
@@ -608,9 +653,10 @@ film = [36.0, 24.0]
             center: DVec3::new(0.0, 0.0, z),
             radius: 1.0,
         };
-        let (near, far) = (at(-5.0).grid(&d), at(-20.0).grid(&d));
+        let (near, far) = (at(-5.0).cut(&d), at(-20.0).cut(&d));
         assert!(near.within && far.within);
-        assert!(far.quads[0] <= near.quads[0] && far.quads[0] < near.quads[0] * 3 / 4);
-        assert!(at(-5.0).grid(&detail(2.0)).quads[0] < near.quads[0]);
+        let around = |cut: &Cut| cut.grids[0][0];
+        assert!(around(&far) < around(&near) * 3 / 4);
+        assert!(around(&at(-5.0).cut(&detail(2.0))) < around(&near));
     }
 }

@@ -209,26 +209,85 @@ fn push_quad(
 /// Every patch as a grid of `quads` x `quads` quads, the patch's normals at the vertices;
 /// triangles that collapse at a patch's degenerate edge (the teapot's poles) are left out.
 pub fn patches_mesh(patches: &[BezierPatch], quads: u32) -> TriangleMesh {
+    patches_mesh_cut(patches, &vec![[quads; 2]; patches.len()])
+}
+
+/// Every patch as a grid of its own `grids[k]` = [along u, along v] quads (as
+/// [`patches_mesh`]); neighbours meet without cracks where the edges they share are cut alike
+/// ([`alike_sides`]).
+pub fn patches_mesh_cut(patches: &[BezierPatch], grids: &[[u32; 2]]) -> TriangleMesh {
     let mut mesh = empty_mesh();
-    let side = quads + 1;
-    for patch in patches {
+    for (patch, &[nu, nv]) in patches.iter().zip(grids) {
         let first = mesh.positions.len() as u32;
-        for i in 0..side {
-            for j in 0..side {
-                let uv = DVec2::new(i as f64, j as f64) / quads as f64;
+        for i in 0..=nu {
+            for j in 0..=nv {
+                let uv = DVec2::new(i as f64 / nu as f64, j as f64 / nv as f64);
                 mesh.positions.push(patch.point(uv).as_vec3());
                 let normals = mesh.normals.get_or_insert_with(Vec::new);
                 normals.push(patch_normal(patch, uv).as_vec3());
             }
         }
-        let index = |i: u32, j: u32| first + i * side + j;
-        for i in 0..quads {
-            for j in 0..quads {
+        let index = |i: u32, j: u32| first + i * (nv + 1) + j;
+        for i in 0..nu {
+            for j in 0..nv {
                 push_quad(&mut mesh, index, (i, j), false);
             }
         }
     }
     mesh
+}
+
+/// Which directions of the patches must be cut into as many pieces: per patch, the class of
+/// its u direction and of its v direction, two directions sharing a class where a chain of
+/// shared edges links them (an edge of one patch whose four control points are another's, in
+/// the same or the reverse order; its pieces run along u on one side, along the other's
+/// direction there). Edges collapsed to a point (the teapot's poles) link nothing: no crack can
+/// open along them.
+pub fn alike_sides(patches: &[BezierPatch]) -> Vec<[usize; 2]> {
+    // The edges at u = 0 and u = 1 run along v (direction 1), those at v = 0 and 1 along u.
+    let edges = |p: &BezierPatch| {
+        let along_v = |i: usize| p.points[i];
+        let along_u = |j: usize| p.points.map(|row| row[j]);
+        [
+            (along_v(0), 1),
+            (along_v(3), 1),
+            (along_u(0), 0),
+            (along_u(3), 0),
+        ]
+    };
+    let mut parent: Vec<usize> = (0..2 * patches.len()).collect();
+    fn root(parent: &mut [usize], mut k: usize) -> usize {
+        while parent[k] != k {
+            parent[k] = parent[parent[k]];
+            k = parent[k];
+        }
+        k
+    }
+    let key = |points: [DVec3; 4]| points.map(|p| p.to_array().map(f64::to_bits));
+    let mut seen = std::collections::HashMap::new();
+    for (k, patch) in patches.iter().enumerate() {
+        for (points, direction) in edges(patch) {
+            if points.iter().all(|&p| p == points[0]) {
+                continue;
+            }
+            let mut reversed = points;
+            reversed.reverse();
+            let side = 2 * k + direction;
+            let other = seen.get(&key(points)).or_else(|| seen.get(&key(reversed)));
+            match other.copied() {
+                Some(other) => {
+                    let (a, b) = (root(&mut parent, side), root(&mut parent, other));
+                    parent[a] = b;
+                }
+                None => {
+                    seen.insert(key(points), side);
+                }
+            }
+        }
+    }
+    (0..patches.len())
+        .map(|k| [root(&mut parent, 2 * k), root(&mut parent, 2 * k + 1)])
+        .collect()
 }
 
 /// A patch's unit normal f_u × f_v at `uv`; where that vanishes (a degenerate edge), the
@@ -413,6 +472,70 @@ mod tests {
         let uv = DVec2::new(0.3, 0.8);
         assert!((p.point(uv) - DVec3::new(0.9, 2.4, 0.0)).length() < 1e-12);
         assert!((patch_normal(&p, uv) - DVec3::Z).length() < 1e-12);
+    }
+
+    /// Newell's teapot cut with every patch's own grid, each direction then as fine as the ones
+    /// it must match: wherever two patches share an edge, their mesh vertices along it are the
+    /// same points (no crack), though the patches' grids differ.
+    #[test]
+    fn patches_cut_alike_along_shared_edges_meet_without_cracks() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/teapot.bpt");
+        let mut patches = load_bezier_patches(&path).unwrap();
+        orient_outward(&mut patches);
+        let classes = alike_sides(&patches);
+        let own = |k: usize| [2 + k as u32 % 5, 3 + k as u32 % 3];
+        let mut finest = std::collections::HashMap::new();
+        for (k, class) in classes.iter().enumerate() {
+            for (&class, quads) in class.iter().zip(own(k)) {
+                let n = finest.entry(class).or_insert(0);
+                *n = quads.max(*n);
+            }
+        }
+        let grids: Vec<[u32; 2]> = classes.iter().map(|c| c.map(|c| finest[&c])).collect();
+        let distinct: std::collections::HashSet<_> = grids.iter().collect();
+        assert!(distinct.len() > 2, "{grids:?}");
+        let mesh = patches_mesh_cut(&patches, &grids);
+        // Each patch's mesh vertices along each of its edges, as bits.
+        let mut first = 0;
+        let mut sides = Vec::new();
+        for (patch, &[nu, nv]) in patches.iter().zip(&grids) {
+            let at = |i: u32, j: u32| mesh.positions[(first + i * (nv + 1) + j) as usize];
+            let line = |points: Vec<glam::Vec3>| {
+                let mut bits: Vec<[u32; 3]> = points
+                    .iter()
+                    .map(|p| p.to_array().map(f32::to_bits))
+                    .collect();
+                bits.sort();
+                bits
+            };
+            let column = |i| line((0..=nv).map(|j| at(i, j)).collect());
+            let row = |j| line((0..=nu).map(|i| at(i, j)).collect());
+            let edges = [
+                (patch.points[0], column(0)),
+                (patch.points[3], column(nu)),
+                (patch.points.map(|r| r[0]), row(0)),
+                (patch.points.map(|r| r[3]), row(nv)),
+            ];
+            sides.extend(edges);
+            first += (nu + 1) * (nv + 1);
+        }
+        let mut shared = 0;
+        for (a, (control_a, vertices_a)) in sides.iter().enumerate() {
+            for (control_b, vertices_b) in &sides[a + 1..] {
+                let mut reversed = *control_b;
+                reversed.reverse();
+                let collapsed = control_a.iter().all(|&p| p == control_a[0]);
+                if collapsed || (control_a != control_b && *control_a != reversed) {
+                    continue;
+                }
+                shared += 1;
+                assert_eq!(
+                    vertices_a, vertices_b,
+                    "an edge shared by two patches cracks"
+                );
+            }
+        }
+        assert!(shared > 30, "{shared} shared edges");
     }
 
     #[test]
