@@ -40,6 +40,14 @@ mkdir -p bench
     # The teapot's 32 searches one a dispatch, as before they were batched (BENCHMARKS.md).
     "$chambre" bench fermat --scene scenes/fermat_teapot.toml --subdivisions 1,4,16 \
         --searches-per-dispatch 1 --json bench/fermat_teapot_unbatched.json
+    # The curved shapes' tessellation tolerance traded against time and FLIP.
+    for mirror in sphere teapot; do
+        for tolerance in 0.125 0.25 0.5 1 2; do
+            "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --subdivisions 4 \
+                --tessellation-tolerance "$tolerance" \
+                --json "bench/fermat_${mirror}_tolerance_$tolerance.json"
+        done
+    done
     echo
     "$chambre" bench rays --runs "$runs" --json bench/rays.json
     echo
