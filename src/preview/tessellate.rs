@@ -18,9 +18,11 @@ use crate::scene::surface::{Surface, alike_sides, patches_mesh_cut};
 pub const DEFAULT_TOLERANCE_PX: f64 = 0.5;
 
 /// The fewest and the most quads a sphere or a round surface is cut into, [around its axis,
-/// across]. A shape that would need more (or reaches the eye's plane) stops at the most and is
-/// reported ([`Grid::within`]).
-pub const ROUND_QUADS: [[u32; 2]; 2] = [[8, 1], [256, 128]];
+/// across]. The fewest keep a solid however small the shape looks (with one quad across, a
+/// sphere's would join its poles and vanish, a torus's tube flatten); a shape that would need
+/// more than the most (or reaches the eye's plane) stops there and is reported
+/// ([`Cut::within`]).
+pub const ROUND_QUADS: [[u32; 2]; 2] = [[8, 4], [256, 128]];
 
 /// The fewest and the most quads along each side of a Bézier patch (the most: the ray
 /// tracers' mesh, `scene::surface::PATCH_QUADS`).
@@ -632,6 +634,29 @@ film = [36.0, 24.0]
         let grid = fitting_grid(&cylinder, span, 1e-3, [8, 1], [256, 128]);
         assert_eq!(grid.quads[1], 1);
         assert!(grid.within && grid.quads[0] > 8);
+    }
+
+    /// A sphere far smaller than the tolerance keeps the fewest quads, a solid of them (one
+    /// quad across would join its poles: every triangle flat, the sphere gone).
+    #[test]
+    fn a_sphere_below_the_tolerance_stays_a_solid() {
+        let tiny = CurvedForm::Sphere {
+            center: DVec3::new(0.0, 0.0, -100.0),
+            radius: 1e-3,
+        };
+        let cut = tiny.cut(&detail(0.5));
+        assert_eq!(cut.grids, vec![ROUND_QUADS[0]]);
+        let mut triangles = Vec::new();
+        sphere(&mut triangles, (DVec3::ZERO, 1e-3), cut.grids[0], 0);
+        let area: f32 = triangles
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] = [0, 1, 2].map(|k| Vec3::from(t[k].position));
+                (b - a).cross(c - a).length() / 2.0
+            })
+            .sum();
+        // An octagonal bipyramid-like solid: most of the sphere's 4π r² area.
+        assert!(area > 0.7 * 4.0 * std::f32::consts::PI * 1e-6, "{area}");
     }
 
     #[test]
