@@ -962,3 +962,37 @@ fn counts_of_zero_are_refused_with_the_flag_named() {
         );
     }
 }
+
+/// A camera inside a sphere (a sky dome): the sphere reaches the eye's plane, so no grid keeps
+/// its triangles within the tolerance of it; the preview draws it at its finest and says so.
+#[test]
+fn a_curved_shape_no_grid_can_hold_within_the_tolerance_is_reported() {
+    if common::gpu_context().is_none() {
+        return;
+    }
+    let dir = scratch_dir("dome");
+    let scene = dir.join("dome.toml");
+    std::fs::write(
+        &scene,
+        "[render]\nwidth = 36\nheight = 24\nambient = [1.0, 1.0, 1.0]\n\
+         [camera]\nposition = [0.0, 0.0, 0.0]\nlook_at = [0.0, 0.0, -1.0]\n\
+         [[materials]]\nname = \"sky\"\nmodel = \"lambert\"\ndiffuse = [0.5, 0.5, 0.5]\n\
+         [[shapes]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 10.0\n\
+         material = \"sky\"\n",
+    )
+    .unwrap();
+    let output = chambre()
+        .args(["preview", scene.to_str().unwrap(), "-o"])
+        .arg(dir.join("dome.png"))
+        .env("XDG_RUNTIME_DIR", "/tmp")
+        .output()
+        .unwrap();
+    let stderr = stderr_of(&output);
+    assert!(output.status.success(), "{stderr}");
+    let [around, across] = chambre::preview::ROUND_QUADS[1];
+    assert!(
+        stderr.contains("1 curved shape(s) stray further than 0.5 px")
+            && stderr.contains(&format!("{} triangles", 2 * around * across)),
+        "{stderr}"
+    );
+}
