@@ -56,6 +56,9 @@ impl Xvfb {
         let child = Command::new("Xvfb")
             .arg(&display)
             .args(["-screen", "0", &format!("{}x{}x24", SCREEN.0, SCREEN.1)])
+            // No auto-repeat: a key held past the delay (xdotool descheduled between its press
+            // and release on a loaded machine) would type itself again.
+            .arg("-r")
             .args(["-nolisten", "tcp", "-fbdir"])
             .arg(dir)
             .stdout(Stdio::null())
