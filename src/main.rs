@@ -779,8 +779,15 @@ fn run_preview(
         0 => String::new(),
         n => format!(" and {n} reflected ({} drawn)", frame.reflected_drawn),
     };
+    let curved = match frame.curved_shapes {
+        0 => String::new(),
+        n => format!(
+            " ({n} curved shape(s) cut within {} px)",
+            options.tolerance_px
+        ),
+    };
     note!(
-        "{}: {}x{}, {} triangles{reflected} in {:.2} ms a frame (median of {frames}, drawn and \
+        "{}: {}x{}, {} triangles{curved}{reflected} in {:.2} ms a frame (median of {frames}, drawn and \
          finished on the device, read-back excluded) on {}",
         output.display(),
         frame.image.width,

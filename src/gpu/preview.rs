@@ -85,8 +85,10 @@ pub struct PreviewFrame {
     pub reflected_triangles: usize,
     /// Of those, the ones the last frame drew: the cull's lists.
     pub reflected_drawn: usize,
-    /// Curved shapes cut as finely as allowed that still stray further than the tolerance (or
-    /// reach the eye's plane).
+    /// Curved shapes (spheres, tori, ellipsoids, cylinders, Bézier shapes), cut for the camera.
+    pub curved_shapes: usize,
+    /// Of those, the ones cut as finely as allowed that still stray further than the tolerance
+    /// (or reach the eye's plane).
     pub coarse_shapes: usize,
 }
 
@@ -142,6 +144,7 @@ pub fn draw_with(
         frame_times_ms,
         reflected_triangles: renderer.reflected_triangles(),
         reflected_drawn: renderer.reflected_drawn()?,
+        curved_shapes: renderer.cuts.len(),
         coarse_shapes: renderer.coarse_shapes(),
     })
 }
