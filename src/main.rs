@@ -782,7 +782,7 @@ fn run_preview(
     let curved = match frame.curved_shapes {
         0 => String::new(),
         n => format!(
-            " ({n} curved shape(s) cut within {} px)",
+            " ({n} curved shape(s) cut for a tolerance of {} px)",
             options.tolerance_px
         ),
     };
