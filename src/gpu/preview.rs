@@ -234,8 +234,14 @@ impl PreviewRenderer {
             &[Some(vertex_layout)],
             &[Some(COLOR_FORMAT.into()), Some(ID_FORMAT.into())],
         );
-        let flat_mesh = MainMesh::new(device, &flat_triangles(flat, extent));
-        let curved_mesh = MainMesh::new(device, &curved.triangles(&cuts));
+        let main_triangles = [flat_triangles(flat, extent), curved.triangles(&cuts)];
+        let flat_mesh = MainMesh::new(device, &main_triangles[0]);
+        let curved_mesh = MainMesh::new(device, &main_triangles[1]);
+        let mirrors = reflectors(flat);
+        let reflected = match mirrors.is_empty() {
+            true => Vec::new(),
+            false => reflected_triangles(flat, &main_triangles.concat(), options.subdivision),
+        };
         let uniform_buffer =
             context.uniform_buffer("preview uniforms", bytemuck::bytes_of(&uniforms));
         let materials =
@@ -306,8 +312,8 @@ impl PreviewRenderer {
                 far,
                 size,
             },
-            reflectors(flat),
-            &reflected_triangles(flat, extent, &detail, options.subdivision),
+            mirrors,
+            &reflected,
             options,
         )
         .map_err(|e| e.with_advice(FERMAT_ARRAYS_ADVICE))?;

@@ -30,8 +30,8 @@ mod tessellate;
 
 use tessellate::vertex;
 pub use tessellate::{
-    CurvedShapes, Cut, DEFAULT_TOLERANCE_PX, Detail, Grid, PATCH_QUADS, ROUND_QUADS, SurfaceAt,
-    coarse_note, fitting_grid, flat_triangles, grid_deviation, tessellate,
+    CurvedShapes, Cut, DEFAULT_TOLERANCE_PX, Detail, Grid, PATCH_QUADS, ROUND_QUADS, Seen,
+    SurfaceAt, UNSEEN_QUADS, coarse_note, fitting_grid, flat_triangles, grid_deviation, tessellate,
 };
 
 /// One vertex of the preview's triangle list.
@@ -240,8 +240,9 @@ fn reflector_tags(scene: &FlatScene, reflectors: &[Reflector]) -> Vec<u32> {
     tags
 }
 
-/// The triangles the reflectors reflect: every triangle of `tessellate` (curved shapes cut for
-/// `detail`) that is not on a reflector, each cut into n² triangles, n pieces along each edge
+/// The triangles the reflectors reflect: every one of `triangles` (the scene's, as the main
+/// pass draws them: `tessellate`) that is not on a reflector, each cut into n² triangles, n
+/// pieces along each edge
 /// (and, where the scene has several curved mirrors, theirs uncut: each mirror reflects the
 /// others once, showing them as the main pass does): n = `subdivision`, or
 /// where it is `None`, the fewest pieces that leave no edge longer than `AUTO_PIECE` of the
@@ -251,17 +252,16 @@ fn reflector_tags(scene: &FlatScene, reflectors: &[Reflector]) -> Vec<u32> {
 /// 16x16).
 pub fn reflected_triangles(
     scene: &FlatScene,
-    extent: f32,
-    detail: &Detail,
+    triangles: &[PreviewVertex],
     subdivision: Option<u32>,
 ) -> Vec<PreviewVertex> {
     let longest = AUTO_PIECE * bounded_radius(scene);
     let several_mirrors = reflectors(scene).len() > 1;
     let mut out = Vec::new();
-    for t in tessellate(scene, extent, detail).chunks_exact(3) {
+    for t in triangles.chunks_exact(3) {
         if t[0].reflector != 0 {
-            // A mirror's triangles, already fine, are reflected in the other mirrors as they
-            // are (its own reflection pass leaves them out); a lone mirror reflects none.
+            // A mirror's triangles, cut for the camera, are reflected in the other mirrors as
+            // they are (its own reflection pass leaves them out); a lone mirror reflects none.
             if several_mirrors {
                 out.extend_from_slice(t);
             }

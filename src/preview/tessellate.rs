@@ -99,25 +99,26 @@ impl Detail {
         }
     }
 
-    /// The length (scene units) the tolerance spans where the ball (`center`, `radius`) is
-    /// seen largest; 0 where part of the ball reaches the eye's plane.
-    pub fn tolerance_at(&self, center: DVec3, radius: f64) -> f64 {
-        self.tolerance_px / self.pixels_per_unit(center, radius)
+    /// The length (scene units) the tolerance spans where a shape sampled at `points` is seen
+    /// largest: [`Seen::At`] 0 where some reach the eye's plane, [`Seen::Behind`] where all lie
+    /// behind it.
+    pub fn tolerance_over(&self, points: impl IntoIterator<Item = DVec3>) -> Seen {
+        match self.pixels_per_unit(points) {
+            None => Seen::Behind,
+            Some(pixels) => Seen::At(self.tolerance_px / pixels),
+        }
     }
 
-    /// The most pixels one scene unit spans on the film over the ball, sampled at its centre,
-    /// 26 points of its surface and its point nearest the eye's plane (where a perspective
-    /// magnifies most); infinite where one lies at or behind that plane.
-    pub fn pixels_per_unit(&self, center: DVec3, radius: f64) -> f64 {
-        let toward_eye = -self.clip.row(3).truncate().normalize_or_zero();
-        let around = (0..27).map(|k| {
-            let d = DVec3::new((k % 3) as f64, (k / 3 % 3) as f64, (k / 9) as f64) - 1.0;
-            center + radius * d.normalize_or_zero()
-        });
-        around
-            .chain([center + radius * toward_eye])
-            .map(|p| self.stretch(p))
-            .fold(0.0, f64::max)
+    /// The most pixels one scene unit spans on the film over `points` (infinite where one lies
+    /// at or behind the eye's plane), or `None` where every one lies behind it.
+    pub fn pixels_per_unit(&self, points: impl IntoIterator<Item = DVec3>) -> Option<f64> {
+        let (mut most, mut before) = (0.0f64, false);
+        for p in points {
+            let stretch = self.stretch(p);
+            before |= self.clip.row(3).dot(p.extend(1.0)) > 0.0;
+            most = most.max(stretch);
+        }
+        before.then_some(most)
     }
 
     /// Pixels per scene unit at `p` in the direction magnified most: the largest singular value
@@ -134,6 +135,16 @@ impl Detail {
         let (a, b, d) = (jx.dot(jx), jx.dot(jy), jy.dot(jy));
         ((a + d) / 2.0 + (((a - d) / 2.0).powi(2) + b * b).sqrt()).sqrt()
     }
+}
+
+/// Where the camera sees a shape.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Seen {
+    /// In front of the eye: the tolerance there (scene units; 0 where it reaches the eye's
+    /// plane).
+    At(f64),
+    /// Wholly behind the eye's plane: the film does not see it, only mirrors may.
+    Behind,
 }
 
 /// How finely a curved shape is cut: `quads` along u and along v (a patch: along each side of
@@ -162,9 +173,11 @@ pub struct Cut {
     pub within: bool,
 }
 
-/// The coarsest grid, from `least` to `most` quads, over the parameter rectangle `span`
-/// (lowest and highest (u, v)) whose triangles keep within `tolerance` of the surface `at`
-/// (as [`grid_deviation`] measures them).
+/// A coarse grid, from `least` to `most` quads, over the parameter rectangle `span` (lowest
+/// and highest (u, v)) whose triangles keep within `tolerance` of the surface `at` (as
+/// [`grid_deviation`] measures them): each round aims at the tolerance from the deviation's
+/// fall with the square of the step and rounds up, so the grid may be a little finer than the
+/// coarsest (the tests bound it: three quarters of it strays too far).
 pub fn fitting_grid(
     at: SurfaceAt,
     span: [DVec2; 2],
@@ -185,12 +198,12 @@ pub fn fitting_grid(
         // tolerance (a quad's centre strays by about the sum of the two); where that asks
         // nothing more (its diagonals stray most), cut both finer.
         let aim = |n: u32, e: f64| ((n as f64 * (2.0 * e / tolerance).sqrt()).ceil() as u32).max(n);
-        let mut next = [aim(quads[0], along_u), aim(quads[1], along_v)];
+        let clamp = |n: [u32; 2]| [0, 1].map(|k| n[k].clamp(least[k], most[k]));
+        let mut next = clamp([aim(quads[0], along_u), aim(quads[1], along_v)]);
         if next == quads {
             let finer = (anywhere / tolerance).sqrt();
-            next = quads.map(|n| ((n as f64 * finer).ceil() as u32).max(n + 1));
+            next = clamp(quads.map(|n| ((n as f64 * finer).ceil() as u32).max(n + 1)));
         }
-        let next = [0, 1].map(|k| next[k].clamp(least[k], most[k]));
         if next == quads {
             return Grid {
                 quads,
@@ -347,37 +360,26 @@ impl CurvedShapes {
 impl CurvedForm {
     fn cut(&self, detail: &Detail) -> Cut {
         let grid = match self {
-            CurvedForm::Sphere { center, radius } => fitting_grid(
-                &|uv| {
+            CurvedForm::Sphere { center, radius } => {
+                let at = |uv| {
                     let normal = sphere_point(DVec3::ZERO, 1.0, uv);
                     (center + radius * normal, normal)
-                },
-                sphere_span(),
-                detail.tolerance_at(*center, *radius),
-                ROUND_QUADS[0],
-                ROUND_QUADS[1],
-            ),
+                };
+                // Its point nearest the eye's plane, where a perspective magnifies most, beside
+                // a grid of its points.
+                let toward_eye = -detail.clip.row(3).truncate().normalize_or_zero();
+                let points = samples(&at, sphere_span()).chain([center + radius * toward_eye]);
+                let seen = detail.tolerance_over(points);
+                fit(seen, &at, sphere_span(), ROUND_QUADS, UNSEEN_QUADS[0])
+            }
             CurvedForm::Surface(Surface::Patches(patches)) => return patches_cut(patches, detail),
             CurvedForm::Surface(surface) => {
                 let round = surface
                     .round_grid()
                     .expect("every surface but patches is round");
-                let span = round.span();
-                // Its ball from a 32 x 16 sample (the surface bulges past it by far less than
-                // the box's slack).
-                let samples = (0..=32).flat_map(|i| {
-                    (0..=16).map(move |j| {
-                        span[0] + (span[1] - span[0]) * DVec2::new(i as f64 / 32.0, j as f64 / 16.0)
-                    })
-                });
-                let (center, radius) = ball_around(samples.map(|uv| round.surface.point(uv)));
-                fitting_grid(
-                    &|uv| (round.surface.point(uv), round.surface.outward_normal(uv)),
-                    span,
-                    detail.tolerance_at(center, radius),
-                    ROUND_QUADS[0],
-                    ROUND_QUADS[1],
-                )
+                let at = |uv| (round.surface.point(uv), round.surface.outward_normal(uv));
+                let seen = detail.tolerance_over(samples(&at, round.span()));
+                fit(seen, &at, round.span(), ROUND_QUADS, UNSEEN_QUADS[0])
             }
         };
         Cut {
@@ -387,32 +389,60 @@ impl CurvedForm {
     }
 }
 
+/// The grids of a shape wholly behind the eye's plane, which only mirrors show (the film gives
+/// no tolerance there): a round shape's and a patch's fixed grids from before the preview cut
+/// shapes for the camera.
+pub const UNSEEN_QUADS: [[u32; 2]; 2] = [[64, 32], [8, 8]];
+
+/// The fitting grid where the shape is `seen`, between the fewest and the most quads of
+/// `range`; `unseen` behind the eye.
+fn fit(
+    seen: Seen,
+    at: SurfaceAt,
+    span: [DVec2; 2],
+    [least, most]: [[u32; 2]; 2],
+    unseen: [u32; 2],
+) -> Grid {
+    match seen {
+        Seen::At(tolerance) => fitting_grid(at, span, tolerance, least, most),
+        Seen::Behind => Grid {
+            quads: unseen,
+            within: true,
+        },
+    }
+}
+
+/// The surface points of a 32 x 16 grid over `span`: where a shape's magnification is sampled.
+fn samples(at: SurfaceAt<'_>, span: [DVec2; 2]) -> impl Iterator<Item = DVec3> + '_ {
+    (0..=32).flat_map(move |i| {
+        (0..=16).map(move |j| {
+            at(span[0] + (span[1] - span[0]) * DVec2::new(i as f64 / 32.0, j as f64 / 16.0)).0
+        })
+    })
+}
+
 /// The patches of a Bézier shape each cut as coarsely as its tolerance allows, then each
 /// direction as finely as any other it must match ([`alike_sides`]): neighbours meet without
 /// cracks, and a patch far from the finest (most of the teapot, beside its spout) is not cut
 /// as finely.
 fn patches_cut(patches: &[crate::fermat::BezierPatch], detail: &Detail) -> Cut {
-    let [least, most] = PATCH_QUADS;
     let unit_square = [DVec2::ZERO, DVec2::ONE];
+    let [least, most] = PATCH_QUADS.map(|n| [n; 2]);
     let surface = |k: usize| {
         let patch = patches[k];
         move |uv| (patch.point(uv), patch.outward_normal(uv))
     };
-    let tolerances: Vec<f64> = patches
-        .iter()
-        .map(|p| {
-            let (center, radius) = ball_around(p.points.iter().flatten().copied());
-            detail.tolerance_at(center, radius)
-        })
+    let seen: Vec<Seen> = (0..patches.len())
+        .map(|k| detail.tolerance_over(samples(&surface(k), unit_square)))
         .collect();
     let own: Vec<Grid> = (0..patches.len())
         .map(|k| {
-            fitting_grid(
+            fit(
+                seen[k],
                 &surface(k),
                 unit_square,
-                tolerances[k],
-                [least; 2],
-                [most; 2],
+                [least, most],
+                UNSEEN_QUADS[1],
             )
         })
         .collect();
@@ -429,19 +459,13 @@ fn patches_cut(patches: &[crate::fermat::BezierPatch], detail: &Detail) -> Cut {
         .map(|c| c.map(|class| finest[&class]))
         .collect();
     // A finer grid strays less, but measure rather than assume.
-    let within = (0..patches.len()).all(|k| {
-        own[k].within && grid_deviation(&surface(k), unit_square, grids[k])[2] <= tolerances[k]
+    let within = (0..patches.len()).all(|k| match seen[k] {
+        Seen::At(tolerance) => {
+            own[k].within && grid_deviation(&surface(k), unit_square, grids[k])[2] <= tolerance
+        }
+        Seen::Behind => true,
     });
     Cut { grids, within }
-}
-
-/// The centre and half diagonal of the box around `points`: a ball holding them.
-fn ball_around(points: impl Iterator<Item = DVec3>) -> (DVec3, f64) {
-    let (lo, hi) = points.fold(
-        (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
-        |(lo, hi), p| (lo.min(p), hi.max(p)),
-    );
-    ((lo + hi) / 2.0, (hi - lo).length() / 2.0)
 }
 
 /// A sphere's parameters: u the azimuth around y, v the angle from +y.
@@ -564,25 +588,42 @@ film = [36.0, 24.0]
     #[test]
     fn the_projection_magnifies_as_a_pinhole_does() {
         let d = detail(0.5);
-        let on_axis = d.pixels_per_unit(DVec3::new(0.0, 0.0, -10.0), 0.0);
-        assert!((on_axis - 50.0).abs() < 1e-9, "{on_axis}");
+        let at = |p: [f64; 3]| d.pixels_per_unit([DVec3::from(p)]).unwrap();
+        assert!((at([0.0, 0.0, -10.0]) - 50.0).abs() < 1e-9);
         // Off the axis, a step along the ray's depth moves the image too: the x row of the
         // Jacobian is (f / z)(1, 0, x / z).
-        let off_axis = d.pixels_per_unit(DVec3::new(2.0, 0.0, -10.0), 0.0);
-        assert!(
-            (off_axis - 50.0 * 1.04f64.sqrt()).abs() < 1e-9,
-            "{off_axis}"
-        );
-        // A ball's nearest point magnifies most.
-        let ball = d.pixels_per_unit(DVec3::new(0.0, 0.0, -10.0), 2.0);
-        assert!((ball - 500.0 / 8.0).abs() < 1e-9, "{ball}");
-        assert!((d.tolerance_at(DVec3::new(0.0, 0.0, -10.0), 2.0) - 0.5 / 62.5).abs() < 1e-12);
-        // Reaching the eye's plane: no tolerance at all.
-        assert_eq!(
-            d.pixels_per_unit(DVec3::new(0.0, 0.0, -1.0), 2.0),
-            f64::INFINITY
-        );
-        assert_eq!(d.tolerance_at(DVec3::new(0.0, 0.0, 5.0), 1.0), 0.0);
+        assert!((at([2.0, 0.0, -10.0]) - 50.0 * 1.04f64.sqrt()).abs() < 1e-9);
+        // The most over the points given.
+        let both = [DVec3::new(0.0, 0.0, -10.0), DVec3::new(0.0, 0.0, -8.0)];
+        assert!((d.pixels_per_unit(both).unwrap() - 62.5).abs() < 1e-9);
+        let Seen::At(tolerance) = d.tolerance_over(both) else {
+            panic!("in front of the eye")
+        };
+        assert!((tolerance - 0.5 / 62.5).abs() < 1e-15);
+        // Reaching the eye's plane: no tolerance; wholly behind it: not seen.
+        let across = [DVec3::new(0.0, 0.0, -1.0), DVec3::new(0.0, 0.0, 1.0)];
+        assert_eq!(d.tolerance_over(across), Seen::At(0.0));
+        assert_eq!(d.tolerance_over([DVec3::new(0.0, 0.0, 5.0)]), Seen::Behind);
+    }
+
+    /// The step that refines one direction when the other is at its most: a thin torus needs
+    /// 256 quads around, then more across, not a report that 256 x 32 strays.
+    #[test]
+    fn a_direction_at_its_most_leaves_the_other_to_be_refined() {
+        let (major, minor) = (1.0, 0.01);
+        let torus = |uv: DVec2| {
+            let (su, cu) = uv.x.sin_cos();
+            let (sv, cv) = uv.y.sin_cos();
+            let normal = DVec3::new(cv * cu, sv, cv * su);
+            (
+                DVec3::new(major * cu, 0.0, major * su) + minor * normal,
+                normal,
+            )
+        };
+        let span = [DVec2::ZERO, DVec2::splat(TAU)];
+        let grid = fitting_grid(&torus, span, 1e-4, ROUND_QUADS[0], ROUND_QUADS[1]);
+        assert!(grid.within && grid.quads[0] == 256, "{grid:?}");
+        assert!(grid_deviation(&torus, span, grid.quads)[2] <= 1e-4);
     }
 
     #[test]
@@ -683,5 +724,13 @@ film = [36.0, 24.0]
         let around = |cut: &Cut| cut.grids[0][0];
         assert!(around(&far) < around(&near) * 3 / 4);
         assert!(around(&at(-5.0).cut(&detail(2.0))) < around(&near));
+        // Wholly behind the eye: only mirrors show it; the fixed grid, not a report.
+        assert_eq!(
+            at(20.0).cut(&d),
+            Cut {
+                grids: vec![UNSEEN_QUADS[0]],
+                within: true
+            }
+        );
     }
 }

@@ -1,7 +1,7 @@
 //! Smooth parametric surfaces a scene declares (`type = "torus"`, `"ellipsoid"`, `"cylinder"`,
 //! `"bezier"`): the ray tracers intersect the first three exactly and trace Bézier patches as a
-//! fine mesh with the patches' own normals at its vertices; the raster preview draws a coarse
-//! mesh of each and reflects in them by Fermat's principle (`crate::fermat`).
+//! fine mesh with the patches' own normals at its vertices; the raster preview draws a mesh
+//! of each cut for its camera and reflects in them by Fermat's principle (`crate::fermat`).
 
 use std::path::Path;
 
@@ -216,6 +216,7 @@ pub fn patches_mesh(patches: &[BezierPatch], quads: u32) -> TriangleMesh {
 /// [`patches_mesh`]); neighbours meet without cracks where the edges they share are cut alike
 /// ([`alike_sides`]).
 pub fn patches_mesh_cut(patches: &[BezierPatch], grids: &[[u32; 2]]) -> TriangleMesh {
+    assert_eq!(patches.len(), grids.len(), "a grid for every patch");
     let mut mesh = empty_mesh();
     for (patch, &[nu, nv]) in patches.iter().zip(grids) {
         let first = mesh.positions.len() as u32;
@@ -263,7 +264,8 @@ pub fn alike_sides(patches: &[BezierPatch]) -> Vec<[usize; 2]> {
         }
         k
     }
-    let key = |points: [DVec3; 4]| points.map(|p| p.to_array().map(f64::to_bits));
+    // − 0.0 + 0.0 is 0.0: a coordinate of −0 in one patch and 0 in its neighbour is one point.
+    let key = |points: [DVec3; 4]| points.map(|p| (p + DVec3::ZERO).to_array().map(f64::to_bits));
     let mut seen = std::collections::HashMap::new();
     for (k, patch) in patches.iter().enumerate() {
         for (points, direction) in edges(patch) {
