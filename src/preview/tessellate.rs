@@ -700,6 +700,43 @@ film = [36.0, 24.0]
         assert!(area > 0.7 * 4.0 * std::f32::consts::PI * 1e-6, "{area}");
     }
 
+    /// Newell's teapot 8 units before the camera: every patch within the tolerance, the
+    /// patches' grids not all alike, and every pair of directions that must match cut alike.
+    #[test]
+    fn each_patch_is_cut_for_itself_and_its_shared_edges_alike() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/teapot.bpt");
+        let mut patches = crate::scene::surface::load_bezier_patches(&path).unwrap();
+        for patch in &mut patches {
+            patch.points = patch
+                .points
+                .map(|row| row.map(|p| p + DVec3::new(0.0, -1.5, -8.0)));
+        }
+        let d = detail(0.5);
+        let cut = patches_cut(&patches, &d);
+        assert!(cut.within);
+        let distinct: std::collections::HashSet<_> = cut.grids.iter().collect();
+        assert!(distinct.len() > 3, "{:?}", cut.grids);
+        for (patch, grid) in patches.iter().zip(&cut.grids) {
+            let at = |uv| (patch.point(uv), patch.outward_normal(uv));
+            let square = [DVec2::ZERO, DVec2::ONE];
+            let Seen::At(tolerance) = d.tolerance_over(samples(&at, square)) else {
+                panic!("the teapot is before the camera")
+            };
+            assert!(grid_deviation(&at, square, *grid)[2] <= tolerance);
+        }
+        let classes = alike_sides(&patches);
+        for (k, a) in classes.iter().enumerate() {
+            for (l, b) in classes.iter().enumerate() {
+                for (i, j) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                    if a[i] == b[j] {
+                        assert_eq!(cut.grids[k][i], cut.grids[l][j], "patches {k} and {l}");
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn a_shape_at_the_eye_is_cut_finest_and_said_to_stray() {
         let d = detail(0.5);
