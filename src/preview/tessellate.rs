@@ -100,25 +100,30 @@ impl Detail {
     }
 
     /// The length (scene units) the tolerance spans where a shape sampled at `points` is seen
-    /// largest: [`Seen::At`] 0 where some reach the eye's plane, [`Seen::Behind`] where all lie
-    /// behind it.
+    /// largest: [`Seen::At`] 0 where some reach the eye's plane, [`Seen::OffFilm`] where the
+    /// film does not show them.
     pub fn tolerance_over(&self, points: impl IntoIterator<Item = DVec3>) -> Seen {
         match self.pixels_per_unit(points) {
-            None => Seen::Behind,
+            None => Seen::OffFilm,
             Some(pixels) => Seen::At(self.tolerance_px / pixels),
         }
     }
 
     /// The most pixels one scene unit spans on the film over `points` (infinite where one lies
-    /// at or behind the eye's plane), or `None` where every one lies behind it.
+    /// at or behind the eye's plane), or `None` where the film shows none of them: every one
+    /// behind the eye's plane, or every one beyond the same edge of the image.
     pub fn pixels_per_unit(&self, points: impl IntoIterator<Item = DVec3>) -> Option<f64> {
         let (mut most, mut before) = (0.0f64, false);
+        // Per edge (right, left, top, bottom): whether every point so far lies beyond it.
+        let mut beyond = [true; 4];
         for p in points {
-            let stretch = self.stretch(p);
-            before |= self.clip.row(3).dot(p.extend(1.0)) > 0.0;
-            most = most.max(stretch);
+            let c = self.clip * p.extend(1.0);
+            before |= c.w > 0.0;
+            let outside = [c.x > c.w, c.x < -c.w, c.y > c.w, c.y < -c.w].map(|o| o && c.w > 0.0);
+            beyond = [0, 1, 2, 3].map(|k| beyond[k] && outside[k]);
+            most = most.max(self.stretch(p));
         }
-        before.then_some(most)
+        (before && !beyond.contains(&true)).then_some(most)
     }
 
     /// Pixels per scene unit at `p` in the direction magnified most: the largest singular value
@@ -143,8 +148,9 @@ pub enum Seen {
     /// In front of the eye: the tolerance there (scene units; 0 where it reaches the eye's
     /// plane).
     At(f64),
-    /// Wholly behind the eye's plane: the film does not see it, only mirrors may.
-    Behind,
+    /// Not on the film (wholly behind the eye's plane, or beyond an edge of the image): only
+    /// mirrors may show it.
+    OffFilm,
 }
 
 /// How finely a curved shape is cut: `quads` along u and along v (a patch: along each side of
@@ -389,13 +395,13 @@ impl CurvedForm {
     }
 }
 
-/// The grids of a shape wholly behind the eye's plane, which only mirrors show (the film gives
-/// no tolerance there): a round shape's and a patch's fixed grids from before the preview cut
+/// The grids of a shape the film does not show (behind the eye's plane or beyond an edge of the
+/// image), which only mirrors show and which gives no tolerance there: a round shape's and a patch's fixed grids from before the preview cut
 /// shapes for the camera.
 pub const UNSEEN_QUADS: [[u32; 2]; 2] = [[64, 32], [8, 8]];
 
 /// The fitting grid where the shape is `seen`, between the fewest and the most quads of
-/// `range`; `unseen` behind the eye.
+/// `range`; `unseen` off the film.
 fn fit(
     seen: Seen,
     at: SurfaceAt,
@@ -405,7 +411,7 @@ fn fit(
 ) -> Grid {
     match seen {
         Seen::At(tolerance) => fitting_grid(at, span, tolerance, least, most),
-        Seen::Behind => Grid {
+        Seen::OffFilm => Grid {
             quads: unseen,
             within: true,
         },
@@ -463,7 +469,7 @@ fn patches_cut(patches: &[crate::fermat::BezierPatch], detail: &Detail) -> Cut {
         Seen::At(tolerance) => {
             own[k].within && grid_deviation(&surface(k), unit_square, grids[k])[2] <= tolerance
         }
-        Seen::Behind => true,
+        Seen::OffFilm => true,
     });
     Cut { grids, within }
 }
@@ -600,10 +606,15 @@ film = [36.0, 24.0]
             panic!("in front of the eye")
         };
         assert!((tolerance - 0.5 / 62.5).abs() < 1e-15);
-        // Reaching the eye's plane: no tolerance; wholly behind it: not seen.
+        // Reaching the eye's plane: no tolerance; wholly behind it, or beyond one edge of the
+        // image (x / w > 1 at x > 0.36 z), off the film; across the image, on it.
         let across = [DVec3::new(0.0, 0.0, -1.0), DVec3::new(0.0, 0.0, 1.0)];
         assert_eq!(d.tolerance_over(across), Seen::At(0.0));
-        assert_eq!(d.tolerance_over([DVec3::new(0.0, 0.0, 5.0)]), Seen::Behind);
+        assert_eq!(d.tolerance_over([DVec3::new(0.0, 0.0, 5.0)]), Seen::OffFilm);
+        let right = [DVec3::new(4.0, 0.0, -10.0), DVec3::new(9.0, 5.0, -10.0)];
+        assert_eq!(d.tolerance_over(right), Seen::OffFilm);
+        let wide = [DVec3::new(4.0, 0.0, -10.0), DVec3::new(-4.0, 0.0, -10.0)];
+        assert!(matches!(d.tolerance_over(wide), Seen::At(t) if t > 0.0));
     }
 
     /// The step that refines one direction when the other is at its most: a thin torus needs
@@ -700,7 +711,7 @@ film = [36.0, 24.0]
         assert!(area > 0.7 * 4.0 * std::f32::consts::PI * 1e-6, "{area}");
     }
 
-    /// Newell's teapot 8 units before the camera: every patch within the tolerance, the
+    /// Newell's teapot 16 units before the camera, in view: every patch within the tolerance, the
     /// patches' grids not all alike, and every pair of directions that must match cut alike.
     #[test]
     fn each_patch_is_cut_for_itself_and_its_shared_edges_alike() {
@@ -710,7 +721,7 @@ film = [36.0, 24.0]
         for patch in &mut patches {
             patch.points = patch
                 .points
-                .map(|row| row.map(|p| p + DVec3::new(0.0, -1.5, -8.0)));
+                .map(|row| row.map(|p| p + DVec3::new(0.0, 0.0, -16.0)));
         }
         let d = detail(0.5);
         let cut = patches_cut(&patches, &d);
@@ -761,7 +772,13 @@ film = [36.0, 24.0]
         let around = |cut: &Cut| cut.grids[0][0];
         assert!(around(&far) < around(&near) * 3 / 4);
         assert!(around(&at(-5.0).cut(&detail(2.0))) < around(&near));
-        // Wholly behind the eye: only mirrors show it; the fixed grid, not a report.
+        // Wholly behind the eye, or beside the view: only mirrors show it; the fixed grid, not
+        // a report.
+        let beside = CurvedForm::Sphere {
+            center: DVec3::new(8.0, 0.0, -5.0),
+            radius: 1.0,
+        };
+        assert_eq!(beside.cut(&d), at(20.0).cut(&d));
         assert_eq!(
             at(20.0).cut(&d),
             Cut {
