@@ -1,9 +1,10 @@
 //! The preview's triangles: the scene's flat primitives as they are (planes as large quads), and
 //! its curved shapes (spheres, tori, ellipsoids, cylinders, Bézier patches) cut for the camera
-//! that sees them. Each curved shape gets the coarsest grid whose flat triangles stray from the
-//! surface by at most a tolerance in pixels on the film ([`Detail`]), as real-time renderers
-//! choose a level of detail: a shape near the camera gets more triangles than the same shape far
-//! away. The ray tracers keep the exact surfaces (patches: their own fine mesh).
+//! that sees them. Each curved shape gets a coarse grid ([`fitting_grid`]) whose flat triangles
+//! stray from the surface by at most a tolerance in pixels on the film ([`Detail`]), as
+//! real-time renderers choose a level of detail: a shape near the camera gets more triangles
+//! than the same shape far away, one the film does not show a fixed grid ([`UNSEEN_QUADS`]).
+//! The ray tracers keep the exact surfaces (patches: their own fine mesh).
 
 use glam::{DMat4, DVec2, DVec3, Vec3};
 
@@ -153,9 +154,9 @@ pub enum Seen {
     OffFilm,
 }
 
-/// How finely a curved shape is cut: `quads` along u and along v (a patch: along each side of
-/// every patch), and whether its triangles keep within the tolerance (false: it stopped at
-/// the most quads allowed, or reaches the eye's plane).
+/// A grid [`fitting_grid`] found: `quads` along u and along v, and whether its triangles keep
+/// within the tolerance (false: it stopped at the most quads allowed, as where the surface
+/// reaches the eye's plane).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Grid {
     /// Quads along u and along v.
