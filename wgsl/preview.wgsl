@@ -4,7 +4,8 @@
 // points at their centres with their cosine falloff).
 // Curved mirrors show Fermat reflections: this pass writes each pixel's reflector id, and
 // wgsl/preview_reflect.wgsl draws the reflected triangles where their reflector is seen.
-// Mirrors: src/preview.rs (tessellation, the clip matrix), src/gpu/preview.rs (the pipeline).
+// Mirrors: src/preview/tessellate.rs (the triangles), src/preview/mod.rs (the clip matrix),
+// src/gpu/preview.rs (the pipeline).
 
 struct PreviewUniforms {
     clip: mat4x4<f32>,

@@ -6,13 +6,13 @@
 //! than the same shape far away, one the film does not show a fixed grid ([`UNSEEN_QUADS`]).
 //! The ray tracers keep the exact surfaces (patches: their own fine mesh).
 
-use glam::{DMat4, DVec2, DVec3, Vec3};
+use glam::{DMat4, DVec2, DVec3, DVec4, Vec3};
 
 use super::{PreviewVertex, reflector_tags, reflectors};
 use crate::fermat::Reflector as _;
 use crate::layout::{GpuPrimitive, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
 use crate::pack::FlatScene;
-use crate::scene::surface::{Surface, alike_sides, patches_mesh_cut};
+use crate::scene::surface::{Surface, grids_cut_alike, patches_mesh_cut};
 
 /// How far (pixels on the film) the preview's triangles may stray from a curved surface unless
 /// told otherwise (`chambre preview --tessellation-tolerance`).
@@ -122,15 +122,15 @@ impl Detail {
             before |= c.w > 0.0;
             let outside = [c.x > c.w, c.x < -c.w, c.y > c.w, c.y < -c.w].map(|o| o && c.w > 0.0);
             beyond = [0, 1, 2, 3].map(|k| beyond[k] && outside[k]);
-            most = most.max(self.stretch(p));
+            most = most.max(self.stretch(c));
         }
         (before && !beyond.contains(&true)).then_some(most)
     }
 
-    /// Pixels per scene unit at `p` in the direction magnified most: the largest singular value
-    /// of the projection's Jacobian (infinite at or behind the eye's plane).
-    fn stretch(&self, p: DVec3) -> f64 {
-        let c = self.clip * p.extend(1.0);
+    /// Pixels per scene unit in the direction magnified most at the point of clip coordinates
+    /// `c`: the largest singular value of the projection's Jacobian there (infinite at or
+    /// behind the eye's plane).
+    fn stretch(&self, c: DVec4) -> f64 {
         if c.w <= 0.0 {
             return f64::INFINITY;
         }
@@ -429,7 +429,7 @@ fn samples(at: SurfaceAt<'_>, span: [DVec2; 2]) -> impl Iterator<Item = DVec3> +
 }
 
 /// The patches of a Bézier shape each cut as coarsely as its tolerance allows, then each
-/// direction as finely as any other it must match ([`alike_sides`]): neighbours meet without
+/// direction as finely as any other it must match ([`grids_cut_alike`]): neighbours meet without
 /// cracks, and a patch far from the finest (most of the teapot, beside its spout) is not cut
 /// as finely.
 fn patches_cut(patches: &[crate::fermat::BezierPatch], detail: &Detail) -> Cut {
@@ -453,18 +453,7 @@ fn patches_cut(patches: &[crate::fermat::BezierPatch], detail: &Detail) -> Cut {
             )
         })
         .collect();
-    let classes = alike_sides(patches);
-    let mut finest = std::collections::HashMap::new();
-    for (grid, class) in own.iter().zip(&classes) {
-        for (&class, &quads) in class.iter().zip(&grid.quads) {
-            let n = finest.entry(class).or_insert(0);
-            *n = quads.max(*n);
-        }
-    }
-    let grids: Vec<[u32; 2]> = classes
-        .iter()
-        .map(|c| c.map(|class| finest[&class]))
-        .collect();
+    let grids = grids_cut_alike(patches, &own.iter().map(|g| g.quads).collect::<Vec<_>>());
     // A finer grid strays less, but measure rather than assume.
     let within = (0..patches.len()).all(|k| match seen[k] {
         Seen::At(tolerance) => {
@@ -737,7 +726,7 @@ film = [36.0, 24.0]
             };
             assert!(grid_deviation(&at, square, *grid)[2] <= tolerance);
         }
-        let classes = alike_sides(&patches);
+        let classes = crate::scene::surface::alike_sides(&patches);
         for (k, a) in classes.iter().enumerate() {
             for (l, b) in classes.iter().enumerate() {
                 for (i, j) in [(0, 0), (0, 1), (1, 0), (1, 1)] {

@@ -238,6 +238,21 @@ pub fn patches_mesh_cut(patches: &[BezierPatch], grids: &[[u32; 2]]) -> Triangle
     mesh
 }
 
+/// Each patch's grid from its own (`own[k]`: [along u, along v] quads), each direction raised to
+/// the finest of the directions it must match ([`alike_sides`]): grids with which
+/// [`patches_mesh_cut`]'s patches meet without cracks.
+pub fn grids_cut_alike(patches: &[BezierPatch], own: &[[u32; 2]]) -> Vec<[u32; 2]> {
+    let classes = alike_sides(patches);
+    let mut finest = std::collections::HashMap::new();
+    for (class, grid) in classes.iter().zip(own) {
+        for (&class, &quads) in class.iter().zip(grid) {
+            let n = finest.entry(class).or_insert(0);
+            *n = quads.max(*n);
+        }
+    }
+    classes.iter().map(|c| c.map(|c| finest[&c])).collect()
+}
+
 /// Which directions of the patches must be cut into as many pieces: per patch, the class of
 /// its u direction and of its v direction, two directions sharing a class where a chain of
 /// shared edges links them (an edge of one patch whose four control points are another's, in
@@ -484,16 +499,10 @@ mod tests {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/teapot.bpt");
         let mut patches = load_bezier_patches(&path).unwrap();
         orient_outward(&mut patches);
-        let classes = alike_sides(&patches);
-        let own = |k: usize| [2 + k as u32 % 5, 3 + k as u32 % 3];
-        let mut finest = std::collections::HashMap::new();
-        for (k, class) in classes.iter().enumerate() {
-            for (&class, quads) in class.iter().zip(own(k)) {
-                let n = finest.entry(class).or_insert(0);
-                *n = quads.max(*n);
-            }
-        }
-        let grids: Vec<[u32; 2]> = classes.iter().map(|c| c.map(|c| finest[&c])).collect();
+        let own: Vec<[u32; 2]> = (0..patches.len() as u32)
+            .map(|k| [2 + k % 5, 3 + k % 3])
+            .collect();
+        let grids = grids_cut_alike(&patches, &own);
         let distinct: std::collections::HashSet<_> = grids.iter().collect();
         assert!(distinct.len() > 2, "{grids:?}");
         let mesh = patches_mesh_cut(&patches, &grids);
