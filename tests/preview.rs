@@ -215,6 +215,70 @@ fn reflections_over_the_binding_limit_are_refused_with_the_previews_remedy() {
     );
 }
 
+/// Where a curved mirror reflects curved shapes (another mirror, a diffuse sphere), the
+/// window's renderer reflects them as cut for its present camera too: a camera change that
+/// cuts them anew gives the frame a preview made for that camera gives, reflections included.
+#[test]
+fn reflected_curved_shapes_are_cut_anew_with_the_camera() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let mirrors = r#"
+[[materials]]
+name = "mirror"
+model = "mirror"
+mirror = [0.9, 0.9, 0.9]
+[[shapes]]
+type = "sphere"
+center = [-0.3, 0.5, 0.0]
+radius = 0.5
+material = "mirror"
+[[shapes]]
+type = "ellipsoid"
+center = [0.8, 0.5, 0.3]
+radii = [0.3, 0.4, 0.3]
+material = "mirror"
+"#;
+    let at = |z: f64| {
+        let mut scene = scene(mirrors);
+        scene.camera.position = DVec3::new(0.0, 0.5, z);
+        scene
+    };
+    let (far, near) = (at(6.0), at(2.2));
+    let options = chambre::gpu::preview::PreviewOptions::default();
+    let mut moved =
+        chambre::gpu::preview::PreviewRenderer::new(&context, &far, &flatten(&far), options)
+            .unwrap();
+    let reflected_far = moved.reflected_triangles();
+    moved.set_camera(&near.camera).unwrap();
+    moved.draw().unwrap();
+    let made =
+        chambre::gpu::preview::PreviewRenderer::new(&context, &near, &flatten(&near), options)
+            .unwrap();
+    made.draw().unwrap();
+    assert!(
+        moved.reflected_triangles() > reflected_far,
+        "{} against {reflected_far}",
+        moved.reflected_triangles()
+    );
+    assert_eq!(moved.reflected_triangles(), made.reflected_triangles());
+    assert_eq!(
+        moved.reflected_drawn().unwrap(),
+        made.reflected_drawn().unwrap()
+    );
+    let (a, b) = (moved.image().unwrap(), made.image().unwrap());
+    let differ = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .filter(|(x, y)| x != y)
+        .count();
+    assert_eq!(
+        differ, 0,
+        "the re-cut preview's reflections differ from one made for its camera"
+    );
+}
+
 /// A camera that comes nearer a curved shape gets it cut finer, and the window's renderer,
 /// re-cutting on the camera change, draws what a preview made for that camera draws.
 #[test]
@@ -230,7 +294,7 @@ fn curved_shapes_are_cut_anew_when_the_camera_comes_nearer() {
         chambre::gpu::preview::PreviewRenderer::new(&context, &far, &flatten(&far), options)
             .unwrap();
     let triangles_far = moved.triangles();
-    moved.set_camera(&near.camera);
+    moved.set_camera(&near.camera).unwrap();
     moved.draw().unwrap();
     let made =
         chambre::gpu::preview::PreviewRenderer::new(&context, &near, &flatten(&near), options)

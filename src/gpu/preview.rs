@@ -24,7 +24,7 @@ use crate::layout::{GpuDrawArgs, GpuReflector, wgsl_prelude};
 use crate::pack::FlatScene;
 use crate::preview::{
     CurvedShapes, Cut, DEFAULT_TOLERANCE_PX, Detail, MirrorSurface, PreviewUniforms, PreviewVertex,
-    Reflector, ReflectorPass, bounded_radius, clip_matrix, flat_triangles, reflected_triangles,
+    ReflectedSet, Reflector, ReflectorPass, bounded_radius, clip_matrix, flat_triangles,
     reflectors,
 };
 use crate::render::Image;
@@ -167,6 +167,9 @@ pub struct PreviewRenderer {
     curved_mesh: Option<MainMesh>,
     curved: CurvedShapes,
     cuts: Vec<Cut>,
+    /// The flat mesh's triangles: with the curved shapes' present cut, what mirrors reflect.
+    flat_triangles: Vec<PreviewVertex>,
+    reflected_set: ReflectedSet,
     tolerance_px: f64,
     uniform_buffer: wgpu::Buffer,
     uniforms: PreviewUniforms,
@@ -234,13 +237,15 @@ impl PreviewRenderer {
             &[Some(vertex_layout)],
             &[Some(COLOR_FORMAT.into()), Some(ID_FORMAT.into())],
         );
-        let main_triangles = [flat_triangles(flat, extent), curved.triangles(&cuts)];
-        let flat_mesh = MainMesh::new(device, &main_triangles[0]);
-        let curved_mesh = MainMesh::new(device, &main_triangles[1]);
+        let flat_triangles = flat_triangles(flat, extent);
+        let curved_triangles = curved.triangles(&cuts);
+        let flat_mesh = MainMesh::new(device, &flat_triangles);
+        let curved_mesh = MainMesh::new(device, &curved_triangles);
         let mirrors = reflectors(flat);
+        let reflected_set = ReflectedSet::new(flat, options.subdivision);
         let reflected = match mirrors.is_empty() {
             true => Vec::new(),
-            false => reflected_triangles(flat, &main_triangles.concat(), options.subdivision),
+            false => reflected_set.of(&[flat_triangles.as_slice(), &curved_triangles].concat()),
         };
         let uniform_buffer =
             context.uniform_buffer("preview uniforms", bytemuck::bytes_of(&uniforms));
@@ -331,6 +336,8 @@ impl PreviewRenderer {
             curved_mesh,
             curved,
             cuts,
+            flat_triangles,
+            reflected_set,
             tolerance_px: options.tolerance_px,
             uniform_buffer,
             uniforms,
@@ -346,16 +353,24 @@ impl PreviewRenderer {
     }
 
     /// Draws through `camera` from now on (the scene's geometry and lights stay; its curved
-    /// shapes are cut anew where the camera needs other grids, the reflected ones stay as the
-    /// first camera had them).
-    pub fn set_camera(&mut self, camera: &CameraSpec) {
+    /// shapes are cut anew where the camera needs other grids, in the main pass and as mirrors
+    /// reflect them). Fails where the reflected triangles, cut anew, outgrow the device's
+    /// buffers; the renderer then draws as it did before the call.
+    pub fn set_camera(&mut self, camera: &CameraSpec) -> Result<()> {
         let eye = eye_of(camera);
         let clip = clip_matrix(camera, self.far);
         let cuts = self
             .curved
             .cuts(&Detail::new(clip, self.image_size(), self.tolerance_px));
         if cuts != self.cuts {
-            self.curved_mesh = MainMesh::new(&self.context.device, &self.curved.triangles(&cuts));
+            let curved_triangles = self.curved.triangles(&cuts);
+            if let Some(reflections) = &mut self.reflections {
+                let triangles = [self.flat_triangles.as_slice(), &curved_triangles].concat();
+                reflections
+                    .load(&self.context, &self.reflected_set.of(&triangles), eye)
+                    .map_err(|e| e.with_advice(FERMAT_ARRAYS_ADVICE))?;
+            }
+            self.curved_mesh = MainMesh::new(&self.context.device, &curved_triangles);
             self.cuts = cuts;
         }
         self.uniforms.clip = clip.as_mat4().to_cols_array_2d();
@@ -368,6 +383,7 @@ impl PreviewRenderer {
         if let Some(reflections) = &self.reflections {
             reflections.set_eye(&self.context, eye);
         }
+        Ok(())
     }
 
     /// Draws one frame into the image and waits for the device.
@@ -443,7 +459,7 @@ impl PreviewRenderer {
             return Ok(0);
         };
         let mut drawn = 0;
-        for batch in &reflections.batches {
+        for batch in &reflections.geometry.batches {
             let bytes = self.context.read_buffer(&batch.cull.args)?;
             let args: Vec<GpuDrawArgs> = bytemuck::pod_collect_to_vec(&bytes);
             let rows = &args[..batch.searches.len()];
@@ -458,9 +474,9 @@ impl PreviewRenderer {
     /// Reflected triangles a frame, summed over the curved mirrors' searches: each search's
     /// cull considers them all, and the draw runs for those whose reflection shows.
     pub fn reflected_triangles(&self) -> usize {
-        self.reflections
-            .as_ref()
-            .map_or(0, |r| r.vertex_count as usize / 3 * r.searches.len())
+        self.reflections.as_ref().map_or(0, |r| {
+            r.geometry.vertex_count as usize / 3 * r.searches.len()
+        })
     }
 }
 
@@ -526,20 +542,32 @@ struct ReflectionSetup<'a> {
 /// for every search in one dispatch, the reflected triangles' pipeline and its own depth buffer
 /// (|P − V|); it draws over the main pass's colour target, each search's shown triangles by an
 /// indirect draw. (Searches come in batches where their buffers would outgrow a binding: a
-/// solve and a cull per batch.)
+/// solve and a cull per batch.) The reflected triangles can be replaced
+/// ([`Reflections::load`]) where the main pass cuts its curved shapes anew.
 struct Reflections {
     fermat: FermatPass,
-    batches: Vec<SearchBatch>,
     /// Per search: 1 + its mirror's index (the id the main pass wrote), and its surface.
     searches: Vec<(u32, MirrorSurface)>,
+    /// Per mirror: its material.
+    materials: Vec<u32>,
+    searches_per_dispatch: Option<usize>,
     pipeline: wgpu::RenderPipeline,
     shared_group: wgpu::BindGroup,
+    far: f64,
+    color_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+    id_view: wgpu::TextureView,
+    geometry: ReflectedGeometry,
+}
+
+/// The reflected triangles' buffers and the searches' batches over them.
+#[derive(Default)]
+struct ReflectedGeometry {
+    batches: Vec<SearchBatch>,
     reflector_groups: Vec<wgpu::BindGroup>,
     vertex_count: u32,
     /// Distinct reflected vertices: one Fermat solve each.
     solve_count: u32,
-    color_view: wgpu::TextureView,
-    depth_view: wgpu::TextureView,
 }
 
 impl Reflections {
@@ -559,47 +587,11 @@ impl Reflections {
             .iter()
             .flat_map(|r| r.searches.iter().map(MirrorSurface::kind))
             .collect();
-        let fermat = FermatPass::new(context, options.steps, &kinds);
-        let (positions, solve_of) = shared_positions(triangles);
-        let fermat_vertices = super::fermat::vertex_buffer(context, &positions)?;
-        let solve_buffer = context.storage_buffer("solve of", bytemuck::cast_slice(&solve_of))?;
-        let vertices =
-            context.storage_buffer("reflected vertices", bytemuck::cast_slice(triangles))?;
         let searches: Vec<(u32, MirrorSurface)> = reflectors
             .iter()
             .enumerate()
             .flat_map(|(k, r)| r.searches.iter().map(move |&s| (k as u32 + 1, s)))
             .collect();
-        let table: Vec<[u32; 4]> = solve_of
-            .chunks(3)
-            .zip(triangles.chunks(3))
-            .map(|(s, t)| [s[0], s[1], s[2], t[0].reflector])
-            .collect();
-        let table = context.storage_buffer(
-            &format!("the {} reflected triangles", table.len()),
-            bytemuck::cast_slice(&table),
-        )?;
-        let triangle_count = triangles.len() as u32 / 3;
-        let fitting =
-            super::fermat::searches_per_solve(context, positions.len() as u32, triangle_count);
-        let per_batch = options
-            .searches_per_dispatch
-            .map_or(fitting, |n| n.clamp(1, fitting));
-        let batches = (0..searches.len())
-            .step_by(per_batch)
-            .map(|first| {
-                let range = first..(first + per_batch).min(searches.len());
-                let uniforms =
-                    search_uniforms(&searches[range.clone()], setup.eye, positions.len());
-                let solve = fermat.solve(context, &uniforms, &fermat_vertices)?;
-                let cull = fermat.cull(context, &solve, &table, triangle_count)?;
-                Ok(SearchBatch {
-                    solve,
-                    cull,
-                    searches: range,
-                })
-            })
-            .collect::<Result<Vec<_>>>()?;
         let pipeline = render_pipeline(
             device,
             setup.module,
@@ -616,66 +608,120 @@ impl Reflections {
                 buffer_entry(2, setup.lights),
             ],
         });
+        let depth = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("preview reflections"),
+            size: setup.size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let mut reflections = Reflections {
+            fermat: FermatPass::new(context, options.steps, &kinds),
+            searches,
+            materials: reflectors.iter().map(|r| r.material).collect(),
+            searches_per_dispatch: options.searches_per_dispatch,
+            pipeline,
+            shared_group,
+            far: setup.far,
+            color_view: setup.color_view.clone(),
+            depth_view: depth.create_view(&Default::default()),
+            id_view: setup.id_view.clone(),
+            geometry: ReflectedGeometry::default(),
+        };
+        reflections.load(context, triangles, setup.eye)?;
+        Ok(Some(reflections))
+    }
+
+    /// Reflects `triangles` (not empty) from now on, the eye at `eye`: their buffers, and the
+    /// searches' batches over them.
+    fn load(
+        &mut self,
+        context: &GpuContext,
+        triangles: &[PreviewVertex],
+        eye: glam::Vec3,
+    ) -> Result<()> {
+        let (positions, solve_of) = shared_positions(triangles);
+        let fermat_vertices = super::fermat::vertex_buffer(context, &positions)?;
+        let solve_buffer = context.storage_buffer("solve of", bytemuck::cast_slice(&solve_of))?;
+        let vertices =
+            context.storage_buffer("reflected vertices", bytemuck::cast_slice(triangles))?;
+        let table: Vec<[u32; 4]> = solve_of
+            .chunks(3)
+            .zip(triangles.chunks(3))
+            .map(|(s, t)| [s[0], s[1], s[2], t[0].reflector])
+            .collect();
+        let table = context.storage_buffer(
+            &format!("the {} reflected triangles", table.len()),
+            bytemuck::cast_slice(&table),
+        )?;
+        let triangle_count = triangles.len() as u32 / 3;
+        let fitting =
+            super::fermat::searches_per_solve(context, positions.len() as u32, triangle_count);
+        let per_batch = self
+            .searches_per_dispatch
+            .map_or(fitting, |n| n.clamp(1, fitting));
+        let batches = (0..self.searches.len())
+            .step_by(per_batch)
+            .map(|first| {
+                let range = first..(first + per_batch).min(self.searches.len());
+                let uniforms = search_uniforms(&self.searches[range.clone()], eye, positions.len());
+                let solve = self.fermat.solve(context, &uniforms, &fermat_vertices)?;
+                let cull = self.fermat.cull(context, &solve, &table, triangle_count)?;
+                Ok(SearchBatch {
+                    solve,
+                    cull,
+                    searches: range,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
         let reflector_groups = batches
             .iter()
             .flat_map(|batch| batch.searches.clone().map(move |search| (batch, search)))
             .map(|(batch, search)| {
-                let id = searches[search].0;
+                let id = self.searches[search].0;
                 let pass = ReflectorPass {
-                    far: setup.far as f32,
+                    far: self.far as f32,
                     id,
-                    material: reflectors[id as usize - 1].material,
+                    material: self.materials[id as usize - 1],
                     search: (search - batch.searches.start) as u32,
                     solves: positions.len() as u32,
                     _pad: [0; 3],
                 };
                 let uniforms = context.uniform_buffer("reflector pass", bytemuck::bytes_of(&pass));
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("reflector"),
-                    layout: &pipeline.get_bind_group_layout(1),
-                    entries: &[
-                        buffer_entry(0, &vertices),
-                        buffer_entry(1, &batch.solve.output),
-                        buffer_entry(2, &uniforms),
-                        buffer_entry(4, &solve_buffer),
-                        buffer_entry(5, &batch.cull.shown),
-                        texture_entry(3, setup.id_view),
-                    ],
-                })
+                context
+                    .device
+                    .create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("reflector"),
+                        layout: &self.pipeline.get_bind_group_layout(1),
+                        entries: &[
+                            buffer_entry(0, &vertices),
+                            buffer_entry(1, &batch.solve.output),
+                            buffer_entry(2, &uniforms),
+                            buffer_entry(4, &solve_buffer),
+                            buffer_entry(5, &batch.cull.shown),
+                            texture_entry(3, &self.id_view),
+                        ],
+                    })
             })
             .collect();
-        let target = |format, usage| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("preview reflections"),
-                size: setup.size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
-        let depth = target(DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT);
-        Ok(Some(Reflections {
-            fermat,
+        self.geometry = ReflectedGeometry {
             batches,
-            searches,
-            pipeline,
-            shared_group,
             reflector_groups,
             vertex_count: triangles.len() as u32,
             solve_count: positions.len() as u32,
-            color_view: setup.color_view.clone(),
-            depth_view: depth.create_view(&Default::default()),
-        }))
+        };
+        Ok(())
     }
 
     /// Every reflector's solves see the eye at `eye` from the next frame on.
     fn set_eye(&self, context: &GpuContext, eye: glam::Vec3) {
-        for batch in &self.batches {
+        for batch in &self.geometry.batches {
             let searches = &self.searches[batch.searches.clone()];
-            let reflectors = search_uniforms(searches, eye, self.solve_count as usize);
+            let count = self.geometry.solve_count as usize;
+            let reflectors = search_uniforms(searches, eye, count);
             context.queue.write_buffer(
                 &batch.solve.reflectors,
                 0,
@@ -686,7 +732,7 @@ impl Reflections {
 
     /// Records the Fermat solves of every search, then their cull.
     fn solve(&self, encoder: &mut wgpu::CommandEncoder) {
-        for batch in &self.batches {
+        for batch in &self.geometry.batches {
             self.fermat.encode(encoder, &batch.solve);
             self.fermat.encode_cull(encoder, &batch.cull);
         }
@@ -706,11 +752,11 @@ impl Reflections {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.shared_group, &[]);
-        let draws = self
-            .batches
-            .iter()
-            .flat_map(|batch| (0..batch.searches.len()).map(move |row| (&batch.cull.args, row)));
-        for (group, (args, row)) in self.reflector_groups.iter().zip(draws) {
+        let draws =
+            self.geometry.batches.iter().flat_map(|batch| {
+                (0..batch.searches.len()).map(move |row| (&batch.cull.args, row))
+            });
+        for (group, (args, row)) in self.geometry.reflector_groups.iter().zip(draws) {
             pass.set_bind_group(1, group, &[]);
             pass.draw_indirect(args, (row * size_of::<GpuDrawArgs>()) as u64);
         }

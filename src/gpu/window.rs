@@ -192,7 +192,10 @@ impl App<'_> {
                 println!("{}", self.composer.figures());
                 if let Some(screen) = &mut self.screen {
                     let coarse = screen.preview.coarse_shapes();
-                    screen.preview.set_camera(&self.composer.camera());
+                    if let Err(e) = screen.preview.set_camera(&self.composer.camera()) {
+                        self.fail(event_loop, e);
+                        return;
+                    }
                     note_coarse_shapes(&screen.preview, coarse, self.drawing.tolerance_px);
                     screen.window.request_redraw();
                 }
@@ -261,7 +264,7 @@ impl App<'_> {
         }
         surface.configure(&context.device, &config);
         let mut preview = PreviewRenderer::new(&context, self.scene, self.flat, self.drawing)?;
-        preview.set_camera(&self.composer.camera());
+        preview.set_camera(&self.composer.camera())?;
         note_coarse_shapes(&preview, 0, self.drawing.tolerance_px);
         let (present, present_layout) = present_pipeline(&context, config.format);
         let present_uniforms = context.uniform_buffer(

@@ -7,7 +7,7 @@
 //!
 //! What the preview leaves out, by design (it trades accuracy for speed): shadows, specular
 //! lobes, reflections other than curved mirrors' (spheres, tori, ellipsoids, cylinders and
-//! Bézier patches, drawn by Fermat's principle, seed 004: `reflectors`, `reflected_triangles`;
+//! Bézier patches, drawn by Fermat's principle, seed 004: `reflectors`, `ReflectedSet`;
 //! a mirror does not reflect itself, and reflects other mirrors once, as the main pass shows
 //! them) and depth of field (a lens is drawn as a pinhole at its centre; lens tilt and swing do
 //! not move a pinhole's rays). Area lights light it as points at their
@@ -240,40 +240,54 @@ fn reflector_tags(scene: &FlatScene, reflectors: &[Reflector]) -> Vec<u32> {
     tags
 }
 
-/// The triangles the reflectors reflect: every one of `triangles` (the scene's, as the main
-/// pass draws them: `tessellate`) that is not on a reflector, each cut into n² triangles, n
-/// pieces along each edge
-/// (and, where the scene has several curved mirrors, theirs uncut: each mirror reflects the
-/// others once, showing them as the main pass does): n = `subdivision`, or
-/// where it is `None`, the fewest pieces that leave no edge longer than `AUTO_PIECE` of the
-/// scene's radius (at most `MAX_AUTO_PIECES`). The raster pipeline draws a reflected triangle
-/// straight between its vertices' reflection points, where the true reflection of a straight
-/// edge is curved: subdividing is what keeps the error small (the seed subdivides its floor
-/// 16x16).
-pub fn reflected_triangles(
-    scene: &FlatScene,
-    triangles: &[PreviewVertex],
+/// How the reflectors' triangles are made from the main pass's (`tessellate`): every one not
+/// on a reflector, each cut into n² triangles, n pieces along each edge (and, where the scene
+/// has several curved mirrors, theirs uncut: each mirror reflects the others once, showing them
+/// as the main pass does): n = `subdivision`, or where it is `None`, the fewest pieces that
+/// leave no edge longer than `AUTO_PIECE` of the scene's radius (at most `MAX_AUTO_PIECES`).
+/// The raster pipeline draws a reflected triangle straight between its vertices' reflection
+/// points, where the true reflection of a straight edge is curved: subdividing is what keeps
+/// the error small (the seed subdivides its floor 16x16).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReflectedSet {
+    longest: f32,
+    several_mirrors: bool,
     subdivision: Option<u32>,
-) -> Vec<PreviewVertex> {
-    let longest = AUTO_PIECE * bounded_radius(scene);
-    let several_mirrors = reflectors(scene).len() > 1;
-    let mut out = Vec::new();
-    for t in triangles.chunks_exact(3) {
-        if t[0].reflector != 0 {
-            // A mirror's triangles, cut for the camera, are reflected in the other mirrors as
-            // they are (its own reflection pass leaves them out); a lone mirror reflects none.
-            if several_mirrors {
-                out.extend_from_slice(t);
-            }
-            continue;
+}
+
+impl ReflectedSet {
+    /// The reflected set of `scene`'s mirrors, its triangles cut as `subdivision` says.
+    pub fn new(scene: &FlatScene, subdivision: Option<u32>) -> ReflectedSet {
+        ReflectedSet {
+            longest: AUTO_PIECE * bounded_radius(scene),
+            several_mirrors: reflectors(scene).len() > 1,
+            subdivision,
         }
-        let [a, b, c] = [t[0], t[1], t[2]].map(|v| Vec3::from(v.position));
-        let edge = a.distance(b).max(b.distance(c)).max(c.distance(a));
-        let n = subdivision
-            .unwrap_or_else(|| ((edge / longest).ceil() as u32).clamp(1, MAX_AUTO_PIECES));
-        subdivide(&mut out, [t[0], t[1], t[2]], n.max(1));
     }
-    out
+
+    /// The reflected triangles made from `triangles`: a triangle's pieces depend on it alone,
+    /// so the set of a mesh's triangles is the sets of its parts, in their order.
+    pub fn of(&self, triangles: &[PreviewVertex]) -> Vec<PreviewVertex> {
+        let mut out = Vec::new();
+        for t in triangles.chunks_exact(3) {
+            if t[0].reflector != 0 {
+                // A mirror's triangles, cut for the camera, are reflected in the other mirrors
+                // as they are (its own reflection pass leaves them out); a lone mirror reflects
+                // none.
+                if self.several_mirrors {
+                    out.extend_from_slice(t);
+                }
+                continue;
+            }
+            let [a, b, c] = [t[0], t[1], t[2]].map(|v| Vec3::from(v.position));
+            let edge = a.distance(b).max(b.distance(c)).max(c.distance(a));
+            let n = self
+                .subdivision
+                .unwrap_or_else(|| ((edge / self.longest).ceil() as u32).clamp(1, MAX_AUTO_PIECES));
+            subdivide(&mut out, [t[0], t[1], t[2]], n.max(1));
+        }
+        out
+    }
 }
 
 /// The automatic subdivision's longest edge, in scene radii (`bounded_radius`).
