@@ -66,8 +66,8 @@ enum Command {
     },
     /// Draw a scene fast with the GPU's raster pipeline through the view camera's projection
     /// (film tilt, swing and shift as the ray tracer has them; curved mirrors reflect by
-    /// Fermat's principle; no shadows, other reflections or depth of field) and report the
-    /// frame time.
+    /// Fermat's principle; shadows by shadow maps with --shadows; no other reflections or
+    /// depth of field) and report the frame time.
     Preview {
         /// Scene file (TOML or glTF; see docs/scene-format.md).
         scene: PathBuf,
@@ -104,6 +104,10 @@ enum Command {
         /// that allows, for the camera that sees it.
         #[arg(long, value_parser = chambre::bench::tolerance_px, default_value_t = chambre::preview::DEFAULT_TOLERANCE_PX)]
         tessellation_tolerance: f64,
+        /// Shadows from every light, by shadow maps (1024 texels square, smaller beyond four
+        /// lights; drawn once; hard, as from a point: an area light's from its centre).
+        #[arg(long)]
+        shadows: bool,
         /// Override any scene field, e.g. --set camera.film_tilt=10 (also -D).
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -359,12 +363,14 @@ fn main() -> ExitCode {
             subdivision,
             fermat_steps,
             tessellation_tolerance,
+            shadows,
             set,
         } => {
             let options = chambre::gpu::preview::PreviewOptions {
                 tolerance_px: tessellation_tolerance,
                 subdivision,
                 steps: fermat_steps,
+                shadows,
                 ..Default::default()
             };
             match (window, output) {
@@ -764,7 +770,7 @@ fn run_preview(
 ) -> anyhow::Result<ExitCode> {
     let target = OutputTarget::prepare(output)?;
     let scene = load_and_note(path, overrides)?;
-    for omission in chambre::preview::omissions(&scene) {
+    for omission in chambre::preview::omissions(&scene, options.shadows) {
         note!("note: {omission}");
     }
     let flat = flatten(&scene);
@@ -779,6 +785,13 @@ fn run_preview(
         0 => String::new(),
         n => format!(" and {n} reflected ({} drawn)", frame.reflected_drawn),
     };
+    let shadows = match frame.shadow_maps {
+        (0, ..) => String::new(),
+        (maps, side, time) => format!(
+            ", {maps} shadow map(s) of {side}x{side} drawn once in {:.2} ms",
+            time.as_secs_f64() * 1e3
+        ),
+    };
     let curved = match frame.curved_shapes {
         0 => String::new(),
         n => format!(
@@ -788,7 +801,7 @@ fn run_preview(
     };
     note!(
         "{}: {}x{}, {} triangles{curved}{reflected} in {:.2} ms a frame (median of {frames}, drawn and \
-         finished on the device, read-back excluded) on {}",
+         finished on the device, read-back excluded{shadows}) on {}",
         output.display(),
         frame.image.width,
         frame.image.height,
@@ -830,7 +843,7 @@ fn run_window(
     }
     let save = save.unwrap_or_else(|| path.with_extension("composed.toml"));
     let scene = load_and_note(path, overrides)?;
-    for omission in chambre::preview::omissions(&scene) {
+    for omission in chambre::preview::omissions(&scene, drawing.shadows) {
         note!("note: {omission}");
     }
     let flat = flatten(&scene);

@@ -135,11 +135,15 @@ fn silhouettes_land_where_the_ray_traced_pinhole_puts_them() {
 
 #[test]
 fn the_preview_says_what_it_cannot_show() {
-    let pinhole = chambre::preview::omissions(&scene(""));
+    let pinhole = chambre::preview::omissions(&scene(""), false);
     assert_eq!(pinhole.len(), 1, "{pinhole:?}");
-    let lens = chambre::preview::omissions(&scene(
-        "f_number = 2.8\nfocus_distance = 6.0\nlens_tilt = 5.0",
-    ));
+    assert!(pinhole[0].contains("no shadows (--shadows"), "{pinhole:?}");
+    let shadowed = chambre::preview::omissions(&scene(""), true);
+    assert!(shadowed[0].contains("hard shadows only"), "{shadowed:?}");
+    let lens = chambre::preview::omissions(
+        &scene("f_number = 2.8\nfocus_distance = 6.0\nlens_tilt = 5.0"),
+        false,
+    );
     assert!(
         lens.iter()
             .any(|n| n.contains("no depth of field") && n.contains("lens tilt")),
@@ -311,5 +315,167 @@ fn curved_shapes_are_cut_anew_when_the_camera_comes_nearer() {
     assert!(
         a.pixels == b.pixels,
         "the re-cut preview differs from one made for its camera"
+    );
+}
+
+/// A floor with a sphere, a box of quads and a tilted card over it, lit by `light` (a TOML
+/// light table) and the ambient term, seen from above at 128x96.
+fn shadowed_scene(light: &str) -> Scene {
+    let text = format!(
+        r#"
+[render]
+width = 128
+height = 96
+spp = 4
+ambient = [0.2, 0.2, 0.2]
+[camera]
+position = [0.0, 5.0, 5.0]
+look_at = [0.0, 0.0, 0.0]
+focal_length = 30.0
+film = [36.0, 27.0]
+[[materials]]
+name = "white"
+model = "lambert"
+diffuse = [0.8, 0.8, 0.8]
+[[shapes]]
+type = "quad"
+corner = [-4.0, 0.0, -4.0]
+edge_u = [0.0, 0.0, 8.0]
+edge_v = [8.0, 0.0, 0.0]
+material = "white"
+[[shapes]]
+type = "sphere"
+center = [-0.9, 0.7, 0.3]
+radius = 0.45
+material = "white"
+[[shapes]]
+type = "quad"
+corner = [0.6, 0.4, -1.2]
+edge_u = [0.9, 0.0, 0.0]
+edge_v = [0.3, 0.6, -0.3]
+material = "white"
+[[shapes]]
+type = "quad"
+corner = [0.9, 0.9, 0.8]
+edge_u = [0.6, 0.0, 0.0]
+edge_v = [0.0, 0.0, 0.6]
+material = "white"
+{light}
+"#
+    );
+    Scene::from_str(Path::new("shadows.toml"), &text, &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// With `--shadows`, the preview's shadows fall where the ray tracer's do. A pixel counts as
+/// shadowed where its radiance lies nearer the ambient term alone than the unshadowed light's;
+/// the classes must agree on every pixel the light brightens well and that shows one surface
+/// (its neighbours in the unshadowed preview alike: a silhouette's pixel mixes two surfaces in
+/// the ray tracer's samples), but where the ray-traced image changes class within a pixel (a
+/// shadow's edge, which pixel filtering blurs). The
+/// lights: a point light low among the shapes (its shadows fall in five of its cube's faces),
+/// a spot, and a directional light at a slant. Without `--shadows`, nothing is shadowed.
+#[test]
+fn shadows_fall_where_the_ray_tracer_puts_them() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    for light in [
+        "[[lights]]\ntype = \"point\"\nposition = [0.1, 1.6, 0.0]\nintensity = [6.0, 6.0, 6.0]",
+        "[[lights]]\ntype = \"spot\"\nposition = [-1.0, 3.0, 1.5]\ndirection = [0.3, -1.0, -0.4]\n\
+         intensity = [30.0, 30.0, 30.0]\nouter_angle = 60.0",
+        "[[lights]]\ntype = \"directional\"\ndirection = [0.5, -1.0, -0.3]\n\
+         irradiance = [3.0, 3.0, 3.0]",
+    ] {
+        let scene = shadowed_scene(light);
+        let flat = flatten(&scene);
+        let draw = |scene: &Scene, shadows| {
+            let options = chambre::gpu::preview::PreviewOptions {
+                shadows,
+                ..Default::default()
+            };
+            chambre::gpu::preview::draw_with(&context, scene, &flatten(scene), 1, options)
+                .unwrap()
+                .image
+        };
+        let dark = shadowed_scene("");
+        let (ambient, lit) = (draw(&dark, false), draw(&scene, false));
+        let (shadowed, traced) = (draw(&scene, true), common::render_cpu(&flat));
+        let (w, h) = (traced.width, traced.height);
+        let luminance = |image: &Image, x, y| image.get(x, y).x as f64;
+        // Per pixel: whether the light brightens it well, and its class in an image.
+        let bright = |x, y| luminance(&lit, x, y) - luminance(&ambient, x, y) > 0.1;
+        let neighbours = |x: u32, y: u32| {
+            (y.saturating_sub(1)..(y + 2).min(h))
+                .flat_map(move |v| (x.saturating_sub(1)..(x + 2).min(w)).map(move |u| (u, v)))
+        };
+        let one_surface = |x, y| {
+            neighbours(x, y)
+                .all(|(u, v)| (luminance(&lit, u, v) - luminance(&lit, x, y)).abs() < 0.05)
+        };
+        let in_shadow = |image: &Image, x, y| {
+            let middle = (luminance(&lit, x, y) + luminance(&ambient, x, y)) / 2.0;
+            luminance(image, x, y) < middle
+        };
+        let mut counts = [0usize; 4]; // considered, shadowed (traced), disagreeing, at an edge
+        for y in 0..h {
+            for x in 0..w {
+                if !bright(x, y) || !one_surface(x, y) {
+                    continue;
+                }
+                counts[0] += 1;
+                let traced_class = in_shadow(&traced, x, y);
+                counts[1] += usize::from(traced_class);
+                assert!(!in_shadow(&lit, x, y));
+                if in_shadow(&shadowed, x, y) == traced_class {
+                    continue;
+                }
+                counts[2] += 1;
+                let edge = neighbours(x, y).any(|(u, v)| in_shadow(&traced, u, v) != traced_class);
+                counts[3] += usize::from(edge);
+                assert!(
+                    edge,
+                    "{light}: pixel ({x}, {y}) is {} in the preview, {} ray-traced, away \
+                     from any shadow's edge",
+                    if traced_class { "lit" } else { "shadowed" },
+                    if traced_class { "shadowed" } else { "lit" }
+                );
+            }
+        }
+        println!("{light:?}: {counts:?} (pixels lit well, shadowed, differing, at an edge)");
+        assert!(counts[0] > (w * h / 5) as usize, "{light}: {counts:?}");
+        assert!(
+            counts[1] > 100,
+            "{light}: the shapes cast shadows ({counts:?})"
+        );
+        assert!(counts[2] < counts[1] / 4, "{light}: {counts:?}");
+    }
+}
+
+/// More lights than shadow maps can be held for are refused with the reason and the remedy,
+/// not drawn with some shadows missing: 257 point lights need 1,542 maps.
+#[test]
+fn shadows_for_more_lights_than_maps_fit_are_refused() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let lights: String = (0..257)
+        .map(|k| {
+            format!(
+                "[[lights]]\ntype = \"point\"\nposition = [{}, 2.0, 0.0]\nintensity = [0.1, 0.1, 0.1]\n",
+                k as f64 * 0.01
+            )
+        })
+        .collect();
+    let scene = shadowed_scene(&lights);
+    let options = chambre::gpu::preview::PreviewOptions {
+        shadows: true,
+        ..Default::default()
+    };
+    let result = chambre::gpu::preview::draw_with(&context, &scene, &flatten(&scene), 1, options);
+    let message = result.err().expect("refused").to_string();
+    assert!(
+        message.contains("257 lights need 1542 shadow maps")
+            && message.contains("without --shadows"),
+        "{message}"
     );
 }

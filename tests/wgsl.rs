@@ -423,11 +423,11 @@ fn each_kernel_lists_exactly_the_bindings_it_uses() {
     }
 }
 
-/// The raster preview's structs (its vertex, uniforms and reflection pass) have the Rust
-/// layouts, and its shaders validate.
+/// The raster preview's structs (its vertex, uniforms, reflection pass and shadow maps' lights)
+/// have the Rust layouts, and its shaders validate.
 #[test]
 fn preview_structs_have_identical_layouts() {
-    use chambre::preview::{PreviewUniforms, PreviewVertex, ReflectorPass};
+    use chambre::preview::{PreviewUniforms, PreviewVertex, ReflectorPass, ShadowLight};
     let module = parse_and_validate(&chambre::gpu::preview::shader_source());
     layout!(
         module,
@@ -465,4 +465,14 @@ fn preview_structs_have_identical_layouts() {
         ("_pad2", offset_of!(ReflectorPass, _pad) + 8),
     ];
     check_struct(&module, "ReflectorPass", size_of::<ReflectorPass>(), &pass);
+    let shadow = [
+        ("origin", offset_of!(ShadowLight, origin)),
+        ("first", offset_of!(ShadowLight, first)),
+        ("layers", offset_of!(ShadowLight, layers)),
+        ("texel", offset_of!(ShadowLight, texel)),
+        ("_pad0", offset_of!(ShadowLight, _pad)),
+        ("_pad1", offset_of!(ShadowLight, _pad) + 4),
+    ];
+    check_struct(&module, "ShadowLight", size_of::<ShadowLight>(), &shadow);
+    parse_and_validate(chambre::gpu::preview::SHADOW_SHADER);
 }

@@ -1,7 +1,8 @@
 // The raster preview (`chambre preview`): the scene's triangles through the view camera's clip
 // matrix (film tilt, swing and shift as the ray tracer defines them), shaded per fragment with
-// Lambert's BRDF, the ambient term, emission, and every light without shadows (area lights as
-// points at their centres with their cosine falloff).
+// Lambert's BRDF, the ambient term, emission, and every light (area lights as points at their
+// centres with their cosine falloff), shadowed by its shadow map where the preview draws
+// shadows (`--shadows`; src/preview/shadows.rs makes the maps' views).
 // Curved mirrors show Fermat reflections: this pass writes each pixel's reflector id, and
 // wgsl/preview_reflect.wgsl draws the reflected triangles where their reflector is seen.
 // Mirrors: src/preview/tessellate.rs (the triangles), src/preview/mod.rs (the clip matrix),
@@ -23,6 +24,24 @@ struct PreviewUniforms {
 @group(0) @binding(0) var<uniform> preview: PreviewUniforms;
 @group(0) @binding(1) var<storage, read> preview_materials: array<GpuMaterial>;
 @group(0) @binding(2) var<storage, read> preview_lights: array<GpuLight>;
+
+// A light's shadow map (`preview::ShadowLight`): `layers` 0 (no shadows), 1 (a directional
+// light's orthographic view) or 6 (a cube of 90-degree views from `origin`).
+struct ShadowLight {
+    origin: vec3<f32>,
+    first: u32,
+    layers: u32,
+    // A texel's width: at unit distance along a cube face's axis, or across the view.
+    texel: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+@group(0) @binding(3) var shadow_maps: texture_depth_2d_array;
+@group(0) @binding(4) var shadow_sampler: sampler_comparison;
+// Per layer: world to the view's clip space (depth in [0, 1]).
+@group(0) @binding(5) var<storage, read> shadow_views: array<mat4x4<f32>>;
+@group(0) @binding(6) var<storage, read> shadow_lights: array<ShadowLight>;
 
 // One vertex of the triangle list (`preview::PreviewVertex`); the reflection pass reads them
 // from a storage buffer.
@@ -93,6 +112,58 @@ fn light_at(light: GpuLight, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return power * max(dot(n, wi), 0.0) * falloff;
 }
 
+// The face of a cube that direction `d` falls in (`preview::cube_face`): its largest
+// coordinate's axis and sign, x before y before z where they tie.
+fn cube_face(d: vec3<f32>) -> u32 {
+    let a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) {
+        return select(0u, 1u, d.x < 0.0);
+    }
+    if (a.y >= a.z) {
+        return select(2u, 3u, d.y < 0.0);
+    }
+    return select(4u, 5u, d.z < 0.0);
+}
+
+// How much of light `i` reaches `p` (normal `n`) past its shadow map: 1 lit, 0 shadowed,
+// between on a shadow's edge (the comparison sampler's 2x2 filter). The lookup stands
+// SHADOW_NORMAL_OFFSET texels off the surface so that it does not shadow itself, and a cube's
+// face is the one that moved point falls in (near a face's edge the point before the move may
+// fall in the next). Points nearer a light than its views' near plane, beyond their far
+// plane, or outside a directional light's box are lit.
+fn lit_fraction(i: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    let shadow = shadow_lights[i];
+    if (shadow.layers == 0u) {
+        return 1.0;
+    }
+    var layer = shadow.first;
+    var texel = shadow.texel;
+    if (shadow.layers == 6u) {
+        let d = p - shadow.origin;
+        texel *= max(abs(d.x), max(abs(d.y), abs(d.z)));
+    }
+    let looked_up = p + SHADOW_NORMAL_OFFSET * texel * n;
+    if (shadow.layers == 6u) {
+        layer += cube_face(looked_up - shadow.origin);
+    }
+    let q = shadow_views[layer] * vec4<f32>(looked_up, 1.0);
+    if (q.w <= 0.0) {
+        return 1.0;
+    }
+    let ndc = q.xyz / q.w;
+    var uv = vec2<f32>(0.5 * ndc.x + 0.5, 0.5 - 0.5 * ndc.y);
+    if (ndc.z < 0.0 || ndc.z > 1.0) {
+        return 1.0;
+    }
+    if (shadow.layers == 6u) {
+        // On the face's edge rounding may step out by an ulp: the faces cover every direction.
+        uv = clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0));
+    } else if (any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0))) {
+        return 1.0;
+    }
+    return textureSampleCompareLevel(shadow_maps, shadow_sampler, uv, layer, ndc.z);
+}
+
 // Radiance leaving `world` (normal `normal`) toward `eye` under the preview's lighting.
 fn shade(material_index: u32, world: vec3<f32>, normal: vec3<f32>, eye: vec3<f32>) -> vec3<f32> {
     let material = preview_materials[material_index];
@@ -108,7 +179,10 @@ fn shade(material_index: u32, world: vec3<f32>, normal: vec3<f32>, eye: vec3<f32
     }
     var radiance = material.diffuse * preview.ambient.xyz;
     for (var i = 0u; i < preview.light_count; i += 1u) {
-        radiance += material.diffuse / 3.14159265 * light_at(preview_lights[i], world, n);
+        let irradiance = light_at(preview_lights[i], world, n);
+        if (any(irradiance > vec3<f32>(0.0))) {
+            radiance += material.diffuse / 3.14159265 * irradiance * lit_fraction(i, world, n);
+        }
     }
     return radiance;
 }

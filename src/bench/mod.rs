@@ -19,6 +19,7 @@ pub mod fermat;
 pub mod frame;
 pub mod motion;
 pub mod precision;
+pub mod preview;
 pub mod rays;
 pub mod samplers;
 pub mod scale;
@@ -56,6 +57,29 @@ pub enum BenchCommand {
     /// Fermat reflections in the raster preview against the ray tracer on a curved mirror: frame
     /// times, displacement of reflected features in pixels and FLIP, by subdivision.
     Fermat(FermatArgs),
+    /// The raster preview without and with shadows: frame times, the shadow maps' drawing and
+    /// FLIP against the ray tracer.
+    Preview(PreviewArgs),
+}
+
+/// Arguments of `chambre bench preview`.
+#[derive(Debug, clap::Args)]
+pub struct PreviewArgs {
+    /// Scenes of `scenes/`, by name.
+    #[arg(long, value_delimiter = ',', default_values_t = ["tabletop".to_string(), "spheres".to_string(), "bunny".to_string(), "architecture".to_string(), "cornell_direct".to_string()])]
+    pub scenes: Vec<String>,
+    /// Timed frames each way after a warm-up.
+    #[arg(long, value_parser = positive(), default_value_t = 21)]
+    pub frames: u32,
+    /// Samples per pixel of the ray-traced reference for FLIP.
+    #[arg(long, value_parser = positive(), default_value_t = 64)]
+    pub reference_spp: u32,
+    /// Override any scene field, e.g. --set render.width=640 (also -D).
+    #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Where the report goes.
+    #[command(flatten)]
+    pub output: Output,
 }
 
 /// Arguments of `chambre bench fermat`.
@@ -472,6 +496,22 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 tolerance_px: args.tessellation_tolerance,
             };
             let report = fermat::run(&config, usable(&context)?)?;
+            finish(
+                &command_line,
+                &machine,
+                report.to_markdown(),
+                &report,
+                &args.output,
+            )
+        }
+        BenchCommand::Preview(args) => {
+            let report = preview::run(
+                usable(&context)?,
+                &args.scenes,
+                &args.set,
+                args.frames,
+                args.reference_spp,
+            )?;
             finish(
                 &command_line,
                 &machine,

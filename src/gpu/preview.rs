@@ -24,8 +24,9 @@ use crate::layout::{GpuDrawArgs, GpuReflector, wgsl_prelude};
 use crate::pack::FlatScene;
 use crate::preview::{
     CurvedShapes, Cut, DEFAULT_TOLERANCE_PX, Detail, MirrorSurface, PreviewUniforms, PreviewVertex,
-    ReflectedSet, Reflector, ReflectorPass, bounded_radius, clip_matrix, flat_triangles,
-    reflectors,
+    ReflectedSet, Reflector, ReflectorPass, SHADOW_MEMORY, SHADOW_NORMAL_OFFSET,
+    SMALLEST_SHADOW_MAP, ShadowPlan, bounded_radius, bounded_sphere, clip_matrix, flat_triangles,
+    reflectors, shadow_map_size,
 };
 use crate::render::Image;
 use crate::scene::Scene;
@@ -53,6 +54,8 @@ pub struct PreviewOptions {
     /// most; `None`: as many as the bindings hold (`gpu::fermat::searches_per_solve`). One a
     /// dispatch is how the preview ran before it batched them (BENCHMARKS.md measures both).
     pub searches_per_dispatch: Option<usize>,
+    /// Shadows from every light, by shadow maps (`preview::ShadowPlan`).
+    pub shadows: bool,
 }
 
 impl Default for PreviewOptions {
@@ -65,6 +68,7 @@ impl Default for PreviewOptions {
             subdivision: None,
             steps: 12,
             searches_per_dispatch: None,
+            shadows: false,
         }
     }
 }
@@ -90,7 +94,14 @@ pub struct PreviewFrame {
     /// Of those, the ones cut as finely as allowed that still stray further than the tolerance
     /// (or reach the eye's plane).
     pub coarse_shapes: usize,
+    /// Shadow maps drawn, texels along their side, and how long drawing them last took
+    /// (submitted and finished on the device): once for a static camera, again where a camera
+    /// change cuts curved shapes anew.
+    pub shadow_maps: (usize, u32, Duration),
 }
+
+/// The shadow maps' shader (`wgsl/preview_shadow.wgsl`): positions through a light's view.
+pub const SHADOW_SHADER: &str = include_str!("../../wgsl/preview_shadow.wgsl");
 
 /// The shader's source: constants, the shared types, the preview's stages and its reflection
 /// stages.
@@ -101,7 +112,7 @@ pub fn shader_source() -> String {
         .expect("types.wgsl is a module")
         .1;
     format!(
-        "{}\n{types}\n{}\n{}",
+        "{}\nconst SHADOW_NORMAL_OFFSET: f32 = {SHADOW_NORMAL_OFFSET:?};\n{types}\n{}\n{}",
         wgsl_prelude(),
         include_str!("../../wgsl/preview.wgsl"),
         include_str!("../../wgsl/preview_reflect.wgsl")
@@ -146,6 +157,7 @@ pub fn draw_with(
         reflected_drawn: renderer.reflected_drawn()?,
         curved_shapes: renderer.cuts.len(),
         coarse_shapes: renderer.coarse_shapes(),
+        shadow_maps: renderer.shadow_maps(),
     })
 }
 
@@ -181,6 +193,7 @@ pub struct PreviewRenderer {
     id_view: wgpu::TextureView,
     background: wgpu::Color,
     reflections: Option<Reflections>,
+    shadows: Shadows,
 }
 
 impl PreviewRenderer {
@@ -252,23 +265,36 @@ impl PreviewRenderer {
         let materials =
             context.storage_buffer("materials", bytemuck::cast_slice(&flat.materials))?;
         let lights = context.storage_buffer("lights", bytemuck::cast_slice(&flat.lights))?;
+        let plan = match options.shadows {
+            true => ShadowPlan::new(
+                &flat.lights,
+                bounded_sphere(flat),
+                shadow_map_size(ShadowPlan::layers(&flat.lights)).ok_or_else(|| {
+                    Error::Gpu(format!(
+                        "--shadows: the scene's {} lights need {} shadow maps (six for each \
+                         light but a directional one), more than {} MiB holds at {} texels a \
+                         side; preview it without --shadows",
+                        flat.lights.len(),
+                        ShadowPlan::layers(&flat.lights),
+                        SHADOW_MEMORY >> 20,
+                        SMALLEST_SHADOW_MAP
+                    ))
+                })?,
+            ),
+            false => ShadowPlan::none(flat.lights.len()),
+        };
+        let shadows = Shadows::new(context, plan)?;
+        shadows.draw(context, [&flat_mesh, &curved_mesh])?;
+        let shading = Shading {
+            uniforms: &uniform_buffer,
+            materials: &materials,
+            lights: &lights,
+            shadows: &shadows,
+        };
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("preview"),
             layout: &pipeline.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform_buffer.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: materials.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: lights.as_entire_binding(),
-                },
-            ],
+            entries: &shading.entries(),
         });
         let size = wgpu::Extent3d {
             width,
@@ -308,9 +334,7 @@ impl PreviewRenderer {
             context,
             &ReflectionSetup {
                 module: &module,
-                uniforms: &uniform_buffer,
-                materials: &materials,
-                lights: &lights,
+                shading,
                 color_view: &color_view,
                 id_view: &id_view,
                 eye,
@@ -349,6 +373,7 @@ impl PreviewRenderer {
             id_view,
             background: wgpu::Color { r, g, b, a: 1.0 },
             reflections,
+            shadows,
         })
     }
 
@@ -372,6 +397,9 @@ impl PreviewRenderer {
             }
             self.curved_mesh = MainMesh::new(&self.context.device, &curved_triangles);
             self.cuts = cuts;
+            // The curved shapes cast their shadows as cut now.
+            self.shadows
+                .draw(&self.context, [&self.flat_mesh, &self.curved_mesh])?;
         }
         self.uniforms.clip = clip.as_mat4().to_cols_array_2d();
         self.uniforms.eye = [eye.x, eye.y, eye.z, 0.0];
@@ -435,6 +463,12 @@ impl PreviewRenderer {
     /// The image as a texture view (linear radiance, `Rgba32Float`).
     pub fn view(&self) -> &wgpu::TextureView {
         &self.color_view
+    }
+
+    /// Shadow maps, texels along their side, and how long drawing them last took.
+    pub fn shadow_maps(&self) -> (usize, u32, Duration) {
+        let shadows = &self.shadows;
+        (shadows.layers.len(), shadows.side, shadows.drawn_in.get())
     }
 
     /// Triangles drawn a frame.
@@ -524,12 +558,195 @@ impl MainMesh {
     }
 }
 
-/// What the reflection passes share with the main pass.
-struct ReflectionSetup<'a> {
-    module: &'a wgpu::ShaderModule,
+/// What shading reads, the main pass's and the reflection passes' alike (their group 0).
+#[derive(Clone, Copy)]
+struct Shading<'a> {
     uniforms: &'a wgpu::Buffer,
     materials: &'a wgpu::Buffer,
     lights: &'a wgpu::Buffer,
+    shadows: &'a Shadows,
+}
+
+impl Shading<'_> {
+    fn entries(&self) -> [wgpu::BindGroupEntry<'_>; 7] {
+        [
+            buffer_entry(0, self.uniforms),
+            buffer_entry(1, self.materials),
+            buffer_entry(2, self.lights),
+            texture_entry(3, &self.shadows.maps),
+            wgpu::BindGroupEntry {
+                binding: 4,
+                resource: wgpu::BindingResource::Sampler(&self.shadows.sampler),
+            },
+            buffer_entry(5, &self.shadows.views),
+            buffer_entry(6, &self.shadows.lights),
+        ]
+    }
+}
+
+/// The lights' shadow maps (`preview::ShadowPlan`; one unread texel where the preview draws no
+/// shadows), their views and lights as the shading reads them, and what draws them.
+struct Shadows {
+    maps: wgpu::TextureView,
+    sampler: wgpu::Sampler,
+    views: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    /// Per layer: its depth target and its view's uniforms.
+    layers: Vec<(wgpu::TextureView, wgpu::BindGroup)>,
+    /// Texels along a map's side.
+    side: u32,
+    pipeline: Option<wgpu::RenderPipeline>,
+    /// How long the last drawing of the maps took.
+    drawn_in: std::cell::Cell<Duration>,
+}
+
+impl Shadows {
+    /// The maps `plan` asks for, not yet drawn; refused where they need more layers than a
+    /// texture of this device holds.
+    fn new(context: &GpuContext, plan: ShadowPlan) -> Result<Shadows> {
+        let device = &context.device;
+        let layers = plan.views.len() as u32;
+        let most = device.limits().max_texture_array_layers;
+        if layers > most {
+            return Err(Error::Gpu(format!(
+                "--shadows: the scene's {} lights need {layers} shadow maps (six for each light \
+                 but a directional one), more than this device holds in one texture \
+                 (max_texture_array_layers = {most}); preview it without --shadows",
+                plan.lights.len()
+            )));
+        }
+        let side = plan.side;
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow maps"),
+            size: wgpu::Extent3d {
+                width: side,
+                height: side,
+                depth_or_array_layers: layers.max(1),
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let maps = texture.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadow maps"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
+        let pipeline = (layers > 0).then(|| shadow_pipeline(device));
+        let layers = match &pipeline {
+            None => Vec::new(),
+            Some(pipeline) => (0..layers)
+                .map(|k| {
+                    let target = texture.create_view(&wgpu::TextureViewDescriptor {
+                        dimension: Some(wgpu::TextureViewDimension::D2),
+                        base_array_layer: k,
+                        array_layer_count: Some(1),
+                        ..Default::default()
+                    });
+                    let view = plan.views[k as usize].to_cols_array_2d();
+                    let uniforms = context.uniform_buffer("shadow view", bytemuck::bytes_of(&view));
+                    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("shadow view"),
+                        layout: &pipeline.get_bind_group_layout(0),
+                        entries: &[buffer_entry(0, &uniforms)],
+                    });
+                    (target, group)
+                })
+                .collect(),
+        };
+        let views: Vec<[[f32; 4]; 4]> = plan.views.iter().map(|v| v.to_cols_array_2d()).collect();
+        Ok(Shadows {
+            maps,
+            sampler,
+            views: context.storage_buffer("shadow views", bytemuck::cast_slice(&views))?,
+            lights: context.storage_buffer("shadow lights", bytemuck::cast_slice(&plan.lights))?,
+            layers,
+            side,
+            pipeline,
+            drawn_in: Default::default(),
+        })
+    }
+
+    /// Draws every map from `meshes` (the main pass's) and waits for the device.
+    fn draw(&self, context: &GpuContext, meshes: [&Option<MainMesh>; 2]) -> Result<()> {
+        let Some(pipeline) = &self.pipeline else {
+            return Ok(());
+        };
+        let start = Instant::now();
+        let mut encoder = context.device.create_command_encoder(&Default::default());
+        for (target, group) in &self.layers {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow map"),
+                color_attachments: &[],
+                depth_stencil_attachment: depth_attachment(target, wgpu::StoreOp::Store),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, group, &[]);
+            for mesh in meshes.into_iter().flatten() {
+                mesh.draw(&mut pass);
+            }
+        }
+        context.wait(context.queue.submit([encoder.finish()]))?;
+        self.drawn_in.set(start.elapsed());
+        Ok(())
+    }
+}
+
+/// The shadow maps' pipeline: positions only, depth only, with a slope-scaled bias so that a
+/// surface at a grazing angle to the light does not shadow itself.
+fn shadow_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("preview shadows"),
+        source: wgpu::ShaderSource::Wgsl(SHADOW_SHADER.into()),
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("shadow_vertex"),
+        layout: None,
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("shadow_vertex"),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: size_of::<PreviewVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+            })],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: wgpu::DepthBiasState {
+                constant: 0,
+                slope_scale: 2.0,
+                clamp: 0.0,
+            },
+        }),
+        multisample: Default::default(),
+        fragment: None,
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// What the reflection passes share with the main pass.
+struct ReflectionSetup<'a> {
+    module: &'a wgpu::ShaderModule,
+    shading: Shading<'a>,
     color_view: &'a wgpu::TextureView,
     id_view: &'a wgpu::TextureView,
     eye: glam::Vec3,
@@ -602,11 +819,7 @@ impl Reflections {
         let shared_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("preview reflections"),
             layout: &pipeline.get_bind_group_layout(0),
-            entries: &[
-                buffer_entry(0, setup.uniforms),
-                buffer_entry(1, setup.materials),
-                buffer_entry(2, setup.lights),
-            ],
+            entries: &setup.shading.entries(),
         });
         let depth = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("preview reflections"),

@@ -26,8 +26,13 @@ use crate::pack::FlatScene;
 use crate::scene::Scene;
 use crate::scene::surface::Surface;
 
+mod shadows;
 mod tessellate;
 
+pub use shadows::{
+    CUBE_FACES, SHADOW_MAP_SIZE, SHADOW_MEMORY, SHADOW_NORMAL_OFFSET, SMALLEST_SHADOW_MAP,
+    ShadowLight, ShadowPlan, cube_face, shadow_map_size,
+};
 use tessellate::vertex;
 pub use tessellate::{
     CurvedShapes, Cut, DEFAULT_TOLERANCE_PX, Detail, Grid, PATCH_QUADS, ROUND_QUADS, Seen,
@@ -339,17 +344,24 @@ pub fn sub_triangle(a: f32, b: f32, n: u32) -> ([(u32, u32); 3], [f32; 3]) {
     }
 }
 
-/// The radius of the scene's bounded primitives around their centre (at least 1e-6).
+/// The radius of the sphere around the scene's bounded primitives' box (half its diagonal;
+/// 1 for a scene of planes only).
 pub fn bounded_radius(scene: &FlatScene) -> f32 {
+    bounded_sphere(scene).1
+}
+
+/// The sphere around the scene's bounded primitives' box: its centre and half its diagonal
+/// (the origin and 1 for a scene of planes only).
+pub fn bounded_sphere(scene: &FlatScene) -> (Vec3, f32) {
     let bounded = &scene.prims[..scene.frame.plane_start as usize];
     let (lo, hi) = bounded.iter().map(crate::accel::primitive_bounds).fold(
         (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
         |(lo, hi), b| (lo.min(b.min.into()), hi.max(b.max.into())),
     );
     if lo.x > hi.x {
-        return 1.0;
+        return (Vec3::ZERO, 1.0);
     }
-    ((hi - lo).length() / 2.0).max(1e-6)
+    ((lo + hi) / 2.0, ((hi - lo).length() / 2.0).max(1e-6))
 }
 
 /// The clip matrix of `camera` for wgpu (depth in [0, 1]), with the far plane `far`
@@ -366,16 +378,20 @@ pub fn clip_matrix(camera: &CameraSpec, far: f64) -> DMat4 {
     depth * gl
 }
 
-/// What the preview cannot show of `scene`'s camera, one sentence each (said to the user).
-pub fn omissions(scene: &Scene) -> Vec<String> {
+/// What the preview cannot show of `scene` (drawn with or without `shadows`), one sentence
+/// each (said to the user).
+pub fn omissions(scene: &Scene, shadows: bool) -> Vec<String> {
     let camera = &scene.camera;
-    let mut notes = vec![
-        "the preview has no shadows or specular lobes; curved mirrors (spheres, tori, \
-         ellipsoids, cylinders, Bezier patches) reflect the scene by Fermat's principle (one \
-         reflection per point and surface; each other once, not themselves), other mirrors \
-         show their diffuse term only"
-            .into(),
-    ];
+    let mut notes = vec![format!(
+        "the preview has {} no specular lobes; curved mirrors (spheres, tori, ellipsoids, \
+         cylinders, Bezier patches) reflect the scene by Fermat's principle (one reflection per \
+         point and surface; each other once, not themselves), other mirrors show their diffuse \
+         term only",
+        match shadows {
+            true => "hard shadows only (shadow maps; area lights' from their centres) and",
+            false => "no shadows (--shadows draws them by shadow maps) and",
+        }
+    )];
     if !camera.is_pinhole() {
         notes.push(format!(
             "the preview shows no depth of field: the f/{} lens is drawn as a pinhole at its \

@@ -1,0 +1,346 @@
+//! The preview's shadows (`chambre preview --shadows`): a depth map per light, drawn once from
+//! the main pass's triangles (the scene is static; a camera change that cuts curved shapes
+//! anew draws them again), looked up per fragment by `lit_fraction` in `wgsl/preview.wgsl`.
+//!
+//! - Point and spot lights, and area lights as the preview lights them (a point at the centre),
+//!   get a cube of six 90° views (`CUBE_FACES`; the face a direction falls in: `cube_face`).
+//!   An area light's cube stands `EMITTER_CLEARANCE` of its far distance in front of the light,
+//!   off its emitting surface.
+//! - Directional lights get one orthographic view over the sphere that bounds the scene's
+//!   bounded primitives; receivers outside it (the far parts of a plane) are lit.
+//! - Each view's far plane lies beyond the bounded primitives; its near plane at `NEAR` of that
+//!   distance. Casters nearer a light than that cast no shadow, and receivers outside a view
+//!   are lit.
+//!
+//! The shadows are hard, as from a point: the ray tracer's area lights give soft ones. Each
+//! map is `SHADOW_MAP_SIZE` texels square, or smaller where the scene's lights need more than
+//! `SHADOW_MEMORY` of them at that size (`shadow_map_size`), filtered 2x2 by the comparison
+//! sampler; a fragment is looked up `SHADOW_NORMAL_OFFSET` texels off its surface along its
+//! normal, and the maps are drawn with a slope-scaled depth bias, so that surfaces do not
+//! shadow themselves.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3, Vec4};
+
+use crate::layout::{GpuLight, LIGHT_AREA, LIGHT_DIRECTIONAL, LIGHT_TRIANGLE};
+
+/// Texels along each side of a shadow map, at most.
+pub const SHADOW_MAP_SIZE: u32 = 1024;
+/// Texels along each side of a shadow map, at least.
+pub const SMALLEST_SHADOW_MAP: u32 = 128;
+/// The bytes the maps may take together (4 a texel): 24 maps of 1024², four cubes.
+pub const SHADOW_MEMORY: u64 = 96 << 20;
+
+/// The side of `layers` shadow maps: `SHADOW_MAP_SIZE`, halved until they fit in
+/// `SHADOW_MEMORY`; `None` where not even `SMALLEST_SHADOW_MAP` fits.
+pub fn shadow_map_size(layers: u32) -> Option<u32> {
+    let mut side = SHADOW_MAP_SIZE;
+    while u64::from(layers) * u64::from(side) * u64::from(side) * 4 > SHADOW_MEMORY {
+        side /= 2;
+        if side < SMALLEST_SHADOW_MAP {
+            return None;
+        }
+    }
+    Some(side)
+}
+/// How far (texels of its map) a fragment is moved along its normal before its lookup.
+pub const SHADOW_NORMAL_OFFSET: f32 = 1.5;
+/// A view's near plane, in parts of its far distance.
+pub const NEAR: f32 = 1e-3;
+/// How far in front of an area light its cube stands, in parts of its far distance.
+pub const EMITTER_CLEARANCE: f32 = 2.0 * NEAR;
+
+/// The six faces of a light's cube, in layer order: the direction each looks along and its up.
+pub const CUBE_FACES: [(Vec3, Vec3); 6] = [
+    (Vec3::X, Vec3::Y),
+    (Vec3::NEG_X, Vec3::Y),
+    (Vec3::Y, Vec3::Z),
+    (Vec3::NEG_Y, Vec3::Z),
+    (Vec3::Z, Vec3::Y),
+    (Vec3::NEG_Z, Vec3::Y),
+];
+
+/// The face of a cube (index into `CUBE_FACES`) that direction `d` falls in: its largest
+/// coordinate's axis and sign, x before y before z where they tie (`cube_face` in
+/// wgsl/preview.wgsl).
+pub fn cube_face(d: Vec3) -> u32 {
+    let a = d.abs();
+    if a.x >= a.y && a.x >= a.z {
+        u32::from(d.x < 0.0)
+    } else if a.y >= a.z {
+        2 + u32::from(d.y < 0.0)
+    } else {
+        4 + u32::from(d.z < 0.0)
+    }
+}
+
+/// One light's shadow map as the fragment shader finds it (`ShadowLight` in
+/// wgsl/preview.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct ShadowLight {
+    /// Where a cube stands (point, spot and area lights); unused for a directional light.
+    pub origin: [f32; 3],
+    /// Its first layer in the maps' array.
+    pub first: u32,
+    /// Its layers: 0 (no shadows), 1 (directional) or 6 (a cube).
+    pub layers: u32,
+    /// A texel's width in scene units: at unit distance along a cube face's axis (times the
+    /// distance there), or across the directional view.
+    pub texel: f32,
+    /// Padding to the WGSL layout.
+    pub _pad: [u32; 2],
+}
+
+/// Every light's shadow map: per light its entry, and per layer its view's matrix (world to
+/// wgpu clip space, depth in [0, 1]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShadowPlan {
+    /// Per light of the scene's light array: its map's entry.
+    pub lights: Vec<ShadowLight>,
+    /// Per layer of the maps: its view.
+    pub views: Vec<Mat4>,
+    /// Texels along each side of a map.
+    pub side: u32,
+}
+
+impl ShadowPlan {
+    /// The maps of `lights`, `side` texels square, over a scene whose bounded primitives lie in
+    /// the sphere at `center` of radius `radius`.
+    pub fn new(lights: &[GpuLight], (center, radius): (Vec3, f32), side: u32) -> ShadowPlan {
+        let mut plan = ShadowPlan {
+            lights: Vec::new(),
+            views: Vec::new(),
+            side,
+        };
+        for light in lights {
+            let first = plan.views.len() as u32;
+            let entry = if light.kind == LIGHT_DIRECTIONAL {
+                plan.views
+                    .push(directional_view(Vec3::from(light.p0), (center, radius)));
+                ShadowLight {
+                    first,
+                    layers: 1,
+                    texel: 2.0 * radius / side as f32,
+                    ..Default::default()
+                }
+            } else {
+                let origin = cube_origin(light, (center, radius));
+                let far = 1.01 * (origin.distance(center) + radius);
+                let projection = quarter_turn_perspective(NEAR * far, far);
+                for (forward, up) in CUBE_FACES {
+                    plan.views.push(projection * look_to(origin, forward, up));
+                }
+                ShadowLight {
+                    origin: origin.to_array(),
+                    first,
+                    layers: 6,
+                    texel: 2.0 / side as f32,
+                    ..Default::default()
+                }
+            };
+            plan.lights.push(entry);
+        }
+        plan
+    }
+
+    /// No shadows: an entry with no layers per light.
+    pub fn none(light_count: usize) -> ShadowPlan {
+        ShadowPlan {
+            lights: vec![ShadowLight::default(); light_count],
+            views: Vec::new(),
+            side: 1,
+        }
+    }
+
+    /// The layers `lights` need: six for each light but a directional one's one.
+    pub fn layers(lights: &[GpuLight]) -> u32 {
+        lights
+            .iter()
+            .map(|l| if l.kind == LIGHT_DIRECTIONAL { 1 } else { 6 })
+            .sum()
+    }
+}
+
+/// Where `light`'s cube stands: a point or spot light's position; an area light's centre (where
+/// the preview lights it from), moved `EMITTER_CLEARANCE` of its far distance along its
+/// normal, off the emitting surface the cube would otherwise cut.
+fn cube_origin(light: &GpuLight, (center, radius): (Vec3, f32)) -> Vec3 {
+    let [p0, p1, p2] = [light.p0, light.p1, light.p2].map(Vec3::from);
+    let middle = match light.kind {
+        LIGHT_AREA => p0 + 0.5 * (p1 + p2),
+        LIGHT_TRIANGLE => p0 + (p1 + p2) / 3.0,
+        _ => return p0,
+    };
+    let far = middle.distance(center) + radius;
+    middle + EMITTER_CLEARANCE * far * p1.cross(p2).normalize_or_zero()
+}
+
+/// The orthographic view along a directional light (`toward` points to the light) over the
+/// sphere at `center` of radius `radius`: its box is the sphere's, from 2 radii before it.
+fn directional_view(toward: Vec3, (center, radius): (Vec3, f32)) -> Mat4 {
+    let forward = -toward.normalize();
+    let eye = center - 2.0 * radius * forward;
+    let up = forward.any_orthonormal_vector();
+    // x and y over [-radius, radius] to [-1, 1]; depth 0 to 4 radii to [0, 1].
+    let projection = Mat4::from_cols(
+        Vec4::new(1.0 / radius, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, 1.0 / radius, 0.0, 0.0),
+        Vec4::new(0.0, 0.0, -1.0 / (4.0 * radius), 0.0),
+        Vec4::W,
+    );
+    projection * look_to(eye, forward, up)
+}
+
+/// The view from `eye` looking along `forward` with `up` upward: x right, y up, looking down
+/// -z (right-handed, as OpenGL's).
+fn look_to(eye: Vec3, forward: Vec3, up: Vec3) -> Mat4 {
+    let f = forward.normalize();
+    let right = f.cross(up).normalize();
+    let up = right.cross(f);
+    Mat4::from_cols(
+        Vec4::new(right.x, up.x, -f.x, 0.0),
+        Vec4::new(right.y, up.y, -f.y, 0.0),
+        Vec4::new(right.z, up.z, -f.z, 0.0),
+        Vec4::new(-right.dot(eye), -up.dot(eye), f.dot(eye), 1.0),
+    )
+}
+
+/// The perspective of a 90° square view looking down -z, depth `near` to `far` mapped to
+/// [0, 1] (wgpu's).
+fn quarter_turn_perspective(near: f32, far: f32) -> Mat4 {
+    Mat4::from_cols(
+        Vec4::X,
+        Vec4::Y,
+        Vec4::new(0.0, 0.0, far / (near - far), -1.0),
+        Vec4::new(0.0, 0.0, near * far / (near - far), 0.0),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::{LIGHT_POINT, LIGHT_SPOT};
+
+    fn light(kind: u32, p0: Vec3) -> GpuLight {
+        GpuLight {
+            p0: p0.to_array(),
+            kind,
+            p1: [0.5, 0.0, 0.0],
+            p2: [0.0, 0.0, 0.5],
+            color: [1.0; 3],
+            ..Default::default()
+        }
+    }
+
+    /// A point seen by a view lands in its clip volume (x, y in [-1, 1], depth in [0, 1]).
+    fn inside(view: Mat4, p: Vec3) -> bool {
+        let q = view.project_point3(p);
+        q.x.abs() <= 1.0 + 1e-5 && q.y.abs() <= 1.0 + 1e-5 && (0.0..=1.0).contains(&q.z)
+    }
+
+    /// Every point of the bounding sphere falls in the face `cube_face` picks for it, for a
+    /// point light inside the sphere, on it and far outside it (the faces cover the directions,
+    /// and the far plane the sphere).
+    #[test]
+    fn each_direction_falls_in_the_face_picked_for_it() {
+        let sphere = (Vec3::new(0.3, -0.2, 0.1), 2.0);
+        let mut state = 7u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        for position in [
+            Vec3::ZERO,
+            Vec3::new(0.0, 2.0, 0.0),
+            Vec3::new(5.0, 9.0, -4.0),
+        ] {
+            let plan = ShadowPlan::new(&[light(LIGHT_POINT, position)], sphere, 1024);
+            assert_eq!(plan.views.len(), 6);
+            for _ in 0..2000 {
+                let d = Vec3::new(next(), next(), next());
+                if d.length() > 1.0 || d.length() < 1e-3 {
+                    continue;
+                }
+                let p = sphere.0 + sphere.1 * d;
+                if p.distance(position) < 1e-2 {
+                    continue;
+                }
+                let face = cube_face(p - position) as usize;
+                assert!(
+                    inside(plan.views[face], p),
+                    "{p} from {position}: face {face}"
+                );
+            }
+        }
+    }
+
+    /// Maps keep 1024 texels a side up to four cubes, then halve as the lights need more, down
+    /// to 128; beyond, none fit.
+    #[test]
+    fn maps_shrink_to_fit_their_memory() {
+        assert_eq!(shadow_map_size(1), Some(1024));
+        assert_eq!(shadow_map_size(24), Some(1024));
+        assert_eq!(shadow_map_size(25), Some(512));
+        assert_eq!(shadow_map_size(96), Some(512));
+        assert_eq!(shadow_map_size(1536), Some(128));
+        assert_eq!(shadow_map_size(1537), None);
+    }
+
+    /// The faces tie toward x, then y: a direction on a cube's edge gets one face, the same in
+    /// both twins.
+    #[test]
+    fn ties_go_to_the_first_axis() {
+        assert_eq!(cube_face(Vec3::new(1.0, 1.0, 1.0)), 0);
+        assert_eq!(cube_face(Vec3::new(-1.0, 1.0, 1.0)), 1);
+        assert_eq!(cube_face(Vec3::new(0.0, -1.0, 1.0)), 3);
+        assert_eq!(cube_face(Vec3::new(0.0, 0.0, -1.0)), 5);
+    }
+
+    /// A directional light's view holds the whole bounding sphere, whatever its direction.
+    #[test]
+    fn a_directional_view_holds_the_bounding_sphere() {
+        let sphere = (Vec3::new(1.0, 2.0, 3.0), 0.5);
+        for toward in [Vec3::Y, Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 0.0, -1.0)] {
+            let plan = ShadowPlan::new(&[light(LIGHT_DIRECTIONAL, toward)], sphere, 1024);
+            assert_eq!(plan.lights[0].layers, 1);
+            for d in [
+                Vec3::X,
+                Vec3::NEG_X,
+                Vec3::Y,
+                Vec3::NEG_Y,
+                Vec3::Z,
+                Vec3::NEG_Z,
+            ] {
+                assert!(
+                    inside(plan.views[0], sphere.0 + 0.999 * sphere.1 * d),
+                    "{toward} {d}"
+                );
+            }
+        }
+    }
+
+    /// Layers follow the lights: a cube per local light, one per directional light; an area
+    /// light's cube stands off its surface, on the side it emits to.
+    #[test]
+    fn layers_follow_the_lights() {
+        let sphere = (Vec3::ZERO, 1.0);
+        let lights = [
+            light(LIGHT_SPOT, Vec3::Y),
+            light(LIGHT_DIRECTIONAL, Vec3::Y),
+            light(LIGHT_AREA, Vec3::new(0.0, 3.0, 0.0)),
+        ];
+        assert_eq!(ShadowPlan::layers(&lights), 13);
+        let plan = ShadowPlan::new(&lights, sphere, 512);
+        assert_eq!(plan.lights[0].texel, 2.0 / 512.0);
+        let firsts: Vec<(u32, u32)> = plan.lights.iter().map(|l| (l.first, l.layers)).collect();
+        assert_eq!(firsts, [(0, 6), (6, 1), (7, 6)]);
+        assert_eq!(plan.views.len(), 13);
+        // Edges x and z: the normal x × z = -y.
+        let origin = Vec3::from(plan.lights[2].origin);
+        assert!(origin.y < 3.0 && (origin.x - 0.25).abs() < 1e-6, "{origin}");
+        assert_eq!(ShadowPlan::none(3).lights, vec![ShadowLight::default(); 3]);
+    }
+}
