@@ -371,9 +371,9 @@ material = "white"
 /// the classes must agree on every pixel the light brightens well and that shows one surface
 /// (its neighbours in the unshadowed preview alike: a silhouette's pixel mixes two surfaces in
 /// the ray tracer's samples), but where the ray-traced image changes class within a pixel (a
-/// shadow's edge, which pixel filtering blurs). The
-/// lights: a point light low among the shapes (its shadows fall in five of its cube's faces),
-/// a spot, and a directional light at a slant. Without `--shadows`, nothing is shadowed.
+/// shadow's edge, which pixel filtering blurs). The lights: a point light low among the
+/// shapes (its shadows fall in four of its cube's faces, ±x and ±z), a spot, and a directional
+/// light at a slant. Without `--shadows`, nothing is shadowed.
 #[test]
 fn shadows_fall_where_the_ray_tracer_puts_them() {
     let Some(context) = common::gpu_context() else {
