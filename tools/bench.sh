@@ -29,6 +29,9 @@ mkdir -p bench
             | grep -v '^note:'
     done
     echo
+    # The preview without and with shadows: frame time, the maps' drawing, FLIP.
+    "$chambre" bench preview --json bench/preview.json
+    echo
     "$chambre" bench motion --size 768 --runs "$runs" --json bench/motion.json
     echo
     # Fermat reflections in the preview against the ray tracer, by subdivision: a sphere, a
