@@ -11,6 +11,10 @@
 //! each pixel sees (and the mirror's colour as if it reflected the background), and the
 //! reflection pass draws each search's listed triangles over its mirror's pixels
 //! (`wgsl/preview_reflect.wgsl`).
+//!
+//! With shadows (`PreviewOptions::shadows`), each light's shadow maps are drawn once from the
+//! main pass's triangles (`Shadows`, `wgsl/preview_shadow.wgsl`) and read by the shading of both
+//! passes.
 
 use std::time::{Duration, Instant};
 

@@ -5,7 +5,8 @@
 //! swing and shift are a rotation of the view and an off-axis frustum). The GPU side is
 //! `gpu::preview`, its shader `wgsl/preview.wgsl`.
 //!
-//! What the preview leaves out, by design (it trades accuracy for speed): shadows, specular
+//! What the preview leaves out, by design (it trades accuracy for speed): shadows unless asked
+//! (`shadows`: hard ones, by shadow maps), specular
 //! lobes, reflections other than curved mirrors' (spheres, tori, ellipsoids, cylinders and
 //! Bézier patches, drawn by Fermat's principle, seed 004: `reflectors`, `ReflectedSet`;
 //! a mirror does not reflect itself, and reflects other mirrors once, as the main pass shows
