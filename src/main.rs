@@ -108,6 +108,10 @@ enum Command {
         /// lights; drawn once; hard, as from a point: an area light's from its centre).
         #[arg(long)]
         shadows: bool,
+        /// With --shadows: an area light's shadow maps stand at the centres of N x N strata of
+        /// it (N² cubes), for soft shadows; 1 is its centre.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=8), default_value_t = 1, requires = "shadows")]
+        area_shadow_samples: u32,
         /// Override any scene field, e.g. --set camera.film_tilt=10 (also -D).
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -364,6 +368,7 @@ fn main() -> ExitCode {
             fermat_steps,
             tessellation_tolerance,
             shadows,
+            area_shadow_samples,
             set,
         } => {
             let options = chambre::gpu::preview::PreviewOptions {
@@ -371,6 +376,7 @@ fn main() -> ExitCode {
                 subdivision,
                 steps: fermat_steps,
                 shadows,
+                area_shadow_samples,
                 ..Default::default()
             };
             match (window, output) {

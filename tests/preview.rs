@@ -479,3 +479,58 @@ fn shadows_for_more_lights_than_maps_fit_are_refused() {
         "{message}"
     );
 }
+
+/// An area light's shadows from 3 x 3 cubes over its surface come nearer the ray tracer's soft
+/// shadows than those from one cube at its centre: the mean difference over the pixels of one
+/// surface the light brightens well shrinks, most where the shadows are (pixels the two
+/// previews tell apart).
+#[test]
+fn an_area_lights_shadow_maps_over_its_surface_soften_its_shadows() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let light = "[[lights]]\ntype = \"area\"\ncorner = [-0.6, 2.2, -0.6]\nedge_u = [1.2, 0.0, 0.0]\n\
+                 edge_v = [0.0, 0.0, 1.2]\nradiance = [4.0, 4.0, 4.0]\nsamples = 16";
+    let scene = shadowed_scene(light);
+    let flat = flatten(&scene);
+    let mut traced = scene.clone();
+    traced.render.spp = 16;
+    let traced = common::render_cpu(&flatten(&traced));
+    let draw = |shadows, area_shadow_samples| {
+        let options = chambre::gpu::preview::PreviewOptions {
+            shadows,
+            area_shadow_samples,
+            ..Default::default()
+        };
+        chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options)
+            .unwrap()
+            .image
+    };
+    let (lit, hard, soft) = (draw(false, 1), draw(true, 1), draw(true, 3));
+    let (w, h) = (traced.width, traced.height);
+    let value = |image: &Image, x, y| image.get(x, y).x as f64;
+    let (mut hard_error, mut soft_error, mut apart) = (0.0, 0.0, 0usize);
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let one_surface = (y - 1..y + 2).all(|v| {
+                (x - 1..x + 2).all(|u| (value(&lit, u, v) - value(&lit, x, y)).abs() < 0.05)
+            });
+            if !one_surface || (value(&hard, x, y) - value(&soft, x, y)).abs() < 1e-3 {
+                continue;
+            }
+            apart += 1;
+            hard_error += (value(&hard, x, y) - value(&traced, x, y)).abs();
+            soft_error += (value(&soft, x, y) - value(&traced, x, y)).abs();
+        }
+    }
+    println!(
+        "{apart} pixels apart: mean difference {:.4} with one cube, {:.4} with nine",
+        hard_error / apart as f64,
+        soft_error / apart as f64
+    );
+    assert!(apart > 200, "{apart}");
+    assert!(
+        soft_error < 0.5 * hard_error,
+        "{soft_error} against {hard_error}"
+    );
+}

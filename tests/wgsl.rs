@@ -466,12 +466,10 @@ fn preview_structs_have_identical_layouts() {
     ];
     check_struct(&module, "ReflectorPass", size_of::<ReflectorPass>(), &pass);
     let shadow = [
-        ("origin", offset_of!(ShadowLight, origin)),
         ("first", offset_of!(ShadowLight, first)),
         ("layers", offset_of!(ShadowLight, layers)),
         ("texel", offset_of!(ShadowLight, texel)),
-        ("_pad0", offset_of!(ShadowLight, _pad)),
-        ("_pad1", offset_of!(ShadowLight, _pad) + 4),
+        ("origins", offset_of!(ShadowLight, origins)),
     ];
     check_struct(&module, "ShadowLight", size_of::<ShadowLight>(), &shadow);
     parse_and_validate(chambre::gpu::preview::SHADOW_SHADER);

@@ -25,16 +25,15 @@ struct PreviewUniforms {
 @group(0) @binding(1) var<storage, read> preview_materials: array<GpuMaterial>;
 @group(0) @binding(2) var<storage, read> preview_lights: array<GpuLight>;
 
-// A light's shadow map (`preview::ShadowLight`): `layers` 0 (no shadows), 1 (a directional
-// light's orthographic view) or 6 (a cube of 90-degree views from `origin`).
+// A light's shadow maps (`preview::ShadowLight`): `layers` 0 (no shadows), 1 (a directional
+// light's orthographic view) or six per cube of 90-degree views (an area light's several),
+// the cubes standing at `shadow_origins[origins]` and on.
 struct ShadowLight {
-    origin: vec3<f32>,
     first: u32,
     layers: u32,
     // A texel's width: at unit distance along a cube face's axis, or across the view.
     texel: f32,
-    _pad0: u32,
-    _pad1: u32,
+    origins: u32,
 }
 
 @group(0) @binding(3) var shadow_maps: texture_depth_2d_array;
@@ -42,6 +41,8 @@ struct ShadowLight {
 // Per layer: world to the view's clip space (depth in [0, 1]).
 @group(0) @binding(5) var<storage, read> shadow_views: array<mat4x4<f32>>;
 @group(0) @binding(6) var<storage, read> shadow_lights: array<ShadowLight>;
+// Per cube: where it stands (w unused).
+@group(0) @binding(7) var<storage, read> shadow_origins: array<vec4<f32>>;
 
 // One vertex of the triangle list (`preview::PreviewVertex`); the reflection pass reads them
 // from a storage buffer.
@@ -125,28 +126,38 @@ fn cube_face(d: vec3<f32>) -> u32 {
     return select(4u, 5u, d.z < 0.0);
 }
 
-// How much of light `i` reaches `p` (normal `n`) past its shadow map: 1 lit, 0 shadowed,
-// between on a shadow's edge (the comparison sampler's 2x2 filter). The lookup stands
+// How much of light `i` reaches `p` (normal `n`) past its shadow maps: 1 lit, 0 shadowed,
+// between on a shadow's edge (the comparison sampler's 2x2 filter) or, for an area light's
+// several cubes, where some see `p` and some do not (their mean). The lookup stands
 // SHADOW_NORMAL_OFFSET texels off the surface so that it does not shadow itself, and a cube's
 // face is the one that moved point falls in (near a face's edge the point before the move may
-// fall in the next). Points nearer a light than its views' near plane, beyond their far
-// plane, or outside a directional light's box are lit.
+// fall in the next).
 fn lit_fraction(i: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let shadow = shadow_lights[i];
     if (shadow.layers == 0u) {
         return 1.0;
     }
-    var layer = shadow.first;
-    var texel = shadow.texel;
-    if (shadow.layers == 6u) {
-        let d = p - shadow.origin;
-        texel *= max(abs(d.x), max(abs(d.y), abs(d.z)));
+    if (shadow.layers == 1u) {
+        return map_lit(shadow.first, p + SHADOW_NORMAL_OFFSET * shadow.texel * n, false);
     }
-    let looked_up = p + SHADOW_NORMAL_OFFSET * texel * n;
-    if (shadow.layers == 6u) {
-        layer += cube_face(looked_up - shadow.origin);
+    let cubes = shadow.layers / 6u;
+    var lit = 0.0;
+    for (var k = 0u; k < cubes; k += 1u) {
+        let origin = shadow_origins[shadow.origins + k].xyz;
+        let d = p - origin;
+        let texel = shadow.texel * max(abs(d.x), max(abs(d.y), abs(d.z)));
+        let looked_up = p + SHADOW_NORMAL_OFFSET * texel * n;
+        lit += map_lit(shadow.first + 6u * k + cube_face(looked_up - origin), looked_up, true);
     }
-    let q = shadow_views[layer] * vec4<f32>(looked_up, 1.0);
+    return lit / f32(cubes);
+}
+
+// Whether map `layer` sees `x` (1), does not (0), or between on an edge. Points nearer its
+// light than the view's near plane or beyond its far plane are lit, as are points outside a
+// directional light's box; a cube's face is chosen so that `x` is in it (`in_cube`), up to
+// rounding at its edge.
+fn map_lit(layer: u32, x: vec3<f32>, in_cube: bool) -> f32 {
+    let q = shadow_views[layer] * vec4<f32>(x, 1.0);
     if (q.w <= 0.0) {
         return 1.0;
     }
@@ -155,8 +166,7 @@ fn lit_fraction(i: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if (ndc.z < 0.0 || ndc.z > 1.0) {
         return 1.0;
     }
-    if (shadow.layers == 6u) {
-        // On the face's edge rounding may step out by an ulp: the faces cover every direction.
+    if (in_cube) {
         uv = clamp(uv, vec2<f32>(0.0), vec2<f32>(1.0));
     } else if (any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0))) {
         return 1.0;

@@ -183,6 +183,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             steps: config.steps,
             searches_per_dispatch: config.searches_per_dispatch,
             shadows: false,
+            area_shadow_samples: 1,
         };
         let frame = draw_with(context, &scene, &flat, config.frames.max(1), options)?;
         let placed = displacements(context, &scene, &flat, &reflector, &clip, options)?;

@@ -74,6 +74,10 @@ pub struct PreviewArgs {
     /// Samples per pixel of the ray-traced reference for FLIP.
     #[arg(long, value_parser = positive(), default_value_t = 64)]
     pub reference_spp: u32,
+    /// Where a scene has area lights, a third preview with their shadow maps at N x N points
+    /// of each (1: none).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=8), default_value_t = 3)]
+    pub area_shadow_samples: u32,
     /// Override any scene field, e.g. --set render.width=640 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,
@@ -511,6 +515,7 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 &args.set,
                 args.frames,
                 args.reference_spp,
+                args.area_shadow_samples,
             )?;
             finish(
                 &command_line,

@@ -1,7 +1,8 @@
 //! The raster preview's shadows traded against time (`chambre bench preview`): each scene
-//! previewed without and with `--shadows`, the frame time (median of the timed frames, the
-//! two interleaved), the shadow maps' one-off drawing time, and FLIP of the whole image
-//! against the ray tracer's (CPU path) at many samples per pixel. Both previews leave out what
+//! previewed without and with `--shadows` (and, where it has area lights, with n x n cubes of
+//! shadow maps over each), the frame time (median of the timed frames, the ways interleaved),
+//! the shadow maps' one-off drawing time, and FLIP of the whole image against the ray
+//! tracer's (CPU path) at many samples per pixel. Both previews leave out what
 //! the preview always does (specular lobes, depth of field, mirrors but curved ones): what
 //! moves between the two rows is what the shadows buy.
 
@@ -15,6 +16,7 @@ use crate::converge::flip;
 use crate::error::Result;
 use crate::gpu::GpuContext;
 use crate::gpu::preview::{PreviewOptions, PreviewRenderer};
+use crate::layout::{LIGHT_AREA, LIGHT_TRIANGLE};
 use crate::pack::flatten;
 use crate::scene::Scene;
 
@@ -31,6 +33,8 @@ pub struct PreviewRow {
     pub lights: usize,
     /// Whether the preview drew shadows.
     pub shadows: bool,
+    /// With shadows: an area light's cubes along each side of it.
+    pub area_shadow_samples: u32,
     /// Frame time, milliseconds.
     pub frame_ms: Spread,
     /// Shadow maps drawn.
@@ -43,25 +47,28 @@ pub struct PreviewRow {
     pub flip: f64,
 }
 
-/// The comparison's rows, two a scene.
+/// The comparison's rows, two or three a scene.
 #[derive(Clone, Debug, Serialize)]
 pub struct PreviewReport {
     /// Samples per pixel of the ray-traced reference.
     pub reference_spp: u32,
     /// Timed frames each way.
     pub frames: u32,
-    /// Two rows a scene: without shadows, then with.
+    /// Rows a scene: without shadows, with, and with area lights' several cubes where it has
+    /// area lights.
     pub rows: Vec<PreviewRow>,
 }
 
 /// Previews each of `scenes` (names in `scenes/`) `frames` times each way, interleaved, against
-/// a ray-traced reference at `reference_spp`.
+/// a ray-traced reference at `reference_spp`; area lights' shadows also from
+/// `area_shadow_samples`² cubes.
 pub fn run(
     context: &GpuContext,
     scenes: &[String],
     overrides: &[String],
     frames: u32,
     reference_spp: u32,
+    area_shadow_samples: u32,
 ) -> Result<PreviewReport> {
     let mut rows = Vec::new();
     for name in scenes {
@@ -76,18 +83,26 @@ pub fn run(
         let reference = flatten(&Scene::load(Path::new(&path), &reference)?);
         let features = reference.features();
         let reference = render_once(&reference, Way::Cpu { features }, None)?.image;
-        let ways = [false, true];
+        let has_area_lights = flat
+            .lights
+            .iter()
+            .any(|l| l.kind == LIGHT_AREA || l.kind == LIGHT_TRIANGLE);
+        let mut ways = vec![(false, 1), (true, 1)];
+        if has_area_lights && area_shadow_samples > 1 {
+            ways.push((true, area_shadow_samples));
+        }
         let renderers = ways
-            .map(|shadows| {
+            .iter()
+            .map(|&(shadows, area_shadow_samples)| {
                 let options = PreviewOptions {
                     shadows,
+                    area_shadow_samples,
                     ..Default::default()
                 };
                 PreviewRenderer::new(context, &scene, &flat, options)
             })
-            .into_iter()
             .collect::<Result<Vec<_>>>()?;
-        let mut times = [Vec::new(), Vec::new()];
+        let mut times = vec![Vec::new(); ways.len()];
         for frame in 0..=frames.max(1) {
             for (renderer, times) in renderers.iter().zip(&mut times) {
                 let start = std::time::Instant::now();
@@ -97,7 +112,9 @@ pub fn run(
                 }
             }
         }
-        for ((renderer, times), shadows) in renderers.iter().zip(&times).zip(ways) {
+        for ((renderer, times), (shadows, area_shadow_samples)) in
+            renderers.iter().zip(&times).zip(ways)
+        {
             let (maps, side, drawn_in) = renderer.shadow_maps();
             rows.push(PreviewRow {
                 scene: name.clone(),
@@ -105,6 +122,7 @@ pub fn run(
                 height: flat.frame.height,
                 lights: flat.lights.len(),
                 shadows,
+                area_shadow_samples,
                 frame_ms: Spread::of(times),
                 shadow_maps: maps,
                 shadow_map_side: side,
@@ -144,7 +162,11 @@ impl PreviewReport {
                 r.width,
                 r.height,
                 r.lights,
-                if r.shadows { "yes" } else { "no" },
+                match (r.shadows, r.area_shadow_samples) {
+                    (false, _) => "no".to_string(),
+                    (true, 1) => "yes".to_string(),
+                    (true, n) => format!("yes, area lights {n}x{n} cubes"),
+                },
                 r.frame_ms.median,
                 r.frame_ms.min,
                 r.frame_ms.max,

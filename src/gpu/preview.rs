@@ -60,6 +60,8 @@ pub struct PreviewOptions {
     pub searches_per_dispatch: Option<usize>,
     /// Shadows from every light, by shadow maps (`preview::ShadowPlan`).
     pub shadows: bool,
+    /// With shadows: an area light's cubes of shadow maps along each side of it (n² cubes).
+    pub area_shadow_samples: u32,
 }
 
 impl Default for PreviewOptions {
@@ -73,6 +75,7 @@ impl Default for PreviewOptions {
             steps: 12,
             searches_per_dispatch: None,
             shadows: false,
+            area_shadow_samples: 1,
         }
     }
 }
@@ -270,21 +273,7 @@ impl PreviewRenderer {
             context.storage_buffer("materials", bytemuck::cast_slice(&flat.materials))?;
         let lights = context.storage_buffer("lights", bytemuck::cast_slice(&flat.lights))?;
         let plan = match options.shadows {
-            true => ShadowPlan::new(
-                &flat.lights,
-                bounded_sphere(flat),
-                shadow_map_size(ShadowPlan::layers(&flat.lights)).ok_or_else(|| {
-                    Error::Gpu(format!(
-                        "--shadows: the scene's {} lights need {} shadow maps (six for each \
-                         light but a directional one), more than {} MiB holds at {} texels a \
-                         side; preview it without --shadows",
-                        flat.lights.len(),
-                        ShadowPlan::layers(&flat.lights),
-                        SHADOW_MEMORY >> 20,
-                        SMALLEST_SHADOW_MAP
-                    ))
-                })?,
-            ),
+            true => shadow_plan(flat, options.area_shadow_samples)?,
             false => ShadowPlan::none(flat.lights.len()),
         };
         let shadows = Shadows::new(context, plan)?;
@@ -562,6 +551,29 @@ impl MainMesh {
     }
 }
 
+/// The shadow maps of `flat`'s lights, `area_samples`² cubes for an area light, as large as
+/// `SHADOW_MEMORY` holds; refused where not even the smallest fit.
+fn shadow_plan(flat: &FlatScene, area_samples: u32) -> Result<ShadowPlan> {
+    let layers = ShadowPlan::layers(&flat.lights, area_samples);
+    let side = shadow_map_size(layers).ok_or_else(|| {
+        Error::Gpu(format!(
+            "--shadows: the scene's {} lights need {layers} shadow maps (a cube of six for \
+             each light but a directional one, {area_samples}² cubes for an area light), more \
+             than {} MiB holds at {} texels a side; preview it without --shadows or with fewer \
+             --area-shadow-samples",
+            flat.lights.len(),
+            SHADOW_MEMORY >> 20,
+            SMALLEST_SHADOW_MAP
+        ))
+    })?;
+    Ok(ShadowPlan::new(
+        &flat.lights,
+        bounded_sphere(flat),
+        side,
+        area_samples,
+    ))
+}
+
 /// What shading reads, the main pass's and the reflection passes' alike (their group 0).
 #[derive(Clone, Copy)]
 struct Shading<'a> {
@@ -572,7 +584,7 @@ struct Shading<'a> {
 }
 
 impl Shading<'_> {
-    fn entries(&self) -> [wgpu::BindGroupEntry<'_>; 7] {
+    fn entries(&self) -> [wgpu::BindGroupEntry<'_>; 8] {
         [
             buffer_entry(0, self.uniforms),
             buffer_entry(1, self.materials),
@@ -584,6 +596,7 @@ impl Shading<'_> {
             },
             buffer_entry(5, &self.shadows.views),
             buffer_entry(6, &self.shadows.lights),
+            buffer_entry(7, &self.shadows.origins),
         ]
     }
 }
@@ -595,6 +608,7 @@ struct Shadows {
     sampler: wgpu::Sampler,
     views: wgpu::Buffer,
     lights: wgpu::Buffer,
+    origins: wgpu::Buffer,
     /// Per layer: its depth target and its view's uniforms.
     layers: Vec<(wgpu::TextureView, wgpu::BindGroup)>,
     /// Texels along a map's side.
@@ -613,9 +627,11 @@ impl Shadows {
         let most = device.limits().max_texture_array_layers;
         if layers > most {
             return Err(Error::Gpu(format!(
-                "--shadows: the scene's {} lights need {layers} shadow maps (six for each light \
-                 but a directional one), more than this device holds in one texture \
-                 (max_texture_array_layers = {most}); preview it without --shadows",
+                "--shadows: the scene's {} lights need {layers} shadow maps (a cube of six for \
+                 each light but a directional one, several for an area light with \
+                 --area-shadow-samples), more than this device holds in one texture \
+                 (max_texture_array_layers = {most}); preview it without --shadows or with \
+                 fewer --area-shadow-samples",
                 plan.lights.len()
             )));
         }
@@ -673,6 +689,8 @@ impl Shadows {
             sampler,
             views: context.storage_buffer("shadow views", bytemuck::cast_slice(&views))?,
             lights: context.storage_buffer("shadow lights", bytemuck::cast_slice(&plan.lights))?,
+            origins: context
+                .storage_buffer("shadow origins", bytemuck::cast_slice(&plan.origins))?,
             layers,
             side,
             pipeline,

@@ -2,10 +2,12 @@
 //! the main pass's triangles (the scene is static; a camera change that cuts curved shapes
 //! anew draws them again), looked up per fragment by `lit_fraction` in `wgsl/preview.wgsl`.
 //!
-//! - Point and spot lights, and area lights as the preview lights them (a point at the centre),
-//!   get a cube of six 90° views (`CUBE_FACES`; the face a direction falls in: `cube_face`).
-//!   An area light's cube stands `EMITTER_CLEARANCE` of its far distance in front of the light,
-//!   off its emitting surface.
+//! - Point and spot lights get a cube of six 90° views (`CUBE_FACES`; the face a direction
+//!   falls in: `cube_face`). Area lights get n² cubes at the centres of n x n strata of their
+//!   surface (n sub-triangles a side for a triangle; n = 1 by default: the centre, where the
+//!   preview lights them from), a fragment lit by the fraction of the cubes that see it: soft
+//!   shadows for n > 1. A cube stands `EMITTER_CLEARANCE` of its far distance in front of the
+//!   light, off its emitting surface.
 //! - Directional lights get one orthographic view over the sphere that bounds the scene's
 //!   bounded primitives; receivers outside it (the far parts of a plane) are lit.
 //! - Each view's far plane lies beyond the bounded primitives; its near plane at `NEAR` of that
@@ -74,22 +76,20 @@ pub fn cube_face(d: Vec3) -> u32 {
     }
 }
 
-/// One light's shadow map as the fragment shader finds it (`ShadowLight` in
+/// One light's shadow maps as the fragment shader finds them (`ShadowLight` in
 /// wgsl/preview.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ShadowLight {
-    /// Where a cube stands (point, spot and area lights); unused for a directional light.
-    pub origin: [f32; 3],
     /// Its first layer in the maps' array.
     pub first: u32,
-    /// Its layers: 0 (no shadows), 1 (directional) or 6 (a cube).
+    /// Its layers: 0 (no shadows), 1 (directional) or 6 a cube.
     pub layers: u32,
     /// A texel's width in scene units: at unit distance along a cube face's axis (times the
     /// distance there), or across the directional view.
     pub texel: f32,
-    /// Padding to the WGSL layout.
-    pub _pad: [u32; 2],
+    /// Its first cube's origin in `ShadowPlan::origins` (the others follow).
+    pub origins: u32,
 }
 
 /// Every light's shadow map: per light its entry, and per layer its view's matrix (world to
@@ -100,17 +100,25 @@ pub struct ShadowPlan {
     pub lights: Vec<ShadowLight>,
     /// Per layer of the maps: its view.
     pub views: Vec<Mat4>,
+    /// Per cube: where it stands (`w` unused).
+    pub origins: Vec<[f32; 4]>,
     /// Texels along each side of a map.
     pub side: u32,
 }
 
 impl ShadowPlan {
     /// The maps of `lights`, `side` texels square, over a scene whose bounded primitives lie in
-    /// the sphere at `center` of radius `radius`.
-    pub fn new(lights: &[GpuLight], (center, radius): (Vec3, f32), side: u32) -> ShadowPlan {
+    /// the sphere at `center` of radius `radius`; area lights get `area_samples`² cubes.
+    pub fn new(
+        lights: &[GpuLight],
+        (center, radius): (Vec3, f32),
+        side: u32,
+        area_samples: u32,
+    ) -> ShadowPlan {
         let mut plan = ShadowPlan {
             lights: Vec::new(),
             views: Vec::new(),
+            origins: Vec::new(),
             side,
         };
         for light in lights {
@@ -125,18 +133,20 @@ impl ShadowPlan {
                     ..Default::default()
                 }
             } else {
-                let origin = cube_origin(light, (center, radius));
-                let far = 1.01 * (origin.distance(center) + radius);
-                let projection = quarter_turn_perspective(NEAR * far, far);
-                for (forward, up) in CUBE_FACES {
-                    plan.views.push(projection * look_to(origin, forward, up));
+                let origins = plan.origins.len() as u32;
+                for origin in cube_origins(light, (center, radius), area_samples) {
+                    let far = 1.01 * (origin.distance(center) + radius);
+                    let projection = quarter_turn_perspective(NEAR * far, far);
+                    for (forward, up) in CUBE_FACES {
+                        plan.views.push(projection * look_to(origin, forward, up));
+                    }
+                    plan.origins.push(origin.extend(0.0).to_array());
                 }
                 ShadowLight {
-                    origin: origin.to_array(),
                     first,
-                    layers: 6,
+                    layers: plan.views.len() as u32 - first,
                     texel: 2.0 / side as f32,
-                    ..Default::default()
+                    origins,
                 }
             };
             plan.lights.push(entry);
@@ -149,31 +159,51 @@ impl ShadowPlan {
         ShadowPlan {
             lights: vec![ShadowLight::default(); light_count],
             views: Vec::new(),
+            origins: Vec::new(),
             side: 1,
         }
     }
 
-    /// The layers `lights` need: six for each light but a directional one's one.
-    pub fn layers(lights: &[GpuLight]) -> u32 {
+    /// The layers `lights` need: a directional light's one, a point or spot light's cube of
+    /// six, an area light's `area_samples`² cubes.
+    pub fn layers(lights: &[GpuLight], area_samples: u32) -> u32 {
         lights
             .iter()
-            .map(|l| if l.kind == LIGHT_DIRECTIONAL { 1 } else { 6 })
+            .map(|l| match l.kind {
+                LIGHT_DIRECTIONAL => 1,
+                LIGHT_AREA | LIGHT_TRIANGLE => 6 * area_samples * area_samples,
+                _ => 6,
+            })
             .sum()
     }
 }
 
-/// Where `light`'s cube stands: a point or spot light's position; an area light's centre (where
-/// the preview lights it from), moved `EMITTER_CLEARANCE` of its far distance along its
-/// normal, off the emitting surface the cube would otherwise cut.
-fn cube_origin(light: &GpuLight, (center, radius): (Vec3, f32)) -> Vec3 {
+/// Where `light`'s cubes stand: a point or spot light's position; for an area light, the
+/// centres of n x n strata of its parallelogram (the centroids of the n² triangles its
+/// triangle is cut into, n to a side), each moved `EMITTER_CLEARANCE` of its far distance
+/// along the light's normal, off the emitting surface the cube would otherwise cut.
+fn cube_origins(light: &GpuLight, (center, radius): (Vec3, f32), n: u32) -> Vec<Vec3> {
     let [p0, p1, p2] = [light.p0, light.p1, light.p2].map(Vec3::from);
-    let middle = match light.kind {
-        LIGHT_AREA => p0 + 0.5 * (p1 + p2),
-        LIGHT_TRIANGLE => p0 + (p1 + p2) / 3.0,
-        _ => return p0,
+    let at = |(a, b): (f32, f32)| p0 + a / n as f32 * p1 + b / n as f32 * p2;
+    let points: Vec<Vec3> = match light.kind {
+        LIGHT_AREA => (0..n * n)
+            .map(|k| at(((k % n) as f32 + 0.5, (k / n) as f32 + 0.5)))
+            .collect(),
+        LIGHT_TRIANGLE => (0..n)
+            .flat_map(|j| (0..n - j).map(move |i| (i as f32, j as f32)))
+            .flat_map(|(i, j)| {
+                let up = at((i + 1.0 / 3.0, j + 1.0 / 3.0));
+                let down = (i + j + 1.0 < n as f32).then(|| at((i + 2.0 / 3.0, j + 2.0 / 3.0)));
+                std::iter::once(up).chain(down)
+            })
+            .collect(),
+        _ => return vec![p0],
     };
-    let far = middle.distance(center) + radius;
-    middle + EMITTER_CLEARANCE * far * p1.cross(p2).normalize_or_zero()
+    let normal = p1.cross(p2).normalize_or_zero();
+    points
+        .into_iter()
+        .map(|p| p + EMITTER_CLEARANCE * (p.distance(center) + radius) * normal)
+        .collect()
 }
 
 /// The orthographic view along a directional light (`toward` points to the light) over the
@@ -257,7 +287,7 @@ mod tests {
             Vec3::new(0.0, 2.0, 0.0),
             Vec3::new(5.0, 9.0, -4.0),
         ] {
-            let plan = ShadowPlan::new(&[light(LIGHT_POINT, position)], sphere, 1024);
+            let plan = ShadowPlan::new(&[light(LIGHT_POINT, position)], sphere, 1024, 1);
             assert_eq!(plan.views.len(), 6);
             for _ in 0..2000 {
                 let d = Vec3::new(next(), next(), next());
@@ -274,6 +304,31 @@ mod tests {
                     "{p} from {position}: face {face}"
                 );
             }
+        }
+    }
+
+    /// An area light's cubes stand at the centres of its strata, a triangle's at the centroids
+    /// of its pieces: their mean is the light's centre, each off the surface on its emitting
+    /// side.
+    #[test]
+    fn an_area_lights_cubes_spread_over_it() {
+        let sphere = (Vec3::ZERO, 1.0);
+        for (kind, centre, count) in [
+            (LIGHT_AREA, Vec3::new(0.25, 3.0, 0.25), 16),
+            (LIGHT_TRIANGLE, Vec3::new(1.0 / 6.0, 3.0, 1.0 / 6.0), 16),
+        ] {
+            let origins = cube_origins(&light(kind, Vec3::new(0.0, 3.0, 0.0)), sphere, 4);
+            assert_eq!(origins.len(), count);
+            let mean = origins.iter().sum::<Vec3>() / count as f32;
+            let off = mean - centre;
+            assert!(off.x.abs() < 1e-6 && off.z.abs() < 1e-6, "{kind}: {mean}");
+            assert!(
+                origins.iter().all(|o| o.y < 3.0 && o.y > 2.98),
+                "{origins:?}"
+            );
+            let mut xs: Vec<f32> = origins.iter().map(|o| o.x).collect();
+            xs.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+            assert!(xs.len() > 1);
         }
     }
 
@@ -304,7 +359,7 @@ mod tests {
     fn a_directional_view_holds_the_bounding_sphere() {
         let sphere = (Vec3::new(1.0, 2.0, 3.0), 0.5);
         for toward in [Vec3::Y, Vec3::new(1.0, 1.0, 0.0), Vec3::new(0.0, 0.0, -1.0)] {
-            let plan = ShadowPlan::new(&[light(LIGHT_DIRECTIONAL, toward)], sphere, 1024);
+            let plan = ShadowPlan::new(&[light(LIGHT_DIRECTIONAL, toward)], sphere, 1024, 1);
             assert_eq!(plan.lights[0].layers, 1);
             for d in [
                 Vec3::X,
@@ -332,15 +387,23 @@ mod tests {
             light(LIGHT_DIRECTIONAL, Vec3::Y),
             light(LIGHT_AREA, Vec3::new(0.0, 3.0, 0.0)),
         ];
-        assert_eq!(ShadowPlan::layers(&lights), 13);
-        let plan = ShadowPlan::new(&lights, sphere, 512);
+        assert_eq!(ShadowPlan::layers(&lights, 1), 13);
+        let plan = ShadowPlan::new(&lights, sphere, 512, 1);
         assert_eq!(plan.lights[0].texel, 2.0 / 512.0);
-        let firsts: Vec<(u32, u32)> = plan.lights.iter().map(|l| (l.first, l.layers)).collect();
-        assert_eq!(firsts, [(0, 6), (6, 1), (7, 6)]);
+        let firsts: Vec<(u32, u32, u32)> = plan
+            .lights
+            .iter()
+            .map(|l| (l.first, l.layers, l.origins))
+            .collect();
+        assert_eq!(firsts, [(0, 6, 0), (6, 1, 0), (7, 6, 1)]);
         assert_eq!(plan.views.len(), 13);
         // Edges x and z: the normal x × z = -y.
-        let origin = Vec3::from(plan.lights[2].origin);
+        let origin = Vec3::from_slice(&plan.origins[1]);
         assert!(origin.y < 3.0 && (origin.x - 0.25).abs() < 1e-6, "{origin}");
         assert_eq!(ShadowPlan::none(3).lights, vec![ShadowLight::default(); 3]);
+        // Three by three cubes for the area light: 6 + 1 + 54 layers.
+        assert_eq!(ShadowPlan::layers(&lights, 3), 61);
+        let plan = ShadowPlan::new(&lights, sphere, 512, 3);
+        assert_eq!((plan.lights[2].layers, plan.origins.len()), (54, 10));
     }
 }
