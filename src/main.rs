@@ -776,7 +776,10 @@ fn run_preview(
 ) -> anyhow::Result<ExitCode> {
     let target = OutputTarget::prepare(output)?;
     let scene = load_and_note(path, overrides)?;
-    for omission in chambre::preview::omissions(&scene, options.shadows) {
+    for omission in chambre::preview::omissions(
+        &scene,
+        options.shadows.then_some(options.area_shadow_samples),
+    ) {
         note!("note: {omission}");
     }
     let flat = flatten(&scene);
@@ -849,7 +852,10 @@ fn run_window(
     }
     let save = save.unwrap_or_else(|| path.with_extension("composed.toml"));
     let scene = load_and_note(path, overrides)?;
-    for omission in chambre::preview::omissions(&scene, drawing.shadows) {
+    for omission in chambre::preview::omissions(
+        &scene,
+        drawing.shadows.then_some(drawing.area_shadow_samples),
+    ) {
         note!("note: {omission}");
     }
     let flat = flatten(&scene);

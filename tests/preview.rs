@@ -135,14 +135,16 @@ fn silhouettes_land_where_the_ray_traced_pinhole_puts_them() {
 
 #[test]
 fn the_preview_says_what_it_cannot_show() {
-    let pinhole = chambre::preview::omissions(&scene(""), false);
+    let pinhole = chambre::preview::omissions(&scene(""), None);
     assert_eq!(pinhole.len(), 1, "{pinhole:?}");
     assert!(pinhole[0].contains("no shadows (--shadows"), "{pinhole:?}");
-    let shadowed = chambre::preview::omissions(&scene(""), true);
+    let shadowed = chambre::preview::omissions(&scene(""), Some(1));
     assert!(shadowed[0].contains("hard shadows only"), "{shadowed:?}");
+    let soft = chambre::preview::omissions(&scene(""), Some(3));
+    assert!(soft[0].contains("from 3x3 points"), "{soft:?}");
     let lens = chambre::preview::omissions(
         &scene("f_number = 2.8\nfocus_distance = 6.0\nlens_tilt = 5.0"),
-        false,
+        None,
     );
     assert!(
         lens.iter()

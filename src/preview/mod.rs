@@ -379,9 +379,9 @@ pub fn clip_matrix(camera: &CameraSpec, far: f64) -> DMat4 {
     depth * gl
 }
 
-/// What the preview cannot show of `scene` (drawn with or without `shadows`), one sentence
-/// each (said to the user).
-pub fn omissions(scene: &Scene, shadows: bool) -> Vec<String> {
+/// What the preview cannot show of `scene` (drawn with shadows, from n x n points of each area
+/// light, where `shadows` is `Some(n)`), one sentence each (said to the user).
+pub fn omissions(scene: &Scene, shadows: Option<u32>) -> Vec<String> {
     let camera = &scene.camera;
     let mut notes = vec![format!(
         "the preview has {} no specular lobes; curved mirrors (spheres, tori, ellipsoids, \
@@ -389,8 +389,14 @@ pub fn omissions(scene: &Scene, shadows: bool) -> Vec<String> {
          point and surface; each other once, not themselves), other mirrors show their diffuse \
          term only",
         match shadows {
-            true => "hard shadows only (shadow maps; area lights' from their centres) and",
-            false => "no shadows (--shadows draws them by shadow maps) and",
+            None => "no shadows (--shadows draws them by shadow maps) and".to_string(),
+            Some(1) =>
+                "hard shadows only (shadow maps; area lights' from their centres) and".into(),
+            Some(n) => format!(
+                "shadows by shadow maps (area lights' from {n}x{n} points of each, a penumbra \
+                 of {} steps) and",
+                n * n
+            ),
         }
     )];
     if !camera.is_pinhole() {
