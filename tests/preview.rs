@@ -536,3 +536,49 @@ fn an_area_lights_shadow_maps_over_its_surface_soften_its_shadows() {
         "{soft_error} against {hard_error}"
     );
 }
+
+/// A camera change that cuts the curved shapes anew draws their shadows anew too: the frame
+/// equals that of a preview made with shadows for the new camera.
+#[test]
+fn shadows_are_drawn_anew_with_the_shapes_cut_anew() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let light =
+        "[[lights]]\ntype = \"point\"\nposition = [0.1, 1.6, 0.0]\nintensity = [6.0, 6.0, 6.0]";
+    let far = shadowed_scene(light);
+    let mut near = shadowed_scene(light);
+    near.camera.position = DVec3::new(-1.2, 1.5, 1.0);
+    near.camera.look_at = DVec3::new(-0.9, 0.5, 0.3);
+    let options = chambre::gpu::preview::PreviewOptions {
+        shadows: true,
+        ..Default::default()
+    };
+    let mut moved =
+        chambre::gpu::preview::PreviewRenderer::new(&context, &far, &flatten(&far), options)
+            .unwrap();
+    let triangles_far = moved.triangles();
+    moved.set_camera(&near.camera).unwrap();
+    moved.draw().unwrap();
+    let made =
+        chambre::gpu::preview::PreviewRenderer::new(&context, &near, &flatten(&near), options)
+            .unwrap();
+    made.draw().unwrap();
+    assert!(
+        moved.triangles() > triangles_far,
+        "{} against {triangles_far}",
+        moved.triangles()
+    );
+    assert_eq!(moved.shadow_maps().0, 6);
+    let (a, b) = (moved.image().unwrap(), made.image().unwrap());
+    let differ = a
+        .pixels
+        .iter()
+        .zip(&b.pixels)
+        .filter(|(x, y)| x != y)
+        .count();
+    assert_eq!(
+        differ, 0,
+        "the re-cut preview's shadows differ from one made for its camera"
+    );
+}
