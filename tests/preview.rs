@@ -221,6 +221,47 @@ fn reflections_over_the_binding_limit_are_refused_with_the_previews_remedy() {
     );
 }
 
+/// A renderer made for `from` whose camera then moves to `to`'s, and one made for `to`, each
+/// having drawn a frame (with `options`), and `from`'s triangles and reflected triangles.
+struct Moved {
+    moved: chambre::gpu::preview::PreviewRenderer,
+    made: chambre::gpu::preview::PreviewRenderer,
+    triangles_before: usize,
+    reflected_before: usize,
+}
+
+impl Moved {
+    fn new(
+        context: &chambre::gpu::GpuContext,
+        (from, to): (&Scene, &Scene),
+        options: chambre::gpu::preview::PreviewOptions,
+    ) -> Moved {
+        use chambre::gpu::preview::PreviewRenderer;
+        let mut moved = PreviewRenderer::new(context, from, &flatten(from), options).unwrap();
+        let (triangles_before, reflected_before) = (moved.triangles(), moved.reflected_triangles());
+        moved.set_camera(&to.camera).unwrap();
+        moved.draw().unwrap();
+        let made = PreviewRenderer::new(context, to, &flatten(to), options).unwrap();
+        made.draw().unwrap();
+        Moved {
+            moved,
+            made,
+            triangles_before,
+            reflected_before,
+        }
+    }
+
+    /// Pixels where the two frames differ.
+    fn pixels_differing(&self) -> usize {
+        let (a, b) = (self.moved.image().unwrap(), self.made.image().unwrap());
+        a.pixels
+            .iter()
+            .zip(&b.pixels)
+            .filter(|(x, y)| x != y)
+            .count()
+    }
+}
+
 /// Where a curved mirror reflects curved shapes (another mirror, a diffuse sphere), the
 /// window's renderer reflects them as cut for its present camera too: a camera change that
 /// cuts them anew gives the frame a preview made for that camera gives, reflections included.
@@ -251,36 +292,22 @@ material = "mirror"
         scene
     };
     let (far, near) = (at(6.0), at(2.2));
-    let options = chambre::gpu::preview::PreviewOptions::default();
-    let mut moved =
-        chambre::gpu::preview::PreviewRenderer::new(&context, &far, &flatten(&far), options)
-            .unwrap();
-    let reflected_far = moved.reflected_triangles();
-    moved.set_camera(&near.camera).unwrap();
-    moved.draw().unwrap();
-    let made =
-        chambre::gpu::preview::PreviewRenderer::new(&context, &near, &flatten(&near), options)
-            .unwrap();
-    made.draw().unwrap();
+    let m = Moved::new(&context, (&far, &near), Default::default());
+    let (moved, made) = (&m.moved, &m.made);
     assert!(
-        moved.reflected_triangles() > reflected_far,
-        "{} against {reflected_far}",
-        moved.reflected_triangles()
+        moved.reflected_triangles() > m.reflected_before,
+        "{} against {}",
+        moved.reflected_triangles(),
+        m.reflected_before
     );
     assert_eq!(moved.reflected_triangles(), made.reflected_triangles());
     assert_eq!(
         moved.reflected_drawn().unwrap(),
         made.reflected_drawn().unwrap()
     );
-    let (a, b) = (moved.image().unwrap(), made.image().unwrap());
-    let differ = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .filter(|(x, y)| x != y)
-        .count();
     assert_eq!(
-        differ, 0,
+        m.pixels_differing(),
+        0,
         "the re-cut preview's reflections differ from one made for its camera"
     );
 }
@@ -295,27 +322,19 @@ fn curved_shapes_are_cut_anew_when_the_camera_comes_nearer() {
     let far = scene("");
     let mut near = scene("");
     near.camera.position = DVec3::new(0.0, 0.5, 2.0);
-    let options = chambre::gpu::preview::PreviewOptions::default();
-    let mut moved =
-        chambre::gpu::preview::PreviewRenderer::new(&context, &far, &flatten(&far), options)
-            .unwrap();
-    let triangles_far = moved.triangles();
-    moved.set_camera(&near.camera).unwrap();
-    moved.draw().unwrap();
-    let made =
-        chambre::gpu::preview::PreviewRenderer::new(&context, &near, &flatten(&near), options)
-            .unwrap();
-    made.draw().unwrap();
+    let m = Moved::new(&context, (&far, &near), Default::default());
+    let (moved, made) = (&m.moved, &m.made);
     assert!(
-        moved.triangles() > 2 * triangles_far,
-        "{} against {triangles_far}",
-        moved.triangles()
+        moved.triangles() > 2 * m.triangles_before,
+        "{} against {}",
+        moved.triangles(),
+        m.triangles_before
     );
     assert_eq!(moved.triangles(), made.triangles());
     assert_eq!(moved.coarse_shapes(), 0);
-    let (a, b) = (moved.image().unwrap(), made.image().unwrap());
-    assert!(
-        a.pixels == b.pixels,
+    assert_eq!(
+        m.pixels_differing(),
+        0,
         "the re-cut preview differs from one made for its camera"
     );
 }
@@ -554,31 +573,17 @@ fn shadows_are_drawn_anew_with_the_shapes_cut_anew() {
         shadows: true,
         ..Default::default()
     };
-    let mut moved =
-        chambre::gpu::preview::PreviewRenderer::new(&context, &far, &flatten(&far), options)
-            .unwrap();
-    let triangles_far = moved.triangles();
-    moved.set_camera(&near.camera).unwrap();
-    moved.draw().unwrap();
-    let made =
-        chambre::gpu::preview::PreviewRenderer::new(&context, &near, &flatten(&near), options)
-            .unwrap();
-    made.draw().unwrap();
+    let m = Moved::new(&context, (&far, &near), options);
     assert!(
-        moved.triangles() > triangles_far,
-        "{} against {triangles_far}",
-        moved.triangles()
+        m.moved.triangles() > m.triangles_before,
+        "{} against {}",
+        m.moved.triangles(),
+        m.triangles_before
     );
-    assert_eq!(moved.shadow_maps().0, 6);
-    let (a, b) = (moved.image().unwrap(), made.image().unwrap());
-    let differ = a
-        .pixels
-        .iter()
-        .zip(&b.pixels)
-        .filter(|(x, y)| x != y)
-        .count();
+    assert_eq!(m.moved.shadow_maps().0, 6);
     assert_eq!(
-        differ, 0,
+        m.pixels_differing(),
+        0,
         "the re-cut preview's shadows differ from one made for its camera"
     );
 }

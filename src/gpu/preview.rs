@@ -747,16 +747,10 @@ fn shadow_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
             })],
         },
         primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: wgpu::DepthBiasState {
-                constant: 0,
-                slope_scale: 2.0,
-                clamp: 0.0,
-            },
+        depth_stencil: depth_test(wgpu::DepthBiasState {
+            constant: 0,
+            slope_scale: 2.0,
+            clamp: 0.0,
         }),
         multisample: Default::default(),
         fragment: None,
@@ -1107,13 +1101,7 @@ fn render_pipeline(
             buffers,
         },
         primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
+        depth_stencil: depth_test(Default::default()),
         multisample: Default::default(),
         fragment: Some(wgpu::FragmentState {
             module,
@@ -1123,6 +1111,17 @@ fn render_pipeline(
         }),
         multiview_mask: None,
         cache: None,
+    })
+}
+
+/// The nearer fragment wins and is written, its depth moved by `bias`.
+fn depth_test(bias: wgpu::DepthBiasState) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Less),
+        stencil: Default::default(),
+        bias,
     })
 }
 
