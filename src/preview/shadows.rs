@@ -83,7 +83,7 @@ pub fn cube_face(d: Vec3) -> u32 {
 pub struct ShadowLight {
     /// Its first layer in the maps' array.
     pub first: u32,
-    /// Its layers: 0 (no shadows), 1 (directional) or 6 a cube.
+    /// Its layers: 0 (no shadows), 1 (directional) or 6 a cube (an area light's several).
     pub layers: u32,
     /// A texel's width in scene units: at unit distance along a cube face's axis (times the
     /// distance there), or across the directional view.
