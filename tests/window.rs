@@ -126,8 +126,8 @@ fn wait_for<T>(what: &str, mut ready: impl FnMut() -> Option<T>) -> T {
     }
 }
 
-/// `chambre preview SCENE -o OUT` (headless), read back as RGB bytes.
-fn headless_preview(scene: &Path, out: &Path) -> (u32, u32, Vec<u8>) {
+/// `chambre preview SCENE -o OUT FLAGS` (headless), read back as RGB bytes.
+fn headless_preview(scene: &Path, out: &Path, flags: &[&str]) -> (u32, u32, Vec<u8>) {
     let status = Command::new(BIN)
         .args([
             "preview",
@@ -135,6 +135,7 @@ fn headless_preview(scene: &Path, out: &Path) -> (u32, u32, Vec<u8>) {
             "-o",
             out.to_str().unwrap(),
         ])
+        .args(flags)
         .env("XDG_RUNTIME_DIR", "/tmp")
         .stderr(Stdio::null())
         .status()
@@ -164,7 +165,7 @@ fn keys_typed_into_the_window_compose_the_shot_it_shows_and_saves() {
     std::fs::create_dir_all(&dir).unwrap();
     let scene = dir.join("scene.toml");
     std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE), &scene).unwrap();
-    let (width, height, untouched) = headless_preview(&scene, &dir.join("untouched.png"));
+    let (width, height, untouched) = headless_preview(&scene, &dir.join("untouched.png"), &[]);
 
     let x = Xvfb::start(&dir);
     let screenshot = dir.join("shot.png");
@@ -197,7 +198,7 @@ fn keys_typed_into_the_window_compose_the_shot_it_shows_and_saves() {
     x.xdotool(&["key", "Down", "Down", "Right", "j", "s"]);
     let saved = dir.join("scene.composed.toml");
     wait_for("the composed scene", || saved.exists().then_some(()));
-    let (_, _, composed) = headless_preview(&saved, &dir.join("composed.png"));
+    let (_, _, composed) = headless_preview(&saved, &dir.join("composed.png"), &[]);
     assert!(
         largest_difference(&composed, &untouched) > 40,
         "the keys changed the picture"
@@ -231,6 +232,10 @@ fn keys_typed_into_the_window_compose_the_shot_it_shows_and_saves() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The scripted window draws shadows, an area light's from 2 x 2 points of it, as the headless
+/// preview of the saved scene does.
+const SHADOWS: &[&str] = &["--shadows", "--area-shadow-samples", "2"];
+
 #[test]
 fn a_key_script_replays_keys_then_closes_the_window_with_a_screenshot() {
     if !x_tools_present() {
@@ -245,6 +250,7 @@ fn a_key_script_replays_keys_then_closes_the_window_with_a_screenshot() {
     let (screenshot, saved) = (dir.join("shot.png"), dir.join("saved.toml"));
     let output = Command::new(BIN)
         .args(["preview", scene.to_str().unwrap(), "--window"])
+        .args(SHADOWS)
         .args(["--keys", "up,i,d,s", "--screenshot"])
         .arg(&screenshot)
         .arg("--save")
@@ -259,7 +265,12 @@ fn a_key_script_replays_keys_then_closes_the_window_with_a_screenshot() {
         stdout.contains("film tilt +1.0°, swing +0.0°, shift [+0.0, +1.0] mm; camera pan +1.0°"),
         "{stdout}"
     );
-    let (_, _, composed) = headless_preview(&saved, &dir.join("composed.png"));
+    let (_, _, composed) = headless_preview(&saved, &dir.join("composed.png"), SHADOWS);
+    let (_, _, unshadowed) = headless_preview(&saved, &dir.join("unshadowed.png"), &[]);
+    assert!(
+        largest_difference(&composed, &unshadowed) > 40,
+        "the shadows show"
+    );
     let shot = image::open(&screenshot).unwrap().into_rgb8().into_raw();
     assert_eq!(largest_difference(&shot, &composed), 0);
     let _ = std::fs::remove_dir_all(&dir);
