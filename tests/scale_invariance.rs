@@ -1,7 +1,8 @@
 //! Scale invariance and precision at the extremes the scene format allows (lengths up to 1e9):
 //! the same scene scaled by 1e-6 ... 1e6 renders the same image; a ground sphere of radius up to
 //! 1e9 renders like the plane it approximates; a scene translated far from the origin stays
-//! close to the untranslated one, and the GPU stays close to the CPU there. Both paths.
+//! close to the untranslated one, and the GPU stays close to the CPU there. Both paths, and the
+//! raster preview's shadow maps.
 //!
 //! Figures: `relative_l1` = sum |a - b| / sum |a| over all pixels and channels; "within x" =
 //! fraction of pixels whose every channel agrees within x relative (`common::agreement`). The
@@ -380,6 +381,43 @@ fn packets_trace_what_each_sample_traces_alone_at_every_scale_and_offset() {
         assert!(
             differing <= 4,
             "scale {scale:e}: {differing} samples differ"
+        );
+    }
+}
+
+/// The raster preview with shadows (shadow maps whose views, near planes and offsets are all
+/// relative to the scene's size) draws every scale of `SCALES` as it draws scale 1, within the
+/// ray tracer's bounds (measured: relative L1 at most 3.5e-7).
+#[test]
+fn preview_shadows_do_not_depend_on_the_scene_scale() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let options = chambre::gpu::preview::PreviewOptions {
+        shadows: true,
+        ..Default::default()
+    };
+    let preview = |text: &str| {
+        // In scenes/, as `flat` places it, so that the bunny's relative path resolves.
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenes")
+            .join("in_memory");
+        let scene = Scene::from_str(&path, text, &[]).unwrap_or_else(|e| panic!("{e}"));
+        chambre::gpu::preview::draw_with(&context, &scene, &flatten(&scene), 1, options)
+            .unwrap()
+            .image
+    };
+    let reference = preview(&scaled_scene(1.0, 0.0));
+    for scale in SCALES {
+        let image = preview(&scaled_scene(scale, 0.0));
+        let l1 = relative_l1(&reference, &image);
+        let within = common::agreement(&reference, &image, 1e-3).0;
+        println!(
+            "preview with shadows, scale {scale:e}: relative L1 {l1:.2e}, within 1e-3 {within:.4}"
+        );
+        assert!(
+            l1 < SCALE_MAX_RELATIVE_L1 && within > SCALE_MIN_WITHIN_1E3,
+            "scale {scale:e}: {l1:e}, {within}"
         );
     }
 }
