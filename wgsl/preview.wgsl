@@ -1,8 +1,8 @@
 // The raster preview (`chambre preview`): the scene's triangles through the view camera's clip
 // matrix (film tilt, swing and shift as the ray tracer defines them), shaded per fragment with
-// Lambert's BRDF, the ambient term, emission, and every light (area lights as points at their
-// centres with their cosine falloff), shadowed by its shadow map where the preview draws
-// shadows (`--shadows`; src/preview/shadows.rs makes the maps' views).
+// Lambert's BRDF, the ambient term, emission, and every light (an area light's exact
+// unoccluded irradiance, by Lambert's formula), shadowed by its shadow maps where the preview
+// draws shadows (`--shadows`; src/preview/shadows.rs makes the maps' views).
 // Curved mirrors show Fermat reflections: this pass writes each pixel's reflector id, and
 // wgsl/preview_reflect.wgsl draws the reflected triangles where their reflector is seen.
 // Mirrors: src/preview/tessellate.rs (the triangles), src/preview/mod.rs (the clip matrix),
@@ -83,26 +83,20 @@ fn preview_vertex(v: VertexIn) -> VertexOut {
     return VertexOut(clip, v.position, v.normal, v.material, v.reflector);
 }
 
+// Whether the scene has area lights, and whether the preview draws shadows: code not needed is
+// left out of the pipeline (`gpu::preview::ShadingVariant`).
+override PREVIEW_AREA_LIGHTS: bool = true;
+override PREVIEW_SHADOWS: bool = true;
+
 // Irradiance-like factor (W/m^2 per unit BRDF) at `p` with normal `n` from light `light`.
 fn light_at(light: GpuLight, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     if (light.kind == LIGHT_DIRECTIONAL) {
         return light.color * max(dot(n, light.p0), 0.0);
     }
-    var position = light.p0;
-    var power = light.color;
-    if (light.kind == LIGHT_AREA || light.kind == LIGHT_TRIANGLE) {
-        // A point at the centre radiating L A cos(theta_light).
-        let c = cross(light.p1, light.p2);
-        var area = length(c);
-        position = light.p0 + 0.5 * (light.p1 + light.p2);
-        if (light.kind == LIGHT_TRIANGLE) {
-            area = 0.5 * area;
-            position = light.p0 + (light.p1 + light.p2) / 3.0;
-        }
-        let to_p = normalize(p - position);
-        power = light.color * area * max(dot(normalize(c), to_p), 0.0);
+    if (PREVIEW_AREA_LIGHTS && (light.kind == LIGHT_AREA || light.kind == LIGHT_TRIANGLE)) {
+        return light.color * projected_solid_angle(light, p, n);
     }
-    let to_light = position - p;
+    let to_light = light.p0 - p;
     let d2 = max(dot(to_light, to_light), 1e-20);
     let wi = to_light * inverseSqrt(d2);
     var falloff = 1.0 / d2;
@@ -110,7 +104,86 @@ fn light_at(light: GpuLight, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
         let cone = clamp(-dot(light.p1, wi) * light.p2.x + light.p2.y, 0.0, 1.0);
         falloff *= cone * cone;
     }
-    return power * max(dot(n, wi), 0.0) * falloff;
+    return light.color * max(dot(n, wi), 0.0) * falloff;
+}
+
+// The projected solid angle, integral of cos(theta) d(omega), of an area light (a
+// parallelogram p0, p0 + p1, p0 + p1 + p2, p0 + p2, or a triangle p0, p0 + p1, p0 + p2) seen
+// from `p` with normal `n`: Lambert's formula, half the sum over its edges of the angle an edge
+// subtends times the cosine between `n` and the normal of the plane through `p` and the edge,
+// after the light is clipped to the half-space above `p`'s tangent plane (where the formula
+// holds). Zero behind the light, which emits on the side of p1 x p2 only. Irradiance from
+// radiance L is L times it, exactly, as the ray tracer's light sampling converges to.
+fn projected_solid_angle(light: GpuLight, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    if (dot(p - light.p0, cross(light.p1, light.p2)) <= 0.0) {
+        return 0.0;
+    }
+    // Corners relative to p; a triangle's third is its last.
+    let a = light.p0 - p;
+    let b = a + light.p1;
+    let d = a + light.p2;
+    var clipped = ClippedPolygon(vec3<f32>(0.0), vec3<f32>(0.0), 0u, 0.0);
+    clip_edge(&clipped, n, a, b);
+    if (light.kind == LIGHT_TRIANGLE) {
+        clip_edge(&clipped, n, b, d);
+    } else {
+        let c = b + light.p2;
+        clip_edge(&clipped, n, b, c);
+        clip_edge(&clipped, n, c, d);
+    }
+    clip_edge(&clipped, n, d, a);
+    if (clipped.count > 1u) {
+        clipped.sum += edge_term(clipped.last, clipped.first, n);
+    }
+    // The sign is the winding seen from p; the clipped light is one convex polygon.
+    return 0.5 * abs(clipped.sum);
+}
+
+// The light clipped to n . x > 0 as Sutherland-Hodgman emits it, corner by corner, and
+// Lambert's sum over the edges emitted so far (no array: lavapipe keeps arrays indexed at run
+// time in memory, which tripled every preview frame, point lights' too).
+struct ClippedPolygon {
+    first: vec3<f32>,
+    last: vec3<f32>,
+    count: u32,
+    sum: f32,
+}
+
+fn emit_corner(polygon: ptr<function, ClippedPolygon>, n: vec3<f32>, x: vec3<f32>) {
+    if ((*polygon).count == 0u) {
+        (*polygon).first = x;
+    } else {
+        (*polygon).sum += edge_term((*polygon).last, x, n);
+    }
+    (*polygon).last = x;
+    (*polygon).count += 1u;
+}
+
+// Edge a -> b of the light: a kept where above the plane, the crossing added where the edge
+// crosses it.
+fn clip_edge(polygon: ptr<function, ClippedPolygon>, n: vec3<f32>, a: vec3<f32>, b: vec3<f32>) {
+    let da = dot(n, a);
+    let db = dot(n, b);
+    if (da > 0.0) {
+        emit_corner(polygon, n, a);
+    }
+    if ((da > 0.0) != (db > 0.0)) {
+        emit_corner(polygon, n, a + (b - a) * (da / (da - db)));
+    }
+}
+
+// One edge's term of Lambert's formula: the angle it subtends times n . the unit normal of the
+// plane through the point and the edge (atan2 rather than acos: acos loses half the digits
+// near 0).
+fn edge_term(a: vec3<f32>, b: vec3<f32>, n: vec3<f32>) -> f32 {
+    let u = normalize(a);
+    let v = normalize(b);
+    let c = cross(u, v);
+    let s = length(c);
+    if (s == 0.0) {
+        return 0.0;
+    }
+    return atan2(s, dot(u, v)) * dot(n, c) / s;
 }
 
 // The face of a cube that direction `d` falls in (`preview::cube_face`): its largest
@@ -134,7 +207,7 @@ fn cube_face(d: vec3<f32>) -> u32 {
 // fall in the next).
 fn lit_fraction(i: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let shadow = shadow_lights[i];
-    if (shadow.layers == 0u) {
+    if (!PREVIEW_SHADOWS || shadow.layers == 0u) {
         return 1.0;
     }
     if (shadow.layers == 1u) {

@@ -250,12 +250,14 @@ impl PreviewRenderer {
                 0 => Float32x3, 1 => Uint32, 2 => Float32x3, 3 => Uint32
             ],
         };
+        let variant = ShadingVariant::of(flat, &options);
         let pipeline = render_pipeline(
             device,
             &module,
             ("preview_vertex", "preview_fragment"),
             &[Some(vertex_layout)],
             &[Some(COLOR_FORMAT.into()), Some(ID_FORMAT.into())],
+            &variant,
         );
         let flat_triangles = flat_triangles(flat, extent);
         let curved_triangles = curved.triangles(&cuts);
@@ -327,6 +329,7 @@ impl PreviewRenderer {
             context,
             &ReflectionSetup {
                 module: &module,
+                variant,
                 shading,
                 color_view: &color_view,
                 id_view: &id_view,
@@ -575,6 +578,34 @@ fn shadow_plan(flat: &FlatScene, area_samples: u32) -> Result<ShadowPlan> {
     ))
 }
 
+/// The shading code a preview needs: Lambert's formula for area lights only where the scene
+/// has some, the shadow maps' lookups only where it draws shadows (lavapipe runs a branch's
+/// code for every fragment, masked, whichever way it goes: the formula in every pipeline made
+/// the previews of scenes without area lights 2x slower).
+#[derive(Clone, Copy, Debug)]
+struct ShadingVariant {
+    area_lights: bool,
+    shadows: bool,
+}
+
+impl ShadingVariant {
+    fn of(flat: &FlatScene, options: &PreviewOptions) -> ShadingVariant {
+        ShadingVariant {
+            area_lights: flat.lights.iter().any(|l| l.is_area()),
+            shadows: options.shadows,
+        }
+    }
+
+    /// The pipeline-overridable constants of `wgsl/preview.wgsl`.
+    fn constants(&self) -> [(&'static str, f64); 2] {
+        let flag = |on: bool| f64::from(u8::from(on));
+        [
+            ("PREVIEW_AREA_LIGHTS", flag(self.area_lights)),
+            ("PREVIEW_SHADOWS", flag(self.shadows)),
+        ]
+    }
+}
+
 /// What shading reads, the main pass's and the reflection passes' alike (their group 0).
 #[derive(Clone, Copy)]
 struct Shading<'a> {
@@ -763,6 +794,7 @@ fn shadow_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
 /// What the reflection passes share with the main pass.
 struct ReflectionSetup<'a> {
     module: &'a wgpu::ShaderModule,
+    variant: ShadingVariant,
     shading: Shading<'a>,
     color_view: &'a wgpu::TextureView,
     id_view: &'a wgpu::TextureView,
@@ -832,6 +864,7 @@ impl Reflections {
             ("reflected_vertex", "reflected_fragment"),
             &[],
             &[Some(COLOR_FORMAT.into())],
+            &setup.variant,
         );
         let shared_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("preview reflections"),
@@ -1091,6 +1124,7 @@ fn render_pipeline(
     (vertex, fragment): (&str, &str),
     buffers: &[Option<wgpu::VertexBufferLayout>],
     targets: &[Option<wgpu::ColorTargetState>],
+    shading: &ShadingVariant,
 ) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(vertex),
@@ -1107,7 +1141,10 @@ fn render_pipeline(
         fragment: Some(wgpu::FragmentState {
             module,
             entry_point: Some(fragment),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &shading.constants(),
+                ..Default::default()
+            },
             targets,
         }),
         multiview_mask: None,

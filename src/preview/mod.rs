@@ -11,8 +11,8 @@
 //! Bézier patches, drawn by Fermat's principle, seed 004: `reflectors`, `ReflectedSet`;
 //! a mirror does not reflect itself, and reflects other mirrors once, as the main pass shows
 //! them) and depth of field (a lens is drawn as a pinhole at its centre; lens tilt and swing do
-//! not move a pinhole's rays). Area lights light it as points at their
-//! centres with their power's cosine falloff.
+//! not move a pinhole's rays). Area lights light it exactly where nothing occludes them
+//! (Lambert's formula for a polygon).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
