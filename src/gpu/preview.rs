@@ -50,7 +50,7 @@ pub struct PreviewOptions {
     /// (`preview::Detail`).
     pub tolerance_px: f64,
     /// Pieces each edge of a reflected triangle is cut into; `None`: as many as keep every
-    /// piece under 1/16 of the scene's radius (`preview::reflected_triangles`).
+    /// piece under 1/16 of the scene's radius (`preview::ReflectedSet`).
     pub subdivision: Option<u32>,
     /// The Fermat search's steps at most (the seed: 4–5).
     pub steps: u32,
