@@ -2,7 +2,6 @@
 //! with the code specialised to the scene's features and with the general code, so the
 //! specialisation's speed-up is measured in the same run.
 
-use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use serde::Serialize;
@@ -131,7 +130,7 @@ pub fn run(
 ) -> Result<FrameReport> {
     let mut results = Vec::new();
     for name in scenes {
-        let scene = Scene::load(Path::new(&format!("scenes/{name}.toml")), overrides)?;
+        let scene = Scene::load(&super::sample_scene(name), overrides)?;
         let flat = flatten(&scene);
         let mut ways: Vec<(String, Way)> = vec![
             (

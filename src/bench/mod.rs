@@ -62,6 +62,11 @@ pub enum BenchCommand {
     Preview(PreviewArgs),
 }
 
+/// The sample scene named `name`: its file in `scenes/`.
+pub fn sample_scene(name: &str) -> PathBuf {
+    PathBuf::from("scenes").join(format!("{name}.toml"))
+}
+
 /// Arguments of `chambre bench preview`.
 #[derive(Debug, clap::Args)]
 pub struct PreviewArgs {

@@ -6,8 +6,6 @@
 //! the preview always does (specular lobes, depth of field, mirrors but curved ones): what
 //! moves between the two rows is what the shadows buy.
 
-use std::path::Path;
-
 use serde::Serialize;
 
 use super::Spread;
@@ -23,7 +21,7 @@ use crate::scene::Scene;
 /// One scene previewed one way.
 #[derive(Clone, Debug, Serialize)]
 pub struct PreviewRow {
-    /// The scene's name (`scenes/NAME.toml`).
+    /// The sample scene's name (`bench::sample_scene`: a file of `scenes/`).
     pub scene: String,
     /// Image width, pixels.
     pub width: u32,
@@ -72,15 +70,15 @@ pub fn run(
 ) -> Result<PreviewReport> {
     let mut rows = Vec::new();
     for name in scenes {
-        let path = format!("scenes/{name}.toml");
-        let scene = Scene::load(Path::new(&path), overrides)?;
+        let path = super::sample_scene(name);
+        let scene = Scene::load(&path, overrides)?;
         let flat = flatten(&scene);
         let reference: Vec<String> = overrides
             .iter()
             .cloned()
             .chain([format!("render.spp={reference_spp}")])
             .collect();
-        let reference = flatten(&Scene::load(Path::new(&path), &reference)?);
+        let reference = flatten(&Scene::load(&path, &reference)?);
         let features = reference.features();
         let reference = render_once(&reference, Way::Cpu { features }, None)?.image;
         let has_area_lights = flat

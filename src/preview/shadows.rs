@@ -405,5 +405,7 @@ mod tests {
         assert_eq!(ShadowPlan::layers(&lights, 3), 61);
         let plan = ShadowPlan::new(&lights, sphere, 512, 3);
         assert_eq!((plan.lights[2].layers, plan.origins.len()), (54, 10));
+        // `layers`, which sizes the maps before the plan is made, counts what the plan makes.
+        assert_eq!(plan.views.len() as u32, ShadowPlan::layers(&lights, 3));
     }
 }
