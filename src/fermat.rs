@@ -674,6 +674,13 @@ pub fn drawn_in_preview(p: DVec3, n: DVec3, eye: DVec3, vertex: DVec3) -> bool {
         && reflection_error(p, n, eye, vertex) < f64::from(crate::layout::REFLECTION_TOLERANCE)
 }
 
+/// Whether a point of the searched mirror itself, reflected at `p`, stands clear enough of `p`
+/// to be drawn there (`layout::SELF_REFLECTION_CLEARANCE`; the CPU twin of `fermat_cull`'s
+/// test in wgsl/fermat.wgsl): a vertex on the surface is its own "reflection" at P = V.
+pub fn self_reflection_clear(p: DVec3, eye: DVec3, vertex: DVec3) -> bool {
+    p.distance(vertex) > f64::from(crate::layout::SELF_REFLECTION_CLEARANCE) * p.distance(eye)
+}
+
 /// Alhazen's problem on a sphere in f64, independently of the solver: the reflection point lies
 /// on the great circle of the plane through E, V and the centre, where d(φ) is extremal; found
 /// by a dense scan of the arc facing E and V and bisection on d'(φ).

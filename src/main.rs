@@ -112,6 +112,11 @@ enum Command {
         /// it (N² cubes), for soft shadows; 1 is its centre.
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=8), default_value_t = 1, requires = "shadows")]
         area_shadow_samples: u32,
+        /// Curved mirrors that can see themselves (a torus, a teapot) reflect their own
+        /// triangles, cut for this tolerance (pixels on the film; the flag alone: 2), at the
+        /// cost of their Fermat solves (a teapot's 32 patches each solve every vertex).
+        #[arg(long, value_parser = chambre::bench::tolerance_px, num_args = 0..=1, default_missing_value = chambre::preview::SELF_REFLECTION_TOLERANCE_PX)]
+        self_reflections: Option<f64>,
         /// Override any scene field, e.g. --set camera.film_tilt=10 (also -D).
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
@@ -369,6 +374,7 @@ fn main() -> ExitCode {
             tessellation_tolerance,
             shadows,
             area_shadow_samples,
+            self_reflections,
             set,
         } => {
             let options = chambre::gpu::preview::PreviewOptions {
@@ -377,6 +383,7 @@ fn main() -> ExitCode {
                 steps: fermat_steps,
                 shadows,
                 area_shadow_samples,
+                self_reflections,
                 ..Default::default()
             };
             match (window, output) {

@@ -256,3 +256,41 @@ fn adaptive_sampling_agx_and_the_preview_from_the_command_line() {
     );
     assert_eq!(image::open(&preview).unwrap().width(), 480);
 }
+
+/// `preview --self-reflections` alone cuts the teapot's own reflected triangles for the default
+/// tolerance (`preview::SELF_REFLECTION_TOLERANCE_PX`, the same count as naming it), a finer
+/// tolerance gives more, and without the flag the teapot reflects none of its own.
+#[test]
+fn self_reflections_from_the_command_line() {
+    let reflected = |extra: &[&str]| -> u64 {
+        let output = chambre()
+            .args(["preview", "--frames", "1", "--subdivision", "1"])
+            .args(["-D", "render.width=96", "-D", "render.height=72", "-o"])
+            .arg(scratch("teapot.png"))
+            .arg(scene_path("fermat_teapot.toml"))
+            .args(extra)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(output.status.success(), "{stderr}");
+        let words: Vec<&str> = stderr.split_whitespace().collect();
+        let at = words
+            .iter()
+            .position(|w| *w == "reflected")
+            .expect("a reflected count");
+        words[at - 1].parse().unwrap()
+    };
+    let without = reflected(&[]);
+    let default = reflected(&["--self-reflections"]);
+    let named = reflected(&[
+        "--self-reflections",
+        chambre::preview::SELF_REFLECTION_TOLERANCE_PX,
+    ]);
+    let finer = reflected(&["--self-reflections", "0.5"]);
+    eprintln!("reflected triangles: {without} without, {default} with, {finer} finer");
+    assert_eq!(default, named);
+    assert!(
+        without < default && default < finer,
+        "{without}, {default}, {finer}"
+    );
+}

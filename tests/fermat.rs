@@ -8,6 +8,7 @@ use chambre::bench::fermat::{FermatConfig, FermatReport};
 use chambre::fermat::{
     BezierPatch, Cylinder, Ellipsoid, Reflector, Solver, Sphere, Torus, alhazen_sphere,
     drawn_in_preview, on_cylinder, on_patch, reflection_error, seen_from_outside,
+    self_reflection_clear,
 };
 use chambre::math::rng::Rng;
 use chambre::preview::MirrorSurface;
@@ -181,9 +182,12 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points() {
 /// The `fermat` kernel marks each vertex's reflection shown or not as the CPU twin
 /// `fermat::drawn_in_preview` judges the kernel's own point, and the preview's cull
 /// (`fermat_cull`) lists exactly the reflected triangles whose three vertices' reflections are
-/// shown and that do not lie on the searched mirror itself: a floor of 1,800
+/// shown and that do not lie on the searched mirror itself, unless the search draws its own
+/// mirror's triangles (self-reflections) and they stand clear of their points: a floor of 1,800
 /// triangles under a sphere and under one of the teapot's patches, a seventh of them tagged as
-/// lying on the mirror (left out), a seventh on another mirror (kept). Triangles with a vertex
+/// lying on the mirror (left out by the sphere, which cannot see itself; kept by the patch, with
+/// self-reflections on, where `fermat::self_reflection_clear` says), a seventh on another
+/// mirror (kept). Triangles with a vertex
 /// within 2% of the tolerance, or within 1e-4 of being unseen, where the kernel's f32 and the
 /// twin's f64 may judge differently, are not compared.
 #[test]
@@ -200,11 +204,13 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
                 radius: 0.6,
             },
             DVec3::new(0.0, 1.6, 3.2),
+            false,
         ),
         (
             "teapot patch",
             MirrorSurface::Patch(patches[2]),
             DVec3::new(0.3, 1.8, 3.5),
+            true,
         ),
     ];
     // A 31 x 31 grid of floor points from -2 to 2, two triangles per cell.
@@ -231,11 +237,11 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
         }
     }
     let tolerance = f64::from(chambre::layout::REFLECTION_TOLERANCE);
-    for (name, surface, eye) in cases {
+    for (name, surface, eye, sees_itself) in cases {
         let (points, shown) = chambre::gpu::fermat::shown_triangles(
             &context,
             surface,
-            (eye.as_vec3(), 1),
+            (eye.as_vec3(), 1, sees_itself),
             &vertices,
             &triangles,
             chambre::gpu::preview::PreviewOptions::default().steps,
@@ -261,7 +267,7 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
                 assert_eq!(r.shown, *drawn as u32, "{name}: vertex {k}");
             }
         }
-        let (mut compared, mut own_left_out) = (0, 0);
+        let (mut compared, mut own_shown) = (0, 0);
         let mut expected = Vec::new();
         for (t, tri) in triangles.iter().enumerate() {
             let corners: Option<Vec<bool>> = tri[..3].iter().map(|&k| judged[k as usize]).collect();
@@ -270,8 +276,13 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
             };
             compared += 1;
             let drawn = corners.iter().all(|&d| d);
-            own_left_out += (drawn && tri[3] == 1) as u32;
-            if drawn && tri[3] != 1 {
+            let own = tri[3] == 1;
+            own_shown += (drawn && own) as u32;
+            let clear = tri[..3].iter().all(|&k| {
+                let p = glam::Vec3::from(points[k as usize].point).as_dvec3();
+                self_reflection_clear(p, eye, vertices[k as usize].as_dvec3())
+            });
+            if drawn && (!own || (sees_itself && clear)) {
                 expected.push(t as u32);
             }
         }
@@ -285,8 +296,8 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
             })
             .collect();
         eprintln!(
-            "{name}: {} triangles listed, {} of them compared; {compared} compared, {own_left_out} \
-             on the mirror itself left out",
+            "{name}: {} triangles listed, {} of them compared; {compared} compared, {own_shown} \
+             on the mirror itself whose reflections show",
             shown.len(),
             listed.len()
         );
@@ -298,7 +309,7 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
             "{name}: {} shown",
             expected.len()
         );
-        assert!(own_left_out > 5, "{name}: {own_left_out}");
+        assert!(own_shown > 5, "{name}: {own_shown}");
         assert_eq!(listed, expected, "{name}");
     }
 }
@@ -427,6 +438,7 @@ fn compare_small_with(
         reference_spp: 32,
         searches_per_dispatch: None,
         tolerance_px: chambre::preview::DEFAULT_TOLERANCE_PX,
+        self_reflections: None,
     };
     let report = chambre::bench::fermat::run(&config, context).unwrap();
     eprintln!("{}", report.to_markdown());
@@ -931,6 +943,222 @@ fn mirrors_reflect_each_other_in_the_preview() {
     assert!(
         (shown - ray_traced as f64).abs() < 0.35 * ray_traced as f64,
         "the preview shows {shown} red pixels in the left mirror, the ray tracer {ray_traced}"
+    );
+}
+
+/// A mirror seen in a curved mirror where the scene's paths bounce once (max_depth 1) ends the
+/// path there, as the ray tracer's does: it shows its own shading, no background. Two mirror
+/// spheres under ambient light, the right one red: where the ray tracer shows the red sphere
+/// in the left one (0.9 x its diffuse 0.6, 0.05, 0.05, exactly), the preview shows the same
+/// colour, where it added 0.3 x the background before.
+#[test]
+fn a_mirror_seen_in_a_mirror_ends_the_path_at_max_depth_1() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fermat_sphere.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let one_sphere = "center = [0.0, 0.65, 0.0]\nradius = 0.6\nmaterial = \"mirror\"";
+    assert!(text.contains(one_sphere));
+    let spheres = "center = [-0.55, 0.5, 0.0]\nradius = 0.45\nmaterial = \"mirror\"\n\n\
+                   [[shapes]]\ntype = \"sphere\"\ncenter = [0.55, 0.5, 0.0]\nradius = 0.45\n\
+                   material = \"red_mirror\"\n\n[[materials]]\nname = \"red_mirror\"\n\
+                   model = \"lambert\"\ndiffuse = [0.6, 0.05, 0.05]\nmirror = [0.3, 0.3, 0.3]";
+    let text = text
+        .replace(one_sphere, spheres)
+        .replace("width = 320", "width = 160")
+        .replace("height = 240", "height = 120");
+    let scene = chambre::scene::Scene::from_str(&path, &text, &[]).unwrap();
+    assert_eq!(scene.render.max_depth, 1);
+    let flat = chambre::pack::flatten(&scene);
+    let options = chambre::gpu::preview::PreviewOptions::default();
+    let preview = chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options)
+        .unwrap()
+        .image;
+    let traced = common::render_cpu(&flat);
+    let red_in_mirror = glam::Vec3::new(0.54, 0.045, 0.045);
+    let (mut shown, mut alike) = (0, 0);
+    for (t, p) in traced.pixels.iter().zip(&preview.pixels) {
+        if (*t - red_in_mirror).abs().max_element() < 1e-3 {
+            shown += 1;
+            alike += ((*p - red_in_mirror).abs().max_element() < 1e-3) as u32;
+        }
+    }
+    eprintln!(
+        "{alike} of the {shown} pixels where the ray tracer shows the red mirror in the other"
+    );
+    assert!(shown > 30, "{shown}");
+    assert!(alike as f64 >= 0.8 * shown as f64, "{alike} of {shown}");
+}
+
+/// A scene whose paths do not bounce (max_depth 0) shows no reflection in the ray tracer, and
+/// none in the preview: it has no curved mirrors to reflect in, and its image is the image of
+/// the same scene with the mirror's reflectance 0.
+#[test]
+fn a_scene_whose_paths_do_not_bounce_shows_no_reflection_in_the_preview() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let draw = |extra: &[&str]| {
+        let overrides: Vec<&str> = [
+            "render.width=160",
+            "render.height=120",
+            "render.max_depth=0",
+        ]
+        .into_iter()
+        .chain(extra.iter().copied())
+        .collect();
+        let scene = common::load("scenes/fermat_sphere.toml", &overrides);
+        let flat = chambre::pack::flatten(&scene);
+        let options = chambre::gpu::preview::PreviewOptions::default();
+        let image = chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options)
+            .unwrap()
+            .image;
+        (chambre::preview::reflectors(&flat).len(), image)
+    };
+    let (mirrors, image) = draw(&[]);
+    let (_, without) = draw(&["materials[0].mirror=[0.0,0.0,0.0]"]);
+    assert_eq!(mirrors, 0);
+    assert_eq!(common::differing_pixels(&image, &without), 0);
+}
+
+/// The teapot reflects itself in the preview with self-reflections on, where the ray tracer
+/// (max_depth 1) shows it: its path ends on the mirror, which shows black (its diffuse is 0).
+/// Without them the preview shows the background or the floor there instead.
+#[test]
+fn the_teapot_reflects_itself_where_the_ray_tracer_sees_it() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let scene = common::load(
+        "scenes/fermat_teapot.toml",
+        &["render.width=160", "render.height=120", "render.spp=4"],
+    );
+    let flat = chambre::pack::flatten(&scene);
+    let traced = common::render_cpu(&flat);
+    let draw = |self_reflections| {
+        let options = chambre::gpu::preview::PreviewOptions {
+            self_reflections,
+            ..Default::default()
+        };
+        chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options)
+            .unwrap()
+            .image
+    };
+    // Black: below the floor's dark squares (0.05) and their reflections (0.045).
+    let black = |image: &chambre::render::Image| -> Vec<bool> {
+        image
+            .pixels
+            .iter()
+            .map(|p| p.max_element() < 0.02)
+            .collect()
+    };
+    // Black pixels of `a` with a black pixel of `b` at most a pixel away (a reflected edge
+    // a pixel off, or grey in the ray tracer's 4 samples, is not a miss).
+    let near = |a: &[bool], b: &[bool]| {
+        let (w, h) = (160i32, 120i32);
+        (0..w * h)
+            .filter(|&i| a[i as usize])
+            .filter(|&i| {
+                (-1..=1).any(|dy| {
+                    (-1..=1).any(|dx| {
+                        let (x, y) = (i % w + dx, i / w + dy);
+                        (0..w).contains(&x) && (0..h).contains(&y) && b[(y * w + x) as usize]
+                    })
+                })
+            })
+            .count()
+    };
+    let traced = black(&traced);
+    let (without, with) = (black(&draw(None)), black(&draw(Some(1.0))));
+    let count = |b: &[bool]| b.iter().filter(|&&b| b).count();
+    eprintln!(
+        "black pixels: ray tracer {} ({} of them black in the preview with self-reflections, \
+         {} without, a pixel away at most); preview without {}, with {} ({} black in the ray \
+         tracer)",
+        count(&traced),
+        near(&traced, &with),
+        near(&traced, &without),
+        count(&without),
+        count(&with),
+        near(&with, &traced)
+    );
+    let traced_black = count(&traced) as f64;
+    assert!(traced_black > 100.0, "{traced_black}");
+    assert!((count(&without) as f64) < 0.1 * traced_black);
+    let found = near(&traced, &with) as f64;
+    assert!(found > 0.55 * traced_black, "{found} of {traced_black}");
+    let right = near(&with, &traced) as f64;
+    assert!(
+        right > 0.75 * count(&with) as f64,
+        "{right} of {}",
+        count(&with)
+    );
+}
+
+/// A mirror's own point drawn reflected in it must stand clear of its reflection point: a
+/// point of the searched surface itself is its own "reflection" (P = V, the minimum of
+/// |E − P| + |P − V|), and its triangle would cover the true reflection there at depth 0. Points
+/// a little off one of the teapot's body patches, along the direction the eye's rays reflect
+/// to (so the law of reflection holds at the patch point below them): tagged as the mirror's
+/// own, the cull draws their triangles in that patch where they stand twice
+/// `SELF_REFLECTION_CLEARANCE` of the eye's distance off, and none at half of it; tagged as
+/// another shape's, both.
+#[test]
+fn a_mirrors_own_points_are_drawn_only_clear_of_their_reflection() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let (_, patches) = teapot();
+    let patch = patches[5];
+    let eye = DVec3::new(0.3, 1.8, 3.5);
+    let clearance = f64::from(chambre::layout::SELF_REFLECTION_CLEARANCE);
+    let n = 12;
+    let grid = |off: f64| -> Vec<glam::Vec3> {
+        (0..=n)
+            .flat_map(|i| (0..=n).map(move |j| glam::DVec2::new(i as f64, j as f64) / n as f64))
+            .map(|uv| {
+                let (p, normal) = (patch.point(uv), patch.outward_normal(uv));
+                let to_eye = (eye - p).normalize();
+                let reflected = 2.0 * to_eye.dot(normal) * normal - to_eye;
+                (p + off * clearance * eye.distance(p) * reflected).as_vec3()
+            })
+            .collect()
+    };
+    let triangles = |tag: u32| -> Vec<[u32; 4]> {
+        let mut out = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let k = i * (n + 1) + j;
+                out.push([k, k + 1, k + n + 1, tag]);
+                out.push([k + 1, k + n + 2, k + n + 1, tag]);
+            }
+        }
+        out
+    };
+    let listed = |off: f64, tag: u32| {
+        let (_, shown) = chambre::gpu::fermat::shown_triangles(
+            &context,
+            MirrorSurface::Patch(patch),
+            (eye.as_vec3(), 1, true),
+            &grid(off),
+            &triangles(tag),
+            chambre::gpu::preview::PreviewOptions::default().steps,
+        )
+        .unwrap();
+        shown.len()
+    };
+    let (near_own, far_own) = (listed(0.5, 1), listed(2.0, 1));
+    let (near_other, far_other) = (listed(0.5, 0), listed(2.0, 0));
+    eprintln!(
+        "triangles drawn: own at half the clearance {near_own}, at twice it {far_own}; another \
+         shape's {near_other} and {far_other}"
+    );
+    assert_eq!(near_own, 0);
+    assert!(far_own > 50, "{far_own}");
+    assert!(
+        near_other > 20 && far_other > 50,
+        "{near_other}, {far_other}"
     );
 }
 

@@ -312,6 +312,40 @@ material = "mirror"
     );
 }
 
+/// A mirror that reflects itself (the teapot, with self-reflections on) reflects its own
+/// triangles as cut for the window's present camera too: after the camera comes nearer, the
+/// frame is the one a preview made for that camera gives.
+#[test]
+fn a_mirror_reflecting_itself_is_cut_anew_with_the_camera() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let at = |z: f64| {
+        let mut scene = common::load(
+            "scenes/fermat_teapot.toml",
+            &["render.width=96", "render.height=72"],
+        );
+        scene.camera.position = DVec3::new(0.0, 0.5 + 0.35 * z, z);
+        scene
+    };
+    let options = chambre::gpu::preview::PreviewOptions {
+        subdivision: Some(1),
+        self_reflections: Some(1.0),
+        ..Default::default()
+    };
+    let m = Moved::new(&context, (&at(6.4), &at(2.4)), options);
+    let (moved, made) = (&m.moved, &m.made);
+    assert!(
+        moved.reflected_triangles() > m.reflected_before,
+        "{} against {}",
+        moved.reflected_triangles(),
+        m.reflected_before
+    );
+    assert_eq!(moved.reflected_triangles(), made.reflected_triangles());
+    assert!(made.reflected_drawn().unwrap() > 0);
+    assert_eq!(m.pixels_differing(), 0);
+}
+
 /// A camera that comes nearer a curved shape gets it cut finer, and the window's renderer,
 /// re-cutting on the camera change, draws what a preview made for that camera draws.
 #[test]

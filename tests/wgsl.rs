@@ -251,7 +251,11 @@ fn shared_structs_have_identical_layouts() {
             mirror,
             radii,
             orientation,
-            control
+            control,
+            sees_itself,
+            _pad0,
+            _pad1,
+            _pad2
         }
     );
     layout!(
@@ -441,9 +445,9 @@ fn preview_structs_have_identical_layouts() {
     let uniforms = [
         ("clip", offset_of!(PreviewUniforms, clip)),
         ("light_count", offset_of!(PreviewUniforms, light_count)),
-        ("_pad0", offset_of!(PreviewUniforms, _pad)),
-        ("_pad1", offset_of!(PreviewUniforms, _pad) + 4),
-        ("_pad2", offset_of!(PreviewUniforms, _pad) + 8),
+        ("max_depth", offset_of!(PreviewUniforms, max_depth)),
+        ("_pad1", offset_of!(PreviewUniforms, _pad)),
+        ("_pad2", offset_of!(PreviewUniforms, _pad) + 4),
         ("ambient", offset_of!(PreviewUniforms, ambient)),
         ("eye", offset_of!(PreviewUniforms, eye)),
         ("background", offset_of!(PreviewUniforms, background)),

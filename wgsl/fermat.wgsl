@@ -396,8 +396,10 @@ fn reflection_shows(point: vec3<f32>, n: vec3<f32>, eye: vec3<f32>, vertex: vec3
 // One reflected triangle of one search per invocation (x the triangle, y the search): listed in
 // the search's part of `shown_triangles` (and its three vertices counted into its indirect
 // draw) when all three vertices' reflections show on the search's surface (`fermat` marked
-// each, `GpuReflection::shown`) and the triangle
-// does not lie on that mirror itself (a mirror does not reflect itself in the preview). Runs
+// each, `GpuReflection::shown`), and where the triangle lies on the searched mirror itself,
+// only when the search draws its mirror's own triangles (`sees_itself`: a torus, a teapot's
+// patches, with self-reflections on) and each corner stands clear of its reflection point
+// (SELF_REFLECTION_CLEARANCE; CPU twin `fermat::self_reflection_clear`). Runs
 // after `fermat` has solved the vertices; the preview draws only the listed triangles, so the
 // vertex stage no longer runs for the many whose reflection is not on a surface (most of a
 // teapot patch's). The list's order varies from run to run; the reflections' depth test makes
@@ -415,11 +417,15 @@ fn fermat_cull(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let triangle = reflected_triangles[t];
-    if (triangle.w == reflectors[search].mirror) {
+    let own = triangle.w == reflectors[search].mirror;
+    if (own && reflectors[search].sees_itself == 0u) {
         return;
     }
+    let eye = reflectors[search].eye;
     for (var k = 0u; k < 3u; k += 1u) {
-        if (reflections[s * reflectors[search].count + triangle[k]].shown == 0u) {
+        let r = reflections[s * reflectors[search].count + triangle[k]];
+        if (r.shown == 0u
+            || (own && r.depth <= SELF_REFLECTION_CLEARANCE * distance(r.point, eye))) {
             return;
         }
     }

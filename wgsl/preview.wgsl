@@ -11,7 +11,8 @@
 struct PreviewUniforms {
     clip: mat4x4<f32>,
     light_count: u32,
-    _pad0: u32,
+    // The scene's max_depth: how many bounces the ray tracer's paths take (`PreviewUniforms`).
+    max_depth: u32,
     _pad1: u32,
     _pad2: u32,
     ambient: vec4<f32>,

@@ -87,8 +87,10 @@ fn reflected_fragment(f: ReflectedOut) -> @location(0) vec4<f32> {
     let own = shade(reflector_pass.material, f.mirror_point, normalize(f.mirror_normal),
         preview.eye.xyz);
     var reflected = shade(f.material, f.world, f.normal, f.mirror_point);
-    if (f.reflector != 0u) {
-        // Another mirror, as the main pass shows one: reflecting the background.
+    if (f.reflector != 0u && preview.max_depth >= 2u) {
+        // A mirror seen in a mirror (another, or a teapot's spout in its body): where the ray
+        // tracer bounces again, it reflects the background, as the main pass shows a mirror;
+        // at max_depth 1 its path ends there and it shows its own shading only.
         reflected += preview_materials[f.material].mirror * preview.background.xyz;
     }
     return vec4<f32>(own + preview_materials[reflector_pass.material].mirror * reflected, 1.0);

@@ -149,6 +149,10 @@ struct GpuReflector {
     radii: vec4<f32>,
     orientation: vec4<f32>,
     control: array<vec4<f32>, 16>,
+    sees_itself: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // v turned by the unit quaternion q = (x, y, z, w): a curved shape's orientation

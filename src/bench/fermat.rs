@@ -92,6 +92,9 @@ pub struct FermatReport {
     pub steps: u32,
     /// How far (pixels) the preview's triangles may stray from a curved shape.
     pub tolerance_px: f64,
+    /// With self-reflections: the tolerance (pixels) the mirror's own reflected triangles are
+    /// cut for; `None` without.
+    pub self_reflections: Option<f64>,
     /// The ray-traced frame at 1 sample per pixel on the GPU (the preview's device),
     /// milliseconds.
     pub ray_traced_gpu_ms: Spread,
@@ -125,6 +128,9 @@ pub struct FermatConfig<'a> {
     /// How far (pixels) the preview's triangles may stray from a curved shape
     /// (`PreviewOptions::tolerance_px`).
     pub tolerance_px: f64,
+    /// Mirrors that can see themselves reflect their own triangles, cut for this tolerance
+    /// (`PreviewOptions::self_reflections`).
+    pub self_reflections: Option<f64>,
 }
 
 /// Runs the comparison on `context`'s device.
@@ -184,6 +190,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             searches_per_dispatch: config.searches_per_dispatch,
             shadows: false,
             area_shadow_samples: 1,
+            self_reflections: config.self_reflections,
         };
         let frame = draw_with(context, &scene, &flat, config.frames.max(1), options)?;
         let placed = displacements(context, &scene, &flat, &reflector, &clip, options)?;
@@ -220,6 +227,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
         height,
         steps: config.steps,
         tolerance_px: config.tolerance_px,
+        self_reflections: config.self_reflections,
         ray_traced_gpu_ms: Spread::of(&gpu_ms),
         ray_traced_cpu_ms: Spread::of(&cpu_ms),
         reference_spp: config.reference_spp,
@@ -438,7 +446,7 @@ impl FermatReport {
         let gpu = self.ray_traced_gpu_ms.median;
         let mut out = format!(
             "Fermat reflections against the ray tracer: {} ({}x{}), at most {} steps, curved \
-             shapes within {} px\n\n\
+             shapes within {} px{}\n\n\
              Ray-traced frame, 1 spp: GPU {:.2} ms, CPU {:.2} ms (median of runs)\n\n\
              | subdivision | triangles | reflected triangles (drawn) | preview (ms) | ray-traced GPU / preview | \
              features drawn | corners: max (px) | all features: median (px) | p99 (px) | \
@@ -449,6 +457,9 @@ impl FermatReport {
             self.height,
             self.steps,
             self.tolerance_px,
+            self.self_reflections.map_or(String::new(), |px| format!(
+                ", self-reflections within {px} px"
+            )),
             gpu,
             self.ray_traced_cpu_ms.median,
             self.reference_spp

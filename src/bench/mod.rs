@@ -121,6 +121,10 @@ pub struct FermatArgs {
     /// How far (pixels on the film) the preview's triangles may stray from a curved shape.
     #[arg(long, value_parser = tolerance_px, default_value_t = crate::preview::DEFAULT_TOLERANCE_PX)]
     pub tessellation_tolerance: f64,
+    /// A torus or teapot reflects itself, its own triangles cut for this tolerance (pixels on
+    /// the film; the flag alone: the preview's default, `preview::SELF_REFLECTION_TOLERANCE_PX`).
+    #[arg(long, value_parser = tolerance_px, num_args = 0..=1, default_missing_value = crate::preview::SELF_REFLECTION_TOLERANCE_PX)]
+    pub self_reflections: Option<f64>,
     /// Override any scene field, e.g. --set render.width=640 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,
@@ -503,6 +507,7 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 reference_spp: args.reference_spp,
                 searches_per_dispatch: args.searches_per_dispatch,
                 tolerance_px: args.tessellation_tolerance,
+                self_reflections: args.self_reflections,
             };
             let report = fermat::run(&config, usable(&context)?)?;
             finish(

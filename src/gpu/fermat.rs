@@ -267,11 +267,12 @@ pub fn vertex_buffer(context: &GpuContext, vertices: &[Vec3]) -> Result<wgpu::Bu
 /// The reflections of `vertices` seen from `eye` on `surface` (at most `steps` steps) and the
 /// triangles of `triangles` (three indices into `vertices` and 1 + the index of the mirror each
 /// lies on) that the preview draws on it as a part of mirror `mirror`, sorted: `fermat_cull`'s
-/// list, read back (none is culled where `triangles` is empty).
+/// list, read back (none is culled where `triangles` is empty). With `sees_itself`, the
+/// mirror's own triangles are drawn where they stand clear of their points.
 pub fn shown_triangles(
     context: &GpuContext,
     surface: MirrorSurface,
-    (eye, mirror): (Vec3, u32),
+    (eye, mirror, sees_itself): (Vec3, u32, bool),
     vertices: &[Vec3],
     triangles: &[[u32; 4]],
     steps: u32,
@@ -283,6 +284,7 @@ pub fn shown_triangles(
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let reflector = GpuReflector {
         mirror,
+        sees_itself: sees_itself as u32,
         ..surface.gpu(eye, vertices.len() as u32)
     };
     let pass = FermatPass::new(context, steps, &[reflector.kind]);
@@ -326,6 +328,7 @@ pub fn reflections(
     vertices: &[Vec3],
     steps: u32,
 ) -> Result<Vec<GpuReflection>> {
-    let (reflections, _) = shown_triangles(context, surface, (eye, 0), vertices, &[], steps)?;
+    let (reflections, _) =
+        shown_triangles(context, surface, (eye, 0, false), vertices, &[], steps)?;
     Ok(reflections)
 }

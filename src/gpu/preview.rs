@@ -62,6 +62,10 @@ pub struct PreviewOptions {
     pub shadows: bool,
     /// With shadows: an area light's cubes of shadow maps along each side of it (n² cubes).
     pub area_shadow_samples: u32,
+    /// Where a mirror can see itself (a torus's inner ring, a teapot's spout in its body), it
+    /// reflects its own triangles, cut for this tolerance (pixels on the film, as
+    /// `tolerance_px`); `None`: mirrors do not reflect themselves.
+    pub self_reflections: Option<f64>,
 }
 
 impl Default for PreviewOptions {
@@ -76,6 +80,7 @@ impl Default for PreviewOptions {
             searches_per_dispatch: None,
             shadows: false,
             area_shadow_samples: 1,
+            self_reflections: None,
         }
     }
 }
@@ -190,6 +195,7 @@ pub struct PreviewRenderer {
     flat_triangles: Vec<PreviewVertex>,
     reflected_set: ReflectedSet,
     tolerance_px: f64,
+    self_reflections: Option<f64>,
     uniform_buffer: wgpu::Buffer,
     uniforms: PreviewUniforms,
     far: f64,
@@ -223,6 +229,7 @@ impl PreviewRenderer {
         let uniforms = PreviewUniforms {
             clip: clip.as_mat4().to_cols_array_2d(),
             light_count: flat.frame.light_count,
+            max_depth: flat.frame.max_depth,
             ambient: [
                 flat.frame.ambient[0],
                 flat.frame.ambient[1],
@@ -264,10 +271,21 @@ impl PreviewRenderer {
         let flat_mesh = MainMesh::new(device, &flat_triangles);
         let curved_mesh = MainMesh::new(device, &curved_triangles);
         let mirrors = reflectors(flat);
-        let reflected_set = ReflectedSet::new(flat, options.subdivision);
+        let reflected_set = ReflectedSet::new(
+            flat,
+            options.subdivision,
+            options.self_reflections.is_some(),
+        );
         let reflected = match mirrors.is_empty() {
             true => Vec::new(),
-            false => reflected_set.of(&[flat_triangles.as_slice(), &curved_triangles].concat()),
+            false => reflected_set.of(&reflected_triangles(
+                &flat_triangles,
+                &curved_triangles,
+                &curved,
+                options
+                    .self_reflections
+                    .map(|px| Detail::new(clip, (width, height), px)),
+            )),
         };
         let uniform_buffer =
             context.uniform_buffer("preview uniforms", bytemuck::bytes_of(&uniforms));
@@ -359,6 +377,7 @@ impl PreviewRenderer {
             flat_triangles,
             reflected_set,
             tolerance_px: options.tolerance_px,
+            self_reflections: options.self_reflections,
             uniform_buffer,
             uniforms,
             far,
@@ -386,8 +405,16 @@ impl PreviewRenderer {
             .cuts(&Detail::new(clip, self.image_size(), self.tolerance_px));
         if cuts != self.cuts {
             let curved_triangles = self.curved.triangles(&cuts);
+            let own_detail = self
+                .self_reflections
+                .map(|px| Detail::new(clip, self.image_size(), px));
             if let Some(reflections) = &mut self.reflections {
-                let triangles = [self.flat_triangles.as_slice(), &curved_triangles].concat();
+                let triangles = reflected_triangles(
+                    &self.flat_triangles,
+                    &curved_triangles,
+                    &self.curved,
+                    own_detail,
+                );
                 reflections
                     .load(&self.context, &self.reflected_set.of(&triangles), eye)
                     .map_err(|e| e.with_advice(FERMAT_ARRAYS_ADVICE))?;
@@ -817,6 +844,8 @@ struct Reflections {
     /// Per mirror: its material.
     materials: Vec<u32>,
     searches_per_dispatch: Option<usize>,
+    /// Whether mirrors that can see themselves draw their own triangles reflected.
+    self_reflections: bool,
     pipeline: wgpu::RenderPipeline,
     shared_group: wgpu::BindGroup,
     far: f64,
@@ -886,6 +915,7 @@ impl Reflections {
             searches,
             materials: reflectors.iter().map(|r| r.material).collect(),
             searches_per_dispatch: options.searches_per_dispatch,
+            self_reflections: options.self_reflections.is_some(),
             pipeline,
             shared_group,
             far: setup.far,
@@ -930,7 +960,12 @@ impl Reflections {
             .step_by(per_batch)
             .map(|first| {
                 let range = first..(first + per_batch).min(self.searches.len());
-                let uniforms = search_uniforms(&self.searches[range.clone()], eye, positions.len());
+                let uniforms = search_uniforms(
+                    &self.searches[range.clone()],
+                    eye,
+                    positions.len(),
+                    self.self_reflections,
+                );
                 let solve = self.fermat.solve(context, &uniforms, &fermat_vertices)?;
                 let cull = self.fermat.cull(context, &solve, &table, triangle_count)?;
                 Ok(SearchBatch {
@@ -984,7 +1019,7 @@ impl Reflections {
         for batch in &self.geometry.batches {
             let searches = &self.searches[batch.searches.clone()];
             let count = self.geometry.solve_count as usize;
-            let reflectors = search_uniforms(searches, eye, count);
+            let reflectors = search_uniforms(searches, eye, count, self.self_reflections);
             context.queue.write_buffer(
                 &batch.solve.reflectors,
                 0,
@@ -1040,14 +1075,39 @@ fn search_uniforms(
     searches: &[(u32, MirrorSurface)],
     eye: glam::Vec3,
     count: usize,
+    self_reflections: bool,
 ) -> Vec<GpuReflector> {
     searches
         .iter()
         .map(|&(id, search)| GpuReflector {
             mirror: id,
+            sees_itself: (self_reflections && search.sees_itself()) as u32,
             ..search.gpu(eye, count as u32)
         })
         .collect()
+}
+
+/// The triangles the mirrors reflect, before `ReflectedSet::of` cuts them: the flat ones and
+/// the curved shapes as the main pass cuts them (`curved_triangles`), but where mirrors
+/// reflect themselves (`own_detail`), the mirrors' own triangles cut for that detail: a
+/// convex mirror shows what it reflects smaller than the eye sees it, so a coarser cut than the
+/// main pass's serves, at a fraction of the solves.
+fn reflected_triangles(
+    flat_triangles: &[PreviewVertex],
+    curved_triangles: &[PreviewVertex],
+    curved: &CurvedShapes,
+    own_detail: Option<Detail>,
+) -> Vec<PreviewVertex> {
+    let Some(detail) = own_detail else {
+        return [flat_triangles, curved_triangles].concat();
+    };
+    let on_mirror = |t: &&[PreviewVertex]| t[0].reflector != 0;
+    let others = curved_triangles.chunks_exact(3).filter(|t| !on_mirror(t));
+    let mirrors = curved.triangles(&curved.cuts(&detail));
+    let mirrors = mirrors.chunks_exact(3).filter(on_mirror);
+    let mut out = flat_triangles.to_vec();
+    out.extend(others.chain(mirrors).flatten());
+    out
 }
 
 /// How far the preview's planes reach from their point (`tessellate`'s `extent`) and its far

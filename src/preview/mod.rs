@@ -9,8 +9,8 @@
 //! (`shadows`: hard ones, by shadow maps), specular
 //! lobes, reflections other than curved mirrors' (spheres, tori, ellipsoids, cylinders and
 //! Bézier patches, drawn by Fermat's principle, seed 004: `reflectors`, `ReflectedSet`;
-//! a mirror does not reflect itself, and reflects other mirrors once, as the main pass shows
-//! them) and depth of field (a lens is drawn as a pinhole at its centre; lens tilt and swing do
+//! mirrors reflect each other once, and a torus or a teapot itself where asked: a mirror seen in
+//! a mirror reflects the background, or nothing where the scene's paths bounce once) and depth of field (a lens is drawn as a pinhole at its centre; lens tilt and swing do
 //! not move a pinhole's rays). Area lights light it exactly where nothing occludes them
 //! (Lambert's formula for a polygon).
 
@@ -64,8 +64,11 @@ pub struct PreviewUniforms {
     pub clip: [[f32; 4]; 4],
     /// Lights in the scene's light array.
     pub light_count: u32,
+    /// The scene's `max_depth`: a mirror seen in a curved mirror (the reflection's one bounce)
+    /// reflects the background only where the ray tracer would bounce again (2 or more).
+    pub max_depth: u32,
     /// Padding to the WGSL layout.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
     /// Ambient radiance: each surface adds diffuse * ambient.
     pub ambient: [f32; 4],
     /// The eye (the lens centre), world space; `w` unused.
@@ -149,6 +152,13 @@ impl MirrorSurface {
         }
     }
 
+    /// Whether the surface can reflect points of its own mirror: a torus's inner ring and a
+    /// teapot's spout, handle and lid see the rest of it; a sphere, an ellipsoid and a cylinder
+    /// (seen from outside, as the search sees it) are convex.
+    pub fn sees_itself(&self) -> bool {
+        matches!(self, MirrorSurface::Torus(_) | MirrorSurface::Patch(_))
+    }
+
     /// The Fermat kernel's uniforms for this surface, the eye at `eye`, `count` vertices.
     pub fn gpu(&self, eye: Vec3, count: u32) -> GpuReflector {
         let mut reflector = GpuReflector {
@@ -193,8 +203,12 @@ impl MirrorSurface {
 /// The scene's curved mirrors: mirror spheres in primitive order, then the scene's mirror
 /// parametric surfaces (tori, ellipsoids, cylinders, Bézier shapes; flat
 /// mirrors, mirror triangles and quads of meshes are drawn with their diffuse term only: the
-/// seed's method is for smooth curved reflectors).
+/// seed's method is for smooth curved reflectors). None where the scene's paths do not bounce
+/// (`max_depth` 0): the ray tracer shows no reflection there either.
 pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
+    if scene.frame.max_depth == 0 {
+        return Vec::new();
+    }
     let mirror_of = |material: u32| Vec3::from(scene.materials[material as usize].mirror);
     let bounded = &scene.prims[..scene.frame.plane_start as usize];
     let spheres = bounded
@@ -248,8 +262,9 @@ fn reflector_tags(scene: &FlatScene, reflectors: &[Reflector]) -> Vec<u32> {
 
 /// How the reflectors' triangles are made from the main pass's (`tessellate`): every one not
 /// on a reflector, each cut into n² triangles, n pieces along each edge (and, where the scene
-/// has several curved mirrors, theirs uncut: each mirror reflects the others once, showing them
-/// as the main pass does): n = `subdivision`, or where it is `None`, the fewest pieces that
+/// has several curved mirrors or one that can see itself, the mirrors' own triangles uncut:
+/// each mirror reflects the others, and a torus or a teapot reflects itself, once, showing
+/// them as the ray tracer's last bounce does): n = `subdivision`, or where it is `None`, the fewest pieces that
 /// leave no edge longer than `AUTO_PIECE` of the scene's radius (at most `MAX_AUTO_PIECES`).
 /// The raster pipeline draws a reflected triangle straight between its vertices' reflection
 /// points, where the true reflection of a straight edge is curved: subdividing is what keeps
@@ -257,16 +272,24 @@ fn reflector_tags(scene: &FlatScene, reflectors: &[Reflector]) -> Vec<u32> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReflectedSet {
     longest: f32,
-    several_mirrors: bool,
+    mirrors_reflected: bool,
     subdivision: Option<u32>,
 }
 
 impl ReflectedSet {
-    /// The reflected set of `scene`'s mirrors, its triangles cut as `subdivision` says.
-    pub fn new(scene: &FlatScene, subdivision: Option<u32>) -> ReflectedSet {
+    /// The reflected set of `scene`'s mirrors, its triangles cut as `subdivision` says;
+    /// with `self_reflections`, a mirror that can see itself reflects its own triangles.
+    pub fn new(
+        scene: &FlatScene,
+        subdivision: Option<u32>,
+        self_reflections: bool,
+    ) -> ReflectedSet {
+        let mirrors = reflectors(scene);
+        let sees_itself = |r: &Reflector| r.searches.iter().any(MirrorSurface::sees_itself);
         ReflectedSet {
             longest: AUTO_PIECE * bounded_radius(scene),
-            several_mirrors: reflectors(scene).len() > 1,
+            mirrors_reflected: mirrors.len() > 1
+                || (self_reflections && mirrors.iter().any(sees_itself)),
             subdivision,
         }
     }
@@ -277,10 +300,10 @@ impl ReflectedSet {
         let mut out = Vec::new();
         for t in triangles.chunks_exact(3) {
             if t[0].reflector != 0 {
-                // A mirror's triangles, cut for the camera, are reflected in the other mirrors
-                // as they are (its own reflection pass leaves them out); a lone mirror reflects
-                // none.
-                if self.several_mirrors {
+                // A mirror's triangles, cut for the camera, are reflected as they are (a convex
+                // mirror's own searches leave its own out: `fermat_cull`); a lone convex mirror
+                // reflects none.
+                if self.mirrors_reflected {
                     out.extend_from_slice(t);
                 }
                 continue;
@@ -295,6 +318,10 @@ impl ReflectedSet {
         out
     }
 }
+
+/// The tolerance (pixels on the film) a mirror's own triangles are cut for where it reflects
+/// itself and the user names none (`--self-reflections` alone), as the command lines write it.
+pub const SELF_REFLECTION_TOLERANCE_PX: &str = "2";
 
 /// The automatic subdivision's longest edge, in scene radii (`bounded_radius`).
 pub const AUTO_PIECE: f32 = 1.0 / 16.0;
@@ -386,8 +413,9 @@ pub fn omissions(scene: &Scene, shadows: Option<u32>) -> Vec<String> {
     let mut notes = vec![format!(
         "the preview has {} no specular lobes; curved mirrors (spheres, tori, ellipsoids, \
          cylinders, Bezier patches) reflect the scene by Fermat's principle (one reflection per \
-         point and surface; each other once, not themselves), other mirrors show their diffuse \
-         term only",
+         point and surface; each other once, tori and teapots themselves only with \
+         --self-reflections; a mirror seen in one reflects the background, or nothing at \
+         max_depth 1), other mirrors show their diffuse term only",
         match shadows {
             None => "no shadows (--shadows draws them by shadow maps) and".to_string(),
             Some(1) =>
