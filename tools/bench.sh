@@ -51,6 +51,15 @@ mkdir -p bench
                 --json "bench/fermat_${mirror}_tolerance_$tolerance.json"
         done
     done
+    # Mirrors reflecting themselves (--self-reflections), their own triangles cut for each
+    # tolerance, traded against time and FLIP (without: the tables above).
+    for mirror in torus teapot; do
+        for tolerance in 0.5 1 2 4; do
+            "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --subdivisions 4 \
+                --self-reflections "$tolerance" \
+                --json "bench/fermat_${mirror}_self_$tolerance.json"
+        done
+    done
     echo
     "$chambre" bench rays --runs "$runs" --json bench/rays.json
     echo
