@@ -410,6 +410,22 @@ pub fn on_patch(uv: DVec2) -> bool {
     uv.min_element() >= -margin && uv.max_element() <= 1.0 + margin
 }
 
+/// Whether a patch's search shows a reflection found at parameters `uv`: on the patch or in
+/// the seam band around it, on its smooth continuation (`layout::PATCH_SEAM`; the kernel's
+/// zero normal beyond).
+pub fn within_seam(uv: DVec2) -> bool {
+    let seam = f64::from(crate::layout::PATCH_SEAM);
+    uv.min_element() >= -seam && uv.max_element() <= 1.0 + seam
+}
+
+/// Whether a patch's search draws a reflected triangle whose corners' reflections show at
+/// parameters `uvs`: one corner at least on the patch itself, the others perhaps in its seam
+/// band (the CPU twin of `fermat_cull`'s test): a triangle across a seam is drawn by both
+/// patches, one wholly beyond by the neighbour alone.
+pub fn anchored_on_patch(uvs: [DVec2; 3]) -> bool {
+    uvs.into_iter().any(on_patch)
+}
+
 /// Whether the height `v` of a point of a cylinder lies on one `height` tall: in [0, height],
 /// widened by `PATCH_MARGIN` of it.
 pub fn on_cylinder(v: f64, height: f64) -> bool {

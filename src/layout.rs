@@ -704,10 +704,11 @@ pub const FERMAT_SPREAD: f32 = 1e-3;
 /// that flat triangles break the step's system.
 pub const FERMAT_FLAT: f32 = 1e-3;
 
-/// A reflection found on a Bézier patch counts where its (u, v) lies in the patch's square
+/// A reflection found on a Bézier patch lies on it where its (u, v) lies in the patch's square
 /// widened by this much: beyond, the point belongs to a neighbouring patch (whose own search
-/// finds it) or to none. On a cylinder, where its height lies within [0, height] widened by
-/// this fraction of the height.
+/// finds it) or to none, and anchors no reflected triangle (`PATCH_SEAM`). On a cylinder, a
+/// reflection counts where its height lies within [0, height] widened by this fraction of the
+/// height.
 pub const PATCH_MARGIN: f32 = 1e-4;
 
 /// A mirror's own vertex V is drawn reflected in it (a teapot's spout in its body) only where
@@ -717,6 +718,14 @@ pub const PATCH_MARGIN: f32 = 1e-4;
 /// at the preview scenes' 40 mm focal length over 320 pixels; the nearest real self-reflections
 /// there (the teapot's knob over its lid) stand 10x farther off.
 pub const SELF_REFLECTION_CLEARANCE: f32 = 1e-3;
+
+/// A reflection found on a Bézier patch's smooth continuation, its (u, v) beyond the square by
+/// at most this much, still shows as a corner of a reflected triangle with another corner on
+/// the patch itself (`fermat::within_seam`, `fermat::anchored_on_patch`): a triangle whose
+/// corners reflect on two neighbouring patches was drawn by neither, and a teapot's seams
+/// showed holes (the features drawn at subdivision 4: 917 of 1,277 with none, 1,053 with
+/// 0.03, 1,111 with 0.1; BENCHMARKS.md).
+pub const PATCH_SEAM: f32 = 0.1;
 
 /// A search on a Bézier patch stops once a step leaves the patch's square widened by this much
 /// (`fermat::Reflector::beyond_reach`).
@@ -795,6 +804,7 @@ pub fn wgsl_prelude() -> String {
         ("FERMAT_SPREAD", FERMAT_SPREAD),
         ("FERMAT_FLAT", FERMAT_FLAT),
         ("PATCH_MARGIN", PATCH_MARGIN),
+        ("PATCH_SEAM", PATCH_SEAM),
         ("SELF_REFLECTION_CLEARANCE", SELF_REFLECTION_CLEARANCE),
         ("PATCH_REACH", PATCH_REACH),
         ("PATCH_CROSSING_DONE", PATCH_CROSSING_DONE),

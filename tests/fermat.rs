@@ -7,8 +7,8 @@
 use chambre::bench::fermat::{FermatConfig, FermatReport};
 use chambre::fermat::{
     BezierPatch, Cylinder, Ellipsoid, Reflector, Solver, Sphere, Torus, alhazen_sphere,
-    drawn_in_preview, on_cylinder, on_patch, reflection_error, seen_from_outside,
-    self_reflection_clear,
+    anchored_on_patch, drawn_in_preview, on_cylinder, on_patch, reflection_error,
+    seen_from_outside, self_reflection_clear,
 };
 use chambre::math::rng::Rng;
 use chambre::preview::MirrorSurface;
@@ -277,6 +277,10 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
             compared += 1;
             let drawn = corners.iter().all(|&d| d);
             let own = tri[3] == 1;
+            // A patch draws a triangle with a corner on it (the others may be in its seam).
+            let uvs = [0, 1, 2].map(|c| glam::Vec2::from(points[tri[c] as usize].uv).as_dvec2());
+            let drawn =
+                drawn && (!matches!(surface, MirrorSurface::Patch(_)) || anchored_on_patch(uvs));
             own_shown += (drawn && own) as u32;
             let clear = tri[..3].iter().all(|&k| {
                 let p = glam::Vec3::from(points[k as usize].point).as_dvec3();
@@ -310,6 +314,19 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
             expected.len()
         );
         assert!(own_shown > 5, "{name}: {own_shown}");
+        // The patch draws triangles across its seam: a corner on its continuation.
+        let across = expected
+            .iter()
+            .filter(|&&t| {
+                triangles[t as usize][..3]
+                    .iter()
+                    .any(|&k| !on_patch(glam::Vec2::from(points[k as usize].uv).as_dvec2()))
+            })
+            .count();
+        eprintln!("{name}: {across} triangles drawn across the seam");
+        if matches!(surface, MirrorSurface::Patch(_)) {
+            assert!(across > 0, "{name}: {across}");
+        }
         assert_eq!(listed, expected, "{name}");
     }
 }
@@ -568,7 +585,9 @@ fn preview_reflections_on_turned_mirrors_land_where_the_ray_tracer_puts_them() {
 
 /// The same on the teapot scene, whose 32 patches are searched one by one: the features drawn
 /// land where the converged f64 search puts them on their patch, corners exactly, points
-/// between within a pixel at 16x16 at this size; FLIP falls with the subdivision.
+/// between within a pixel at 16x16 at this size; FLIP falls with the subdivision. At 16x16
+/// more than 80% of the features are drawn (87%; 72% before triangles across the patches'
+/// seams were drawn, `layout::PATCH_SEAM`).
 #[test]
 fn preview_reflections_on_a_teapot_land_where_the_ray_tracer_puts_them() {
     let Some(context) = common::gpu_context() else {
@@ -580,7 +599,7 @@ fn preview_reflections_on_a_teapot_land_where_the_ray_tracer_puts_them() {
         assert!(row.features > 300, "{row:?}");
         assert!(row.corner_max_px.is_some_and(|d| d < 0.05), "{row:?}");
     }
-    assert!(fine.drawn as f64 >= 0.6 * fine.features as f64, "{fine:?}");
+    assert!(fine.drawn as f64 >= 0.8 * fine.features as f64, "{fine:?}");
     assert!(fine.drawn > coarse.drawn, "{report:?}");
     assert!(
         fine.displacement_p99_px.is_some_and(|d| d < 1.0),
@@ -857,9 +876,10 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points_on_bezier_patches() {
             let s = solver.solve(patch, eye, *v);
             let gn = DVec3::from(glam::Vec3::from(gpu.normal));
             if s.left_surface || !on_patch(s.uv) {
-                // Far off the square; near its edges f32 and f64 may disagree.
-                let uv = s.uv;
-                if uv.min_element() < -0.1 || uv.max_element() > 1.1 {
+                // Far off the square and its seam band; near their edges f32 and f64 may
+                // disagree.
+                let (uv, beyond) = (s.uv, f64::from(chambre::layout::PATCH_SEAM) + 0.1);
+                if uv.min_element() < -beyond || uv.max_element() > 1.0 + beyond {
                     off += 1;
                     off_agree += (gn == DVec3::ZERO) as u32;
                 }

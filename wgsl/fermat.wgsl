@@ -362,14 +362,16 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     let own_point = surface(f, best).p;
     let point = c + turn(q, own_point - c);
     var normal = turn(q, surface_normal(f, best));
-    // A patch's reflection outside its square is none of its own: a zero normal, never seen
-    // from outside, so the preview leaves it out (`fermat::on_patch`).
-    let margin = PATCH_MARGIN;
+    // A patch's reflection beyond the seam band around its square is none of its own: a zero
+    // normal, never seen from outside, so the preview leaves it out (`fermat::within_seam`).
+    // Within the band it lies on the patch's smooth continuation toward its neighbour, and the
+    // cull draws it as a corner of a triangle anchored on the patch.
     if (REFLECTOR_KIND == REFLECTOR_PATCH
-        && (min(best.x, best.y) < -margin || max(best.x, best.y) > 1.0 + margin)) {
+        && (min(best.x, best.y) < -PATCH_SEAM || max(best.x, best.y) > 1.0 + PATCH_SEAM)) {
         normal = vec3<f32>(0.0);
     }
-    // So is a cylinder's beyond its height (`fermat::on_cylinder`).
+    // So is a cylinder's beyond its height (`fermat::on_cylinder`): its ends have no neighbour.
+    let margin = PATCH_MARGIN;
     let h = reflectors[search].height;
     if (REFLECTOR_KIND == REFLECTOR_CYLINDER
         && (best.y < -margin * h || best.y > (1.0 + margin) * h)) {
@@ -422,12 +424,20 @@ fn fermat_cull(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let eye = reflectors[search].eye;
+    var anchored = reflectors[search].kind != REFLECTOR_PATCH;
     for (var k = 0u; k < 3u; k += 1u) {
         let r = reflections[s * reflectors[search].count + triangle[k]];
         if (r.shown == 0u
             || (own && r.depth <= SELF_REFLECTION_CLEARANCE * distance(r.point, eye))) {
             return;
         }
+        anchored = anchored || (min(r.uv.x, r.uv.y) >= -PATCH_MARGIN
+            && max(r.uv.x, r.uv.y) <= 1.0 + PATCH_MARGIN);
+    }
+    // A patch draws the triangles with a corner on it; one wholly in its seam band is its
+    // neighbour's (`fermat::anchored_on_patch`).
+    if (!anchored) {
+        return;
     }
     let slot = atomicAdd(&draw_args[s].vertex_count, 3u) / 3u;
     shown_triangles[s * triangles + slot] = t;

@@ -25,8 +25,8 @@ use crate::accel::intersect::RayQuery;
 use crate::accel::traverse::closest_hit;
 use crate::error::{Error, Location, Result};
 use crate::fermat::{
-    Solver, Sphere, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, reflection_error,
-    seen_from_outside,
+    Solver, Sphere, alhazen_sphere, anchored_on_patch, drawn_in_preview, on_cylinder, on_patch,
+    reflection_error, seen_from_outside,
 };
 use crate::gpu::GpuContext;
 use crate::gpu::preview::{PreviewOptions, draw_with, extent_and_far};
@@ -312,7 +312,11 @@ fn displacements(
                     let p = Vec3::from(r.point).as_dvec3();
                     let n = Vec3::from(r.normal).as_dvec3();
                     drawn_in_preview(p, n, eye64, v.as_dvec3())
-                });
+                })
+                && (!matches!(surface, MirrorSurface::Patch(_))
+                    || anchored_on_patch(
+                        [0, 1, 2].map(|c| glam::Vec2::from(corners_found[c].uv).as_dvec2()),
+                    ));
             let drawn_at = corners_found
                 .iter()
                 .zip(weights)
