@@ -251,6 +251,30 @@ impl Moved {
         }
     }
 
+    /// The moved renderer reflects more triangles than before the move (cut finer for the
+    /// nearer camera), as many as the one made for its camera, draws as many, and the same
+    /// frame.
+    fn assert_reflections_cut_anew(&self) {
+        let (moved, made) = (&self.moved, &self.made);
+        assert!(
+            moved.reflected_triangles() > self.reflected_before,
+            "{} against {}",
+            moved.reflected_triangles(),
+            self.reflected_before
+        );
+        assert_eq!(moved.reflected_triangles(), made.reflected_triangles());
+        assert!(made.reflected_drawn().unwrap() > 0);
+        assert_eq!(
+            moved.reflected_drawn().unwrap(),
+            made.reflected_drawn().unwrap()
+        );
+        assert_eq!(
+            self.pixels_differing(),
+            0,
+            "the re-cut preview's reflections differ from one made for its camera"
+        );
+    }
+
     /// Pixels where the two frames differ.
     fn pixels_differing(&self) -> usize {
         let (a, b) = (self.moved.image().unwrap(), self.made.image().unwrap());
@@ -292,24 +316,7 @@ material = "mirror"
         scene
     };
     let (far, near) = (at(6.0), at(2.2));
-    let m = Moved::new(&context, (&far, &near), Default::default());
-    let (moved, made) = (&m.moved, &m.made);
-    assert!(
-        moved.reflected_triangles() > m.reflected_before,
-        "{} against {}",
-        moved.reflected_triangles(),
-        m.reflected_before
-    );
-    assert_eq!(moved.reflected_triangles(), made.reflected_triangles());
-    assert_eq!(
-        moved.reflected_drawn().unwrap(),
-        made.reflected_drawn().unwrap()
-    );
-    assert_eq!(
-        m.pixels_differing(),
-        0,
-        "the re-cut preview's reflections differ from one made for its camera"
-    );
+    Moved::new(&context, (&far, &near), Default::default()).assert_reflections_cut_anew();
 }
 
 /// A mirror that reflects itself (the teapot, with self-reflections on) reflects its own
@@ -333,17 +340,7 @@ fn a_mirror_reflecting_itself_is_cut_anew_with_the_camera() {
         self_reflections: Some(1.0),
         ..Default::default()
     };
-    let m = Moved::new(&context, (&at(6.4), &at(2.4)), options);
-    let (moved, made) = (&m.moved, &m.made);
-    assert!(
-        moved.reflected_triangles() > m.reflected_before,
-        "{} against {}",
-        moved.reflected_triangles(),
-        m.reflected_before
-    );
-    assert_eq!(moved.reflected_triangles(), made.reflected_triangles());
-    assert!(made.reflected_drawn().unwrap() > 0);
-    assert_eq!(m.pixels_differing(), 0);
+    Moved::new(&context, (&at(6.4), &at(2.4)), options).assert_reflections_cut_anew();
 }
 
 /// A camera that comes nearer a curved shape gets it cut finer, and the window's renderer,

@@ -394,7 +394,7 @@ impl PreviewRenderer {
 
     /// Draws through `camera` from now on (the scene's geometry and lights stay; its curved
     /// shapes are cut anew where the camera needs other grids, in the main pass and as mirrors
-    /// reflect them, their shadows drawn anew). Fails where the reflected triangles, cut anew,
+    /// reflect them, a mirror's own reflected triangles with them, their shadows drawn anew). Fails where the reflected triangles, cut anew,
     /// outgrow the device's buffers (the renderer then draws as it did before the call), or
     /// where the device fails drawing the shadow maps.
     pub fn set_camera(&mut self, camera: &CameraSpec) -> Result<()> {
