@@ -267,3 +267,46 @@ fn bench_motion_finds_the_same_hits_with_every_slicing() {
         .collect();
     assert!(t.iter().all(|&x| (x - t[0]).abs() <= 1e-9 * t[0]), "{t:?}");
 }
+
+/// `bench fermat --self-reflections` reports the tolerance in its table's title and its JSON,
+/// and the teapot reflects more triangles (its own) than without, with the same features
+/// measured (the floor's).
+#[test]
+fn bench_fermat_measures_a_mirror_reflecting_itself() {
+    drop(common::gpu_context());
+    let run = |extra: &[&str], header: &str| {
+        let json = std::env::temp_dir().join(format!(
+            "chambre-fermat-{}-{}.json",
+            std::process::id(),
+            extra.len()
+        ));
+        let args: Vec<&str> = [
+            "fermat",
+            "--scene",
+            "scenes/fermat_teapot.toml",
+            "--subdivisions",
+            "1",
+            "--runs",
+            "1",
+            "--frames",
+            "1",
+            "--reference-spp",
+            "1",
+            "-D",
+            "render.width=64",
+            "-D",
+            "render.height=48",
+        ]
+        .into_iter()
+        .chain(extra.iter().copied())
+        .collect();
+        run_bench(&args, &json, header)["report"].clone()
+    };
+    let without = run(&[], "curved shapes within 0.5 px\n");
+    let with = run(&["--self-reflections", "2"], "self-reflections within 2 px");
+    assert!(without["self_reflections"].is_null(), "{without}");
+    assert_eq!(with["self_reflections"].as_f64(), Some(2.0));
+    let row = |r: &serde_json::Value, name: &str| r["rows"][0][name].as_u64().unwrap();
+    assert!(row(&with, "reflected_triangles") > row(&without, "reflected_triangles"));
+    assert_eq!(row(&with, "features"), row(&without, "features"));
+}
