@@ -774,6 +774,23 @@ fn shard_manifest(
 }
 
 /// `chambre preview`: the raster preview, written atomically, with its frame time.
+/// Tells the user what the preview of `scene` drawn with `options` cannot show.
+fn note_what_the_preview_leaves_out(
+    scene: &chambre::scene::Scene,
+    flat: &chambre::pack::FlatScene,
+    options: &chambre::gpu::preview::PreviewOptions,
+) {
+    let shadows = options.shadows.then_some(options.area_shadow_samples);
+    for omission in chambre::preview::omissions(scene, shadows) {
+        note!("note: {omission}");
+    }
+    if options.self_reflections.is_some()
+        && let Some(note) = chambre::preview::self_reflections_note(flat)
+    {
+        note!("note: {note}");
+    }
+}
+
 fn run_preview(
     path: &Path,
     output: &Path,
@@ -783,13 +800,8 @@ fn run_preview(
 ) -> anyhow::Result<ExitCode> {
     let target = OutputTarget::prepare(output)?;
     let scene = load_and_note(path, overrides)?;
-    for omission in chambre::preview::omissions(
-        &scene,
-        options.shadows.then_some(options.area_shadow_samples),
-    ) {
-        note!("note: {omission}");
-    }
     let flat = flatten(&scene);
+    note_what_the_preview_leaves_out(&scene, &flat, &options);
     let context = chambre::gpu::GpuContext::new()?;
     let frame = chambre::gpu::preview::draw_with(&context, &scene, &flat, frames, options)?;
     target.write(&frame.image)?;
@@ -859,13 +871,8 @@ fn run_window(
     }
     let save = save.unwrap_or_else(|| path.with_extension("composed.toml"));
     let scene = load_and_note(path, overrides)?;
-    for omission in chambre::preview::omissions(
-        &scene,
-        drawing.shadows.then_some(drawing.area_shadow_samples),
-    ) {
-        note!("note: {omission}");
-    }
     let flat = flatten(&scene);
+    note_what_the_preview_leaves_out(&scene, &flat, &drawing);
     let options = chambre::gpu::window::WindowOptions {
         keys,
         screenshot: screenshot.clone(),

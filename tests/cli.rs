@@ -259,20 +259,26 @@ fn adaptive_sampling_agx_and_the_preview_from_the_command_line() {
 
 /// `preview --self-reflections` alone cuts the teapot's own reflected triangles for the default
 /// tolerance (`preview::SELF_REFLECTION_TOLERANCE_PX`, the same count as naming it), a finer
-/// tolerance gives more, and without the flag the teapot reflects none of its own.
+/// tolerance gives more, and without the flag the teapot reflects none of its own. On a mirror
+/// sphere, which cannot see itself, the flag is said to change nothing.
 #[test]
 fn self_reflections_from_the_command_line() {
-    let reflected = |extra: &[&str]| -> u64 {
+    let preview = |scene: &str, extra: &[&str]| -> String {
         let output = chambre()
             .args(["preview", "--frames", "1", "--subdivision", "1"])
             .args(["-D", "render.width=96", "-D", "render.height=72", "-o"])
-            .arg(scratch("teapot.png"))
-            .arg(scene_path("fermat_teapot.toml"))
+            .arg(scratch("mirror.png"))
+            .arg(scene_path(scene))
             .args(extra)
             .output()
             .unwrap();
-        let stderr = String::from_utf8_lossy(&output.stderr);
+        let stderr = String::from_utf8_lossy(&output.stderr).to_string();
         assert!(output.status.success(), "{stderr}");
+        stderr
+    };
+    let reflected = |extra: &[&str]| -> u64 {
+        let stderr = preview("fermat_teapot.toml", extra);
+        assert!(!stderr.contains("changes nothing"), "{stderr}");
         let words: Vec<&str> = stderr.split_whitespace().collect();
         let at = words
             .iter()
@@ -292,5 +298,10 @@ fn self_reflections_from_the_command_line() {
     assert!(
         without < default && default < finer,
         "{without}, {default}, {finer}"
+    );
+    let sphere = preview("fermat_sphere.toml", &["--self-reflections"]);
+    assert!(
+        sphere.contains("--self-reflections changes nothing here"),
+        "{sphere}"
     );
 }

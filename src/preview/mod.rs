@@ -249,6 +249,26 @@ pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
         .collect()
 }
 
+/// What `--self-reflections` cannot do in `scene`, said to the user: `None` where a curved
+/// mirror of it can see itself (a torus, Bézier patches); else why it changes nothing.
+pub fn self_reflections_note(scene: &FlatScene) -> Option<String> {
+    let mirrors = reflectors(scene);
+    let sees_itself = |r: &Reflector| r.searches.iter().any(MirrorSurface::sees_itself);
+    match (mirrors.is_empty(), mirrors.iter().any(sees_itself)) {
+        (_, true) => None,
+        (true, false) => Some(
+            "--self-reflections changes nothing here: the scene has no curved mirror to \
+             reflect in (or max_depth 0)"
+                .into(),
+        ),
+        (false, false) => Some(
+            "--self-reflections changes nothing here: the scene's curved mirrors are spheres, \
+             ellipsoids or cylinders, convex from outside, which cannot see themselves"
+                .into(),
+        ),
+    }
+}
+
 /// Per primitive of `scene`, 1 + the index of the reflector it belongs to, or 0.
 fn reflector_tags(scene: &FlatScene, reflectors: &[Reflector]) -> Vec<u32> {
     let mut tags = vec![0; scene.prims.len()];
