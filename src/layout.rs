@@ -630,7 +630,9 @@ pub struct GpuReflection {
     /// 1 where the preview draws this reflection (E and V see P from outside and the law of
     /// reflection holds to `REFLECTION_TOLERANCE`; CPU twin `fermat::drawn_in_preview`), else 0.
     pub shown: u32,
-    /// P's parameters (u, v) in the vertex's facing frame (`fermat::Sphere::facing`).
+    /// P's parameters (u, v) in the vertex's facing frame (`fermat::Sphere::facing`); a
+    /// patch's own (u, v), which the cull reads to tell a corner on the patch from one in its
+    /// seam band.
     pub uv: [f32; 2],
     /// |P − V|, the reflected point's depth for hidden-surface removal among reflections.
     pub depth: f32,
