@@ -410,14 +410,6 @@ pub fn on_patch(uv: DVec2) -> bool {
     uv.min_element() >= -margin && uv.max_element() <= 1.0 + margin
 }
 
-/// Whether a patch's search shows a reflection found at parameters `uv`: on the patch or in
-/// the seam band around it, on its smooth continuation (`layout::PATCH_SEAM`; the kernel's
-/// zero normal beyond).
-pub fn within_seam(uv: DVec2) -> bool {
-    let seam = f64::from(crate::layout::PATCH_SEAM);
-    uv.min_element() >= -seam && uv.max_element() <= 1.0 + seam
-}
-
 /// Whether a patch's search draws a reflected triangle whose corners' reflections show at
 /// parameters `uvs`: one corner at least on the patch itself, the others perhaps in its seam
 /// band (the CPU twin of `fermat_cull`'s test): a triangle across a seam is drawn by both

@@ -723,7 +723,7 @@ pub const SELF_REFLECTION_CLEARANCE: f32 = 1e-3;
 
 /// A reflection found on a Bézier patch's smooth continuation, its (u, v) beyond the square by
 /// at most this much, still shows as a corner of a reflected triangle with another corner on
-/// the patch itself (`fermat::within_seam`, `fermat::anchored_on_patch`): a triangle whose
+/// the patch itself (the kernel's zero normal beyond the band; `fermat::anchored_on_patch`): a triangle whose
 /// corners reflect on two neighbouring patches was drawn by neither, and a teapot's seams
 /// showed holes (the features drawn at subdivision 4: 917 of 1,277 with none, 1,053 with
 /// 0.03, 1,111 with 0.1; BENCHMARKS.md).

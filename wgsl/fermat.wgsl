@@ -363,7 +363,7 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     let point = c + turn(q, own_point - c);
     var normal = turn(q, surface_normal(f, best));
     // A patch's reflection beyond the seam band around its square is none of its own: a zero
-    // normal, never seen from outside, so the preview leaves it out (`fermat::within_seam`).
+    // normal, never seen from outside, so the preview leaves it out (`PATCH_SEAM`).
     // Within the band it lies on the patch's smooth continuation toward its neighbour, and the
     // cull draws it as a corner of a triangle anchored on the patch.
     if (REFLECTOR_KIND == REFLECTOR_PATCH

@@ -111,6 +111,13 @@ pub struct Reflector {
     pub mirror: Vec3,
 }
 
+impl Reflector {
+    /// Whether a surface of the mirror can see the mirror itself (`MirrorSurface::sees_itself`).
+    pub fn sees_itself(&self) -> bool {
+        self.searches.iter().any(MirrorSurface::sees_itself)
+    }
+}
+
 /// The surfaces the Fermat kernel solves on (`wgsl/fermat.wgsl`).
 // A scene has a handful (a teapot 32): copies of a patch's 384 bytes cost nothing, and Copy
 // keeps the searches plain values.
@@ -253,8 +260,10 @@ pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
 /// mirror of it can see itself (a torus, Bézier patches); else why it changes nothing.
 pub fn self_reflections_note(scene: &FlatScene) -> Option<String> {
     let mirrors = reflectors(scene);
-    let sees_itself = |r: &Reflector| r.searches.iter().any(MirrorSurface::sees_itself);
-    match (mirrors.is_empty(), mirrors.iter().any(sees_itself)) {
+    match (
+        mirrors.is_empty(),
+        mirrors.iter().any(Reflector::sees_itself),
+    ) {
         (_, true) => None,
         (true, false) => Some(
             "--self-reflections changes nothing here: the scene has no curved mirror to \
@@ -305,11 +314,10 @@ impl ReflectedSet {
         self_reflections: bool,
     ) -> ReflectedSet {
         let mirrors = reflectors(scene);
-        let sees_itself = |r: &Reflector| r.searches.iter().any(MirrorSurface::sees_itself);
         ReflectedSet {
             longest: AUTO_PIECE * bounded_radius(scene),
             mirrors_reflected: mirrors.len() > 1
-                || (self_reflections && mirrors.iter().any(sees_itself)),
+                || (self_reflections && mirrors.iter().any(Reflector::sees_itself)),
             subdivision,
         }
     }
