@@ -738,6 +738,12 @@ pub const PATCH_REACH: f32 = 1.0;
 /// later steps from improving on it, and each costs a patch evaluation.
 pub const PATCH_CROSSING_DONE: f32 = 1e-6;
 
+/// A vertex within this fraction of a torus's tube radius of its surface is the torus's own
+/// (`fermat::Torus::holds`): its search starts across the hole (`Reflector::initial_corners`).
+/// A torus's own points lie on it to f32's rounding (~1e-7 of the scene's size); another
+/// shape's vertex that near touches the torus, where its reflection is the point itself.
+pub const TORUS_OWN_POINT: f32 = 1e-4;
+
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
 pub fn wgsl_prelude() -> String {
     let u32s = [
@@ -810,6 +816,7 @@ pub fn wgsl_prelude() -> String {
         ("SELF_REFLECTION_CLEARANCE", SELF_REFLECTION_CLEARANCE),
         ("PATCH_REACH", PATCH_REACH),
         ("PATCH_CROSSING_DONE", PATCH_CROSSING_DONE),
+        ("TORUS_OWN_POINT", TORUS_OWN_POINT),
         ("TORUS_MARGIN", TORUS_MARGIN),
         ("TORUS_POLISH_REACH", TORUS_POLISH_REACH),
     ] {

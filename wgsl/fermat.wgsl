@@ -229,6 +229,22 @@ fn crossing(f: Frame, outside: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(u, d.y);
 }
 
+// Whether `x` (in the torus's own frame) is a point of the torus itself, to TORUS_OWN_POINT of
+// its tube radius (`Torus::holds`).
+fn torus_holds(x: vec3<f32>) -> bool {
+    let d = x - reflectors[search].center;
+    let ring = length(d.xz) - reflectors[search].radius;
+    return abs(length(vec2<f32>(ring, d.y)) - reflectors[search].minor)
+        < TORUS_OWN_POINT * reflectors[search].minor;
+}
+
+// The torus's inner equator (v = pi) across the hole from `x`'s azimuth
+// (`Torus::across_the_hole`).
+fn across_the_hole(x: vec3<f32>) -> vec2<f32> {
+    let d = x - reflectors[search].center;
+    return vec2<f32>(atan2(d.z, d.x) + 0.5 * TAU, 0.5 * TAU);
+}
+
 fn fermat_gradient(f: Frame, eye: vec3<f32>, vertex: vec3<f32>, uv: vec2<f32>) -> vec2<f32> {
     let s = surface(f, uv);
     let pull = normalize(eye - s.p) + normalize(vertex - s.p);
@@ -304,9 +320,17 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     let eye = c + turn(conjugate(q), reflectors[search].eye - c);
     let vertex = c + turn(conjugate(q), fermat_vertices[i].xyz - c);
     let f = frame_for(eye, vertex);
-    // The initial triangle: A and B where E -> O and V -> O cross the reflector, C off AB.
-    let a0 = crossing(f, eye);
-    var b0 = crossing(f, vertex);
+    // The initial triangle: A and B where E -> O and V -> O cross the reflector, C off AB; a
+    // torus's own point starts across the hole (`Reflector::initial_corners`).
+    var a0: vec2<f32>;
+    var b0: vec2<f32>;
+    if (REFLECTOR_KIND == REFLECTOR_TORUS && torus_holds(vertex)) {
+        a0 = across_the_hole(eye);
+        b0 = across_the_hole(vertex);
+    } else {
+        a0 = crossing(f, eye);
+        b0 = crossing(f, vertex);
+    }
     // An azimuthal u (all but a patch's) is unwrapped so that AB takes the short way round.
     if (REFLECTOR_KIND != REFLECTOR_PATCH) {
         b0.x += TAU * round((a0.x - b0.x) / TAU);
