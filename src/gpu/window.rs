@@ -150,7 +150,15 @@ impl ApplicationHandler for App<'_> {
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
-            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
+            // winit makes up a press of each key held down when the window gains focus
+            // (`is_synthetic`): that key was typed elsewhere, and on a loaded machine a key
+            // typed just after the focus moved was applied twice (the window test's film tilt
+            // went -3° for two presses).
+            WindowEvent::KeyboardInput {
+                event,
+                is_synthetic: false,
+                ..
+            } if event.state == ElementState::Pressed => {
                 if let Some(key) = compose_key(&event.logical_key) {
                     self.press(event_loop, key);
                 }
