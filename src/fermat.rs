@@ -23,7 +23,7 @@
 
 use crate::layout::{
     FERMAT_C_OFFSET, FERMAT_FLAT, FERMAT_INSIDE, FERMAT_SPREAD, PATCH_CROSSING_DONE,
-    TORUS_OWN_POINT,
+    TORUS_OWN_POINT, TORUS_OWN_ROUNDING,
 };
 use glam::{DQuat, DVec2, DVec3};
 
@@ -359,13 +359,15 @@ impl Torus {
         DVec3::new(d.x, 0.0, d.z).normalize_or(DVec3::X)
     }
 
-    /// Whether `x` is a point of the torus itself (to `TORUS_OWN_POINT` of the tube radius):
-    /// one of its own vertices, which it reflects with self-reflections on.
+    /// Whether `x` is a point of the torus itself (to `TORUS_OWN_POINT` of the tube radius
+    /// and the rounding of f32 coordinates, `TORUS_OWN_ROUNDING`): one of its own vertices,
+    /// which it reflects with self-reflections on.
     pub fn holds(&self, x: DVec3) -> bool {
         let d = self.to_own(x);
         let ring = DVec2::new(d.x, d.z).length() - self.major;
-        (DVec2::new(ring, d.y).length() - self.minor).abs()
-            < f64::from(TORUS_OWN_POINT) * self.minor
+        let tolerance = f64::from(TORUS_OWN_POINT) * self.minor
+            + f64::from(TORUS_OWN_ROUNDING) * (d.length() + self.center.length());
+        (DVec2::new(ring, d.y).length() - self.minor).abs() < tolerance
     }
 
     /// The parameters of the inner equator (v = π) across the hole from `x`'s azimuth.

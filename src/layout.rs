@@ -738,11 +738,16 @@ pub const PATCH_REACH: f32 = 1.0;
 /// later steps from improving on it, and each costs a patch evaluation.
 pub const PATCH_CROSSING_DONE: f32 = 1e-6;
 
-/// A vertex within this fraction of a torus's tube radius of its surface is the torus's own
-/// (`fermat::Torus::holds`): its search starts across the hole (`Reflector::initial_corners`).
-/// A torus's own points lie on it to f32's rounding (~1e-7 of the scene's size); another
-/// shape's vertex that near touches the torus, where its reflection is the point itself.
+/// A vertex within this fraction of a torus's tube radius of its surface, plus
+/// `TORUS_OWN_ROUNDING`, is the torus's own (`fermat::Torus::holds`): its search starts across
+/// the hole (`Reflector::initial_corners`). Another shape's vertex that near touches the torus.
 pub const TORUS_OWN_POINT: f32 = 1e-4;
+
+/// ... plus this fraction of |V − centre| + |centre|: a torus's own points lie on it to the f32
+/// rounding of their coordinates and of the kernel's turn into the torus's frame (a few 1e-7
+/// of those lengths), which a thin torus far from the origin (tube 0.1 at 600 units) would
+/// otherwise exceed.
+pub const TORUS_OWN_ROUNDING: f32 = 1e-6;
 
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
 pub fn wgsl_prelude() -> String {
@@ -817,6 +822,7 @@ pub fn wgsl_prelude() -> String {
         ("PATCH_REACH", PATCH_REACH),
         ("PATCH_CROSSING_DONE", PATCH_CROSSING_DONE),
         ("TORUS_OWN_POINT", TORUS_OWN_POINT),
+        ("TORUS_OWN_ROUNDING", TORUS_OWN_ROUNDING),
         ("TORUS_MARGIN", TORUS_MARGIN),
         ("TORUS_POLISH_REACH", TORUS_POLISH_REACH),
     ] {

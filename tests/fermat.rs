@@ -1238,6 +1238,70 @@ fn a_torus_finds_its_own_points_reflections_from_across_the_hole() {
     );
 }
 
+/// A thin torus far from the origin (tube 0.1 at 600 units, turned, where f32 rounds its
+/// points' coordinates to 3e-5, a third of the tube's own 1e-5 tolerance) still knows its own
+/// points: its vertices, rounded to f32, are its own to the CPU (f64), and the kernel (f32)
+/// solves them from across the hole as the CPU does: the same points to 1e-4 of the distance
+/// from the eye (f32's rounding there is 1e-5 of it) where the CPU's search converged, but
+/// for a few that found another of a point's images. (Without `TORUS_OWN_ROUNDING`, the CPU took
+/// 558 of 1,000 such points for its own and the kernel 448, and the kernel's reflections here
+/// were the CPU's for 168 of the 280.)
+#[test]
+fn a_thin_torus_far_from_the_origin_knows_its_own_points() {
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    let torus = Torus {
+        orientation: DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 0.5).normalize(), 0.7),
+        ..Torus::new(DVec3::new(310.0, -270.0, 530.0), 1.0, 0.1)
+    };
+    let eye = torus.center + torus.orientation * DVec3::new(0.0, 2.2, 3.5);
+    let tau = std::f64::consts::TAU;
+    let own: Vec<glam::Vec3> = (0..24 * 12)
+        .map(|k| {
+            let uv = glam::DVec2::new(
+                tau * (k % 24) as f64 / 24.0,
+                tau * (k / 24) as f64 / 12.0 + 0.1,
+            );
+            torus.point(uv).as_vec3()
+        })
+        .collect();
+    assert!(own.iter().all(|v| torus.holds(v.as_dvec3())));
+    let on_gpu = chambre::gpu::fermat::reflections(
+        &context,
+        MirrorSurface::Torus(torus),
+        eye.as_vec3(),
+        &own,
+        12,
+    )
+    .unwrap();
+    let solver = Solver {
+        max_steps: 12,
+        min_size: 1e-7,
+    };
+    let (mut compared, mut agree) = (0, 0);
+    for (v, gpu) in own.iter().zip(&on_gpu) {
+        let v = v.as_dvec3();
+        let uv = solver.solve(&torus, eye, v).uv;
+        let (p, n) = (torus.point(uv), torus.outward_normal(uv));
+        if reflection_error(p, n, eye, v) > 1e-4
+            || !seen_from_outside(p, n, eye, v)
+            || !self_reflection_clear(p, eye, v)
+        {
+            continue;
+        }
+        compared += 1;
+        let gp = DVec3::from(glam::Vec3::from(gpu.point));
+        agree += (gp.distance(p) < 1e-4 * p.distance(eye)) as u32;
+    }
+    eprintln!("a far thin torus's own points: {agree} of {compared} reflections the same on both");
+    assert!(compared > 100, "{compared}");
+    assert!(
+        agree as f64 >= 0.98 * compared as f64,
+        "{agree} of {compared}"
+    );
+}
+
 /// A mirror's own point drawn reflected in it must stand clear of its reflection point: a
 /// point of the searched surface itself is its own "reflection" (P = V, the minimum of
 /// |E − P| + |P − V|), and its triangle would cover the true reflection there at depth 0. Points

@@ -230,12 +230,14 @@ fn crossing(f: Frame, outside: vec3<f32>) -> vec2<f32> {
 }
 
 // Whether `x` (in the torus's own frame) is a point of the torus itself, to TORUS_OWN_POINT of
-// its tube radius (`Torus::holds`).
+// its tube radius and the rounding of f32 coordinates (`Torus::holds`).
 fn torus_holds(x: vec3<f32>) -> bool {
-    let d = x - reflectors[search].center;
+    let c = reflectors[search].center;
+    let d = x - c;
     let ring = length(d.xz) - reflectors[search].radius;
-    return abs(length(vec2<f32>(ring, d.y)) - reflectors[search].minor)
-        < TORUS_OWN_POINT * reflectors[search].minor;
+    let tolerance = TORUS_OWN_POINT * reflectors[search].minor
+        + TORUS_OWN_ROUNDING * (length(d) + length(c));
+    return abs(length(vec2<f32>(ring, d.y)) - reflectors[search].minor) < tolerance;
 }
 
 // The torus's inner equator (v = pi) across the hole from `x`'s azimuth
