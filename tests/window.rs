@@ -126,6 +126,37 @@ fn wait_for<T>(what: &str, mut ready: impl FnMut() -> Option<T>) -> T {
     }
 }
 
+/// A fresh temporary folder `NAME-PID` holding a copy of `SCENE`, and the copy's path.
+fn scene_copy(name: &str) -> (PathBuf, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE), &scene).unwrap();
+    (dir, scene)
+}
+
+/// `chambre preview SCENE --window FLAGS` on `x`'s display, its output piped, and the id of its
+/// window once the window is there.
+fn open_window(x: &Xvfb, scene: &Path, flags: &[&str]) -> (Child, String) {
+    let chambre = Command::new(BIN)
+        .args(["preview", scene.to_str().unwrap(), "--window"])
+        .args(flags)
+        .env("DISPLAY", &x.display)
+        .env("XDG_RUNTIME_DIR", "/tmp")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("starting chambre preview --window");
+    let window = x
+        .xdotool(&["search", "--sync", "--name", "chambre preview"])
+        .lines()
+        .next()
+        .expect("the window")
+        .to_string();
+    (chambre, window)
+}
+
 /// `chambre preview SCENE -o OUT FLAGS` (headless), read back as RGB bytes.
 fn headless_preview(scene: &Path, out: &Path, flags: &[&str]) -> (u32, u32, Vec<u8>) {
     let status = Command::new(BIN)
@@ -160,35 +191,13 @@ fn keys_typed_into_the_window_compose_the_shot_it_shows_and_saves() {
     if !x_tools_present() {
         return;
     }
-    let dir = std::env::temp_dir().join(format!("chambre-window-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let scene = dir.join("scene.toml");
-    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE), &scene).unwrap();
+    let (dir, scene) = scene_copy("chambre-window");
     let (width, height, untouched) = headless_preview(&scene, &dir.join("untouched.png"), &[]);
 
     let x = Xvfb::start(&dir);
     let screenshot = dir.join("shot.png");
-    let chambre = Command::new(BIN)
-        .args([
-            "preview",
-            scene.to_str().unwrap(),
-            "--window",
-            "--screenshot",
-        ])
-        .arg(&screenshot)
-        .env("DISPLAY", &x.display)
-        .env("XDG_RUNTIME_DIR", "/tmp")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("starting chambre preview --window");
-    let window = x
-        .xdotool(&["search", "--sync", "--name", "chambre preview"])
-        .lines()
-        .next()
-        .expect("the window")
-        .to_string();
+    let (chambre, window) =
+        open_window(&x, &scene, &["--screenshot", screenshot.to_str().unwrap()]);
     // The first frame shows the scene as it is.
     wait_for("the first frame on the screen", || {
         (largest_difference(&x.screen(width, height), &untouched) <= 2).then_some(())
@@ -241,11 +250,7 @@ fn a_key_script_replays_keys_then_closes_the_window_with_a_screenshot() {
     if !x_tools_present() {
         return;
     }
-    let dir = std::env::temp_dir().join(format!("chambre-script-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let scene = dir.join("scene.toml");
-    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE), &scene).unwrap();
+    let (dir, scene) = scene_copy("chambre-script");
     let x = Xvfb::start(&dir);
     let (screenshot, saved) = (dir.join("shot.png"), dir.join("saved.toml"));
     let output = Command::new(BIN)
@@ -306,27 +311,10 @@ fn a_key_held_as_the_window_gains_focus_is_not_typed() {
     if !x_tools_present() {
         return;
     }
-    let dir = std::env::temp_dir().join(format!("chambre-window-focus-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    let scene = dir.join("scene.toml");
-    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join(SCENE), &scene).unwrap();
+    let (dir, scene) = scene_copy("chambre-window-focus");
     let (width, height, untouched) = headless_preview(&scene, &dir.join("untouched.png"), &[]);
     let x = Xvfb::start(&dir);
-    let chambre = Command::new(BIN)
-        .args(["preview", scene.to_str().unwrap(), "--window"])
-        .env("DISPLAY", &x.display)
-        .env("XDG_RUNTIME_DIR", "/tmp")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("starting chambre preview --window");
-    let window = x
-        .xdotool(&["search", "--sync", "--name", "chambre preview"])
-        .lines()
-        .next()
-        .expect("the window")
-        .to_string();
+    let (chambre, window) = open_window(&x, &scene, &[]);
     wait_for("the first frame on the screen", || {
         (largest_difference(&x.screen(width, height), &untouched) <= 2).then_some(())
     });
