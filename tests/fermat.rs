@@ -1239,7 +1239,7 @@ fn a_torus_finds_its_own_points_reflections_from_across_the_hole() {
 }
 
 /// A thin torus far from the origin (tube 0.1 at 600 units, turned, where f32 rounds its
-/// points' coordinates to 3e-5, a third of the tube's own 1e-5 tolerance) still knows its own
+/// points' coordinates to 3e-5, three times the tube's own 1e-5 tolerance) still knows its own
 /// points: its vertices, rounded to f32, are its own to the CPU (f64), and the kernel (f32)
 /// solves them from across the hole as the CPU does: the same points to 1e-4 of the distance
 /// from the eye (f32's rounding there is 1e-5 of it) where the CPU's search converged, but
