@@ -1073,8 +1073,7 @@ fn the_teapot_reflects_itself_where_the_ray_tracer_sees_it() {
 /// The torus too: the far inner wall, seen through the hole, shows the near one (its own
 /// points solved from across the hole). The ray tracer shows 77 black pixels; the preview
 /// covers 61 of them (22 when the search started at the point itself) and shows 115, 89 of them
-/// black in the ray tracer: a reflected triangle whose corners reflect at two of a point's
-/// images spans the light streak between them.
+/// black in the ray tracer within a pixel.
 #[test]
 fn the_torus_reflects_itself_where_the_ray_tracer_sees_it() {
     reflects_itself_where_the_ray_tracer_sees_it("scenes/fermat_torus.toml", (0.7, 0.7));
