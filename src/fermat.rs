@@ -585,9 +585,10 @@ pub fn gradient(reflector: &impl Reflector, eye: DVec3, vertex: DVec3, uv: DVec2
     DVec2::new(-fu.dot(pull), -fv.dot(pull))
 }
 
-/// The seed's initial triangle: A and B where E → O and V → O cross the reflector, C off the
-/// middle of AB by `FERMAT_C_OFFSET` of its length, so the triangle is not flat (or a triangle
-/// of side `FERMAT_SPREAD` at A when A and B coincide).
+/// The seed's initial triangle: A and B where E → O and V → O cross the reflector (or where
+/// the surface starts instead, `Reflector::initial_corners`: a torus's own points across the
+/// hole), C off the middle of AB by `FERMAT_C_OFFSET` of its length, so the triangle is not
+/// flat (or a triangle of side `FERMAT_SPREAD` at A when A and B coincide).
 pub fn initial_triangle(reflector: &impl Reflector, eye: DVec3, vertex: DVec3) -> [DVec2; 3] {
     let (a, mut b) = reflector.initial_corners(eye, vertex);
     // A periodic u (an azimuth) is unwrapped so that the side AB takes the short way round.
