@@ -23,7 +23,6 @@
 
 use crate::layout::{
     FERMAT_C_OFFSET, FERMAT_FLAT, FERMAT_INSIDE, FERMAT_SPREAD, PATCH_CROSSING_DONE,
-    TORUS_OWN_POINT, TORUS_OWN_ROUNDING,
 };
 use glam::{DQuat, DVec2, DVec3};
 
@@ -359,17 +358,6 @@ impl Torus {
         DVec3::new(d.x, 0.0, d.z).normalize_or(DVec3::X)
     }
 
-    /// Whether `x` is a point of the torus itself (to `TORUS_OWN_POINT` of the tube radius
-    /// and the rounding of f32 coordinates, `TORUS_OWN_ROUNDING`): one of its own vertices,
-    /// which it reflects with self-reflections on.
-    pub fn holds(&self, x: DVec3) -> bool {
-        let d = self.to_own(x);
-        let ring = DVec2::new(d.x, d.z).length() - self.major;
-        let tolerance = f64::from(TORUS_OWN_POINT) * self.minor
-            + f64::from(TORUS_OWN_ROUNDING) * (d.length() + self.center.length());
-        (DVec2::new(ring, d.y).length() - self.minor).abs() < tolerance
-    }
-
     /// The parameters of the inner equator (v = π) across the hole from `x`'s azimuth.
     fn across_the_hole(&self, x: DVec3) -> DVec2 {
         let d = self.to_own(x);
@@ -413,22 +401,84 @@ impl Reflector for Torus {
         self.orientation * DVec3::new(cv * cu, sv, cv * su)
     }
 
-    /// The seed's crossings, but for a point of the torus itself: its crossing is the point
-    /// (P = V, no reflection), and what it can see of the torus lies across the hole, on the
-    /// far inner wall. Both corners start on the inner equator there, across from E's and V's
-    /// azimuths: 12 steps find a reflection for 260 of 288 own points seen from above, the
-    /// seed's corners for 10 (`tests/fermat.rs`).
+    fn u_period(&self) -> Option<f64> {
+        Some(std::f64::consts::TAU)
+    }
+}
+
+/// The half of a torus one of its two searches shows the images on. A point can show on a
+/// torus more than once, and the seed's crossings lead the search to the images on the outer
+/// half only: never, for instance, to the image of a floor point inside the hole, which the
+/// eye sees in the far inner wall, nor to a point of the torus itself, whose own crossing is
+/// the point (P = V). So a torus is searched twice, as a teapot's patches are searched each, and each
+/// search draws the reflected triangles anchored on its half (`anchored_on_torus_half`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TorusHalf {
+    /// cos v ≥ 0, facing away from the axis: searched from the seed's crossings.
+    Outer,
+    /// cos v < 0, the wall of the hole: searched from across the hole, where what a point
+    /// sees of the inner wall lies: both corners on the inner equator, across from E's and
+    /// V's azimuths.
+    Inner,
+}
+
+/// A torus searched for the images on one of its halves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TorusSearch {
+    /// The torus.
+    pub torus: Torus,
+    /// The half whose images the search shows.
+    pub half: TorusHalf,
+}
+
+impl Reflector for TorusSearch {
+    fn point(&self, uv: DVec2) -> DVec3 {
+        self.torus.point(uv)
+    }
+
+    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
+        self.torus.tangents(uv)
+    }
+
+    fn inside(&self, outside: DVec3) -> DVec3 {
+        self.torus.inside(outside)
+    }
+
+    fn crossing(&self, outside: DVec3) -> DVec2 {
+        self.torus.crossing(outside)
+    }
+
+    fn outward_normal(&self, uv: DVec2) -> DVec3 {
+        self.torus.outward_normal(uv)
+    }
+
     fn initial_corners(&self, eye: DVec3, vertex: DVec3) -> (DVec2, DVec2) {
-        if self.holds(vertex) {
-            (self.across_the_hole(eye), self.across_the_hole(vertex))
-        } else {
-            (self.crossing(eye), self.crossing(vertex))
+        match self.half {
+            TorusHalf::Outer => (self.crossing(eye), self.crossing(vertex)),
+            TorusHalf::Inner => (
+                self.torus.across_the_hole(eye),
+                self.torus.across_the_hole(vertex),
+            ),
         }
     }
 
     fn u_period(&self) -> Option<f64> {
-        Some(std::f64::consts::TAU)
+        self.torus.u_period()
     }
+}
+
+/// Whether a torus's parameters `uv` lie on `half` of it.
+pub fn on_torus_half(uv: DVec2, half: TorusHalf) -> bool {
+    (uv.y.cos() >= 0.0) == (half == TorusHalf::Outer)
+}
+
+/// Whether a torus's search of `half` draws a reflected triangle whose corners' reflections
+/// show at parameters `uvs`: one corner at least on its half (the CPU twin of `fermat_cull`'s
+/// test). The torus goes on smoothly across the two circles where the halves meet, so a
+/// triangle across them is drawn by both searches (where each finds its corners), one wholly
+/// on a half by that half's alone.
+pub fn anchored_on_torus_half(uvs: [DVec2; 3], half: TorusHalf) -> bool {
+    uvs.into_iter().any(|uv| on_torus_half(uv, half))
 }
 
 /// A bicubic Bézier patch (as the Newell teapot's): f(u, v) = Σ B_i(u) B_j(v) P_ij over
@@ -586,7 +636,7 @@ pub fn gradient(reflector: &impl Reflector, eye: DVec3, vertex: DVec3, uv: DVec2
 }
 
 /// The seed's initial triangle: A and B where E → O and V → O cross the reflector (or where
-/// the surface starts instead, `Reflector::initial_corners`: a torus's own points across the
+/// the surface starts instead, `Reflector::initial_corners`: a torus's inner half across the
 /// hole), C off the middle of AB by `FERMAT_C_OFFSET` of its length, so the triangle is not
 /// flat (or a triangle of side `FERMAT_SPREAD` at A when A and B coincide).
 pub fn initial_triangle(reflector: &impl Reflector, eye: DVec3, vertex: DVec3) -> [DVec2; 3] {

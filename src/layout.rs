@@ -608,8 +608,9 @@ pub struct GpuReflector {
     /// teapot's, with the preview's self-reflections on): the cull keeps those whose corners
     /// stand clear of their points (`SELF_REFLECTION_CLEARANCE`) instead of leaving them out.
     pub sees_itself: u32,
-    /// Padding to the WGSL layout.
-    pub _pad0: u32,
+    /// A torus's search: 0 for its outer half, 1 for its inner half (`fermat::TorusHalf`):
+    /// where the search starts, and which triangles it draws. 0 for the other kinds.
+    pub torus_half: u32,
     /// Padding to the WGSL layout.
     pub _pad1: u32,
     /// Padding to the WGSL layout.
@@ -738,17 +739,6 @@ pub const PATCH_REACH: f32 = 1.0;
 /// later steps from improving on it, and each costs a patch evaluation.
 pub const PATCH_CROSSING_DONE: f32 = 1e-6;
 
-/// A vertex within this fraction of a torus's tube radius of its surface, plus
-/// `TORUS_OWN_ROUNDING`, is the torus's own (`fermat::Torus::holds`): its search starts across
-/// the hole (`Reflector::initial_corners`). Another shape's vertex that near touches the torus.
-pub const TORUS_OWN_POINT: f32 = 1e-4;
-
-/// ... plus this fraction of |V − centre| + |centre|: a torus's own points lie on it to the f32
-/// rounding of their coordinates and of the kernel's turn into the torus's frame (a few 1e-7
-/// of those lengths), which a thin torus far from the origin (tube 0.1 at 600 units) would
-/// otherwise exceed.
-pub const TORUS_OWN_ROUNDING: f32 = 1e-6;
-
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
 pub fn wgsl_prelude() -> String {
     let u32s = [
@@ -821,8 +811,6 @@ pub fn wgsl_prelude() -> String {
         ("SELF_REFLECTION_CLEARANCE", SELF_REFLECTION_CLEARANCE),
         ("PATCH_REACH", PATCH_REACH),
         ("PATCH_CROSSING_DONE", PATCH_CROSSING_DONE),
-        ("TORUS_OWN_POINT", TORUS_OWN_POINT),
-        ("TORUS_OWN_ROUNDING", TORUS_OWN_ROUNDING),
         ("TORUS_MARGIN", TORUS_MARGIN),
         ("TORUS_POLISH_REACH", TORUS_POLISH_REACH),
     ] {

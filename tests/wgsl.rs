@@ -253,7 +253,7 @@ fn shared_structs_have_identical_layouts() {
             orientation,
             control,
             sees_itself,
-            _pad0,
+            torus_half,
             _pad1,
             _pad2
         }

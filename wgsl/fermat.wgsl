@@ -229,17 +229,6 @@ fn crossing(f: Frame, outside: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(u, d.y);
 }
 
-// Whether `x` (in the torus's own frame) is a point of the torus itself, to TORUS_OWN_POINT of
-// its tube radius and the rounding of f32 coordinates (`Torus::holds`).
-fn torus_holds(x: vec3<f32>) -> bool {
-    let c = reflectors[search].center;
-    let d = x - c;
-    let ring = length(d.xz) - reflectors[search].radius;
-    let tolerance = TORUS_OWN_POINT * reflectors[search].minor
-        + TORUS_OWN_ROUNDING * (length(d) + length(c));
-    return abs(length(vec2<f32>(ring, d.y)) - reflectors[search].minor) < tolerance;
-}
-
 // The torus's inner equator (v = pi) across the hole from `x`'s azimuth
 // (`Torus::across_the_hole`).
 fn across_the_hole(x: vec3<f32>) -> vec2<f32> {
@@ -322,11 +311,11 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     let eye = c + turn(conjugate(q), reflectors[search].eye - c);
     let vertex = c + turn(conjugate(q), fermat_vertices[i].xyz - c);
     let f = frame_for(eye, vertex);
-    // The initial triangle: A and B where E -> O and V -> O cross the reflector, C off AB; a
-    // torus's own point starts across the hole (`Reflector::initial_corners`).
+    // The initial triangle: A and B where E -> O and V -> O cross the reflector, C off AB; the
+    // search of a torus's inner half starts across the hole (`TorusSearch::initial_corners`).
     var a0: vec2<f32>;
     var b0: vec2<f32>;
-    if (REFLECTOR_KIND == REFLECTOR_TORUS && torus_holds(vertex)) {
+    if (REFLECTOR_KIND == REFLECTOR_TORUS && reflectors[search].torus_half != 0u) {
         a0 = across_the_hole(eye);
         b0 = across_the_hole(vertex);
     } else {
@@ -450,18 +439,25 @@ fn fermat_cull(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let eye = reflectors[search].eye;
-    var anchored = reflectors[search].kind != REFLECTOR_PATCH;
+    let kind = reflectors[search].kind;
+    let inner_half = reflectors[search].torus_half != 0u;
+    var anchored = kind != REFLECTOR_PATCH && kind != REFLECTOR_TORUS;
     for (var k = 0u; k < 3u; k += 1u) {
         let r = reflections[s * reflectors[search].count + triangle[k]];
         if (r.shown == 0u
             || (own && r.depth <= SELF_REFLECTION_CLEARANCE * distance(r.point, eye))) {
             return;
         }
-        anchored = anchored || (min(r.uv.x, r.uv.y) >= -PATCH_MARGIN
-            && max(r.uv.x, r.uv.y) <= 1.0 + PATCH_MARGIN);
+        if (kind == REFLECTOR_PATCH) {
+            anchored = anchored || (min(r.uv.x, r.uv.y) >= -PATCH_MARGIN
+                && max(r.uv.x, r.uv.y) <= 1.0 + PATCH_MARGIN);
+        } else if (kind == REFLECTOR_TORUS) {
+            anchored = anchored || ((cos(r.uv.y) < 0.0) == inner_half);
+        }
     }
     // A patch draws the triangles with a corner on it; one wholly in its seam band is its
-    // neighbour's (`fermat::anchored_on_patch`).
+    // neighbour's (`fermat::anchored_on_patch`). A torus's search draws those with a corner
+    // on its half (`fermat::anchored_on_torus_half`).
     if (!anchored) {
         return;
     }

@@ -150,7 +150,7 @@ struct GpuReflector {
     orientation: vec4<f32>,
     control: array<vec4<f32>, 16>,
     sees_itself: u32,
-    _pad0: u32,
+    torus_half: u32,
     _pad1: u32,
     _pad2: u32,
 }

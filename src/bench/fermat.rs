@@ -25,7 +25,7 @@ use crate::accel::intersect::RayQuery;
 use crate::accel::traverse::closest_hit;
 use crate::error::{Error, Location, Result};
 use crate::fermat::{
-    Solver, Sphere, alhazen_sphere, anchored_on_patch, drawn_in_preview, on_cylinder, on_patch,
+    Solver, Sphere, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, on_torus_half,
     reflection_error, seen_from_outside,
 };
 use crate::gpu::GpuContext;
@@ -313,10 +313,8 @@ fn displacements(
                     let n = Vec3::from(r.normal).as_dvec3();
                     drawn_in_preview(p, n, eye64, v.as_dvec3())
                 })
-                && (!matches!(surface, MirrorSurface::Patch(_))
-                    || anchored_on_patch(
-                        [0, 1, 2].map(|c| glam::Vec2::from(corners_found[c].uv).as_dvec2()),
-                    ));
+                && surface
+                    .anchors([0, 1, 2].map(|c| glam::Vec2::from(corners_found[c].uv).as_dvec2()));
             let drawn_at = corners_found
                 .iter()
                 .zip(weights)
@@ -352,8 +350,9 @@ fn light_path_is_clear(flat: &FlatScene, eye: DVec3, p: DVec3, x: DVec3) -> bool
 /// Where the ray tracer sees `x` reflected on `surface` from `eye`, if it does (seen from
 /// outside). On a sphere: Alhazen's point, solved independently in f64. A torus can show a
 /// point several times; the truth is the stationary point the preview's search heads for, the
-/// f64 search run to convergence (`TRUTH_STEPS`, the law of reflection to 1e-9 rad): its
-/// displacement is the preview's own error. Images the search never finds show in the FLIP.
+/// f64 search run to convergence (`TRUTH_STEPS`, the law of reflection to 1e-9 rad), on the
+/// search's half: its displacement is the preview's own error. Images the searches never find
+/// show in the FLIP.
 fn true_reflection(surface: &MirrorSurface, eye: DVec3, x: DVec3) -> Option<DVec3> {
     let (point, normal) = match *surface {
         MirrorSurface::Sphere { center, radius } => {
@@ -361,8 +360,11 @@ fn true_reflection(surface: &MirrorSurface, eye: DVec3, x: DVec3) -> Option<DVec
             let p = alhazen_sphere(&sphere, eye, x);
             (p, (p - sphere.center) / sphere.radius)
         }
-        MirrorSurface::Torus(torus) => {
-            let (p, n, _) = converged(&torus, eye, x)?;
+        MirrorSurface::Torus(search) => {
+            let (p, n, uv) = converged(&search, eye, x)?;
+            if !on_torus_half(uv, search.half) {
+                return None;
+            }
             (p, n)
         }
         MirrorSurface::Patch(patch) => {

@@ -18,7 +18,10 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 
 use crate::camera::CameraSpec;
-use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Torus};
+use crate::fermat::{
+    BezierPatch, Cylinder, Ellipsoid, TorusHalf, TorusSearch, anchored_on_patch,
+    anchored_on_torus_half,
+};
 use crate::layout::{
     GpuReflector, PRIM_SPHERE, REFLECTOR_CYLINDER, REFLECTOR_ELLIPSOID, REFLECTOR_PATCH,
     REFLECTOR_SPHERE, REFLECTOR_TORUS,
@@ -100,8 +103,8 @@ pub struct ReflectorPass {
 /// A curved mirror the preview reflects in by Fermat's principle.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Reflector {
-    /// Its Fermat searches: one per surface of the mirror (a sphere's, a torus's, each of a
-    /// teapot's patches); each can show a reflection of a point.
+    /// Its Fermat searches: one per surface of the mirror (a sphere's, each half of a torus,
+    /// each of a teapot's patches); each can show a reflection of a point.
     pub searches: Vec<MirrorSurface>,
     /// Its primitives' indices in the flattened scene (a sphere's one, a torus's triangles).
     pub prims: Vec<usize>,
@@ -131,8 +134,9 @@ pub enum MirrorSurface {
         /// Radius (scene units).
         radius: f32,
     },
-    /// A torus (rendered as a mesh).
-    Torus(Torus),
+    /// One half of a torus (rendered as a mesh), whose images its search shows: a torus is
+    /// searched twice (`TorusHalf`).
+    Torus(TorusSearch),
     /// A bicubic Bézier patch (rendered with its neighbours as a mesh): reflections found
     /// outside its parameter square belong to a neighbour or to nothing.
     Patch(BezierPatch),
@@ -166,6 +170,17 @@ impl MirrorSurface {
         matches!(self, MirrorSurface::Torus(_) | MirrorSurface::Patch(_))
     }
 
+    /// Whether its search draws a reflected triangle whose corners' reflections show at
+    /// parameters `uvs` (the CPU twin of `fermat_cull`'s anchoring): a patch's and a torus
+    /// half's search draws those with a corner on its part of the mirror, the others all.
+    pub fn anchors(&self, uvs: [glam::DVec2; 3]) -> bool {
+        match self {
+            MirrorSurface::Patch(_) => anchored_on_patch(uvs),
+            MirrorSurface::Torus(search) => anchored_on_torus_half(uvs, search.half),
+            _ => true,
+        }
+    }
+
     /// The Fermat kernel's uniforms for this surface, the eye at `eye`, `count` vertices.
     pub fn gpu(&self, eye: Vec3, count: u32) -> GpuReflector {
         let mut reflector = GpuReflector {
@@ -180,11 +195,12 @@ impl MirrorSurface {
                 reflector.center = center.to_array();
                 reflector.radius = radius;
             }
-            MirrorSurface::Torus(t) => {
+            MirrorSurface::Torus(TorusSearch { torus: t, half }) => {
                 reflector.center = t.center.as_vec3().to_array();
                 reflector.radius = t.major as f32;
                 reflector.minor = t.minor as f32;
                 reflector.orientation = t.orientation.as_quat().to_array();
+                reflector.torus_half = (half == TorusHalf::Inner) as u32;
             }
             MirrorSurface::Patch(patch) => {
                 for (k, p) in patch.points.iter().flatten().enumerate() {
@@ -235,7 +251,14 @@ pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
         let material = scene.prims[*s.prims.first()? as usize].material;
         Some(Reflector {
             searches: match &s.surface {
-                Surface::Torus(torus) => vec![MirrorSurface::Torus(*torus)],
+                Surface::Torus(torus) => [TorusHalf::Outer, TorusHalf::Inner]
+                    .map(|half| {
+                        MirrorSurface::Torus(TorusSearch {
+                            torus: *torus,
+                            half,
+                        })
+                    })
+                    .to_vec(),
                 Surface::Patches(patches) => {
                     patches.iter().map(|&p| MirrorSurface::Patch(p)).collect()
                 }
@@ -441,9 +464,10 @@ pub fn omissions(scene: &Scene, shadows: Option<u32>) -> Vec<String> {
     let mut notes = vec![format!(
         "the preview has {} no specular lobes; curved mirrors (spheres, tori, ellipsoids, \
          cylinders, Bezier patches) reflect the scene by Fermat's principle (one reflection per \
-         point and surface; each other once, tori and teapots themselves only with \
-         --self-reflections; a mirror seen in one reflects the background, or nothing at \
-         max_depth 1), other mirrors show their diffuse term only",
+         point and surface: a sphere, a torus's half, a Bezier patch; each other once, tori \
+         and teapots themselves only with --self-reflections; a mirror seen in one reflects \
+         the background, or nothing at max_depth 1), other mirrors show their diffuse term \
+         only",
         match shadows {
             None => "no shadows (--shadows draws them by shadow maps) and".to_string(),
             Some(1) =>
