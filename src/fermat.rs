@@ -769,6 +769,82 @@ pub fn drawn_in_preview(p: DVec3, n: DVec3, eye: DVec3, vertex: DVec3) -> bool {
         && reflection_error(p, n, eye, vertex) < f64::from(crate::layout::REFLECTION_TOLERANCE)
 }
 
+/// The point of a 4 x 4 grid of `patch`'s parameters (its corners and thirds) where the law
+/// of reflection fails least for `vertex` seen from `eye`: the least 1 − n · b, n the outward
+/// normal and b the bisector of the directions to E and V (a point facing away fails most).
+/// The kernel's `sampled_start`.
+pub fn sampled_start(patch: &BezierPatch, eye: DVec3, vertex: DVec3) -> DVec2 {
+    let failure = |uv: DVec2| {
+        let p = patch.point(uv);
+        let bisector = ((eye - p).normalize() + (vertex - p).normalize()).normalize();
+        1.0 - patch.outward_normal(uv).dot(bisector)
+    };
+    (0..16)
+        .map(|k| DVec2::new((k % 4) as f64, (k / 4) as f64) / 3.0)
+        .min_by(|&a, &b| failure(a).total_cmp(&failure(b)))
+        .expect("16 samples")
+}
+
+/// The search for `vertex`, a point of the mirror `patch` is part of (a teapot's own point),
+/// on `patch`: the seed's search, and where the preview would show nothing of it, another
+/// from `sampled_start` (A there, B = A + (`SAMPLED_START_SIDE`, half that)). A point of the
+/// mirror sees its other patches from close by, where the segment V → O seldom crosses them
+/// near the reflection. The kernel's, with `OWN_POINTS_SEARCHED_AGAIN`.
+pub fn solve_on_patch(solver: &Solver, patch: &BezierPatch, eye: DVec3, vertex: DVec3) -> Solution {
+    let shows = |solution: &Solution| {
+        let seam = f64::from(crate::layout::PATCH_SEAM);
+        let uv = solution.uv;
+        uv.min_element() >= -seam
+            && uv.max_element() <= 1.0 + seam
+            && drawn_in_preview(patch.point(uv), patch.outward_normal(uv), eye, vertex)
+    };
+    let first = solver.solve(patch, eye, vertex);
+    if shows(&first) {
+        return first;
+    }
+    let a = sampled_start(patch, eye, vertex);
+    let side = f64::from(crate::layout::SAMPLED_START_SIDE);
+    let again = solver.solve(
+        &StartedFrom(*patch, a, a + DVec2::new(side, side / 2.0)),
+        eye,
+        vertex,
+    );
+    if shows(&again) { again } else { first }
+}
+
+/// A patch whose search starts from given corners A and B.
+struct StartedFrom(BezierPatch, DVec2, DVec2);
+
+impl Reflector for StartedFrom {
+    fn point(&self, uv: DVec2) -> DVec3 {
+        self.0.point(uv)
+    }
+
+    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
+        self.0.tangents(uv)
+    }
+
+    fn inside(&self, outside: DVec3) -> DVec3 {
+        self.0.inside(outside)
+    }
+
+    fn crossing(&self, outside: DVec3) -> DVec2 {
+        self.0.crossing(outside)
+    }
+
+    fn outward_normal(&self, uv: DVec2) -> DVec3 {
+        self.0.outward_normal(uv)
+    }
+
+    fn initial_corners(&self, _eye: DVec3, _vertex: DVec3) -> (DVec2, DVec2) {
+        (self.1, self.2)
+    }
+
+    fn beyond_reach(&self, uv: DVec2) -> bool {
+        self.0.beyond_reach(uv)
+    }
+}
+
 /// Whether a point of the searched mirror itself, reflected at `p`, stands clear enough of `p`
 /// to be drawn there (`layout::SELF_REFLECTION_CLEARANCE`; the CPU twin of `fermat_cull`'s
 /// test in wgsl/fermat.wgsl): a vertex on the surface is its own "reflection" at P = V.

@@ -739,6 +739,11 @@ pub const PATCH_REACH: f32 = 1.0;
 /// later steps from improving on it, and each costs a patch evaluation.
 pub const PATCH_CROSSING_DONE: f32 = 1e-6;
 
+/// A teapot's own point searched again on a patch (`fermat::solve_on_patch`) starts from the
+/// sampled point A that fails the law of reflection least and B = A + (this, half this) in the
+/// patch's parameters.
+pub const SAMPLED_START_SIDE: f32 = 0.2;
+
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
 pub fn wgsl_prelude() -> String {
     let u32s = [
@@ -811,6 +816,7 @@ pub fn wgsl_prelude() -> String {
         ("SELF_REFLECTION_CLEARANCE", SELF_REFLECTION_CLEARANCE),
         ("PATCH_REACH", PATCH_REACH),
         ("PATCH_CROSSING_DONE", PATCH_CROSSING_DONE),
+        ("SAMPLED_START_SIDE", SAMPLED_START_SIDE),
         ("TORUS_MARGIN", TORUS_MARGIN),
         ("TORUS_POLISH_REACH", TORUS_POLISH_REACH),
     ] {

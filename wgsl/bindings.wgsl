@@ -24,8 +24,8 @@
 // The pixels an adaptive pass samples (`y * width + x`), when `pass_info.listed_pixels` is not 0.
 @group(0) @binding(14) var<storage, read> pixel_list: array<u32>;
 // The Fermat kernel's searches, one surface and eye each (a dispatch's y picks one), the
-// vertices each solves (xyz, w unused) and their reflection points, search after search
-// (wgsl/fermat.wgsl).
+// vertices each solves (xyz, and in w the mirror each lies on: 1 + its index, 0 for none) and
+// their reflection points, search after search (wgsl/fermat.wgsl).
 @group(0) @binding(15) var<storage, read> reflectors: array<GpuReflector>;
 @group(0) @binding(16) var<storage, read> fermat_vertices: array<vec4<f32>>;
 @group(0) @binding(17) var<storage, read_write> reflections: array<GpuReflection>;

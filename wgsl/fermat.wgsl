@@ -2,14 +2,18 @@
 // one invocation finds, for one scene vertex V and the eye E, the point P of the reflector where E -> P -> V has extremal length, by
 // the seed's search on a triangle in the (u, v) plane (see src/fermat.rs for the method), in
 // f32, step for step as its twin; the search's constants come from src/layout.rs.
-// Mirrors: src/fermat.rs (Sphere, Sphere::facing, Torus, BezierPatch, on_patch, Ellipsoid,
-// Cylinder, on_cylinder, initial_triangle, replaced_corner, Solver::solve).
+// Mirrors: src/fermat.rs (Sphere, Sphere::facing, Torus, TorusSearch, BezierPatch, on_patch,
+// Ellipsoid, Cylinder, on_cylinder, initial_triangle, replaced_corner, Solver::solve,
+// sampled_start, solve_on_patch, anchored_on_patch, anchored_on_torus_half).
 
 // Steps at most: the seed's 5 unless the pipeline overrides it (`gpu::fermat::FermatPass`).
 override FERMAT_STEPS: u32 = 5u;
 // The reflector's kind (`REFLECTOR_SPHERE`, ...): a pipeline per kind, so that each carries
 // only its own surface's code (`gpu::fermat::FermatPass`).
 override REFLECTOR_KIND: u32 = 0u;
+// Whether a patch's own points are searched again where the seed's corners find nothing (with
+// self-reflections: `gpu::fermat::FermatPass`).
+override OWN_POINTS_SEARCHED_AGAIN: bool = false;
 const FERMAT_MIN_SIZE: f32 = 1e-7;
 // The invocation's search (its row of the dispatch, `global_invocation_id.y`): the surface
 // functions below read `reflectors[search]`, the same element across a workgroup, rather than
@@ -296,42 +300,29 @@ fn replaced_corner(corners: Triangle, p: vec2<f32>) -> u32 {
     return first;
 }
 
-@compute @workgroup_size(64, 1, 1)
-fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
-    // One row of the dispatch per search; a pipeline solves its kind's searches only.
-    search = id.y;
-    let i = id.x;
-    if (reflectors[search].kind != REFLECTOR_KIND || i >= reflectors[search].count) {
-        return;
-    }
-    // The search runs in the reflector's own frame (a turned torus, ellipsoid or cylinder;
-    // others have the identity orientation): E and V are taken into it, P and its normal out.
-    let q = reflectors[search].orientation;
-    let c = reflectors[search].center;
-    let eye = c + turn(conjugate(q), reflectors[search].eye - c);
-    let vertex = c + turn(conjugate(q), fermat_vertices[i].xyz - c);
-    let f = frame_for(eye, vertex);
-    // The initial triangle: A and B where E -> O and V -> O cross the reflector, C off AB; the
-    // search of a torus's inner half starts across the hole (`TorusSearch::initial_corners`).
-    var a0: vec2<f32>;
-    var b0: vec2<f32>;
-    if (REFLECTOR_KIND == REFLECTOR_TORUS && reflectors[search].torus_half != 0u) {
-        a0 = across_the_hole(eye);
-        b0 = across_the_hole(vertex);
-    } else {
-        a0 = crossing(f, eye);
-        b0 = crossing(f, vertex);
-    }
+// Where a search ended: its parameters, the steps it took, and whether its step system went
+// singular.
+struct Search {
+    best: vec2<f32>,
+    steps: u32,
+    degenerate: u32,
+}
+
+// The seed's search from initial corners A and B (`fermat::Solver::solve`): the gradients of d
+// at A, B and C, the point where their linear interpolation vanishes replacing a corner, until
+// the triangle or the step is small or the steps run out.
+fn search_from(f: Frame, eye: vec3<f32>, vertex: vec3<f32>, a: vec2<f32>, b_start: vec2<f32>)
+    -> Search {
+    var b0 = b_start;
     // An azimuthal u (all but a patch's) is unwrapped so that AB takes the short way round.
     if (REFLECTOR_KIND != REFLECTOR_PATCH) {
-        b0.x += TAU * round((a0.x - b0.x) / TAU);
+        b0.x += TAU * round((a.x - b0.x) / TAU);
     }
-    let side = b0 - a0;
-    var corners = Triangle(a0, a0 + vec2<f32>(FERMAT_SPREAD, 0.0),
-        a0 + vec2<f32>(FERMAT_SPREAD, FERMAT_SPREAD));
+    let side = b0 - a;
+    var corners = Triangle(a, a + vec2<f32>(FERMAT_SPREAD, 0.0),
+        a + vec2<f32>(FERMAT_SPREAD, FERMAT_SPREAD));
     if (length(side) > FERMAT_SPREAD) {
-        corners = Triangle(a0, b0,
-            (a0 + b0) / 2.0 + vec2<f32>(-side.y, side.x) * FERMAT_C_OFFSET);
+        corners = Triangle(a, b0, (a + b0) / 2.0 + vec2<f32>(-side.y, side.x) * FERMAT_C_OFFSET);
     }
     // Each step replaces one corner: the other two keep their gradients.
     var ga = fermat_gradient(f, eye, vertex, corners.a);
@@ -339,22 +330,17 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     var gc = fermat_gradient(f, eye, vertex, corners.c);
     var best = corners.a;
     var moved = 3.0e38;
-    var steps = FERMAT_STEPS;
-    var degenerate = 0u;
     for (var step = 0u; step < FERMAT_STEPS; step += 1u) {
         let size = max(max(length(corners.a - corners.b), length(corners.b - corners.c)),
             length(corners.c - corners.a));
         if (min(size, moved) < FERMAT_MIN_SIZE) {
-            steps = step;
-            break;
+            return Search(best, step, 0u);
         }
         let m0 = gb - ga;
         let m1 = gc - ga;
         let det = m0.x * m1.y - m1.x * m0.y;
         if (det == 0.0) {
-            steps = step;
-            degenerate = 1u;
-            break;
+            return Search(best, step, 1u);
         }
         let alpha = (-ga.x * m1.y + m1.x * ga.y) / det;
         let beta = (-m0.x * ga.y + ga.x * m0.y) / det;
@@ -370,10 +356,25 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         // A patch's search a square's width beyond it has left it (`beyond_reach`).
         if (REFLECTOR_KIND == REFLECTOR_PATCH
             && (min(p.x, p.y) < -PATCH_REACH || max(p.x, p.y) > 1.0 + PATCH_REACH)) {
-            steps = step + 1u;
-            break;
+            return Search(best, step + 1u, 0u);
         }
     }
+    return Search(best, FERMAT_STEPS, 0u);
+}
+
+// A search's point and normal in the world, and whether the preview draws it there.
+struct Found {
+    point: vec3<f32>,
+    normal: vec3<f32>,
+    own_point: vec3<f32>,
+    shown: bool,
+}
+
+// What search `found` found for `vertex` (own frame; `world_vertex` the same in the world's).
+fn found_at(f: Frame, found: Search, world_vertex: vec3<f32>) -> Found {
+    let q = reflectors[search].orientation;
+    let c = reflectors[search].center;
+    let best = found.best;
     let own_point = surface(f, best).p;
     let point = c + turn(q, own_point - c);
     var normal = turn(q, surface_normal(f, best));
@@ -392,10 +393,77 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         && (best.y < -margin * h || best.y > (1.0 + margin) * h)) {
         normal = vec3<f32>(0.0);
     }
+    let shown = reflection_shows(point, normal, reflectors[search].eye, world_vertex);
+    return Found(point, normal, own_point, shown);
+}
+
+// The point of a 4 x 4 grid of a patch's parameters where the law of reflection fails least
+// for `vertex` seen from `eye` (`fermat::sampled_start`).
+fn sampled_start(f: Frame, eye: vec3<f32>, vertex: vec3<f32>) -> vec2<f32> {
+    var best = vec2<f32>(0.0);
+    var least = 4.0;
+    for (var k = 0u; k < 16u; k += 1u) {
+        let uv = vec2<f32>(f32(k % 4u), f32(k / 4u)) / 3.0;
+        let p = surface(f, uv).p;
+        let n = surface_normal(f, uv);
+        let bisector = normalize(normalize(eye - p) + normalize(vertex - p));
+        let error = 1.0 - dot(n, bisector);
+        if (error < least) {
+            least = error;
+            best = uv;
+        }
+    }
+    return best;
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
+    // One row of the dispatch per search; a pipeline solves its kind's searches only.
+    search = id.y;
+    let i = id.x;
+    if (reflectors[search].kind != REFLECTOR_KIND || i >= reflectors[search].count) {
+        return;
+    }
+    // The search runs in the reflector's own frame (a turned torus, ellipsoid or cylinder;
+    // others have the identity orientation): E and V are taken into it, P and its normal out.
+    let q = reflectors[search].orientation;
+    let c = reflectors[search].center;
+    let eye = c + turn(conjugate(q), reflectors[search].eye - c);
+    let vertex = c + turn(conjugate(q), fermat_vertices[i].xyz - c);
     let world_vertex = fermat_vertices[i].xyz;
-    let shown = u32(reflection_shows(point, normal, reflectors[search].eye, world_vertex));
-    reflections[id.y * reflectors[search].count + i] = GpuReflection(point, steps, normal, shown, best,
-        length(vertex - own_point), degenerate);
+    let f = frame_for(eye, vertex);
+    // The initial corners: A and B where E -> O and V -> O cross the reflector (C off AB); the
+    // search of a torus's inner half starts across the hole (`TorusSearch::initial_corners`).
+    var a0: vec2<f32>;
+    var b0: vec2<f32>;
+    if (REFLECTOR_KIND == REFLECTOR_TORUS && reflectors[search].torus_half != 0u) {
+        a0 = across_the_hole(eye);
+        b0 = across_the_hole(vertex);
+    } else {
+        a0 = crossing(f, eye);
+        b0 = crossing(f, vertex);
+    }
+    var result = search_from(f, eye, vertex, a0, b0);
+    var found = found_at(f, result, world_vertex);
+    // A teapot's own point that the seed's corners do not lead to a reflection on this patch
+    // searches again from the patch's point that fails the law of reflection least
+    // (`fermat::solve_on_patch`): a point of the mirror sees its other patches from close by,
+    // where the segment V -> O seldom crosses them near the reflection.
+    let own = reflectors[search].mirror != 0u
+        && u32(fermat_vertices[i].w) == reflectors[search].mirror;
+    if (OWN_POINTS_SEARCHED_AGAIN && REFLECTOR_KIND == REFLECTOR_PATCH && own && !found.shown) {
+        let start = sampled_start(f, eye, vertex);
+        let side = vec2<f32>(SAMPLED_START_SIDE, 0.5 * SAMPLED_START_SIDE);
+        let again = search_from(f, eye, vertex, start, start + side);
+        let found_again = found_at(f, again, world_vertex);
+        if (found_again.shown) {
+            result = again;
+            found = found_again;
+        }
+    }
+    reflections[id.y * reflectors[search].count + i] = GpuReflection(found.point, result.steps,
+        found.normal, u32(found.shown), result.best, length(vertex - found.own_point),
+        result.degenerate);
 }
 
 // The reflection of `vertex` at `point` (outward normal `n`) is drawn: E and V both see P from

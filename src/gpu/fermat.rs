@@ -66,9 +66,12 @@ pub struct FermatCull {
 }
 
 impl FermatPass {
-    /// Builds the kernel for each of `kinds` of reflector, to take at most `steps` steps
-    /// (validation errors surface through the caller's error scope).
-    pub fn new(context: &GpuContext, steps: u32, kinds: &[u32]) -> FermatPass {
+    /// Builds the kernel for each of `kinds` of reflector, to take at most `steps` steps, a
+    /// patch's own points searched again where the seed's corners find nothing when
+    /// `own_points` (mirrors reflecting themselves; without, the kernel carries none of that
+    /// code: on lavapipe it cost the teapot's frame 5% unused). Validation errors surface
+    /// through the caller's error scope.
+    pub fn new(context: &GpuContext, steps: u32, kinds: &[u32], own_points: bool) -> FermatPass {
         assert!(
             (1..=MAX_FERMAT_STEPS).contains(&steps),
             "{steps} Fermat steps: the command lines take 1..={MAX_FERMAT_STEPS}"
@@ -82,6 +85,7 @@ impl FermatPass {
                 let overrides = [
                     ("FERMAT_STEPS", steps as f64),
                     ("REFLECTOR_KIND", kind as f64),
+                    ("OWN_POINTS_SEARCHED_AGAIN", own_points as u32 as f64),
                 ];
                 let pipeline =
                     kernels::build_pipeline_with(&context.device, &FERMAT, 0, &overrides);
@@ -92,8 +96,9 @@ impl FermatPass {
         FermatPass { pipelines, cull }
     }
 
-    /// The buffers that solve `vertices` (positions, w unused) for each of `reflectors` (one
-    /// search each, all with the vertices' count).
+    /// The buffers that solve `vertices` (positions, w the mirror each lies on:
+    /// `vertex_buffer`) for each of `reflectors` (one search each, all with the vertices'
+    /// count).
     pub fn solve(
         &self,
         context: &GpuContext,
@@ -258,9 +263,17 @@ pub fn searches_per_solve(context: &GpuContext, vertices: u32, triangles: u32) -
     points.min(lists).min(rows).max(1) as usize
 }
 
-/// The vertices' positions as the kernel reads them (w unused), in a storage buffer.
-pub fn vertex_buffer(context: &GpuContext, vertices: &[Vec3]) -> Result<wgpu::Buffer> {
-    let points: Vec<[f32; 4]> = vertices.iter().map(|v| v.extend(0.0).to_array()).collect();
+/// The vertices' positions as the kernel reads them, w the mirror each lies on (`mirrors`: 1 +
+/// its index, 0 for none; empty: none lies on one), in a storage buffer.
+pub fn vertex_buffer(
+    context: &GpuContext,
+    vertices: &[Vec3],
+    mirrors: &[u32],
+) -> Result<wgpu::Buffer> {
+    let mirror = |k: usize| mirrors.get(k).copied().unwrap_or(0) as f32;
+    let points: Vec<[f32; 4]> = (vertices.iter().enumerate())
+        .map(|(k, v)| v.extend(mirror(k)).to_array())
+        .collect();
     context.storage_buffer("fermat vertices", bytemuck::cast_slice(&points))
 }
 
@@ -277,6 +290,47 @@ pub fn shown_triangles(
     triangles: &[[u32; 4]],
     steps: u32,
 ) -> Result<(Vec<GpuReflection>, Vec<u32>)> {
+    solve_and_cull(
+        context,
+        surface,
+        (eye, mirror, sees_itself),
+        (vertices, &[]),
+        triangles,
+        steps,
+    )
+}
+
+/// The reflection point of each of `vertices`, points of the mirror `surface` is part of,
+/// seen from `eye` on `surface`, found in at most `steps` steps (a teapot's own points
+/// search again where the seed's corners find none: `fermat::solve_on_patch`).
+pub fn own_reflections(
+    context: &GpuContext,
+    surface: MirrorSurface,
+    eye: Vec3,
+    vertices: &[Vec3],
+    steps: u32,
+) -> Result<Vec<GpuReflection>> {
+    let own = vec![1; vertices.len()];
+    let (reflections, _) = solve_and_cull(
+        context,
+        surface,
+        (eye, 1, true),
+        (vertices, &own),
+        &[],
+        steps,
+    )?;
+    Ok(reflections)
+}
+
+/// [`shown_triangles`], the vertices each tagged with the mirror it lies on (`vertex_buffer`).
+fn solve_and_cull(
+    context: &GpuContext,
+    surface: MirrorSurface,
+    (eye, mirror, sees_itself): (Vec3, u32, bool),
+    (vertices, mirrors): (&[Vec3], &[u32]),
+    triangles: &[[u32; 4]],
+    steps: u32,
+) -> Result<(Vec<GpuReflection>, Vec<u32>)> {
     if vertices.is_empty() {
         return Ok((Vec::new(), Vec::new()));
     }
@@ -287,8 +341,8 @@ pub fn shown_triangles(
         sees_itself: sees_itself as u32,
         ..surface.gpu(eye, vertices.len() as u32)
     };
-    let pass = FermatPass::new(context, steps, &[reflector.kind]);
-    let input = vertex_buffer(context, vertices)?;
+    let pass = FermatPass::new(context, steps, &[reflector.kind], !mirrors.is_empty());
+    let input = vertex_buffer(context, vertices, mirrors)?;
     let solve = pass.solve(context, &[reflector], &input)?;
     let mut encoder = device.create_command_encoder(&Default::default());
     pass.encode(&mut encoder, &solve);

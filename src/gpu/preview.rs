@@ -911,7 +911,12 @@ impl Reflections {
             view_formats: &[],
         });
         let mut reflections = Reflections {
-            fermat: FermatPass::new(context, options.steps, &kinds),
+            fermat: FermatPass::new(
+                context,
+                options.steps,
+                &kinds,
+                options.self_reflections.is_some(),
+            ),
             searches,
             materials: reflectors.iter().map(|r| r.material).collect(),
             searches_per_dispatch: options.searches_per_dispatch,
@@ -937,7 +942,12 @@ impl Reflections {
         eye: glam::Vec3,
     ) -> Result<()> {
         let (positions, solve_of) = shared_positions(triangles);
-        let fermat_vertices = super::fermat::vertex_buffer(context, &positions)?;
+        // The mirror each solved vertex lies on: a teapot's own points search on.
+        let mut mirrors = vec![0; positions.len()];
+        for (&solve, v) in solve_of.iter().zip(triangles) {
+            mirrors[solve as usize] = mirrors[solve as usize].max(v.reflector);
+        }
+        let fermat_vertices = super::fermat::vertex_buffer(context, &positions, &mirrors)?;
         let solve_buffer = context.storage_buffer("solve of", bytemuck::cast_slice(&solve_of))?;
         let vertices =
             context.storage_buffer("reflected vertices", bytemuck::cast_slice(triangles))?;
