@@ -410,8 +410,9 @@ impl Reflector for Torus {
 /// torus more than once, and the seed's crossings lead the search to the images on the outer
 /// half only: never, for instance, to the image of a floor point inside the hole, which the
 /// eye sees in the far inner wall, nor to a point of the torus itself, whose own crossing is
-/// the point (P = V). So a torus is searched twice, as a teapot's patches are searched each, and each
-/// search draws the reflected triangles anchored on its half (`anchored_on_torus_half`).
+/// the point (P = V). So a torus is searched twice, as a teapot's patches are searched each,
+/// and each search draws the reflected triangles anchored on its half
+/// (`anchored_on_torus_half`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TorusHalf {
     /// cos v ≥ 0, facing away from the axis: searched from the seed's crossings.
@@ -812,10 +813,12 @@ pub fn solve_on_patch(solver: &Solver, patch: &BezierPatch, eye: DVec3, vertex: 
     if shows(&again) { again } else { first }
 }
 
-/// A patch whose search starts from given corners A and B.
-struct StartedFrom(BezierPatch, DVec2, DVec2);
+/// A surface whose search starts from given initial corners A and B
+/// (`Reflector::initial_corners`): a teapot's own point searched again, and the tests'
+/// brute-force searches from many starts.
+pub struct StartedFrom<R: Reflector>(pub R, pub DVec2, pub DVec2);
 
-impl Reflector for StartedFrom {
+impl<R: Reflector> Reflector for StartedFrom<R> {
     fn point(&self, uv: DVec2) -> DVec3 {
         self.0.point(uv)
     }
@@ -838,6 +841,10 @@ impl Reflector for StartedFrom {
 
     fn initial_corners(&self, _eye: DVec3, _vertex: DVec3) -> (DVec2, DVec2) {
         (self.1, self.2)
+    }
+
+    fn u_period(&self) -> Option<f64> {
+        self.0.u_period()
     }
 
     fn beyond_reach(&self, uv: DVec2) -> bool {

@@ -6,9 +6,9 @@
 
 use chambre::bench::fermat::{FermatConfig, FermatReport};
 use chambre::fermat::{
-    BezierPatch, Cylinder, Ellipsoid, Reflector, Solver, Sphere, Torus, TorusHalf, TorusSearch,
-    alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, on_torus_half, reflection_error,
-    seen_from_outside, self_reflection_clear, solve_on_patch,
+    BezierPatch, Cylinder, Ellipsoid, Reflector, Solver, Sphere, StartedFrom, Torus, TorusHalf,
+    TorusSearch, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, on_torus_half,
+    reflection_error, seen_from_outside, self_reflection_clear, solve_on_patch,
 };
 use chambre::math::rng::Rng;
 use chambre::preview::MirrorSurface;
@@ -984,7 +984,7 @@ fn a_teapots_own_points_search_again_from_where_the_law_fails_least() {
                     || by_again
                     || (0..16).any(|s| {
                         let a = glam::UVec2::new(s % 4, s / 4).as_dvec2() / 3.0;
-                        let start = PatchFrom(*patch, a, a + glam::DVec2::new(0.1, 0.05));
+                        let start = StartedFrom(*patch, a, a + glam::DVec2::new(0.1, 0.05));
                         let uv = thorough.solve(&start, eye, v).uv;
                         let (p, n) = (patch.point(uv), patch.outward_normal(uv));
                         on_patch(uv)
@@ -1005,33 +1005,6 @@ fn a_teapots_own_points_search_again_from_where_the_law_fails_least() {
     );
     assert_share((again, pairs), 1000, 0.8);
     assert!(again as f64 > 1.15 * seed as f64, "{again} against {seed}");
-}
-
-/// A patch's search started from given corners (the brute force above tries many).
-struct PatchFrom(BezierPatch, glam::DVec2, glam::DVec2);
-
-impl Reflector for PatchFrom {
-    fn point(&self, uv: glam::DVec2) -> DVec3 {
-        self.0.point(uv)
-    }
-    fn tangents(&self, uv: glam::DVec2) -> (DVec3, DVec3) {
-        self.0.tangents(uv)
-    }
-    fn inside(&self, outside: DVec3) -> DVec3 {
-        self.0.inside(outside)
-    }
-    fn crossing(&self, outside: DVec3) -> glam::DVec2 {
-        self.0.crossing(outside)
-    }
-    fn outward_normal(&self, uv: glam::DVec2) -> DVec3 {
-        self.0.outward_normal(uv)
-    }
-    fn initial_corners(&self, _eye: DVec3, _vertex: DVec3) -> (glam::DVec2, glam::DVec2) {
-        (self.1, self.2)
-    }
-    fn beyond_reach(&self, uv: glam::DVec2) -> bool {
-        self.0.beyond_reach(uv)
-    }
 }
 
 /// The kernel searches a teapot's own points again as the CPU does (`fermat::solve_on_patch`):
@@ -1340,33 +1313,6 @@ fn preview_solver() -> Solver {
     }
 }
 
-/// A torus's search started from given corners (the brute force below tries many).
-struct StartedAt(Torus, glam::DVec2, glam::DVec2);
-
-impl Reflector for StartedAt {
-    fn point(&self, uv: glam::DVec2) -> DVec3 {
-        self.0.point(uv)
-    }
-    fn tangents(&self, uv: glam::DVec2) -> (DVec3, DVec3) {
-        self.0.tangents(uv)
-    }
-    fn inside(&self, outside: DVec3) -> DVec3 {
-        self.0.inside(outside)
-    }
-    fn crossing(&self, outside: DVec3) -> glam::DVec2 {
-        self.0.crossing(outside)
-    }
-    fn outward_normal(&self, uv: glam::DVec2) -> DVec3 {
-        self.0.outward_normal(uv)
-    }
-    fn initial_corners(&self, _eye: DVec3, _vertex: DVec3) -> (glam::DVec2, glam::DVec2) {
-        (self.1, self.2)
-    }
-    fn u_period(&self) -> Option<f64> {
-        self.0.u_period()
-    }
-}
-
 /// A torus's own points (its vertices, reflected with self-reflections on) are found by its
 /// inner half's search, from across the hole: their own crossing is the point itself (P = V),
 /// and what a point of the torus sees of it lies on the far inner wall. Over a grid of own
@@ -1400,7 +1346,7 @@ fn a_torus_finds_its_own_points_reflections_from_across_the_hole() {
     for v in own_points(&torus) {
         let has_one = (0..128).any(|k| {
             let a = glam::DVec2::new(tau * (k % 16) as f64 / 16.0, tau * (k / 16) as f64 / 8.0);
-            let start = StartedAt(torus, a, a + glam::DVec2::new(0.2, 0.1));
+            let start = StartedFrom(torus, a, a + glam::DVec2::new(0.2, 0.1));
             shows(thorough.solve(&start, eye, v).uv, v, 1e-6)
         });
         if has_one {
@@ -1442,7 +1388,7 @@ fn the_floor_inside_a_torus_shows_in_its_far_inner_wall() {
         }
         let has_one = (0..128).any(|k| {
             let a = glam::DVec2::new(tau * (k % 16) as f64 / 16.0, tau * (k / 16) as f64 / 8.0);
-            let start = StartedAt(torus, a, a + glam::DVec2::new(0.3, 0.2));
+            let start = StartedFrom(torus, a, a + glam::DVec2::new(0.3, 0.2));
             let uv = thorough.solve(&start, eye, v).uv;
             // On the far inner wall: the half of the torus away from the eye, inside.
             shows(uv, v, 1e-6) && on_torus_half(uv, TorusHalf::Inner) && torus.point(uv).z < 0.0
