@@ -455,9 +455,10 @@ fn torus_scene(scale: f64) -> String {
 /// from its own points is relative to the eye's distance), draw every scale of `SCALES` as
 /// they draw scale 1 but for a triangle whose corner sits at a threshold of the search (the law
 /// of reflection's tolerance, the seam, the clearance), which f32 rounding of the scaled
-/// coordinates could tip either way: measured, 3,058 triangles drawn at every scale and the
-/// same pixels (since the torus's own points start across the hole, 2026-11-25; before,
-/// 2,891 drawn but at 1e-2 and 1, where 2,890 were, and 2 of 3,072 pixels differed).
+/// coordinates could tip either way: measured, 6,002 triangles drawn at every scale and the
+/// same pixels (both halves of the torus searched, 2026-11-25: 3,058 with one search, since
+/// the torus's own points started across the hole; before that, 2,891 drawn but at 1e-2 and
+/// 1, where 2,890 were, and 2 of 3,072 pixels differed).
 #[test]
 fn fermat_reflections_do_not_depend_on_the_scene_scale() {
     let Some(context) = common::gpu_context() else {
