@@ -310,12 +310,26 @@ pub fn own_reflections(
     vertices: &[Vec3],
     steps: u32,
 ) -> Result<Vec<GpuReflection>> {
-    let own = vec![1; vertices.len()];
+    points_of(context, surface, eye, vertices, true, steps)
+}
+
+/// The reflection points of `vertices` (the searched mirror's own where `own`), none culled.
+fn points_of(
+    context: &GpuContext,
+    surface: MirrorSurface,
+    eye: Vec3,
+    vertices: &[Vec3],
+    own: bool,
+    steps: u32,
+) -> Result<Vec<GpuReflection>> {
+    // The reflector is mirror 1 where its own points are solved, none otherwise.
+    let mirror = own as u32;
+    let mirrors = vec![mirror; if own { vertices.len() } else { 0 }];
     let (reflections, _) = solve_and_cull(
         context,
         surface,
-        (eye, 1, true),
-        (vertices, &own),
+        (eye, mirror, own),
+        (vertices, &mirrors),
         &[],
         steps,
     )?;
@@ -382,7 +396,5 @@ pub fn reflections(
     vertices: &[Vec3],
     steps: u32,
 ) -> Result<Vec<GpuReflection>> {
-    let (reflections, _) =
-        shown_triangles(context, surface, (eye, 0, false), vertices, &[], steps)?;
-    Ok(reflections)
+    points_of(context, surface, eye, vertices, false, steps)
 }
