@@ -498,6 +498,11 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
         assert!(row.features > 300, "{row:?}");
         assert!(row.corner_max_px.is_some_and(|d| d < 0.05), "{row:?}");
         assert!(row.preview_ms.median > 0.0);
+        // One round: one ray-traced frame over the median of the preview frames after it.
+        assert!(
+            row.speedup.median > 0.0 && row.speedup.min == row.speedup.max,
+            "{row:?}"
+        );
     }
     assert!(fine.drawn as f64 >= 0.9 * fine.features as f64, "{fine:?}");
     assert!(
@@ -523,6 +528,7 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
         assert!(json.get(field).is_some(), "{field}");
     }
     assert_eq!(json["rows"][1]["subdivision"], 4);
+    assert!(json["rows"][1]["speedup"]["median"].as_f64().is_some());
 }
 
 /// The same on the torus, ellipsoid and cylinder scenes (each intersected exactly): the

@@ -29,7 +29,7 @@ use crate::fermat::{
     reflection_error, seen_from_outside,
 };
 use crate::gpu::GpuContext;
-use crate::gpu::preview::{PreviewOptions, draw_with, extent_and_far};
+use crate::gpu::preview::{PreviewOptions, PreviewRenderer, extent_and_far};
 use crate::gpu::render::PathKernels;
 use crate::layout::{FEATURES_ALL, NONE, T_FAR};
 use crate::pack::{FlatScene, flatten};
@@ -60,6 +60,9 @@ pub struct FermatRow {
     pub reflected_drawn: usize,
     /// The preview's frame time (Fermat solves, main and reflection passes), milliseconds.
     pub preview_ms: Spread,
+    /// The ray-traced GPU frame's time over the preview's, round by round: a ray-traced frame
+    /// against the median of the preview frames timed just after it.
+    pub speedup: Spread,
     /// Features whose true reflection is in the frame.
     pub features: usize,
     /// Of those, the ones the preview draws (every corner of their sub-triangle converged).
@@ -96,7 +99,7 @@ pub struct FermatReport {
     /// cut for; `None` without.
     pub self_reflections: Option<f64>,
     /// The ray-traced frame at 1 sample per pixel on the GPU (the preview's device),
-    /// milliseconds.
+    /// milliseconds: every round's, of every subdivision.
     pub ray_traced_gpu_ms: Spread,
     /// The same on the CPU path.
     pub ray_traced_cpu_ms: Spread,
@@ -116,9 +119,10 @@ pub struct FermatConfig<'a> {
     pub subdivisions: &'a [u32],
     /// The Fermat search's steps at most.
     pub steps: u32,
-    /// Timed ray-traced frames after a warm-up.
+    /// Rounds timed after a warm-up: the CPU path's ray-traced frames, and per subdivision a
+    /// GPU ray-traced frame then `frames` preview frames each.
     pub runs: u32,
-    /// Timed preview frames per subdivision after a warm-up (a preview frame is short, and
+    /// Timed preview frames per round after a warm-up (a preview frame is short, and
     /// lavapipe's first few after a pipeline is built are slower).
     pub frames: u32,
     /// Samples per pixel of the ray-traced reference.
@@ -158,25 +162,26 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
     let (width, height) = (flat.frame.width, flat.frame.height);
     let one_spp = load(Some("render.spp=1".into()))?;
     let one_spp = flatten(&one_spp);
-    let mut gpu_ms = Vec::new();
-    let mut cpu_ms = Vec::new();
     let features = flat.features();
+    let ray_traced_ms = |way| -> Result<f64> {
+        let traced = render_once(&one_spp, way, Some(context))?;
+        Ok(traced.elapsed.as_secs_f64() * 1e3)
+    };
+    let on_gpu = Way::Gpu {
+        features,
+        budgets: None,
+        kernels: PathKernels::Megakernel,
+    };
+    let mut cpu_ms = Vec::new();
     for run in 0..=config.runs.max(1) {
-        let gpu = render_once(
-            &one_spp,
-            Way::Gpu {
-                features,
-                budgets: None,
-                kernels: PathKernels::Megakernel,
-            },
-            Some(context),
-        )?;
-        let cpu = render_once(&one_spp, Way::Cpu { features }, None)?;
+        let cpu = ray_traced_ms(Way::Cpu { features })?;
         if run > 0 {
-            gpu_ms.push(gpu.elapsed.as_secs_f64() * 1e3);
-            cpu_ms.push(cpu.elapsed.as_secs_f64() * 1e3);
+            cpu_ms.push(cpu);
         }
     }
+    // Warm-up: lavapipe's first frames after a pipeline is built are slower.
+    ray_traced_ms(on_gpu)?;
+    let mut gpu_ms = Vec::new();
     let reference = load(Some(format!("render.spp={}", config.reference_spp)))?;
     let reference = render_once(&flatten(&reference), Way::Cpu { features }, None)?.image;
     let clip = clip_matrix(&scene.camera, extent_and_far(&scene, &flat).1);
@@ -192,7 +197,22 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             area_shadow_samples: 1,
             self_reflections: config.self_reflections,
         };
-        let frame = draw_with(context, &scene, &flat, config.frames.max(1), options)?;
+        let renderer = PreviewRenderer::new(context, &scene, &flat, options)?;
+        renderer.draw()?;
+        // Each round times a ray-traced frame and then the preview's frames, moments apart:
+        // their ratio is that of one spell of this machine's load, which drifts between spells
+        // by more than the difference measured.
+        let mut times = Vec::new();
+        let mut ratios = Vec::new();
+        for _ in 0..config.runs.max(1) {
+            let traced = ray_traced_ms(on_gpu)?;
+            let round = renderer.timed_frames(config.frames)?;
+            let round_ms: Vec<f64> = round.iter().map(|t| t.as_secs_f64() * 1e3).collect();
+            ratios.push(traced / Spread::of(&round_ms).median);
+            gpu_ms.push(traced);
+            times.extend(round);
+        }
+        let frame = renderer.frame(&times)?;
         let placed = displacements(context, &scene, &flat, &reflector, &clip, options)?;
         let corner_max_px = placed
             .iter()
@@ -212,6 +232,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             reflected_triangles: frame.reflected_triangles,
             reflected_drawn: frame.reflected_drawn,
             preview_ms: Spread::of(&frame.frame_times_ms),
+            speedup: Spread::of(&ratios),
             features: placed.len(),
             drawn: drawn.len(),
             corner_max_px,
@@ -220,6 +241,10 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             displacement_max_px: quantile(1.0),
             flip_reflector: masked_flip(&frame.image, &reference, &mask),
         });
+    }
+    if gpu_ms.is_empty() {
+        // No subdivision asked: the ray-traced frame is timed alone.
+        gpu_ms.push(ray_traced_ms(on_gpu)?);
     }
     Ok(FermatReport {
         scene: config.scene.display().to_string(),
@@ -449,12 +474,12 @@ fn masked_flip(image: &Image, reference: &Image, mask: &[bool]) -> Option<f64> {
 impl FermatReport {
     /// The report as Markdown tables.
     pub fn to_markdown(&self) -> String {
-        let gpu = self.ray_traced_gpu_ms.median;
         let mut out = format!(
             "Fermat reflections against the ray tracer: {} ({}x{}), at most {} steps, curved \
              shapes within {} px{}\n\n\
              Ray-traced frame, 1 spp: GPU {:.2} ms, CPU {:.2} ms (median of runs)\n\n\
-             | subdivision | triangles | reflected triangles (drawn) | preview (ms) | ray-traced GPU / preview | \
+             | subdivision | triangles | reflected triangles (drawn) | preview (ms) | \
+             ray-traced GPU / preview (median of rounds) | \
              features drawn | corners: max (px) | all features: median (px) | p99 (px) | \
              max (px) | FLIP of the mirror's pixels vs {} spp |\n\
              |---|---|---|---|---|---|---|---|---|---|---|\n",
@@ -466,7 +491,7 @@ impl FermatReport {
             self.self_reflections.map_or(String::new(), |px| format!(
                 ", self-reflections within {px} px"
             )),
-            gpu,
+            self.ray_traced_gpu_ms.median,
             self.ray_traced_cpu_ms.median,
             self.reference_spp
         );
@@ -481,7 +506,7 @@ impl FermatReport {
                 r.reflected_triangles,
                 r.reflected_drawn,
                 r.preview_ms.median,
-                gpu / r.preview_ms.median,
+                r.speedup.median,
                 r.drawn,
                 r.features,
                 px(r.corner_max_px),

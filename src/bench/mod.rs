@@ -104,10 +104,12 @@ pub struct FermatArgs {
     /// The Fermat search's steps at most (1 to 1000).
     #[arg(long, value_parser = fermat_steps(), default_value_t = crate::gpu::preview::PreviewOptions::default().steps)]
     pub steps: u32,
-    /// Timed ray-traced frames after a warm-up.
+    /// Rounds timed after a warm-up: per subdivision, a GPU ray-traced frame then --frames
+    /// preview frames (the speed-up is the median of the rounds' ratios); and as many CPU
+    /// ray-traced frames.
     #[arg(long, value_parser = positive(), default_value_t = 5)]
     pub runs: u32,
-    /// Timed preview frames per subdivision after a warm-up.
+    /// Timed preview frames per round, after a warm-up.
     #[arg(long, value_parser = positive(), default_value_t = 21)]
     pub frames: u32,
     /// Samples per pixel of the ray-traced reference for FLIP.

@@ -152,25 +152,8 @@ pub fn draw_with(
 ) -> Result<PreviewFrame> {
     let renderer = PreviewRenderer::new(context, scene, flat, options)?;
     renderer.draw()?;
-    let mut times = Vec::new();
-    for _ in 0..frames.max(1) {
-        let start = Instant::now();
-        renderer.draw()?;
-        times.push(start.elapsed());
-    }
-    let frame_times_ms = times.iter().map(|t| t.as_secs_f64() * 1e3).collect();
-    times.sort();
-    Ok(PreviewFrame {
-        image: renderer.image()?,
-        triangles: renderer.triangles(),
-        frame_time: times[times.len() / 2],
-        frame_times_ms,
-        reflected_triangles: renderer.reflected_triangles(),
-        reflected_drawn: renderer.reflected_drawn()?,
-        curved_shapes: renderer.cuts.len(),
-        coarse_shapes: renderer.coarse_shapes(),
-        shadow_maps: renderer.shadow_maps(),
-    })
+    let times = renderer.timed_frames(frames)?;
+    renderer.frame(&times)
 }
 
 /// What to do when the Fermat reflections' arrays outgrow a storage binding: they grow with
@@ -470,6 +453,35 @@ impl PreviewRenderer {
         }
         self.context
             .wait(self.context.queue.submit([encoder.finish()]))
+    }
+
+    /// Draws `frames` frames (at least one), each timed alone: submitted and finished on the
+    /// device.
+    pub fn timed_frames(&self, frames: u32) -> Result<Vec<Duration>> {
+        (0..frames.max(1))
+            .map(|_| {
+                let start = Instant::now();
+                self.draw()?;
+                Ok(start.elapsed())
+            })
+            .collect()
+    }
+
+    /// The last frame drawn, read back, with `times` (at least one) those of its timed frames.
+    pub fn frame(&self, times: &[Duration]) -> Result<PreviewFrame> {
+        let mut sorted = times.to_vec();
+        sorted.sort();
+        Ok(PreviewFrame {
+            image: self.image()?,
+            triangles: self.triangles(),
+            frame_time: sorted[sorted.len() / 2],
+            frame_times_ms: times.iter().map(|t| t.as_secs_f64() * 1e3).collect(),
+            reflected_triangles: self.reflected_triangles(),
+            reflected_drawn: self.reflected_drawn()?,
+            curved_shapes: self.cuts.len(),
+            coarse_shapes: self.coarse_shapes(),
+            shadow_maps: self.shadow_maps(),
+        })
     }
 
     /// The image (linear radiance) as last drawn, read back.
