@@ -33,8 +33,9 @@
 @group(0) @binding(18) var<storage, read_write> primary_hits: array<GpuPrimaryHit>;
 // The preview's reflected triangles for `fermat_cull` (wgsl/fermat.wgsl): per triangle its three
 // vertices' solves (indices into `fermat_vertices`) and, in w, 1 + the index of the mirror it
-// lies on (0: on none); per search, the triangles whose reflection shows (a list as long as
-// `reflected_triangles`, search after search), and the indirect draw that draws them.
+// lies on (0: on none); the triangles whose reflection shows on a search's surface, as (the
+// search's row, the triangle) in one list for all the searches of the dispatch (room for every
+// triangle of every search), and the one indirect draw that draws them all.
 @group(0) @binding(19) var<storage, read> reflected_triangles: array<vec4<u32>>;
-@group(0) @binding(20) var<storage, read_write> shown_triangles: array<u32>;
-@group(0) @binding(21) var<storage, read_write> draw_args: array<GpuDrawArgs>;
+@group(0) @binding(20) var<storage, read_write> shown_triangles: array<vec2<u32>>;
+@group(0) @binding(21) var<storage, read_write> draw_args: GpuDrawArgs;

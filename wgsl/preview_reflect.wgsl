@@ -1,5 +1,6 @@
-// Fermat reflections in the raster preview (seed 004): the reflected triangles of one curved
-// mirror (a sphere or a torus), each vertex V drawn at its reflection point P (the `fermat`
+// Fermat reflections in the raster preview (seed 004): the reflected triangles of a batch of
+// searches (the surfaces of the curved mirrors: a sphere, a torus's half, a teapot's patch) in
+// one draw, each vertex V drawn at its reflection point P (the `fermat`
 // kernel's output) with the depth |P - V|, so the nearest reflected surface along each
 // reflected ray wins (first level of hidden-surface removal, in a depth buffer of its own); a
 // fragment lands only where the main pass saw this reflector at P's distance (second level:
@@ -14,34 +15,30 @@
 // more than this fraction of its distance is on a hidden part of the reflector.
 const HIDDEN_TOLERANCE: f32 = 0.02;
 
-// What the reflection pass of one reflector needs beyond the preview's uniforms.
+// What the reflection pass needs of one search beyond the preview's uniforms.
 struct ReflectorPass {
     // Reflected depths |P - V| are divided by this to land in [0, 1].
     far: f32,
-    // 1 + the reflector's index: the id the main pass wrote where it is seen.
+    // 1 + the index of the search's mirror: the id the main pass wrote where it is seen.
     id: u32,
-    // The reflector's material.
+    // The mirror's material.
     material: u32,
-    // The search's index: its rows of `reflected_points` and `shown_triangles`.
-    search: u32,
     // Vertices each search solves: the length of a search's row of `reflected_points`.
     solves: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 @group(1) @binding(0) var<storage, read> reflected_vertices: array<PreviewVertex>;
-// Every search's reflection points, search after search (`reflector_pass.search` picks a row).
+// Every search's reflection points, search after search.
 @group(1) @binding(1) var<storage, read> reflected_points: array<GpuReflection>;
-@group(1) @binding(2) var<uniform> reflector_pass: ReflectorPass;
+// Per search of the draw (a batch of them: `gpu::preview::SearchBatch`), its pass.
+@group(1) @binding(2) var<storage, read> reflector_passes: array<ReflectorPass>;
 @group(1) @binding(3) var reflector_ids: texture_2d<u32>;
 // Per reflected vertex, the index of its Fermat solve (vertices at one position share one).
 @group(1) @binding(4) var<storage, read> solve_of: array<u32>;
-// Per search, the reflected triangles whose reflection shows on its surface, as `fermat_cull`
-// listed them (wgsl/fermat.wgsl; a row as long as the reflected triangles): the draw runs three
-// vertices for each.
-@group(1) @binding(5) var<storage, read> shown_triangles: array<u32>;
+// The reflected triangles whose reflection shows on a search's surface, as (the search's row,
+// the triangle), as `fermat_cull` listed them (wgsl/fermat.wgsl): the draw runs three vertices
+// for each.
+@group(1) @binding(5) var<storage, read> shown_triangles: array<vec2<u32>>;
 
 struct ReflectedOut {
     @builtin(position) clip: vec4<f32>,
@@ -55,26 +52,31 @@ struct ReflectedOut {
     @location(4) mirror_normal: vec3<f32>,
     // 0, or 1 + the index of the mirror V lies on (another mirror reflected in this one).
     @location(5) @interpolate(flat) reflector: u32,
+    // The search's row in `reflector_passes`.
+    @location(6) @interpolate(flat) search: u32,
 }
 
 // Vertex `j` of the `j / 3`-th triangle shown: its reflected vertex and reflection point.
 @vertex
 fn reflected_vertex(@builtin(vertex_index) j: u32) -> ReflectedOut {
-    let triangles = arrayLength(&reflected_vertices) / 3u;
-    let i = 3u * shown_triangles[reflector_pass.search * triangles + j / 3u] + j % 3u;
+    let shown = shown_triangles[j / 3u];
+    let search = reflector_passes[shown.x];
+    let i = 3u * shown.y + j % 3u;
     let v = reflected_vertices[i];
-    let r = reflected_points[reflector_pass.search * reflector_pass.solves + solve_of[i]];
+    let r = reflected_points[shown.x * search.solves + solve_of[i]];
     var clip = preview.clip * vec4<f32>(r.point, 1.0);
     // Depth linear in |P - V| (interpolated across the triangle after the perspective divide,
     // as the seed's z-buffer does).
-    clip.z = clamp(r.depth / reflector_pass.far, 0.0, 1.0) * clip.w;
-    return ReflectedOut(clip, v.position, v.normal, v.material, r.point, r.normal, v.reflector);
+    clip.z = clamp(r.depth / search.far, 0.0, 1.0) * clip.w;
+    return ReflectedOut(clip, v.position, v.normal, v.material, r.point, r.normal, v.reflector,
+        shown.x);
 }
 
 @fragment
 fn reflected_fragment(f: ReflectedOut) -> @location(0) vec4<f32> {
+    let search = reflector_passes[f.search];
     let seen = textureLoad(reflector_ids, vec2<i32>(f.clip.xy), 0);
-    if (seen.r != reflector_pass.id) {
+    if (seen.r != search.id) {
         discard;
     }
     // P on a part of the reflector the eye does not see (a torus hides parts of itself): the
@@ -84,7 +86,7 @@ fn reflected_fragment(f: ReflectedOut) -> @location(0) vec4<f32> {
     if (distance(f.mirror_point, preview.eye.xyz) > seen_at * (1.0 + HIDDEN_TOLERANCE)) {
         discard;
     }
-    let own = shade(reflector_pass.material, f.mirror_point, normalize(f.mirror_normal),
+    let own = shade(search.material, f.mirror_point, normalize(f.mirror_normal),
         preview.eye.xyz);
     var reflected = shade(f.material, f.world, f.normal, f.mirror_point);
     if (f.reflector != 0u && preview.max_depth >= 2u) {
@@ -93,5 +95,5 @@ fn reflected_fragment(f: ReflectedOut) -> @location(0) vec4<f32> {
         // at max_depth 1 its path ends there and it shows its own shading only.
         reflected += preview_materials[f.material].mirror * preview.background.xyz;
     }
-    return vec4<f32>(own + preview_materials[reflector_pass.material].mirror * reflected, 1.0);
+    return vec4<f32>(own + preview_materials[search.material].mirror * reflected, 1.0);
 }

@@ -3,9 +3,10 @@
 //! of one search (a surface of a mirror) per invocation; `fermat::Solver` is its CPU twin
 //! (f64), and `tests/fermat.rs` checks that they agree. The raster preview encodes it before its
 //! draws (`gpu::preview`): every search in one dispatch per kind of surface, then the
-//! `fermat_cull` kernel, which lists for every search the reflected triangles whose reflection
-//! shows on its surface, for an indirect draw each. A teapot's 32 patches took 64 dispatches a
-//! frame before, whose fixed cost on lavapipe outweighed their work (docs/fermat.md).
+//! `fermat_cull` kernel, which lists the reflected triangles whose reflection shows on each
+//! search's surface, for one indirect draw of them all. A teapot's 32 patches took 64
+//! dispatches a frame before, whose fixed cost on lavapipe outweighed their work, and 32 draws
+//! (docs/fermat.md).
 
 use glam::Vec3;
 use wgpu::util::DeviceExt;
@@ -21,6 +22,9 @@ pub const SEED_STEPS: u32 = 5;
 
 /// Vertices an invocation group of the kernel takes (its `@workgroup_size`).
 const WORKGROUP: u32 = 64;
+
+/// Bytes of an entry of the cull's list: a search's row and a triangle's index.
+const SHOWN_BYTES: u64 = 8;
 
 /// The Fermat search's steps at most that the command lines take (`--fermat-steps`,
 /// `bench fermat --steps`): the preview's default is 12 and the f64 truth of `bench fermat`
@@ -51,14 +55,13 @@ pub struct FermatSolve {
     searches: u32,
 }
 
-/// The searches' cull of the reflected triangles (`fermat_cull`): per search the triangles
-/// whose reflection shows on its surface, and the arguments of the indirect draw of them.
+/// The searches' cull of the reflected triangles (`fermat_cull`): the triangles whose
+/// reflection shows on a search's surface, and the arguments of the one indirect draw of them.
 pub struct FermatCull {
-    /// Per search, as many slots as triangles: the indices of the triangles shown (into the
-    /// reflected triangles), the first `vertex_count / 3` of its slots written, in no fixed
-    /// order.
+    /// As many slots as triangles for each search: (the search's row, the index of a triangle
+    /// shown on its surface), the first `vertex_count / 3` slots written, in no fixed order.
     pub shown: wgpu::Buffer,
-    /// One `GpuDrawArgs` per search: three vertices per triangle shown.
+    /// One `GpuDrawArgs`: three vertices per triangle shown.
     pub args: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     triangles: u32,
@@ -194,11 +197,11 @@ impl FermatPass {
         let shown = self.storage(
             context,
             &what,
-            count.max(1) as u64 * 4 * solve.searches as u64,
+            count.max(1) as u64 * SHOWN_BYTES * solve.searches as u64,
         )?;
         let args = context.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("reflected draws"),
-            size: (solve.searches.max(1) as usize * size_of::<GpuDrawArgs>()) as u64,
+            label: Some("reflected draw"),
+            size: size_of::<GpuDrawArgs>() as u64,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::INDIRECT
                 | wgpu::BufferUsages::COPY_DST
@@ -224,9 +227,9 @@ impl FermatPass {
         })
     }
 
-    /// Records `cull` into `encoder`, after its searches' solve: the draws' arguments are
-    /// cleared (the kernel sets their instance counts back to 1), then every search's
-    /// triangles are listed anew, in one dispatch (a row per search).
+    /// Records `cull` into `encoder`, after its searches' solve: the draw's arguments are
+    /// cleared (the kernel sets its instance count back to 1), then every search's triangles
+    /// are listed anew, in one dispatch (a row per search).
     pub fn encode_cull(&self, encoder: &mut wgpu::CommandEncoder, cull: &FermatCull) {
         encoder.clear_buffer(&cull.args, 0, None);
         let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -258,7 +261,7 @@ pub fn searches_per_solve(context: &GpuContext, vertices: u32, triangles: u32) -
     let limits = context.device.limits();
     let binding = limits.max_storage_buffer_binding_size;
     let points = binding / (vertices.max(1) as u64 * size_of::<GpuReflection>() as u64);
-    let lists = binding / (triangles.max(1) as u64 * 4);
+    let lists = binding / (triangles.max(1) as u64 * SHOWN_BYTES);
     let rows = limits.max_compute_workgroups_per_dimension as u64;
     points.min(lists).min(rows).max(1) as usize
 }
@@ -381,8 +384,11 @@ fn solve_and_cull(
         return Ok((reflections, Vec::new()));
     };
     let args: GpuDrawArgs = bytemuck::pod_read_unaligned(&context.read_buffer(&cull.args)?);
-    let listed: Vec<u32> = bytemuck::pod_collect_to_vec(&context.read_buffer(&cull.shown)?);
-    let mut shown = listed[..(args.vertex_count / 3) as usize].to_vec();
+    let listed: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(&context.read_buffer(&cull.shown)?);
+    // One search: every entry is of its row 0.
+    let mut shown: Vec<u32> = (listed[..(args.vertex_count / 3) as usize].iter())
+        .map(|&[_, triangle]| triangle)
+        .collect();
     shown.sort_unstable();
     Ok((reflections, shown))
 }

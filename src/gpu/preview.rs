@@ -531,12 +531,8 @@ impl PreviewRenderer {
         let mut drawn = 0;
         for batch in &reflections.geometry.batches {
             let bytes = self.context.read_buffer(&batch.cull.args)?;
-            let args: Vec<GpuDrawArgs> = bytemuck::pod_collect_to_vec(&bytes);
-            let rows = &args[..batch.searches.len()];
-            drawn += rows
-                .iter()
-                .map(|a| a.vertex_count as usize / 3)
-                .sum::<usize>();
+            let args: GpuDrawArgs = bytemuck::pod_read_unaligned(&bytes);
+            drawn += args.vertex_count as usize / 3;
         }
         Ok(drawn)
     }
@@ -845,9 +841,9 @@ struct ReflectionSetup<'a> {
 /// The reflection passes of the curved mirrors: the Fermat solves (a search per surface of
 /// each mirror, all in one dispatch per kind of surface), the cull of the reflected triangles
 /// for every search in one dispatch, the reflected triangles' pipeline and its own depth buffer
-/// (|P − V|); it draws over the main pass's colour target, each search's shown triangles by an
-/// indirect draw. (Searches come in batches where their buffers would outgrow a binding: a
-/// solve and a cull per batch.) The reflected triangles can be replaced
+/// (|P − V|); it draws over the main pass's colour target, the shown triangles of all the
+/// searches by one indirect draw. (Searches come in batches where their buffers would outgrow a
+/// binding: a solve, a cull and a draw per batch.) The reflected triangles can be replaced
 /// ([`Reflections::load`]) where the main pass cuts its curved shapes anew.
 struct Reflections {
     fermat: FermatPass,
@@ -871,7 +867,8 @@ struct Reflections {
 #[derive(Default)]
 struct ReflectedGeometry {
     batches: Vec<SearchBatch>,
-    reflector_groups: Vec<wgpu::BindGroup>,
+    /// Per batch, what its draw reads.
+    batch_groups: Vec<wgpu::BindGroup>,
     vertex_count: u32,
     /// Distinct reflected vertices: one Fermat solve each.
     solve_count: u32,
@@ -997,39 +994,39 @@ impl Reflections {
                 })
             })
             .collect::<Result<Vec<_>>>()?;
-        let reflector_groups = batches
+        let batch_groups = batches
             .iter()
-            .flat_map(|batch| batch.searches.clone().map(move |search| (batch, search)))
-            .map(|(batch, search)| {
-                let id = self.searches[search].0;
-                let pass = ReflectorPass {
-                    far: self.far as f32,
-                    id,
-                    material: self.materials[id as usize - 1],
-                    search: (search - batch.searches.start) as u32,
-                    solves: positions.len() as u32,
-                    _pad: [0; 3],
-                };
-                let uniforms = context.uniform_buffer("reflector pass", bytemuck::bytes_of(&pass));
-                context
+            .map(|batch| {
+                let passes: Vec<ReflectorPass> = self.searches[batch.searches.clone()]
+                    .iter()
+                    .map(|&(id, _)| ReflectorPass {
+                        far: self.far as f32,
+                        id,
+                        material: self.materials[id as usize - 1],
+                        solves: positions.len() as u32,
+                    })
+                    .collect();
+                let passes =
+                    context.storage_buffer("reflector passes", bytemuck::cast_slice(&passes))?;
+                Ok(context
                     .device
                     .create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some("reflector"),
+                        label: Some("reflector batch"),
                         layout: &self.pipeline.get_bind_group_layout(1),
                         entries: &[
                             buffer_entry(0, &vertices),
                             buffer_entry(1, &batch.solve.output),
-                            buffer_entry(2, &uniforms),
+                            buffer_entry(2, &passes),
                             buffer_entry(4, &solve_buffer),
                             buffer_entry(5, &batch.cull.shown),
                             texture_entry(3, &self.id_view),
                         ],
-                    })
+                    }))
             })
-            .collect();
+            .collect::<Result<Vec<_>>>()?;
         self.geometry = ReflectedGeometry {
             batches,
-            reflector_groups,
+            batch_groups,
             vertex_count: triangles.len() as u32,
             solve_count: positions.len() as u32,
         };
@@ -1072,13 +1069,14 @@ impl Reflections {
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.shared_group, &[]);
-        let draws =
-            self.geometry.batches.iter().flat_map(|batch| {
-                (0..batch.searches.len()).map(move |row| (&batch.cull.args, row))
-            });
-        for (group, (args, row)) in self.geometry.reflector_groups.iter().zip(draws) {
+        for (group, batch) in self
+            .geometry
+            .batch_groups
+            .iter()
+            .zip(&self.geometry.batches)
+        {
             pass.set_bind_group(1, group, &[]);
-            pass.draw_indirect(args, (row * size_of::<GpuDrawArgs>()) as u64);
+            pass.draw_indirect(&batch.cull.args, 0);
         }
     }
 }

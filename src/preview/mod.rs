@@ -81,23 +81,19 @@ pub struct PreviewUniforms {
     pub background: [f32; 4],
 }
 
-/// The uniforms of one reflector's reflection pass (`ReflectorPass` in
-/// wgsl/preview_reflect.wgsl).
+/// What the reflection pass needs of one search (`ReflectorPass` in
+/// wgsl/preview_reflect.wgsl; one per search of a batch, in a storage array).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ReflectorPass {
     /// Reflected depths |P − V| are divided by this to land in [0, 1].
     pub far: f32,
-    /// 1 + the reflector's index: the id the main pass wrote where it is seen.
+    /// 1 + the index of the search's mirror: the id the main pass wrote where it is seen.
     pub id: u32,
-    /// The reflector's material.
+    /// The mirror's material.
     pub material: u32,
-    /// The search's index: its rows of the reflection points and of the triangles shown.
-    pub search: u32,
-    /// Vertices each search solves: the length of a search's rows of reflection points.
+    /// Vertices each search solves: the length of a search's row of reflection points.
     pub solves: u32,
-    /// Padding to the WGSL layout.
-    pub _pad: [u32; 3],
 }
 
 /// A curved mirror the preview reflects in by Fermat's principle.
