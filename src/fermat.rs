@@ -770,8 +770,8 @@ pub fn drawn_in_preview(p: DVec3, n: DVec3, eye: DVec3, vertex: DVec3) -> bool {
         && reflection_error(p, n, eye, vertex) < f64::from(crate::layout::REFLECTION_TOLERANCE)
 }
 
-/// The point of a 4 x 4 grid of `patch`'s parameters (its corners and thirds) where the law
-/// of reflection fails least for `vertex` seen from `eye`: the least 1 − n · b, n the outward
+/// The point of a `SAMPLED_START_GRID`² grid of `patch`'s parameters (4: its corners and
+/// thirds) where the law of reflection fails least for `vertex` seen from `eye`: the least 1 − n · b, n the outward
 /// normal and b the bisector of the directions to E and V (a point facing away fails most).
 /// The kernel's `sampled_start`.
 pub fn sampled_start(patch: &BezierPatch, eye: DVec3, vertex: DVec3) -> DVec2 {
@@ -780,10 +780,11 @@ pub fn sampled_start(patch: &BezierPatch, eye: DVec3, vertex: DVec3) -> DVec2 {
         let bisector = ((eye - p).normalize() + (vertex - p).normalize()).normalize();
         1.0 - patch.outward_normal(uv).dot(bisector)
     };
-    (0..16)
-        .map(|k| DVec2::new((k % 4) as f64, (k / 4) as f64) / 3.0)
+    let side = crate::layout::SAMPLED_START_GRID;
+    (0..side * side)
+        .map(|k| DVec2::new(f64::from(k % side), f64::from(k / side)) / f64::from(side - 1))
         .min_by(|&a, &b| failure(a).total_cmp(&failure(b)))
-        .expect("16 samples")
+        .expect("a grid of at least one point")
 }
 
 /// The search for `vertex`, a point of the mirror `patch` is part of (a teapot's own point),

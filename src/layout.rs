@@ -744,6 +744,10 @@ pub const PATCH_CROSSING_DONE: f32 = 1e-6;
 /// patch's parameters.
 pub const SAMPLED_START_SIDE: f32 = 0.2;
 
+/// The points along each side of a patch's parameter square that `sampled_start` tries: its
+/// corners and the points between at even steps (4: the corners and the thirds).
+pub const SAMPLED_START_GRID: u32 = 4;
+
 /// WGSL `const` declarations for every constant above, emitted at the top of each kernel.
 pub fn wgsl_prelude() -> String {
     let u32s = [
@@ -799,6 +803,7 @@ pub fn wgsl_prelude() -> String {
         ("STATUS_RAYS", STATUS_RAYS),
         ("STATUS_TRUNCATED", STATUS_TRUNCATED),
         ("STATUS_WORDS", STATUS_WORDS),
+        ("SAMPLED_START_GRID", SAMPLED_START_GRID),
     ];
     let mut out = String::from("// Generated from src/layout.rs: do not edit.\n");
     for (name, value) in u32s {

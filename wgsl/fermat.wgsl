@@ -402,13 +402,14 @@ fn found_at(f: Frame, found: Search, world_vertex: vec3<f32>) -> Found {
     return Found(point, normal, own_point, shown);
 }
 
-// The point of a 4 x 4 grid of a patch's parameters where the law of reflection fails least
-// for `vertex` seen from `eye` (`fermat::sampled_start`).
+// The point of a SAMPLED_START_GRID x SAMPLED_START_GRID grid of a patch's parameters where
+// the law of reflection fails least for `vertex` seen from `eye` (`fermat::sampled_start`).
 fn sampled_start(f: Frame, eye: vec3<f32>, vertex: vec3<f32>) -> vec2<f32> {
     var best = vec2<f32>(0.0);
     var least = 4.0;
-    for (var k = 0u; k < 16u; k += 1u) {
-        let uv = vec2<f32>(f32(k % 4u), f32(k / 4u)) / 3.0;
+    let side = SAMPLED_START_GRID;
+    for (var k = 0u; k < side * side; k += 1u) {
+        let uv = vec2<f32>(f32(k % side), f32(k / side)) / f32(side - 1u);
         let p = surface(f, uv).p;
         let n = surface_normal(f, uv);
         let bisector = normalize(normalize(eye - p) + normalize(vertex - p));

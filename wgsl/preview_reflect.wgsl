@@ -52,8 +52,9 @@ struct ReflectedOut {
     @location(4) mirror_normal: vec3<f32>,
     // 0, or 1 + the index of the mirror V lies on (another mirror reflected in this one).
     @location(5) @interpolate(flat) reflector: u32,
-    // The search's row in `reflector_passes`.
-    @location(6) @interpolate(flat) search: u32,
+    // The searched mirror's id and material (its `ReflectorPass`, read once a vertex).
+    @location(6) @interpolate(flat) mirror_id: u32,
+    @location(7) @interpolate(flat) mirror_material: u32,
 }
 
 // Vertex `j` of the `j / 3`-th triangle shown: its reflected vertex and reflection point.
@@ -69,14 +70,13 @@ fn reflected_vertex(@builtin(vertex_index) j: u32) -> ReflectedOut {
     // as the seed's z-buffer does).
     clip.z = clamp(r.depth / search.far, 0.0, 1.0) * clip.w;
     return ReflectedOut(clip, v.position, v.normal, v.material, r.point, r.normal, v.reflector,
-        shown.x);
+        search.id, search.material);
 }
 
 @fragment
 fn reflected_fragment(f: ReflectedOut) -> @location(0) vec4<f32> {
-    let search = reflector_passes[f.search];
     let seen = textureLoad(reflector_ids, vec2<i32>(f.clip.xy), 0);
-    if (seen.r != search.id) {
+    if (seen.r != f.mirror_id) {
         discard;
     }
     // P on a part of the reflector the eye does not see (a torus hides parts of itself): the
@@ -86,7 +86,7 @@ fn reflected_fragment(f: ReflectedOut) -> @location(0) vec4<f32> {
     if (distance(f.mirror_point, preview.eye.xyz) > seen_at * (1.0 + HIDDEN_TOLERANCE)) {
         discard;
     }
-    let own = shade(search.material, f.mirror_point, normalize(f.mirror_normal),
+    let own = shade(f.mirror_material, f.mirror_point, normalize(f.mirror_normal),
         preview.eye.xyz);
     var reflected = shade(f.material, f.world, f.normal, f.mirror_point);
     if (f.reflector != 0u && preview.max_depth >= 2u) {
@@ -95,5 +95,5 @@ fn reflected_fragment(f: ReflectedOut) -> @location(0) vec4<f32> {
         // at max_depth 1 its path ends there and it shows its own shading only.
         reflected += preview_materials[f.material].mirror * preview.background.xyz;
     }
-    return vec4<f32>(own + preview_materials[search.material].mirror * reflected, 1.0);
+    return vec4<f32>(own + preview_materials[f.mirror_material].mirror * reflected, 1.0);
 }
