@@ -611,10 +611,11 @@ pub struct GpuReflector {
     /// A torus's search: 0 for its outer half, 1 for its inner half (`fermat::TorusHalf`):
     /// where the search starts, and which triangles it draws. 0 for the other kinds.
     pub torus_half: u32,
-    /// Padding to the WGSL layout.
-    pub _pad1: u32,
-    /// Padding to the WGSL layout.
-    pub _pad2: u32,
+    /// A patch's corner A, where the segment from the eye to O crosses it
+    /// (`fermat::BezierPatch::crossing`): the same for every vertex, so found once a frame on
+    /// the CPU, in f64, rather than by Newton's steps in every invocation. Zero for the other
+    /// kinds, whose crossings are closed forms (a sphere's in each vertex's frame).
+    pub eye_uv: [f32; 2],
 }
 
 /// One vertex's reflection point, as the Fermat kernel finds it (`fermat::Solver` is its CPU

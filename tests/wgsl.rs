@@ -254,8 +254,7 @@ fn shared_structs_have_identical_layouts() {
             control,
             sees_itself,
             torus_half,
-            _pad1,
-            _pad2
+            eye_uv
         }
     );
     layout!(

@@ -178,13 +178,13 @@ fn patch_crossing(outside: vec3<f32>) -> vec2<f32> {
     return uvt.xy;
 }
 
-// The outward unit normal at (u, v).
+// n normalised, or zero where it is zero (a patch's degenerate corner), as glam's.
+fn normalize_or_zero(n: vec3<f32>) -> vec3<f32> {
+    return select(vec3<f32>(0.0), normalize(n), length(n) > 0.0);
+}
+
+// The outward unit normal at (u, v) of the closed forms (all kinds but a patch: `normal_at`).
 fn surface_normal(f: Frame, uv: vec2<f32>) -> vec3<f32> {
-    if (REFLECTOR_KIND == REFLECTOR_PATCH) {
-        let s = patch_surface(uv);
-        let n = cross(s.fu, s.fv);
-        return select(vec3<f32>(0.0), normalize(n), length(n) > 0.0);
-    }
     let around = cos(uv.x) * f.x + sin(uv.x) * f.z;
     if (REFLECTOR_KIND == REFLECTOR_TORUS) {
         return cos(uv.y) * around + sin(uv.y) * f.y;
@@ -198,6 +198,15 @@ fn surface_normal(f: Frame, uv: vec2<f32>) -> vec3<f32> {
         return normalize(unit / reflectors[search].radii.xyz);
     }
     return unit;
+}
+
+// The outward unit normal at (u, v), where `s` is the surface there: a patch's from the
+// tangents already evaluated, rather than evaluating the patch again.
+fn normal_at(f: Frame, uv: vec2<f32>, s: SurfacePoint) -> vec3<f32> {
+    if (REFLECTOR_KIND == REFLECTOR_PATCH) {
+        return normalize_or_zero(cross(s.fu, s.fv));
+    }
+    return surface_normal(f, uv);
 }
 
 // Where the segment from `outside` (|outside| > 1) to `inside` (|inside| < 1) crosses the unit
@@ -380,9 +389,10 @@ fn found_at(f: Frame, found: Search, world_vertex: vec3<f32>) -> Found {
     let q = reflectors[search].orientation;
     let c = reflectors[search].center;
     let best = found.best;
-    let own_point = surface(f, best).p;
+    let s = surface(f, best);
+    let own_point = s.p;
     let point = c + turn(q, own_point - c);
-    var normal = turn(q, surface_normal(f, best));
+    var normal = turn(q, normal_at(f, best, s));
     // A patch's reflection beyond the seam band around its square is none of its own: a zero
     // normal, never seen from outside, so the preview leaves it out (`PATCH_SEAM`).
     // Within the band it lies on the patch's smooth continuation toward its neighbour, and the
@@ -410,8 +420,9 @@ fn sampled_start(f: Frame, eye: vec3<f32>, vertex: vec3<f32>) -> vec2<f32> {
     let side = SAMPLED_START_GRID;
     for (var k = 0u; k < side * side; k += 1u) {
         let uv = vec2<f32>(f32(k % side), f32(k / side)) / f32(side - 1u);
-        let p = surface(f, uv).p;
-        let n = surface_normal(f, uv);
+        let s = surface(f, uv);
+        let p = s.p;
+        let n = normal_at(f, uv, s);
         let bisector = normalize(normalize(eye - p) + normalize(vertex - p));
         let error = 1.0 - dot(n, bisector);
         if (error < least) {
@@ -446,7 +457,12 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         a0 = across_the_hole(eye);
         b0 = across_the_hole(vertex);
     } else {
-        a0 = crossing(f, eye);
+        // A patch's A is the same for every vertex: found once a frame on the CPU.
+        if (REFLECTOR_KIND == REFLECTOR_PATCH) {
+            a0 = reflectors[search].eye_uv;
+        } else {
+            a0 = crossing(f, eye);
+        }
         b0 = crossing(f, vertex);
     }
     var result = search_from(f, eye, vertex, a0, b0);

@@ -151,8 +151,7 @@ struct GpuReflector {
     control: array<vec4<f32>, 16>,
     sees_itself: u32,
     torus_half: u32,
-    _pad1: u32,
-    _pad2: u32,
+    eye_uv: vec2<f32>,
 }
 
 // v turned by the unit quaternion q = (x, y, z, w): a curved shape's orientation

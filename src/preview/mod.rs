@@ -19,7 +19,7 @@ use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 
 use crate::camera::CameraSpec;
 use crate::fermat::{
-    BezierPatch, Cylinder, Ellipsoid, TorusHalf, TorusSearch, anchored_on_patch,
+    BezierPatch, Cylinder, Ellipsoid, Reflector as _, TorusHalf, TorusSearch, anchored_on_patch,
     anchored_on_torus_half,
 };
 use crate::layout::{
@@ -202,6 +202,7 @@ impl MirrorSurface {
                 for (k, p) in patch.points.iter().flatten().enumerate() {
                     reflector.control[k] = p.as_vec3().extend(0.0).to_array();
                 }
+                reflector.eye_uv = patch.crossing(eye.as_dvec3()).as_vec2().to_array();
             }
             MirrorSurface::Ellipsoid(e) => {
                 reflector.center = e.center.as_vec3().to_array();
