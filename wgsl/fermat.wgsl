@@ -149,10 +149,10 @@ fn patch_inside() -> vec3<f32> {
 
 // Where the segment from `outside` to O crosses the patch: Newton steps on
 // f(u, v) = O + t (outside - O) from the patch's centre, clamped to the patch, until a step
-// moves less than PATCH_CROSSING_DONE. (O and the eye's crossing are the same for every
-// vertex; computing them once per solve on the CPU measured no faster on lavapipe while the
-// search kept its corners in an indexed array: 17.8–19.6 against 16.0–16.9 ms for the teapot
-// at 16x16; and slower with the corners in registers, BENCHMARKS.md, 2026-11-25.)
+// moves less than PATCH_CROSSING_DONE. Run for each vertex; the eye's crossing, the same for
+// every vertex, the CPU finds once a frame (`GpuReflector::eye_uv`). O is found here too:
+// read from storage inside the Newton loop, it cost lavapipe more than the evaluation it
+// saves (BENCHMARKS.md, 2026-11-25).
 fn patch_crossing(outside: vec3<f32>) -> vec2<f32> {
     let o = patch_inside();
     let d = outside - o;
