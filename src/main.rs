@@ -78,7 +78,9 @@ enum Command {
         #[arg(long, value_parser = chambre::bench::positive(), default_value_t = 5)]
         frames: u32,
         /// Open a window to compose the shot: arrows tilt and swing the film, i/k and j/l
-        /// shift it, a/d pan and w/x pitch the camera, r resets, s saves the scene, q quits.
+        /// shift it, a/d pan and w/x pitch the camera, r resets, s saves the scene, q quits;
+        /// a drag with the left button turns the camera, with the right button the film, and
+        /// the wheel shifts the film.
         #[arg(long)]
         window: bool,
         /// With --window: keys to replay after the first frame, then close (e.g. "up,up,l,s"):

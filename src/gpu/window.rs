@@ -1,7 +1,8 @@
 //! The interactive preview (`chambre preview --window`): the raster preview
-//! (`gpu::preview::PreviewRenderer`) drawn into a window through winit, redrawn as keys move the
-//! film and turn the camera (`preview::Composer`), the figures in the window's title and on the
-//! terminal; `s` saves the scene with the composition, to be rendered by the ray tracer.
+//! (`gpu::preview::PreviewRenderer`) drawn into a window through winit, redrawn as keys or the
+//! mouse move the film and turn the camera (`preview::Composer`), the figures in the window's
+//! title and on the terminal; `s` saves the scene with the composition, to be rendered by the
+//! ray tracer.
 //!
 //! A `--keys` script replays keys after the first frame, as if typed, then closes the window;
 //! with `--screenshot` the last frame shown is written out. That is how it runs headless and is
@@ -13,7 +14,7 @@ use std::time::Instant;
 
 use bytemuck::{Pod, Zeroable};
 use winit::application::ApplicationHandler;
-use winit::event::{ElementState, WindowEvent};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
@@ -23,7 +24,7 @@ use super::preview::{PreviewOptions, PreviewRenderer};
 use crate::error::{Error, Result};
 use crate::output::OutputTarget;
 use crate::pack::FlatScene;
-use crate::preview::{ComposeAction, ComposeKey, Composer};
+use crate::preview::{ComposeAction, ComposeKey, Composer, Drag};
 use crate::scene::{Scene, merged_scene_text};
 
 /// What the window is asked to do beside showing the scene.
@@ -49,6 +50,10 @@ pub struct WindowReport {
     /// The composition when the window closed, as scene overrides.
     pub overrides: Vec<String>,
 }
+
+/// Pixels of a touchpad's scroll taken as one notch of a wheel (winit reports a wheel's turn
+/// in notches and a touchpad's in pixels).
+const SCROLL_PX_PER_NOTCH: f64 = 40.0;
 
 /// The presentation shader's uniforms (`wgsl/preview_present.wgsl`'s `Present`).
 #[repr(C)]
@@ -88,6 +93,8 @@ pub fn run(
         screen: None,
         report: WindowReport::default(),
         error: None,
+        cursor: None,
+        drag: None,
     };
     app.scripted = !app.script.is_empty();
     event_loop
@@ -130,6 +137,10 @@ struct App<'a> {
     screen: Option<Screen>,
     report: WindowReport,
     error: Option<Error>,
+    /// Where the cursor last was in the window (physical pixels), while it is in it.
+    cursor: Option<(f64, f64)>,
+    /// What the mouse drags while a button is held.
+    drag: Option<Drag>,
 }
 
 impl ApplicationHandler for App<'_> {
@@ -163,6 +174,34 @@ impl ApplicationHandler for App<'_> {
                     self.press(event_loop, key);
                 }
             }
+            WindowEvent::MouseInput { state, button, .. } => {
+                self.drag = match (state, button) {
+                    (ElementState::Pressed, MouseButton::Left) => Some(Drag::Camera),
+                    (ElementState::Pressed, MouseButton::Right) => Some(Drag::Film),
+                    (ElementState::Released, _) => None,
+                    _ => self.drag,
+                };
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let last = self.cursor.replace((position.x, position.y));
+                if let (Some(drag), Some((x, y))) = (self.drag, last) {
+                    let action = self.composer.drag(drag, position.x - x, position.y - y);
+                    self.act(event_loop, action);
+                }
+            }
+            // Out of the window the cursor's moves are not seen: its next position in it is
+            // not a drag from the last.
+            WindowEvent::CursorLeft { .. } => self.cursor = None,
+            WindowEvent::MouseWheel { delta, .. } => {
+                let (across, notches) = match delta {
+                    MouseScrollDelta::LineDelta(x, y) => (f64::from(x), f64::from(y)),
+                    MouseScrollDelta::PixelDelta(p) => {
+                        (p.x / SCROLL_PX_PER_NOTCH, p.y / SCROLL_PX_PER_NOTCH)
+                    }
+                };
+                let action = self.composer.wheel(across, notches);
+                self.act(event_loop, action);
+            }
             WindowEvent::Resized(size) => {
                 if let Some(screen) = &mut self.screen {
                     screen.config.width = size.width.max(1);
@@ -195,7 +234,13 @@ impl App<'_> {
     }
 
     fn press(&mut self, event_loop: &ActiveEventLoop, key: ComposeKey) {
-        match self.composer.apply(key) {
+        let action = self.composer.apply(key);
+        self.act(event_loop, action);
+    }
+
+    /// Does what a key or the mouse asked: draws the composed camera, saves, or closes.
+    fn act(&mut self, event_loop: &ActiveEventLoop, action: ComposeAction) {
+        match action {
             ComposeAction::Changed => {
                 println!("{}", self.composer.figures());
                 if let Some(screen) = &mut self.screen {

@@ -548,13 +548,31 @@ pub enum ComposeAction {
 
 /// Degrees a tilt, swing, pan or pitch key turns.
 pub const TURN_STEP_DEG: f64 = 1.0;
-/// Millimetres a shift key moves the film.
+/// Millimetres a shift key, or a notch of the mouse wheel, moves the film.
 pub const SHIFT_STEP_MM: f64 = 1.0;
+/// Degrees a mouse drag turns the camera or the film for each pixel the mouse moves: a drag
+/// across a 320-pixel preview turns 32°.
+pub const DRAG_DEG_PER_PX: f64 = 0.1;
+/// Film tilt and swing, and the camera's pitch, stay within ± this (degrees): the scene
+/// format's (−90°, 90°).
+const TURN_LIMIT_DEG: f64 = 89.0;
+
+/// What a drag of the mouse in the interactive preview moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Drag {
+    /// The left button: the camera pans and pitches after the mouse (right and up).
+    Camera,
+    /// The right button: the film swings and tilts after the mouse (right and up), as the
+    /// arrow keys move it.
+    Film,
+}
 
 /// The camera a user composes in the interactive preview: the scene's camera with film tilt,
 /// swing and shift, and the camera turned (panned and pitched about its position). Keys:
 /// arrows tilt and swing the film, `i`/`k` shift it up/down, `j`/`l` left/right, `a`/`d` pan
-/// the camera, `w`/`x` pitch it, `r` resets, `s` saves, `q` or Escape quits.
+/// the camera, `w`/`x` pitch it, `r` resets, `s` saves, `q` or Escape quits. The mouse: a drag
+/// with the left button turns the camera, with the right button the film (`Drag`), and the
+/// wheel shifts the film.
 #[derive(Clone, Debug)]
 pub struct Composer {
     base: CameraSpec,
@@ -586,8 +604,7 @@ impl Composer {
 
     /// Applies one key; film tilt and swing stay inside the scene format's (−90°, 90°).
     pub fn apply(&mut self, key: ComposeKey) -> ComposeAction {
-        let limit = 89.0;
-        let turn = |v: &mut f64, d: f64| *v = (*v + d).clamp(-limit, limit);
+        let turn = |v: &mut f64, d: f64| *v = turned(*v, d);
         match key {
             ComposeKey::Up => turn(&mut self.film_tilt, TURN_STEP_DEG),
             ComposeKey::Down => turn(&mut self.film_tilt, -TURN_STEP_DEG),
@@ -606,6 +623,38 @@ impl Composer {
             ComposeKey::Char('q') | ComposeKey::Escape => return ComposeAction::Quit,
             ComposeKey::Char(_) => return ComposeAction::Nothing,
         }
+        ComposeAction::Changed
+    }
+
+    /// Applies a drag of the mouse by `dx` pixels right and `dy` down (the window's cursor
+    /// coordinates): what `drag` moves follows it, `DRAG_DEG_PER_PX` a pixel.
+    pub fn drag(&mut self, drag: Drag, dx: f64, dy: f64) -> ComposeAction {
+        if dx == 0.0 && dy == 0.0 {
+            return ComposeAction::Nothing;
+        }
+        let (right, up) = (dx * DRAG_DEG_PER_PX, -dy * DRAG_DEG_PER_PX);
+        match drag {
+            Drag::Camera => {
+                self.pan += right;
+                self.pitch = turned(self.pitch, up);
+            }
+            Drag::Film => {
+                self.film_swing = turned(self.film_swing, right);
+                self.film_tilt = turned(self.film_tilt, up);
+            }
+        }
+        ComposeAction::Changed
+    }
+
+    /// Applies a turn of the mouse wheel by `notches` (away from the user positive) and
+    /// `across` (right positive, a wheel that tilts or a touchpad): the film shifts up and
+    /// right, `SHIFT_STEP_MM` a notch.
+    pub fn wheel(&mut self, across: f64, notches: f64) -> ComposeAction {
+        if across == 0.0 && notches == 0.0 {
+            return ComposeAction::Nothing;
+        }
+        self.film_shift[0] += across * SHIFT_STEP_MM;
+        self.film_shift[1] += notches * SHIFT_STEP_MM;
         ComposeAction::Changed
     }
 
@@ -662,6 +711,11 @@ impl Composer {
     }
 }
 
+/// `v` turned by `d` degrees, kept within `TURN_LIMIT_DEG`.
+fn turned(v: f64, d: f64) -> f64 {
+    (v + d).clamp(-TURN_LIMIT_DEG, TURN_LIMIT_DEG)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -702,6 +756,50 @@ mod tests {
         composer.apply(ComposeKey::Char('r'));
         assert_eq!(composer.film_tilt, m.film_tilt);
         assert!((composer.look_at() - start.look_at).length() < 1e-12);
+    }
+
+    #[test]
+    fn the_mouse_turns_what_it_drags_after_it_and_its_wheel_shifts_the_film() {
+        let start = camera();
+        let m = &start.movements;
+        let mut composer = Composer::new(&start);
+        // 50 px right and 20 px up with the left button: the camera pans right 5° and pitches
+        // up 2°; the film stays.
+        assert_eq!(
+            composer.drag(Drag::Camera, 50.0, -20.0),
+            ComposeAction::Changed
+        );
+        assert_eq!((composer.pan, composer.pitch), (5.0, 2.0));
+        assert_eq!(
+            (composer.film_tilt, composer.film_swing),
+            (m.film_tilt, m.film_swing)
+        );
+        let mut keyed = Composer::new(&start);
+        for _ in 0..5 {
+            keyed.apply(ComposeKey::Char('d'));
+        }
+        for _ in 0..2 {
+            keyed.apply(ComposeKey::Char('w'));
+        }
+        let (dragged, typed) = (composer.look_at(), keyed.look_at());
+        assert!((dragged - typed).length() < 1e-12, "{dragged} {typed}");
+        // The right button moves the film as the arrow keys do: 30 px left and 10 px down.
+        composer.drag(Drag::Film, -30.0, 10.0);
+        assert_eq!(composer.film_swing, m.film_swing - 3.0);
+        assert_eq!(composer.film_tilt, m.film_tilt - 1.0);
+        // Two notches away from the user and one to the right.
+        assert_eq!(composer.wheel(1.0, 2.0), ComposeAction::Changed);
+        assert_eq!(
+            composer.film_shift,
+            [m.film_shift[0] + 1.0, m.film_shift[1] + 2.0]
+        );
+        // A move that moves nothing asks for no frame; a drag's tilt stops as a key's does.
+        assert_eq!(composer.drag(Drag::Film, 0.0, 0.0), ComposeAction::Nothing);
+        assert_eq!(composer.wheel(0.0, 0.0), ComposeAction::Nothing);
+        composer.drag(Drag::Film, 0.0, -1e6);
+        assert_eq!(composer.film_tilt, TURN_LIMIT_DEG);
+        composer.drag(Drag::Camera, 0.0, 1e6);
+        assert_eq!(composer.pitch, -TURN_LIMIT_DEG);
     }
 
     #[test]
