@@ -503,6 +503,11 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
             row.speedup.median > 0.0 && row.speedup.min == row.speedup.max,
             "{row:?}"
         );
+        // Each stage of the frame timed alone.
+        let stages = row.stages;
+        for ms in [stages.solve_ms, stages.cull_ms, stages.main_ms, stages.reflect_ms] {
+            assert!(ms > 0.0 && ms.is_finite(), "{row:?}");
+        }
     }
     assert!(fine.drawn as f64 >= 0.9 * fine.features as f64, "{fine:?}");
     assert!(
@@ -529,6 +534,7 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
     }
     assert_eq!(json["rows"][1]["subdivision"], 4);
     assert!(json["rows"][1]["speedup"]["median"].as_f64().is_some());
+    assert!(json["rows"][1]["stages"]["solve_ms"].as_f64().is_some());
 }
 
 /// The same on the torus, ellipsoid and cylinder scenes (each intersected exactly): the

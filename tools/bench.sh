@@ -23,43 +23,10 @@ mkdir -p bench
     "$chambre" bench frame --runs "$runs" --scenes bunny -D 'shapes[0].velocity=[0.5,0.0,0.0]' \
         -D 'camera.shutter=[0.0,1.0]' --json bench/frame_motion.json
     echo
-    # The raster preview's frame time, beside the ray-traced frames of the table above.
-    for scene in architecture tabletop spheres bunny; do
-        "$chambre" preview "scenes/$scene.toml" -o "bench/preview_$scene.png" --frames 5 2>&1 \
-            | grep -v '^note:'
-    done
-    echo
-    # The preview without and with shadows: frame time, the maps' drawing, FLIP.
-    "$chambre" bench preview --json bench/preview.json
-    echo
     "$chambre" bench motion --size 768 --runs "$runs" --json bench/motion.json
     echo
-    # Fermat reflections in the preview against the ray tracer, by subdivision: a sphere, a
-    # torus, an ellipsoid, a cylinder and the teapot's 32 Bézier patches.
-    "$chambre" bench fermat --json bench/fermat.json
-    for mirror in torus ellipsoid cylinder teapot; do
-        "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --json "bench/fermat_$mirror.json"
-    done
-    # The teapot's 32 searches one a dispatch, as before they were batched (BENCHMARKS.md).
-    "$chambre" bench fermat --scene scenes/fermat_teapot.toml --subdivisions 1,4,16 \
-        --searches-per-dispatch 1 --json bench/fermat_teapot_unbatched.json
-    # The curved shapes' tessellation tolerance traded against time and FLIP.
-    for mirror in sphere teapot; do
-        for tolerance in 0.125 0.25 0.5 1 2; do
-            "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --subdivisions 4 \
-                --tessellation-tolerance "$tolerance" \
-                --json "bench/fermat_${mirror}_tolerance_$tolerance.json"
-        done
-    done
-    # Mirrors reflecting themselves (--self-reflections), their own triangles cut for each
-    # tolerance, traded against time and FLIP (without: the tables above).
-    for mirror in torus teapot; do
-        for tolerance in 0.5 1 2 4; do
-            "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --subdivisions 4 \
-                --self-reflections "$tolerance" \
-                --json "bench/fermat_${mirror}_self_$tolerance.json"
-        done
-    done
+    # The raster preview: Fermat reflections, frame times, shadows.
+    CHAMBRE_BIN="$chambre" tools/bench_preview.sh
     echo
     "$chambre" bench rays --runs "$runs" --json bench/rays.json
     echo

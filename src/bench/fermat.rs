@@ -29,7 +29,7 @@ use crate::fermat::{
     reflection_error, seen_from_outside,
 };
 use crate::gpu::GpuContext;
-use crate::gpu::preview::{PreviewOptions, PreviewRenderer, extent_and_far};
+use crate::gpu::preview::{PreviewOptions, PreviewRenderer, StageTimes, extent_and_far};
 use crate::gpu::render::PathKernels;
 use crate::layout::{FEATURES_ALL, NONE, T_FAR};
 use crate::pack::{FlatScene, flatten};
@@ -80,6 +80,9 @@ pub struct FermatRow {
     pub displacement_max_px: Option<f64>,
     /// Mean FLIP over the mirror's pixels against the ray-traced reference.
     pub flip_reflector: Option<f64>,
+    /// Where a preview frame's time goes: each stage submitted and waited for alone, medians
+    /// of `--frames` frames drawn after the timed ones (`PreviewRenderer::stage_times`).
+    pub stages: StageTimes,
 }
 
 /// The comparison's report.
@@ -213,6 +216,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             times.extend(round);
         }
         let frame = renderer.frame(&times)?;
+        let stages = renderer.stage_times(config.frames)?;
         let placed = displacements(context, &scene, &flat, &reflector, &clip, options)?;
         let corner_max_px = placed
             .iter()
@@ -240,6 +244,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             displacement_p99_px: quantile(0.99),
             displacement_max_px: quantile(1.0),
             flip_reflector: masked_flip(&frame.image, &reference, &mask),
+            stages,
         });
     }
     if gpu_ms.is_empty() {
@@ -515,6 +520,20 @@ impl FermatReport {
                 px(r.displacement_max_px),
                 figure(r.flip_reflector, 4)
             );
+        }
+        if !self.rows.is_empty() {
+            out += "\nWhere a preview frame goes (each stage submitted and waited for alone, \
+                    medians; each includes a submission's round trip, which a frame pays \
+                    once):\n\n\
+                    | subdivision | Fermat solves (ms) | cull (ms) | main pass (ms) | \
+                    reflection pass (ms) |\n|---|---|---|---|---|\n";
+            for r in &self.rows {
+                let t = r.stages;
+                out += &format!(
+                    "| {} | {:.3} | {:.3} | {:.3} | {:.3} |\n",
+                    r.subdivision, t.solve_ms, t.cull_ms, t.main_ms, t.reflect_ms
+                );
+            }
         }
         out
     }

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# The raster preview's figures of BENCHMARKS.md (tools/bench.sh runs this part too): the Fermat
+# reflections against the ray tracer, then the preview's frame times and shadows. Tables go to
+# standard output, JSON reports to bench/.
+# Usage: tools/bench_preview.sh   (each `bench fermat` times 5 rounds after a warm-up)
+# CHAMBRE_BIN=path/to/chambre runs a binary built elsewhere (a GPU machine without cargo).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
+chambre="${CHAMBRE_BIN:-./target/release/chambre}"
+if [ -z "${CHAMBRE_BIN:-}" ]; then
+    cargo build --release --bin chambre
+fi
+mkdir -p bench
+echo "# chambre bench (preview), $(date -u +%Y-%m-%d), $(nproc) cores, $(uname -m)"
+echo
+# Fermat reflections in the preview against the ray tracer, by subdivision: a sphere, a
+# torus, an ellipsoid, a cylinder and the teapot's 32 Bézier patches.
+"$chambre" bench fermat --json bench/fermat.json
+for mirror in torus ellipsoid cylinder teapot; do
+    "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --json "bench/fermat_$mirror.json"
+done
+# The same comparison on a frame 16 times larger, where a real GPU's ray tracer is no longer
+# held by its fixed costs per frame (the reference at 16 spp: FLIP is not this run's question).
+for mirror in sphere teapot; do
+    "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --subdivisions 4 \
+        -D render.width=1280 -D render.height=960 --reference-spp 16 \
+        --json "bench/fermat_${mirror}_1280.json"
+done
+# The teapot's 32 searches one a dispatch, as before they were batched (BENCHMARKS.md).
+"$chambre" bench fermat --scene scenes/fermat_teapot.toml --subdivisions 1,4,16 \
+    --searches-per-dispatch 1 --json bench/fermat_teapot_unbatched.json
+# The curved shapes' tessellation tolerance traded against time and FLIP.
+for mirror in sphere teapot; do
+    for tolerance in 0.125 0.25 0.5 1 2; do
+        "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --subdivisions 4 \
+            --tessellation-tolerance "$tolerance" \
+            --json "bench/fermat_${mirror}_tolerance_$tolerance.json"
+    done
+done
+# Mirrors reflecting themselves (--self-reflections), their own triangles cut for each
+# tolerance, traded against time and FLIP (without: the tables above).
+for mirror in torus teapot; do
+    for tolerance in 0.5 1 2 4; do
+        "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --subdivisions 4 \
+            --self-reflections "$tolerance" \
+            --json "bench/fermat_${mirror}_self_$tolerance.json"
+    done
+done
+echo
+# The raster preview's frame time, beside the ray-traced frames of `bench frame`.
+for scene in architecture tabletop spheres bunny; do
+    "$chambre" preview "scenes/$scene.toml" -o "bench/preview_$scene.png" --frames 5 2>&1 \
+        | grep -v '^note:'
+done
+echo
+# The preview without and with shadows: frame time, the maps' drawing, FLIP.
+"$chambre" bench preview --json bench/preview.json
