@@ -39,3 +39,7 @@
 @group(0) @binding(19) var<storage, read> reflected_triangles: array<vec4<u32>>;
 @group(0) @binding(20) var<storage, read_write> shown_triangles: array<vec2<u32>>;
 @group(0) @binding(21) var<storage, read_write> draw_args: GpuDrawArgs;
+// A patch's search's corner B for each vertex (where V -> O crosses the patch), search after
+// search as `reflections`: it depends on the vertex and the patch only, not on the eye, so
+// `fermat_start` finds it once for a set of vertices and `fermat` reads it every frame.
+@group(0) @binding(22) var<storage, read_write> fermat_starts: array<vec2<f32>>;

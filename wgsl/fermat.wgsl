@@ -457,13 +457,16 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
         a0 = across_the_hole(eye);
         b0 = across_the_hole(vertex);
     } else {
-        // A patch's A is the same for every vertex: found once a frame on the CPU.
+        // A patch's A is the same for every vertex: found once a frame on the CPU; its B
+        // depends on the vertex and the patch only: found once for these vertices by
+        // `fermat_start`.
         if (REFLECTOR_KIND == REFLECTOR_PATCH) {
             a0 = reflectors[search].eye_uv;
+            b0 = fermat_starts[id.y * reflectors[search].count + i];
         } else {
             a0 = crossing(f, eye);
+            b0 = crossing(f, vertex);
         }
-        b0 = crossing(f, vertex);
     }
     var result = search_from(f, eye, vertex, a0, b0);
     var found = found_at(f, result, world_vertex);
@@ -486,6 +489,24 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     reflections[id.y * reflectors[search].count + i] = GpuReflection(found.point, result.steps,
         found.normal, u32(found.shown), result.best, length(vertex - found.own_point),
         result.degenerate);
+}
+
+// A patch's corner B for one vertex of one search (x the vertex, y the search): where the
+// segment from the vertex to O crosses the patch. Neither depends on the eye, so the preview
+// runs this once for a set of vertices (`gpu::fermat::FermatPass::solve`) and `fermat` reads
+// the starts every frame: these Newton steps were the larger part of a teapot's solve
+// (docs/fermat.md). The rows of other kinds are left alone; `fermat` computes their B itself
+// (a sphere's and an ellipsoid's from the eye's frame; a torus's or cylinder's closed form).
+@compute @workgroup_size(64, 1, 1)
+fn fermat_start(@builtin(global_invocation_id) id: vec3<u32>) {
+    search = id.y;
+    let i = id.x;
+    if (reflectors[search].kind != REFLECTOR_PATCH || i >= reflectors[search].count) {
+        return;
+    }
+    // A patch's orientation is the identity (its control points are turned at load), so the
+    // vertex is already in its frame.
+    fermat_starts[id.y * reflectors[search].count + i] = patch_crossing(fermat_vertices[i].xyz);
 }
 
 // The reflection of `vertex` at `point` (outward normal `n`) is drawn: E and V both see P from

@@ -12,9 +12,9 @@ use glam::Vec3;
 use wgpu::util::DeviceExt;
 
 use super::GpuContext;
-use super::kernels::{self, FERMAT, FERMAT_CULL};
+use super::kernels::{self, FERMAT, FERMAT_CULL, FERMAT_START};
 use crate::error::{Error, Result};
-use crate::layout::{GpuDrawArgs, GpuReflection, GpuReflector};
+use crate::layout::{GpuDrawArgs, GpuReflection, GpuReflector, REFLECTOR_PATCH};
 use crate::preview::MirrorSurface;
 
 /// The seed's step count ("4–5 steps"), the kernel's default.
@@ -37,6 +37,8 @@ pub const MAX_FERMAT_STEPS: u32 = 1000;
 /// (on lavapipe the general kernel took a sphere's preview frame from 4 to 12 ms).
 pub struct FermatPass {
     pipelines: Vec<(u32, kernels::Pipeline)>,
+    /// The patches' eye-free corners B (`fermat_start`), where a patch is among the kinds.
+    start: Option<kernels::Pipeline>,
     cull: kernels::Pipeline,
 }
 
@@ -82,6 +84,9 @@ impl FermatPass {
         let mut kinds = kinds.to_vec();
         kinds.sort_unstable();
         kinds.dedup();
+        let start = kinds
+            .contains(&REFLECTOR_PATCH)
+            .then(|| kernels::build_pipeline(&context.device, &FERMAT_START, 0));
         let pipelines = kinds
             .into_iter()
             .map(|kind| {
@@ -96,12 +101,16 @@ impl FermatPass {
             })
             .collect();
         let cull = kernels::build_pipeline(&context.device, &FERMAT_CULL, 0);
-        FermatPass { pipelines, cull }
+        FermatPass {
+            pipelines,
+            start,
+            cull,
+        }
     }
 
     /// The buffers that solve `vertices` (positions, w the mirror each lies on:
     /// `vertex_buffer`) for each of `reflectors` (one search each, all with the vertices'
-    /// count).
+    /// count); the patches' starts are submitted to the queue here, ahead of any frame.
     pub fn solve(
         &self,
         context: &GpuContext,
@@ -117,10 +126,19 @@ impl FermatPass {
                 contents: bytemuck::cast_slice(reflectors),
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             });
+        let solves = count.max(1) as u64 * reflectors.len() as u64;
         let output = self.storage(
             context,
             "reflection points",
-            count.max(1) as u64 * reflectors.len() as u64 * size_of::<GpuReflection>() as u64,
+            solves * size_of::<GpuReflection>() as u64,
+        )?;
+        // A patch's corner B per vertex and search, as `output`: found once, here, as it does
+        // not depend on the eye (`fermat_start`); the bind groups keep it. Smaller than
+        // `output`, so within a binding wherever `output` is.
+        let starts = self.storage(
+            context,
+            "patch starts",
+            solves * size_of::<[f32; 2]>() as u64,
         )?;
         let mut kinds: Vec<u32> = reflectors.iter().map(|r| r.kind).collect();
         kinds.sort_unstable();
@@ -141,11 +159,31 @@ impl FermatPass {
                         ("reflectors", &searches),
                         ("fermat_vertices", vertices),
                         ("reflections", &output),
+                        ("fermat_starts", &starts),
                     ],
                 )?;
                 Ok((pipeline, bind_group))
             })
             .collect::<Result<Vec<_>>>()?;
+        let has_patch = reflectors.iter().any(|r| r.kind == REFLECTOR_PATCH);
+        if let (Some(start), true) = (&self.start, has_patch) {
+            let bind_group = start.bind_group(
+                &context.device,
+                &[
+                    ("reflectors", &searches),
+                    ("fermat_vertices", vertices),
+                    ("fermat_starts", &starts),
+                ],
+            )?;
+            let mut encoder = context.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&start.pipeline);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.dispatch_workgroups(count.div_ceil(WORKGROUP), reflectors.len() as u32, 1);
+            }
+            context.queue.submit([encoder.finish()]);
+        }
         Ok(FermatSolve {
             reflectors: searches,
             output,

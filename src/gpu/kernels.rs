@@ -46,7 +46,7 @@ const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
 }
 
 /// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
-pub const BINDINGS: [Binding; 22] = [
+pub const BINDINGS: [Binding; 23] = [
     binding(0, "camera", Access::Uniform),
     binding(1, "frame", Access::Uniform),
     // One GpuPass per dispatch of a batch, each at its own dynamic offset.
@@ -73,6 +73,7 @@ pub const BINDINGS: [Binding; 22] = [
     binding(19, "reflected_triangles", Access::StorageRead),
     binding(20, "shown_triangles", Access::StorageReadWrite),
     binding(21, "draw_args", Access::StorageReadWrite),
+    binding(22, "fermat_starts", Access::StorageReadWrite),
 ];
 
 /// The bindings of the render kernel: nine storage buffers, one more than WebGPU's baseline
@@ -141,7 +142,10 @@ const TRACE_CW_BINDINGS: [Binding; 7] = [
 ];
 
 /// The bindings of the Fermat kernel.
-const FERMAT_BINDINGS: [Binding; 3] = [BINDINGS[15], BINDINGS[16], BINDINGS[17]];
+const FERMAT_BINDINGS: [Binding; 4] = [BINDINGS[15], BINDINGS[16], BINDINGS[17], BINDINGS[22]];
+
+/// The bindings of the Fermat searches' eye-free start: the searches, the vertices, the starts.
+const FERMAT_START_BINDINGS: [Binding; 3] = [BINDINGS[15], BINDINGS[16], BINDINGS[22]];
 
 /// The bindings of the Fermat cull: the searches (their mirrors' ids), the solves' points
 /// (whether each shows), and the triangles.
@@ -288,6 +292,17 @@ pub const FERMAT: Kernel = Kernel {
     bindings: &FERMAT_BINDINGS,
 };
 
+/// A Bézier patch's corner B for each vertex, where the segment from the vertex to the patch's
+/// inside point O crosses it (`fermat::BezierPatch::crossing`): Newton's steps that depend on
+/// the vertex and the patch, not on the eye, so run once for a set of vertices rather than in
+/// every frame's `fermat` (`gpu::fermat::FermatPass::solve`).
+pub const FERMAT_START: Kernel = Kernel {
+    name: "fermat_start",
+    modules: FERMAT.modules,
+    entry_point: "fermat_start",
+    bindings: &FERMAT_START_BINDINGS,
+};
+
 /// The preview's reflected triangles whose three vertices' reflections show on one curved
 /// mirror, listed for an indirect draw, one invocation per triangle (CPU twin:
 /// `fermat::drawn_in_preview` per vertex): the draw then runs the vertex stage for those only.
@@ -299,7 +314,7 @@ pub const FERMAT_CULL: Kernel = Kernel {
 };
 
 /// Every kernel chambre builds.
-pub const KERNELS: [&Kernel; 9] = [
+pub const KERNELS: [&Kernel; 10] = [
     &RENDER,
     &RENDER_PRIMARY,
     &RENDER_SPLIT,
@@ -308,6 +323,7 @@ pub const KERNELS: [&Kernel; 9] = [
     &TRACE_CLOSEST_CW,
     &TRACE_ANY_CW,
     &FERMAT,
+    &FERMAT_START,
     &FERMAT_CULL,
 ];
 
