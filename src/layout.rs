@@ -642,17 +642,20 @@ pub struct GpuReflection {
     pub degenerate: u32,
 }
 
-/// The arguments of an indirect draw (wgpu's `DrawIndirectArgs`): the `fermat_cull` kernel
-/// counts the vertices of the reflected triangles that show, and the preview draws that many.
+/// The arguments of an indexed indirect draw (wgpu's `DrawIndexedIndirectArgs`): the
+/// `fermat_cull` kernel writes the indices of the reflected triangles that show and counts
+/// them, and the preview draws that many.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuDrawArgs {
-    /// Vertices to draw: three per triangle the cull kept (counted atomically).
-    pub vertex_count: u32,
+    /// Indices to draw: three per triangle the cull kept (counted atomically).
+    pub index_count: u32,
     /// 1.
     pub instance_count: u32,
     /// 0.
-    pub first_vertex: u32,
+    pub first_index: u32,
+    /// 0.
+    pub base_vertex: i32,
     /// 0.
     pub first_instance: u32,
 }

@@ -505,7 +505,12 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
         );
         // Each stage of the frame timed alone.
         let stages = row.stages;
-        for ms in [stages.solve_ms, stages.cull_ms, stages.main_ms, stages.reflect_ms] {
+        for ms in [
+            stages.solve_ms,
+            stages.cull_ms,
+            stages.main_ms,
+            stages.reflect_ms,
+        ] {
             assert!(ms > 0.0 && ms.is_finite(), "{row:?}");
         }
     }

@@ -272,9 +272,10 @@ fn shared_structs_have_identical_layouts() {
     layout!(
         module,
         GpuDrawArgs {
-            vertex_count,
+            index_count,
             instance_count,
-            first_vertex,
+            first_index,
+            base_vertex,
             first_instance
         }
     );

@@ -32,14 +32,19 @@
 // A split render's camera-ray hits, one per sample of a dispatch (wgsl/render.wgsl).
 @group(0) @binding(18) var<storage, read_write> primary_hits: array<GpuPrimaryHit>;
 // The preview's reflected triangles for `fermat_cull` (wgsl/fermat.wgsl): per triangle its three
-// vertices' solves (indices into `fermat_vertices`) and, in w, 1 + the index of the mirror it
-// lies on (0: on none); the triangles whose reflection shows on a search's surface, as (the
-// search's row, the triangle) in one list for all the searches of the dispatch (room for every
-// triangle of every search), and the one indirect draw that draws them all.
+// vertices (indices into the distinct reflected vertices, whose solves `vertex_solves` gives:
+// indices into `fermat_vertices`) and, in w, 1 + the index of the mirror it lies on (0: on
+// none); the triangles whose reflection shows on a search's surface, as the index triples of
+// an indexed draw, (the search's row) x (distinct vertices) + the vertex, in one list for all
+// the searches of the dispatch (room for every triangle of every search), and the one indirect
+// draw that draws them all.
 @group(0) @binding(19) var<storage, read> reflected_triangles: array<vec4<u32>>;
-@group(0) @binding(20) var<storage, read_write> shown_triangles: array<vec2<u32>>;
+@group(0) @binding(20) var<storage, read_write> shown_indices: array<u32>;
 @group(0) @binding(21) var<storage, read_write> draw_args: GpuDrawArgs;
 // A patch's search's corner B for each vertex (where V -> O crosses the patch), search after
 // search as `reflections`: it depends on the vertex and the patch only, not on the eye, so
 // `fermat_start` finds it once for a set of vertices and `fermat` reads it every frame.
 @group(0) @binding(22) var<storage, read_write> fermat_starts: array<vec2<f32>>;
+// Per distinct reflected vertex, the index of its Fermat solve (vertices at one position share
+// one): what `reflected_triangles` indexes.
+@group(0) @binding(23) var<storage, read> vertex_solves: array<u32>;

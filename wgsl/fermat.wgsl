@@ -521,10 +521,12 @@ fn reflection_shows(point: vec3<f32>, n: vec3<f32>, eye: vec3<f32>, vertex: vec3
         && length(cross(n, normalize(half))) < REFLECTION_TOLERANCE;
 }
 
-// One reflected triangle of one search per invocation (x the triangle, y the search): listed in
-// `shown_triangles` with its search, and its three vertices counted into the one indirect draw
-// of all the searches (a draw per search cost lavapipe about 10 us each, a teapot's 32 about 5%
-// of its frame), when all three vertices' reflections show on the search's surface (`fermat`
+// One reflected triangle of one search per invocation (x the triangle, y the search): its three
+// vertices' indices for the search, (row) x (distinct vertices) + the vertex, written to
+// `shown_indices` and counted into the one indexed indirect draw of all the searches (a draw per
+// search cost lavapipe about 10 us each, a teapot's 32 about 5% of its frame; indexed, the
+// vertex stage runs once for a vertex the triangles around it share, not once a corner), when
+// all three vertices' reflections show on the search's surface (`fermat`
 // marked each, `GpuReflection::shown`), and where the triangle lies on the searched mirror
 // itself, only when the search draws its mirror's own triangles (`sees_itself`: a torus, a
 // teapot's patches, with self-reflections on) and each corner stands clear of its reflection
@@ -555,7 +557,7 @@ fn fermat_cull(@builtin(global_invocation_id) id: vec3<u32>) {
     let inner_half = reflectors[search].torus_half != 0u;
     var anchored = kind != REFLECTOR_PATCH && kind != REFLECTOR_TORUS;
     for (var k = 0u; k < 3u; k += 1u) {
-        let r = reflections[s * reflectors[search].count + triangle[k]];
+        let r = reflections[s * reflectors[search].count + vertex_solves[triangle[k]]];
         if (r.shown == 0u
             || (own && r.depth <= SELF_REFLECTION_CLEARANCE * distance(r.point, eye))) {
             return;
@@ -573,6 +575,9 @@ fn fermat_cull(@builtin(global_invocation_id) id: vec3<u32>) {
     if (!anchored) {
         return;
     }
-    let slot = atomicAdd(&draw_args.vertex_count, 3u) / 3u;
-    shown_triangles[slot] = vec2<u32>(s, t);
+    let first = atomicAdd(&draw_args.index_count, 3u);
+    let row = s * arrayLength(&vertex_solves);
+    shown_indices[first] = row + triangle.x;
+    shown_indices[first + 1u] = row + triangle.y;
+    shown_indices[first + 2u] = row + triangle.z;
 }

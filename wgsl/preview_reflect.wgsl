@@ -27,18 +27,17 @@ struct ReflectorPass {
     solves: u32,
 }
 
+// The distinct reflected vertices (the index buffer, `fermat_cull`'s list, names a search's
+// row times their count plus one of them).
 @group(1) @binding(0) var<storage, read> reflected_vertices: array<PreviewVertex>;
 // Every search's reflection points, search after search.
 @group(1) @binding(1) var<storage, read> reflected_points: array<GpuReflection>;
 // Per search of the draw (a batch of them: `gpu::preview::SearchBatch`), its pass.
 @group(1) @binding(2) var<storage, read> reflector_passes: array<ReflectorPass>;
 @group(1) @binding(3) var reflector_ids: texture_2d<u32>;
-// Per reflected vertex, the index of its Fermat solve (vertices at one position share one).
+// Per distinct reflected vertex, the index of its Fermat solve (vertices at one position share
+// one).
 @group(1) @binding(4) var<storage, read> solve_of: array<u32>;
-// The reflected triangles whose reflection shows on a search's surface, as (the search's row,
-// the triangle), as `fermat_cull` listed them (wgsl/fermat.wgsl): the draw runs three vertices
-// for each.
-@group(1) @binding(5) var<storage, read> shown_triangles: array<vec2<u32>>;
 
 struct ReflectedOut {
     @builtin(position) clip: vec4<f32>,
@@ -57,14 +56,16 @@ struct ReflectedOut {
     @location(7) @interpolate(flat) mirror_material: u32,
 }
 
-// Vertex `j` of the `j / 3`-th triangle shown: its reflected vertex and reflection point.
+// Index `k` of `fermat_cull`'s list: distinct reflected vertex k % count of the search in row
+// k / count, at its reflection point; run once however many shown triangles share it.
 @vertex
-fn reflected_vertex(@builtin(vertex_index) j: u32) -> ReflectedOut {
-    let shown = shown_triangles[j / 3u];
-    let search = reflector_passes[shown.x];
-    let i = 3u * shown.y + j % 3u;
+fn reflected_vertex(@builtin(vertex_index) k: u32) -> ReflectedOut {
+    let count = arrayLength(&reflected_vertices);
+    let row = k / count;
+    let i = k % count;
+    let search = reflector_passes[row];
     let v = reflected_vertices[i];
-    let r = reflected_points[shown.x * search.solves + solve_of[i]];
+    let r = reflected_points[row * search.solves + solve_of[i]];
     var clip = preview.clip * vec4<f32>(r.point, 1.0);
     // Depth linear in |P - V| (interpolated across the triangle after the perspective divide,
     // as the seed's z-buffer does).

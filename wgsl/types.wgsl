@@ -178,8 +178,9 @@ struct GpuReflection {
 
 // wgpu's indirect draw arguments; `fermat_cull` counts the vertices atomically.
 struct GpuDrawArgs {
-    vertex_count: atomic<u32>,
+    index_count: atomic<u32>,
     instance_count: u32,
-    first_vertex: u32,
+    first_index: u32,
+    base_vertex: i32,
     first_instance: u32,
 }

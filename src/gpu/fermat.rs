@@ -23,8 +23,8 @@ pub const SEED_STEPS: u32 = 5;
 /// Vertices an invocation group of the kernel takes (its `@workgroup_size`).
 const WORKGROUP: u32 = 64;
 
-/// Bytes of an entry of the cull's list: a search's row and a triangle's index.
-const SHOWN_BYTES: u64 = 8;
+/// Bytes of an entry of the cull's list: a triangle's three indices.
+const SHOWN_BYTES: u64 = 12;
 
 /// The Fermat search's steps at most that the command lines take (`--fermat-steps`,
 /// `bench fermat --steps`): the preview's default is 12 and the f64 truth of `bench fermat`
@@ -60,10 +60,12 @@ pub struct FermatSolve {
 /// The searches' cull of the reflected triangles (`fermat_cull`): the triangles whose
 /// reflection shows on a search's surface, and the arguments of the one indirect draw of them.
 pub struct FermatCull {
-    /// As many slots as triangles for each search: (the search's row, the index of a triangle
-    /// shown on its surface), the first `vertex_count / 3` slots written, in no fixed order.
+    /// The index buffer of the draw, with room for every triangle of every search: three
+    /// indices, (the search's row) x (distinct vertices) + the vertex, per triangle shown on a
+    /// search's surface, the first `index_count` written, triangle by triangle in no fixed
+    /// order.
     pub shown: wgpu::Buffer,
-    /// One `GpuDrawArgs`: three vertices per triangle shown.
+    /// One `GpuDrawArgs`: three indices per triangle shown.
     pub args: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     triangles: u32,
@@ -131,6 +133,7 @@ impl FermatPass {
             context,
             "reflection points",
             solves * size_of::<GpuReflection>() as u64,
+            wgpu::BufferUsages::empty(),
         )?;
         // A patch's corner B per vertex and search, as `output`: found once, here, as it does
         // not depend on the eye (`fermat_start`); the bind groups keep it. Smaller than
@@ -139,6 +142,7 @@ impl FermatPass {
             context,
             "patch starts",
             solves * size_of::<[f32; 2]>() as u64,
+            wgpu::BufferUsages::empty(),
         )?;
         let mut kinds: Vec<u32> = reflectors.iter().map(|r| r.kind).collect();
         kinds.sort_unstable();
@@ -193,9 +197,15 @@ impl FermatPass {
         })
     }
 
-    /// A storage buffer of `bytes` the kernels write (and tests read back), or the refusal of
-    /// one larger than a binding may be on this adapter.
-    fn storage(&self, context: &GpuContext, what: &str, bytes: u64) -> Result<wgpu::Buffer> {
+    /// A storage buffer of `bytes` the kernels write (and tests read back), also used as
+    /// `usage` says, or the refusal of one larger than a binding may be on this adapter.
+    fn storage(
+        &self,
+        context: &GpuContext,
+        what: &str,
+        bytes: u64,
+        usage: wgpu::BufferUsages,
+    ) -> Result<wgpu::Buffer> {
         let limit = context.device.limits().max_storage_buffer_binding_size;
         if bytes > limit {
             return Err(super::over_binding_limit(what, bytes, limit));
@@ -203,7 +213,7 @@ impl FermatPass {
         Ok(context.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(what),
             size: bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | usage,
             mapped_at_creation: false,
         }))
     }
@@ -219,15 +229,16 @@ impl FermatPass {
         }
     }
 
-    /// The buffers that cull `triangles` (`count` of them: per triangle its vertices' solves
-    /// and 1 + the index of the mirror it lies on, as `reflected_triangles` in
-    /// wgsl/bindings.wgsl) against each search of `solve`; a search's reflector names the
-    /// mirror (`GpuReflector::mirror`) whose own triangles it leaves out.
+    /// The buffers that cull `triangles` (`count` of them: per triangle its vertices, indices
+    /// into the distinct reflected vertices whose solves `vertex_solves` gives, and 1 + the
+    /// index of the mirror it lies on, as `reflected_triangles` in wgsl/bindings.wgsl) against
+    /// each search of `solve`; a search's reflector names the mirror (`GpuReflector::mirror`)
+    /// whose own triangles it leaves out.
     pub fn cull(
         &self,
         context: &GpuContext,
         solve: &FermatSolve,
-        triangles: &wgpu::Buffer,
+        (triangles, vertex_solves): (&wgpu::Buffer, &wgpu::Buffer),
         count: u32,
     ) -> Result<FermatCull> {
         within_one_dispatch(context, "reflected triangles to cull", count)?;
@@ -236,6 +247,7 @@ impl FermatPass {
             context,
             &what,
             count.max(1) as u64 * SHOWN_BYTES * solve.searches as u64,
+            wgpu::BufferUsages::INDEX,
         )?;
         let args = context.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("reflected draw"),
@@ -252,8 +264,9 @@ impl FermatPass {
                 ("reflectors", &solve.reflectors),
                 ("reflections", &solve.output),
                 ("reflected_triangles", triangles),
-                ("shown_triangles", &shown),
+                ("shown_indices", &shown),
                 ("draw_args", &args),
+                ("vertex_solves", vertex_solves),
             ],
         )?;
         Ok(FermatCull {
@@ -406,7 +419,10 @@ fn solve_and_cull(
     } else {
         let table =
             context.storage_buffer("reflected triangles", bytemuck::cast_slice(triangles))?;
-        let cull = pass.cull(context, &solve, &table, triangles.len() as u32)?;
+        // Each vertex its own solve.
+        let solves: Vec<u32> = (0..vertices.len() as u32).collect();
+        let solves = context.storage_buffer("vertex solves", bytemuck::cast_slice(&solves))?;
+        let cull = pass.cull(context, &solve, (&table, &solves), triangles.len() as u32)?;
         pass.encode_cull(&mut encoder, &cull);
         Some(cull)
     };
@@ -422,11 +438,20 @@ fn solve_and_cull(
         return Ok((reflections, Vec::new()));
     };
     let args: GpuDrawArgs = bytemuck::pod_read_unaligned(&context.read_buffer(&cull.args)?);
-    let listed: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(&context.read_buffer(&cull.shown)?);
-    // One search: every entry is of its row 0.
-    let mut shown: Vec<u32> = (listed[..(args.vertex_count / 3) as usize].iter())
-        .map(|&[_, triangle]| triangle)
+    let listed: Vec<[u32; 3]> = bytemuck::pod_collect_to_vec(&context.read_buffer(&cull.shown)?);
+    // One search, row 0: each entry is a triangle's three vertices, which name it.
+    let named: std::collections::HashMap<[u32; 3], u32> = (triangles.iter().zip(0..))
+        .map(|(t, k)| ([t[0], t[1], t[2]], k))
         .collect();
+    let mut shown = (listed[..(args.index_count / 3) as usize].iter())
+        .map(|corners| {
+            named.get(corners).copied().ok_or_else(|| {
+                Error::Gpu(format!(
+                    "the cull listed {corners:?}, no triangle's vertices"
+                ))
+            })
+        })
+        .collect::<Result<Vec<u32>>>()?;
     shown.sort_unstable();
     Ok((reflections, shown))
 }

@@ -46,7 +46,7 @@ const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
 }
 
 /// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
-pub const BINDINGS: [Binding; 23] = [
+pub const BINDINGS: [Binding; 24] = [
     binding(0, "camera", Access::Uniform),
     binding(1, "frame", Access::Uniform),
     // One GpuPass per dispatch of a batch, each at its own dynamic offset.
@@ -71,9 +71,10 @@ pub const BINDINGS: [Binding; 23] = [
     binding(17, "reflections", Access::StorageReadWrite),
     binding(18, "primary_hits", Access::StorageReadWrite),
     binding(19, "reflected_triangles", Access::StorageRead),
-    binding(20, "shown_triangles", Access::StorageReadWrite),
+    binding(20, "shown_indices", Access::StorageReadWrite),
     binding(21, "draw_args", Access::StorageReadWrite),
     binding(22, "fermat_starts", Access::StorageReadWrite),
+    binding(23, "vertex_solves", Access::StorageRead),
 ];
 
 /// The bindings of the render kernel: nine storage buffers, one more than WebGPU's baseline
@@ -148,13 +149,14 @@ const FERMAT_BINDINGS: [Binding; 4] = [BINDINGS[15], BINDINGS[16], BINDINGS[17],
 const FERMAT_START_BINDINGS: [Binding; 3] = [BINDINGS[15], BINDINGS[16], BINDINGS[22]];
 
 /// The bindings of the Fermat cull: the searches (their mirrors' ids), the solves' points
-/// (whether each shows), and the triangles.
-const FERMAT_CULL_BINDINGS: [Binding; 5] = [
+/// (whether each shows), the triangles and their vertices' solves, and the draw it writes.
+const FERMAT_CULL_BINDINGS: [Binding; 6] = [
     BINDINGS[15],
     BINDINGS[17],
     BINDINGS[19],
     BINDINGS[20],
     BINDINGS[21],
+    BINDINGS[23],
 ];
 
 /// (file name, source) of every WGSL module a kernel may compose.

@@ -569,7 +569,7 @@ impl PreviewRenderer {
         for batch in &reflections.geometry.batches {
             let bytes = self.context.read_buffer(&batch.cull.args)?;
             let args: GpuDrawArgs = bytemuck::pod_read_unaligned(&bytes);
-            drawn += args.vertex_count as usize / 3;
+            drawn += args.index_count as usize / 3;
         }
         Ok(drawn)
     }
@@ -994,13 +994,21 @@ impl Reflections {
             mirrors[solve as usize] = mirrors[solve as usize].max(v.reflector);
         }
         let fermat_vertices = super::fermat::vertex_buffer(context, &positions, &mirrors)?;
-        let solve_buffer = context.storage_buffer("solve of", bytemuck::cast_slice(&solve_of))?;
+        // The draw is indexed: each distinct reflected vertex (position, normal, material) runs
+        // the vertex stage once for each search, however many shown triangles share it.
+        let (distinct, vertex_of) = distinct_by(triangles, |v| bytemuck::cast::<_, [u32; 8]>(*v));
+        let mut vertex_solves = vec![0; distinct.len()];
+        for (&vertex, &solve) in vertex_of.iter().zip(&solve_of) {
+            vertex_solves[vertex as usize] = solve;
+        }
+        let solve_buffer =
+            context.storage_buffer("vertex solves", bytemuck::cast_slice(&vertex_solves))?;
         let vertices =
-            context.storage_buffer("reflected vertices", bytemuck::cast_slice(triangles))?;
-        let table: Vec<[u32; 4]> = solve_of
+            context.storage_buffer("reflected vertices", bytemuck::cast_slice(&distinct))?;
+        let table: Vec<[u32; 4]> = vertex_of
             .chunks(3)
             .zip(triangles.chunks(3))
-            .map(|(s, t)| [s[0], s[1], s[2], t[0].reflector])
+            .map(|(v, t)| [v[0], v[1], v[2], t[0].reflector])
             .collect();
         let table = context.storage_buffer(
             &format!("the {} reflected triangles", table.len()),
@@ -1023,7 +1031,9 @@ impl Reflections {
                     self.self_reflections,
                 );
                 let solve = self.fermat.solve(context, &uniforms, &fermat_vertices)?;
-                let cull = self.fermat.cull(context, &solve, &table, triangle_count)?;
+                let cull =
+                    self.fermat
+                        .cull(context, &solve, (&table, &solve_buffer), triangle_count)?;
                 Ok(SearchBatch {
                     solve,
                     cull,
@@ -1055,7 +1065,6 @@ impl Reflections {
                             buffer_entry(1, &batch.solve.output),
                             buffer_entry(2, &passes),
                             buffer_entry(4, &solve_buffer),
-                            buffer_entry(5, &batch.cull.shown),
                             texture_entry(3, &self.id_view),
                         ],
                     }))
@@ -1119,7 +1128,8 @@ impl Reflections {
             .zip(&self.geometry.batches)
         {
             pass.set_bind_group(1, group, &[]);
-            pass.draw_indirect(&batch.cull.args, 0);
+            pass.set_index_buffer(batch.cull.shown.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed_indirect(&batch.cull.args, 0);
         }
     }
 }
