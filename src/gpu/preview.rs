@@ -987,20 +987,17 @@ impl Reflections {
         triangles: &[PreviewVertex],
         eye: glam::Vec3,
     ) -> Result<()> {
-        let (positions, solve_of) = shared_positions(triangles);
+        // The draw is indexed: each distinct reflected vertex (position, normal, material) runs
+        // the vertex stage once for each search, however many shown triangles share it; and
+        // the distinct vertices at one position share one solve.
+        let (distinct, vertex_of) = indexed(triangles);
+        let (positions, vertex_solves) = shared_positions(&distinct);
         // The mirror each solved vertex lies on: a teapot's own points search on.
         let mut mirrors = vec![0; positions.len()];
-        for (&solve, v) in solve_of.iter().zip(triangles) {
+        for (&solve, v) in vertex_solves.iter().zip(&distinct) {
             mirrors[solve as usize] = mirrors[solve as usize].max(v.reflector);
         }
         let fermat_vertices = super::fermat::vertex_buffer(context, &positions, &mirrors)?;
-        // The draw is indexed: each distinct reflected vertex (position, normal, material) runs
-        // the vertex stage once for each search, however many shown triangles share it.
-        let (distinct, vertex_of) = distinct_by(triangles, |v| bytemuck::cast::<_, [u32; 8]>(*v));
-        let mut vertex_solves = vec![0; distinct.len()];
-        for (&vertex, &solve) in vertex_of.iter().zip(&solve_of) {
-            vertex_solves[vertex as usize] = solve;
-        }
         let solve_buffer =
             context.storage_buffer("vertex solves", bytemuck::cast_slice(&vertex_solves))?;
         let vertices =
@@ -1384,11 +1381,12 @@ fn depth_attachment(
     })
 }
 
-/// The distinct positions of `triangles`' vertices and, per vertex, the index of its position:
-/// a vertex shared by the triangles around it (n² pieces of a subdivided triangle share most of
-/// theirs) is solved once. Positions are equal when their bits are.
-fn shared_positions(triangles: &[PreviewVertex]) -> (Vec<glam::Vec3>, Vec<u32>) {
-    let (distinct, solve_of) = distinct_by(triangles, |v| v.position.map(f32::to_bits));
+/// The distinct positions of `vertices` and, per vertex, the index of its position: a vertex
+/// shared by the triangles around it (n² pieces of a subdivided triangle share most of theirs),
+/// or by faces of other normals or materials, is solved once. Positions are equal when their
+/// bits are.
+fn shared_positions(vertices: &[PreviewVertex]) -> (Vec<glam::Vec3>, Vec<u32>) {
+    let (distinct, solve_of) = distinct_by(vertices, |v| v.position.map(f32::to_bits));
     let positions = distinct
         .iter()
         .map(|v| glam::Vec3::from(v.position))
@@ -1396,8 +1394,8 @@ fn shared_positions(triangles: &[PreviewVertex]) -> (Vec<glam::Vec3>, Vec<u32>) 
     (positions, solve_of)
 }
 
-/// `triangles`' distinct vertices and, per corner, the index of its vertex: the main pass
-/// draws them indexed, so a corner shared by several triangles (six around a tessellated
+/// `triangles`' distinct vertices and, per corner, the index of its vertex: the main pass and
+/// the reflection pass draw them indexed, so a corner shared by several triangles (six around a tessellated
 /// sphere's or patch's vertex) is shaded once (lavapipe: the teapot's 4,066 triangles 1.55 →
 /// 0.73 ms a frame, `BENCHMARKS.md`). Vertices are equal when their bits are.
 fn indexed(triangles: &[PreviewVertex]) -> (Vec<PreviewVertex>, Vec<u32>) {
