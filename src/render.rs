@@ -299,6 +299,9 @@ pub struct RenderOutput {
     pub pixels_without_samples: usize,
     /// Wall time of the whole render, planning and read-backs included.
     pub elapsed: Duration,
+    /// Wall time until the last pass finished on the device, before the image was read back
+    /// (what a frame shown from the device would take).
+    pub traced: Duration,
     /// Device time in the kernels (GPU timestamp queries), where the adapter offers them.
     pub kernel_time: Option<Duration>,
     /// Dispatches finished.
@@ -634,6 +637,7 @@ fn drive(
             max_samples_per_pixel: 0,
             pixels_without_samples: 0,
             elapsed: Duration::ZERO,
+            traced: Duration::ZERO,
             kernel_time: None,
             dispatches: 0,
             batches: 0,
@@ -661,7 +665,9 @@ fn drive(
         Some(settings) => sample_adaptively(&mut run, backend, &plan, &settings),
     };
     run.drain(backend);
+    let traced = run.start.elapsed();
     let mut output = run.output;
+    output.traced = traced;
     let [x0, x1, y0, y1] = scene.crop;
     let layout = &plan.layout;
     let crop = |layer: Vec<[f32; 4]>| crop_rows(layer, frame.width, scene.crop);

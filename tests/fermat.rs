@@ -533,6 +533,8 @@ fn preview_reflections_land_where_the_ray_tracer_puts_them() {
     );
     assert!(fine.flip_reflector.is_some_and(|f| f < 0.08), "{fine:?}");
     assert!(report.ray_traced_gpu_ms.median > 0.0 && report.ray_traced_cpu_ms.median > 0.0);
+    // Reading the image back comes after the passes finish.
+    assert!(report.ray_traced_gpu_read_ms.min >= report.ray_traced_gpu_ms.min);
     let json = serde_json::to_value(&report).unwrap();
     for field in ["ray_traced_gpu_ms", "reference_spp", "rows"] {
         assert!(json.get(field).is_some(), "{field}");

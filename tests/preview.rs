@@ -278,12 +278,25 @@ impl Moved {
 
     /// Pixels where the two frames differ.
     fn pixels_differing(&self) -> usize {
+        self.pixels_differing_beyond(0.0).0
+    }
+
+    /// Pixels where a channel of the two frames differs by more than `tolerance` relative to
+    /// the larger value (at least 1), and the largest such relative difference.
+    fn pixels_differing_beyond(&self, tolerance: f32) -> (usize, f32) {
         let (a, b) = (self.moved.image().unwrap(), self.made.image().unwrap());
-        a.pixels
+        let differences: Vec<f32> = a
+            .pixels
             .iter()
             .zip(&b.pixels)
-            .filter(|(x, y)| x != y)
-            .count()
+            .map(|(x, y)| {
+                (0..3)
+                    .map(|c| (x[c] - y[c]).abs() / x[c].abs().max(y[c].abs()).max(1.0))
+                    .fold(0.0, f32::max)
+            })
+            .collect();
+        let beyond = differences.iter().filter(|&&d| d > tolerance).count();
+        (beyond, differences.into_iter().fold(0.0, f32::max))
     }
 }
 
@@ -589,7 +602,13 @@ fn an_area_lights_shadow_maps_over_its_surface_soften_its_shadows() {
 }
 
 /// A camera change that cuts the curved shapes anew draws their shadows anew too: the frame
-/// equals that of a preview made with shadows for the new camera.
+/// is that of a preview made with shadows for the new camera. Equal to rounding only: the
+/// moved renderer keeps the far plane it was made with (`extent_and_far`), and the floor
+/// reaches behind the near camera, so the rasteriser clips it at the near plane in clip
+/// coordinates that differ with the far plane; NVIDIA's driver then interpolates the floor's
+/// positions a few ulps apart (1,802 of 12,288 pixels differed, 2026-11-27; lavapipe none).
+/// Shadows left as cut for the first camera differ by the light's whole share where the
+/// sphere's coarser outline moves a shadow edge across a pixel.
 #[test]
 fn shadows_are_drawn_anew_with_the_shapes_cut_anew() {
     let Some(context) = common::gpu_context() else {
@@ -613,10 +632,11 @@ fn shadows_are_drawn_anew_with_the_shapes_cut_anew() {
         m.triangles_before
     );
     assert_eq!(m.moved.shadow_maps().0, 6);
+    let (beyond, largest) = m.pixels_differing_beyond(1e-3);
     assert_eq!(
-        m.pixels_differing(),
-        0,
-        "the re-cut preview's shadows differ from one made for its camera"
+        beyond, 0,
+        "the re-cut preview's shadows differ from one made for its camera (largest relative \
+         difference {largest})"
     );
 }
 

@@ -60,8 +60,9 @@ pub struct FermatRow {
     pub reflected_drawn: usize,
     /// The preview's frame time (Fermat solves, main and reflection passes), milliseconds.
     pub preview_ms: Spread,
-    /// The ray-traced GPU frame's time over the preview's, round by round: a ray-traced frame
-    /// against the median of the preview frames timed just after it.
+    /// The ray-traced GPU frame's time (finished on the device, as the preview's) over the
+    /// preview's, round by round: a ray-traced frame against the median of the preview frames
+    /// timed just after it.
     pub speedup: Spread,
     /// Features whose true reflection is in the frame.
     pub features: usize,
@@ -101,10 +102,16 @@ pub struct FermatReport {
     /// With self-reflections: the tolerance (pixels) the mirror's own reflected triangles are
     /// cut for; `None` without.
     pub self_reflections: Option<f64>,
-    /// The ray-traced frame at 1 sample per pixel on the GPU (the preview's device),
-    /// milliseconds: every round's, of every subdivision.
+    /// The ray-traced frame at 1 sample per pixel on the GPU (the preview's device), until
+    /// its last pass finished on the device (as the preview's frames are timed: the image not
+    /// read back), milliseconds: every round's, of every subdivision.
     pub ray_traced_gpu_ms: Spread,
-    /// The same on the CPU path.
+    /// The same frames with the image read back and made (`RenderOutput::elapsed`).
+    pub ray_traced_gpu_read_ms: Spread,
+    /// Of each GPU frame, its kernels' time by the device's timestamps; `None` where the
+    /// adapter has no timestamps or is a CPU.
+    pub ray_traced_gpu_kernel_ms: Option<Spread>,
+    /// The ray-traced frame on the CPU path, the image made.
     pub ray_traced_cpu_ms: Spread,
     /// Samples per pixel of the ray-traced reference the FLIP column compares with.
     pub reference_spp: u32,
@@ -166,9 +173,19 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
     let one_spp = load(Some("render.spp=1".into()))?;
     let one_spp = flatten(&one_spp);
     let features = flat.features();
-    let ray_traced_ms = |way| -> Result<f64> {
+    // A ray-traced frame's times: finished on the device, with its image read back, and its
+    // kernels' by timestamps where the adapter has them and is not a CPU (lavapipe's, between
+    // the preview's frames, read 0.04 ms of a 67 ms frame; alone, in `bench frame`, they agree
+    // with the frame's time).
+    let timestamps = !context.is_cpu_adapter;
+    let ray_traced_ms = |way| -> Result<TracedTimes> {
         let traced = render_once(&one_spp, way, Some(context))?;
-        Ok(traced.elapsed.as_secs_f64() * 1e3)
+        let ms = |t: std::time::Duration| t.as_secs_f64() * 1e3;
+        Ok(TracedTimes {
+            traced: ms(traced.traced),
+            read: ms(traced.elapsed),
+            kernels: traced.kernel_time.filter(|_| timestamps).map(ms),
+        })
     };
     let on_gpu = Way::Gpu {
         features,
@@ -177,14 +194,14 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
     };
     let mut cpu_ms = Vec::new();
     for run in 0..=config.runs.max(1) {
-        let cpu = ray_traced_ms(Way::Cpu { features })?;
+        let cpu = ray_traced_ms(Way::Cpu { features })?.read;
         if run > 0 {
             cpu_ms.push(cpu);
         }
     }
     // Warm-up: lavapipe's first frames after a pipeline is built are slower.
     ray_traced_ms(on_gpu)?;
-    let mut gpu_ms = Vec::new();
+    let mut gpu_times = Vec::new();
     let reference = load(Some(format!("render.spp={}", config.reference_spp)))?;
     let reference = render_once(&flatten(&reference), Way::Cpu { features }, None)?.image;
     let clip = clip_matrix(&scene.camera, extent_and_far(&scene, &flat).1);
@@ -211,8 +228,8 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             let traced = ray_traced_ms(on_gpu)?;
             let round = renderer.timed_frames(config.frames)?;
             let round_ms: Vec<f64> = round.iter().map(|t| t.as_secs_f64() * 1e3).collect();
-            ratios.push(traced / Spread::of(&round_ms).median);
-            gpu_ms.push(traced);
+            ratios.push(traced.traced / Spread::of(&round_ms).median);
+            gpu_times.push(traced);
             times.extend(round);
         }
         let frame = renderer.frame(&times)?;
@@ -247,10 +264,13 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             stages,
         });
     }
-    if gpu_ms.is_empty() {
+    if gpu_times.is_empty() {
         // No subdivision asked: the ray-traced frame is timed alone.
-        gpu_ms.push(ray_traced_ms(on_gpu)?);
+        gpu_times.push(ray_traced_ms(on_gpu)?);
     }
+    let spread =
+        |of: fn(&TracedTimes) -> f64| Spread::of(&gpu_times.iter().map(of).collect::<Vec<_>>());
+    let kernel_ms: Vec<f64> = gpu_times.iter().filter_map(|t| t.kernels).collect();
     Ok(FermatReport {
         scene: config.scene.display().to_string(),
         width,
@@ -258,11 +278,24 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
         steps: config.steps,
         tolerance_px: config.tolerance_px,
         self_reflections: config.self_reflections,
-        ray_traced_gpu_ms: Spread::of(&gpu_ms),
+        ray_traced_gpu_ms: spread(|t| t.traced),
+        ray_traced_gpu_read_ms: spread(|t| t.read),
+        ray_traced_gpu_kernel_ms: (kernel_ms.len() == gpu_times.len())
+            .then(|| Spread::of(&kernel_ms)),
         ray_traced_cpu_ms: Spread::of(&cpu_ms),
         reference_spp: config.reference_spp,
         rows,
     })
+}
+
+/// A ray-traced frame's times, milliseconds (`FermatReport`).
+struct TracedTimes {
+    /// Until its last pass finished on the device.
+    traced: f64,
+    /// With its image read back and made.
+    read: f64,
+    /// Its kernels, by timestamps.
+    kernels: Option<f64>,
 }
 
 /// Pixel position (x right, y down, pixel centres at +0.5) of world point `p`, if in front.
@@ -482,7 +515,9 @@ impl FermatReport {
         let mut out = format!(
             "Fermat reflections against the ray tracer: {} ({}x{}), at most {} steps, curved \
              shapes within {} px{}\n\n\
-             Ray-traced frame, 1 spp: GPU {:.2} ms, CPU {:.2} ms (median of runs)\n\n\
+             Ray-traced frame, 1 spp (medians of runs): GPU {:.2} ms finished on the device, \
+             as the preview's frames below are timed ({:.2} ms with the image read back{}), \
+             CPU {:.2} ms\n\n\
              | subdivision | triangles | reflected triangles (drawn) | preview (ms) | \
              ray-traced GPU / preview (median of rounds) | \
              features drawn | corners: max (px) | all features: median (px) | p99 (px) | \
@@ -497,6 +532,13 @@ impl FermatReport {
                 ", self-reflections within {px} px"
             )),
             self.ray_traced_gpu_ms.median,
+            self.ray_traced_gpu_read_ms.median,
+            self.ray_traced_gpu_kernel_ms
+                .as_ref()
+                .map_or(String::new(), |k| format!(
+                    "; its kernels {:.2} ms by timestamps",
+                    k.median
+                )),
             self.ray_traced_cpu_ms.median,
             self.reference_spp
         );
