@@ -433,12 +433,12 @@ fn solve_and_cull(
         )));
     }
     context.wait(context.queue.submit([encoder.finish()]))?;
-    let reflections = bytemuck::pod_collect_to_vec(&context.read_buffer(&solve.output)?);
+    let reflections = context.read_buffer(&solve.output)?;
     let Some(cull) = cull else {
         return Ok((reflections, Vec::new()));
     };
-    let args: GpuDrawArgs = bytemuck::pod_read_unaligned(&context.read_buffer(&cull.args)?);
-    let listed: Vec<[u32; 3]> = bytemuck::pod_collect_to_vec(&context.read_buffer(&cull.shown)?);
+    let args: GpuDrawArgs = bytemuck::pod_read_unaligned(&context.read_buffer::<u8>(&cull.args)?);
+    let listed: Vec<[u32; 3]> = context.read_buffer(&cull.shown)?;
     // One search, row 0: each entry is a triangle's three vertices, which name it.
     let named: std::collections::HashMap<[u32; 3], u32> = (triangles.iter().zip(0..))
         .map(|(t, k)| ([t[0], t[1], t[2]], k))

@@ -283,16 +283,33 @@ impl GpuContext {
         }
     }
 
-    /// Copies `buffer` back to the host (it must have COPY_SRC usage).
-    pub(crate) fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
+    /// Copies `buffer`'s values back to the host (it must have COPY_SRC usage).
+    pub(crate) fn read_buffer<T: bytemuck::Pod>(&self, buffer: &wgpu::Buffer) -> Result<Vec<T>> {
+        self.read_range(buffer, 0..buffer.size())
+    }
+
+    /// Copies the values in bytes `range` of `buffer` back to the host (it must have COPY_SRC
+    /// usage; the range a multiple of 4 bytes, as copies are): a staging buffer as large as the
+    /// range, and one copy out of its mapping into aligned values. (Reading the whole buffer,
+    /// then casting and cutting it, copied an image's sums three times: 0.43 of a 2560x1920
+    /// frame's 3.29 s on lavapipe, and nearly all of it on an H200.)
+    pub(crate) fn read_range<T: bytemuck::Pod>(
+        &self,
+        buffer: &wgpu::Buffer,
+        range: std::ops::Range<u64>,
+    ) -> Result<Vec<T>> {
+        let size = range.end - range.start;
+        if size == 0 {
+            return Ok(Vec::new());
+        }
         let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: buffer.size(),
+            size,
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+        encoder.copy_buffer_to_buffer(buffer, range.start, &staging, 0, size);
         self.queue.submit([encoder.finish()]);
         let slice = staging.slice(..);
         let mapped: Mapped = Arc::new(Mutex::new(None));
@@ -307,11 +324,13 @@ impl GpuContext {
             })
             .map_err(|e| Error::Gpu(format!("reading back results: {e}")))?;
         self.await_mapping(&mapped)?;
-        let bytes = slice
-            .get_mapped_range()
-            .map_err(|e| Error::Gpu(format!("mapping results: {e}")))?
-            .to_vec();
+        // Collected, not cast: the mapping's alignment is not T's to rely on.
+        let values = bytemuck::pod_collect_to_vec(
+            &slice
+                .get_mapped_range()
+                .map_err(|e| Error::Gpu(format!("mapping results: {e}")))?,
+        );
         staging.unmap();
-        Ok(bytes)
+        Ok(values)
     }
 }

@@ -567,7 +567,7 @@ impl PreviewRenderer {
         };
         let mut drawn = 0;
         for batch in &reflections.geometry.batches {
-            let bytes = self.context.read_buffer(&batch.cull.args)?;
+            let bytes: Vec<u8> = self.context.read_buffer(&batch.cull.args)?;
             let args: GpuDrawArgs = bytemuck::pod_read_unaligned(&bytes);
             drawn += args.index_count as usize / 3;
         }
@@ -1284,7 +1284,7 @@ fn read_back(
         color.size(),
     );
     context.wait(context.queue.submit([encoder.finish()]))?;
-    let bytes = context.read_buffer(&buffer)?;
+    let bytes: Vec<u8> = context.read_buffer(&buffer)?;
     let pixels = bytes
         .chunks(row as usize)
         .flat_map(|r| {

@@ -443,11 +443,9 @@ impl Backend for GpuRenderer {
 
     /// Read after the batches in flight, like the snapshot.
     fn read_slots(&mut self, slots: std::ops::Range<usize>) -> Result<Vec<[f32; 4]>> {
-        let bytes = self.context.read_buffer(self.buffer("accumulation"))?;
-        // Copied, not cast: the bytes' alignment is a byte's.
-        let mut sums: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
-        sums.truncate(slots.end);
-        Ok(sums.split_off(slots.start))
+        const SLOT: u64 = std::mem::size_of::<[f32; 4]>() as u64;
+        let bytes = slots.start as u64 * SLOT..slots.end as u64 * SLOT;
+        self.context.read_range(self.buffer("accumulation"), bytes)
     }
 
     /// A new buffer: the batches in flight keep the one they were bound with.

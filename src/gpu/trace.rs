@@ -146,7 +146,7 @@ impl GpuTracer {
         let submission = context.queue.submit([encoder.finish()]);
         context.wait(submission)?;
         let elapsed = start.elapsed();
-        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&context.read_buffer(&self.status)?);
+        let words: Vec<u32> = context.read_buffer(&self.status)?;
         if let Some(reason) = describe_status_flags(DispatchStatus::from_words(&words).flags) {
             return Err(Error::Gpu(format!("the ray-query kernel: {reason}")));
         }
@@ -157,8 +157,7 @@ impl GpuTracer {
     pub fn distances(&self) -> Result<Vec<f32>> {
         let mut all = Vec::new();
         for chunk in &self.chunks {
-            let bytes = self.context.read_buffer(&chunk.distances)?;
-            all.extend_from_slice(bytemuck::cast_slice::<u8, f32>(&bytes));
+            all.extend(self.context.read_buffer::<f32>(&chunk.distances)?);
         }
         Ok(all)
     }
