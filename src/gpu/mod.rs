@@ -291,7 +291,7 @@ impl GpuContext {
     /// Copies the values in bytes `range` of `buffer` back to the host (it must have COPY_SRC
     /// usage; the range a multiple of 4 bytes, as copies are): a staging buffer as large as the
     /// range, and one copy out of its mapping into aligned values. (Reading the whole buffer,
-    /// then casting and cutting it, copied an image's sums three times: 0.43 of a 2560x1920
+    /// then casting and cutting it, copied an image's sums three times: 0.43 s of a 2560x1920
     /// frame's 3.29 s on lavapipe, and nearly all of it on an H200.)
     pub(crate) fn read_range<T: bytemuck::Pod>(
         &self,
