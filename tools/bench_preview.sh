@@ -20,12 +20,14 @@ echo
 for mirror in torus ellipsoid cylinder teapot; do
     "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --json "bench/fermat_$mirror.json"
 done
-# The same comparison on a frame 16 times larger, where a real GPU's ray tracer is no longer
-# held by its fixed costs per frame (the reference at 16 spp: FLIP is not this run's question).
+# The same comparison on frames 4, 16 and 64 times larger: how each frame grows with its pixels
+# once past its fixed costs (the reference at 16 spp: FLIP is not this run's question).
 for mirror in sphere teapot; do
-    "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --subdivisions 4 \
-        -D render.width=1280 -D render.height=960 --reference-spp 16 \
-        --json "bench/fermat_${mirror}_1280.json"
+    for size in 640x480 1280x960 2560x1920; do
+        "$chambre" bench fermat --scene "scenes/fermat_$mirror.toml" --subdivisions 4 \
+            -D render.width="${size%x*}" -D render.height="${size#*x}" --reference-spp 16 \
+            --runs 3 --json "bench/fermat_${mirror}_$size.json"
+    done
 done
 # The teapot's 32 searches one a dispatch, as before they were batched (BENCHMARKS.md).
 "$chambre" bench fermat --scene scenes/fermat_teapot.toml --subdivisions 1,4,16 \
