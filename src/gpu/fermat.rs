@@ -437,7 +437,7 @@ fn solve_and_cull(
     let Some(cull) = cull else {
         return Ok((reflections, Vec::new()));
     };
-    let args: GpuDrawArgs = bytemuck::pod_read_unaligned(&context.read_buffer::<u8>(&cull.args)?);
+    let args = context.read_buffer::<GpuDrawArgs>(&cull.args)?[0];
     let listed: Vec<[u32; 3]> = context.read_buffer(&cull.shown)?;
     // One search, row 0: each entry is a triangle's three vertices, which name it.
     let named: std::collections::HashMap<[u32; 3], u32> = (triangles.iter().zip(0..))

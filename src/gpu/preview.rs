@@ -567,8 +567,7 @@ impl PreviewRenderer {
         };
         let mut drawn = 0;
         for batch in &reflections.geometry.batches {
-            let bytes: Vec<u8> = self.context.read_buffer(&batch.cull.args)?;
-            let args: GpuDrawArgs = bytemuck::pod_read_unaligned(&bytes);
+            let args = self.context.read_buffer::<GpuDrawArgs>(&batch.cull.args)?[0];
             drawn += args.index_count as usize / 3;
         }
         Ok(drawn)
