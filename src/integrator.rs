@@ -212,7 +212,7 @@ impl LightWindow {
     }
 
     /// The samples of a light with `samples` samples that fall in the window.
-    fn clip(self, samples: u32) -> std::ops::Range<u32> {
+    pub fn clip(self, samples: u32) -> std::ops::Range<u32> {
         let end = self.start.saturating_add(self.count.min(samples));
         self.start.min(samples)..end.min(samples)
     }

@@ -12,6 +12,15 @@ use bytemuck::{Pod, Zeroable};
 pub const WORKGROUP_SIZE: u32 = 8;
 /// Invocations per workgroup of the ray-query kernels (one ray each).
 pub const TRACE_WORKGROUP_SIZE: u32 = 64;
+/// Workgroups a dispatch may have along one dimension (WebGPU's limit): a longer 1-D grid of
+/// the wavefront render goes on in further rows of this many (`wgsl/wavefront.wgsl`).
+pub const MAX_WORKGROUPS_PER_DIMENSION: u32 = 65535;
+/// The wavefront render's counter of the paths queued for the next depth (`wf_counters`).
+pub const WF_PATH_COUNTER: u32 = 0;
+/// The wavefront render's counter of the shadow rays a depth's vertices emitted.
+pub const WF_SHADOW_COUNTER: u32 = 1;
+/// Words of the wavefront render's counters.
+pub const WF_COUNTERS: u32 = 2;
 /// Depth of the per-invocation BVH traversal stack. Deeper BVHs are refused before upload.
 pub const BVH_STACK_SIZE: u32 = 64;
 /// Node groups on the CWBVH traversal stack: one per level at most (`accel::cwbvh::build`
@@ -228,6 +237,9 @@ pub const STATUS_PERMUTE_CAP: u32 = 4;
 /// LP_MAX_TGSI_LOOP_ITERATIONS); `render.wgsl` detects it with a loop of `LOOP_CHECK_ITERATIONS`
 /// run-time iterations at the end of the kernel, which then runs fewer.
 pub const STATUS_LOOP_LIMIT: u32 = 8;
+/// A wavefront path vertex had more shadow rays than its slots (`GpuWave::shadow_stride`): the
+/// plan undercounted them, and the rays beyond were dropped.
+pub const STATUS_WAVE_OVERFLOW: u32 = 16;
 /// Trip count of the loop-limit check (`GpuPass::loop_check`); any value above 1 works.
 pub const LOOP_CHECK_ITERATIONS: u32 = 2;
 /// Light samples follow the pixel pattern over all of a pixel's `spp x samples` light points
@@ -556,11 +568,11 @@ pub struct GpuRay {
     pub _pad0: u32,
 }
 
-/// A camera ray's closest hit, as a split render's `primary` kernel stores it for
-/// `render_split` (`wgsl/render.wgsl`): the primitive (`NONE`: a miss) and `intersect::Hit`.
+/// A ray's closest hit as the wavefront render stores it between its closest-hit and shading
+/// kernels (`wgsl/wavefront.wgsl`): the primitive (`NONE`: a miss) and `intersect::Hit`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuPrimaryHit {
+pub struct GpuHit {
     /// The primitive hit, in the CWBVH's order, or `NONE`.
     pub prim: u32,
     /// Distance along the ray.
@@ -569,6 +581,109 @@ pub struct GpuPrimaryHit {
     pub b1: f32,
     /// The hit's second surface coordinate (`Hit::b2`).
     pub b2: f32,
+}
+
+/// The ray a wavefront path traces next (`wgsl/wavefront.wgsl`): what the closest-hit kernel
+/// reads, apart from the rest of the path so that it reads 32 bytes a ray, as the ray queries do.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPathRay {
+    /// Ray origin (scene units).
+    pub origin: [f32; 3],
+    /// The camera sample's time (seconds), at which moving primitives are intersected.
+    pub time: f32,
+    /// Unit direction of travel.
+    pub direction: [f32; 3],
+    /// The primitive the ray leaves and must not hit (`NONE`: none).
+    pub skip: u32,
+}
+
+/// A wavefront path's state between its kernels: one camera sample's path (`trace_path` in
+/// `src/integrator.rs` is its twin, vertex by vertex).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPath {
+    /// The path's throughput at its current vertex.
+    pub throughput: [f32; 3],
+    /// The pixel (`y * width + x`) it samples; `NONE` where the dispatch's grid runs past the
+    /// end of a pixel list.
+    pub pixel: u32,
+    /// The radiance gathered so far.
+    pub radiance: [f32; 3],
+    /// Its camera sample's index.
+    pub sample: u32,
+    /// The mirror reflectance its last bounce multiplies the throughput by at the next vertex.
+    pub mirror: [f32; 3],
+    /// Rays it traced: camera, mirror and shadow rays (`DispatchStatus::rays`).
+    pub rays: u32,
+    /// Shadow rays its current vertex emitted (`GpuShadowRay`s from `index * stride`).
+    pub shadow_count: u32,
+    /// 1 once it was cut off at `max_depth` while it still reflected.
+    pub truncated: u32,
+    /// Padding to the WGSL layout.
+    pub _pad0: u32,
+    /// Padding to the WGSL layout.
+    pub _pad1: u32,
+}
+
+/// A shadow ray of a wavefront path vertex, traced by the any-hit kernel.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuShadowRay {
+    /// Origin, offset from the surface by its error bound.
+    pub origin: [f32; 3],
+    /// Where the light is (`shadow_ray_length`): hits beyond do not shadow.
+    pub t_max: f32,
+    /// Unit direction towards the light.
+    pub direction: [f32; 3],
+    /// The camera sample's time (seconds).
+    pub time: f32,
+    /// The primitive the ray leaves (`NONE`: none).
+    pub skip_a: u32,
+    /// The light's own primitive (`NONE`: a punctual light).
+    pub skip_b: u32,
+    /// Padding to the WGSL layout.
+    pub _pad0: u32,
+    /// Padding to the WGSL layout.
+    pub _pad1: u32,
+}
+
+/// What a shadow ray adds where its light is visible, before the light's scale (an area
+/// light's `color * area / samples`; a punctual light's term is whole); the any-hit kernel zeroes
+/// it where the light is blocked.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuShadowTerm {
+    /// The unshadowed term.
+    pub f: [f32; 3],
+    /// The light's index in the light array.
+    pub light: u32,
+}
+
+/// What one stage dispatch of a wavefront batch works on, at its own dynamic offset.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuWave {
+    /// The path vertex the stage works on: 0 for the camera rays' hits.
+    pub depth: u32,
+    /// Shadow-ray slots of each path (`GpuShadowRay`s of path `i` from `i * shadow_stride`):
+    /// the most its vertex may emit in the pass's light window.
+    pub shadow_stride: u32,
+    /// Paths the path buffers hold: each of the two queues' length.
+    pub path_capacity: u32,
+    /// Padding to the WGSL layout.
+    pub _pad0: u32,
+}
+
+/// The indirect dispatches of one path depth, as `wf_prepare` writes them: workgroups
+/// `(x, y, 1)` and, last, the count of entries they cover.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuWaveArgs {
+    /// The paths the depth's closest-hit, shading and resolve kernels take.
+    pub paths: [u32; 4],
+    /// The shadow rays of the depth's vertices.
+    pub shadows: [u32; 4],
 }
 
 /// A Fermat solve's reflector and eye (`wgsl/fermat.wgsl`): a sphere, a torus (around the
@@ -757,6 +872,10 @@ pub fn wgsl_prelude() -> String {
     let u32s = [
         ("WORKGROUP_SIZE", WORKGROUP_SIZE),
         ("TRACE_WORKGROUP_SIZE", TRACE_WORKGROUP_SIZE),
+        ("MAX_WORKGROUPS_PER_DIMENSION", MAX_WORKGROUPS_PER_DIMENSION),
+        ("WF_PATH_COUNTER", WF_PATH_COUNTER),
+        ("WF_SHADOW_COUNTER", WF_SHADOW_COUNTER),
+        ("WF_COUNTERS", WF_COUNTERS),
         ("BVH_STACK_SIZE", BVH_STACK_SIZE),
         ("CWBVH_STACK_SIZE", CWBVH_STACK_SIZE),
         ("MAX_LIGHT_PATTERN_POINTS", MAX_LIGHT_PATTERN_POINTS),
@@ -803,6 +922,7 @@ pub fn wgsl_prelude() -> String {
         ("STATUS_STACK_OVERFLOW", STATUS_STACK_OVERFLOW),
         ("STATUS_PERMUTE_CAP", STATUS_PERMUTE_CAP),
         ("STATUS_LOOP_LIMIT", STATUS_LOOP_LIMIT),
+        ("STATUS_WAVE_OVERFLOW", STATUS_WAVE_OVERFLOW),
         ("STATUS_FLAGS", STATUS_FLAGS),
         ("STATUS_RAYS", STATUS_RAYS),
         ("STATUS_TRUNCATED", STATUS_TRUNCATED),

@@ -27,6 +27,7 @@ use crate::error::{Error, Result};
 use crate::layout::{
     GpuPass, LOOP_CHECK_ITERATIONS, STATUS_FLAGS, STATUS_LOOP_LIMIT, STATUS_PERMUTE_CAP,
     STATUS_RAYS, STATUS_STACK_OVERFLOW, STATUS_TRAVERSAL_CAP, STATUS_TRUNCATED,
+    STATUS_WAVE_OVERFLOW,
 };
 use crate::pack::FlatScene;
 
@@ -942,6 +943,12 @@ pub fn describe_status_flags(flags: u32) -> Option<String> {
     if flags & STATUS_PERMUTE_CAP != 0 {
         reasons.push(
             "the stratified sampler's permutation hit its walk cap (use --pixel-sampler/--lens-sampler sobol)",
+        );
+    }
+    if flags & STATUS_WAVE_OVERFLOW != 0 {
+        reasons.push(
+            "a wavefront path vertex emitted more shadow rays than its planned slots (a planning \
+             bug: render with --gpu-kernels megakernel and report it)",
         );
     }
     (!reasons.is_empty()).then(|| reasons.join("; "))

@@ -5,6 +5,7 @@
 use chambre::adaptive::pixel_error;
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::GpuRenderer;
+use chambre::gpu::render::PathKernels;
 use chambre::pack::{FlatScene, flatten};
 use chambre::render::{Image, RayBudgets, RenderOutput};
 
@@ -173,8 +174,13 @@ fn light_windows_and_a_crop_window_keep_the_decisions() {
     assert_same_render(&whole, &split, "split into light windows");
     if let Some(context) = common::gpu_context() {
         let features = flat.features();
-        let mut gpu = GpuRenderer::with_budgets(context, &flat, features, budgets).unwrap();
-        assert_same_render(&whole, &common::render_clean(&flat, &mut gpu), "GPU, split");
+        for kernels in [PathKernels::Megakernel, PathKernels::Wavefront] {
+            let mut gpu =
+                GpuRenderer::with_budgets(context.clone(), &flat, features, kernels, budgets)
+                    .unwrap();
+            let what = format!("GPU ({kernels:?}), split");
+            assert_same_render(&whole, &common::render_clean(&flat, &mut gpu), &what);
+        }
     }
 }
 

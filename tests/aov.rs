@@ -7,6 +7,7 @@ use std::process::Command;
 
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::GpuRenderer;
+use chambre::gpu::render::PathKernels;
 use chambre::pack::{FlatScene, flatten};
 use chambre::render::{Aovs, RayBudgets};
 use chambre::scene::Scene;
@@ -135,10 +136,18 @@ fn both_paths_and_split_passes_give_the_same_layers() {
     let reference = whole.aovs.as_ref().unwrap();
     assert_close(reference, split.aovs.as_ref().unwrap(), 1e-6, "split");
     if let Some(context) = common::gpu_context() {
-        for budgets in [RayBudgets::DEFAULT, budgets] {
-            let mut gpu =
-                GpuRenderer::with_budgets(context.clone(), &flat, flat.features(), budgets)
-                    .unwrap();
+        let ways = [PathKernels::Megakernel, PathKernels::Wavefront]
+            .into_iter()
+            .flat_map(|kernels| [(kernels, RayBudgets::DEFAULT), (kernels, budgets)]);
+        for (kernels, budgets) in ways {
+            let mut gpu = GpuRenderer::with_budgets(
+                context.clone(),
+                &flat,
+                flat.features(),
+                kernels,
+                budgets,
+            )
+            .unwrap();
             let output = common::render_clean(&flat, &mut gpu);
             let same = output
                 .sample_counts

@@ -88,12 +88,13 @@ fn specialised_kernels_render_the_general_kernels_image() {
     }
 }
 
-/// The split kernels (camera rays' hits first, then the paths from them) render the
-/// megakernel's image bit for bit: the same camera samples, hits and shading, in the same
-/// order; with light windows, adaptive passes (pixel lists) and AOV layers too, and the same
-/// rays, cut-off paths and per-pixel sample counts.
+/// The wavefront render (a kernel per stage of a path vertex, paths and shadow rays in queues)
+/// renders the megakernel's image bit for bit: the same camera samples, hits, shadow rays and
+/// shading, summed in the same order; with light windows, adaptive passes (pixel lists), AOV
+/// layers, curved mirrors cut off at max_depth and motion blur too, and the same rays, cut-off
+/// paths and per-pixel sample counts.
 #[test]
-fn the_split_kernels_render_the_megakernels_image() {
+fn the_wavefront_render_renders_the_megakernels_image() {
     let Some(context) = common::gpu_context() else {
         return;
     };
@@ -159,12 +160,12 @@ fn the_split_kernels_render_the_megakernels_image() {
             assert!(windows.len() > 1, "{path}: {windows:?}");
         }
         let run = |kernels| {
-            let mut renderer = GpuRenderer::with_kernels(
+            let mut renderer = GpuRenderer::with_budgets(
                 context.clone(),
                 &flat,
                 flat.features(),
-                budgets,
                 kernels,
+                budgets,
             )
             .unwrap();
             let output = common::render_through(&flat, &mut renderer);
@@ -173,27 +174,27 @@ fn the_split_kernels_render_the_megakernels_image() {
             output
         };
         let mega = run(PathKernels::Megakernel);
-        let split = run(PathKernels::Split);
-        let differing = common::differing_pixels(&mega.image, &split.image);
+        let wave = run(PathKernels::Wavefront);
+        let differing = common::differing_pixels(&mega.image, &wave.image);
         eprintln!(
             "{path}: {differing} of {} pixels differ, {} rays, {} cut off",
             mega.image.pixels.len(),
             mega.rays,
             mega.truncated_paths
         );
-        assert_eq!(differing, 0, "{path}: the split kernels' image differs");
-        assert_eq!(split.rays, mega.rays, "{path}: rays");
-        assert_eq!(split.truncated_paths, mega.truncated_paths, "{path}");
-        assert_eq!(split.sample_counts, mega.sample_counts, "{path}");
-        let (a, b) = (mega.aovs.unwrap(), split.aovs.unwrap());
+        assert_eq!(differing, 0, "{path}: the wavefront render's image differs");
+        assert_eq!(wave.rays, mega.rays, "{path}: rays");
+        assert_eq!(wave.truncated_paths, mega.truncated_paths, "{path}");
+        assert_eq!(wave.sample_counts, mega.sample_counts, "{path}");
+        let (a, b) = (mega.aovs.unwrap(), wave.aovs.unwrap());
         assert!(a.depth == b.depth && a.normal == b.normal && a.albedo == b.albedo);
     }
 }
 
-/// A dispatch of more camera samples than the split kernels' hit store holds is refused before
-/// anything runs, rather than overrunning the store (the render plan never makes one).
+/// A dispatch of more paths than the wavefront render's buffers hold is refused before anything
+/// runs, rather than overrunning them (the render plan never makes one).
 #[test]
-fn the_split_kernels_refuse_a_dispatch_their_hit_store_cannot_hold() {
+fn the_wavefront_render_refuses_a_dispatch_its_buffers_cannot_hold() {
     use chambre::render::Backend;
     let Some(context) = common::gpu_context() else {
         return;
@@ -202,12 +203,12 @@ fn the_split_kernels_refuse_a_dispatch_their_hit_store_cannot_hold() {
         "scenes/spheres.toml",
         &["render.width=24", "render.height=16"],
     ));
-    let mut renderer = GpuRenderer::with_kernels(
+    let mut renderer = GpuRenderer::with_budgets(
         context,
         &flat,
         flat.features(),
+        PathKernels::Wavefront,
         RayBudgets::DEFAULT,
-        PathKernels::Split,
     )
     .unwrap();
     let plan = chambre::render::plan_passes(&flat, &RayBudgets::DEFAULT);
@@ -216,7 +217,7 @@ fn the_split_kernels_refuse_a_dispatch_their_hit_store_cannot_hold() {
     pass.tile_width = 1;
     pass.tile_height = 1;
     let error = renderer.submit(&[pass]).expect_err("an oversized dispatch");
-    assert!(error.to_string().contains("camera-ray hits"), "{error}");
+    assert!(error.to_string().contains("wavefront render's"), "{error}");
     assert_eq!(renderer.in_flight(), 0);
 }
 

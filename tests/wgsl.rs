@@ -237,7 +237,55 @@ fn shared_structs_have_identical_layouts() {
             _pad0
         }
     );
-    layout!(module, GpuPrimaryHit { prim, t, b1, b2 });
+    layout!(module, GpuHit { prim, t, b1, b2 });
+    layout!(
+        module,
+        GpuPathRay {
+            origin,
+            time,
+            direction,
+            skip
+        }
+    );
+    layout!(
+        module,
+        GpuPath {
+            throughput,
+            pixel,
+            radiance,
+            sample,
+            mirror,
+            rays,
+            shadow_count,
+            truncated,
+            _pad0,
+            _pad1
+        }
+    );
+    layout!(
+        module,
+        GpuShadowRay {
+            origin,
+            t_max,
+            direction,
+            time,
+            skip_a,
+            skip_b,
+            _pad0,
+            _pad1
+        }
+    );
+    layout!(module, GpuShadowTerm { f, light });
+    layout!(
+        module,
+        GpuWave {
+            depth,
+            shadow_stride,
+            path_capacity,
+            _pad0
+        }
+    );
+    layout!(module, GpuWaveArgs { paths, shadows });
     layout!(
         module,
         GpuReflector {

@@ -29,8 +29,8 @@
 @group(0) @binding(15) var<storage, read> reflectors: array<GpuReflector>;
 @group(0) @binding(16) var<storage, read> fermat_vertices: array<vec4<f32>>;
 @group(0) @binding(17) var<storage, read_write> reflections: array<GpuReflection>;
-// A split render's camera-ray hits, one per sample of a dispatch (wgsl/render.wgsl).
-@group(0) @binding(18) var<storage, read_write> primary_hits: array<GpuPrimaryHit>;
+// The wavefront render's closest hit of each path's current ray (wgsl/wavefront.wgsl).
+@group(0) @binding(18) var<storage, read_write> wf_hits: array<GpuHit>;
 // The preview's reflected triangles for `fermat_cull` (wgsl/fermat.wgsl): per triangle its three
 // vertices (indices into the distinct reflected vertices, whose solves `vertex_solves` gives:
 // indices into `fermat_vertices`) and, in w, 1 + the index of the mirror it lies on (0: on
@@ -48,3 +48,21 @@
 // Per distinct reflected vertex, the index of its Fermat solve (vertices at one position share
 // one): what `reflected_triangles` indexes.
 @group(0) @binding(23) var<storage, read> vertex_solves: array<u32>;
+// The wavefront render (wgsl/wavefront.wgsl): the stage dispatch's depth (one GpuWave per stage
+// dispatch of a batch, at its own dynamic offset); each path's ray and state; the paths each
+// depth's stages take (two lists of `path_capacity` entries, used in turn by depth); the
+// counters of the lists being filled (WF_PATH_COUNTER, WF_SHADOW_COUNTER); each depth's indirect
+// dispatches, written by `wf_prepare` and read by the stages they size; the shadow rays of a
+// depth's vertices (`shadow_stride` slots a path), what each adds where its light is visible,
+// and the list of those emitted; the camera rays' first hits for the AOV layers (two a path).
+@group(0) @binding(24) var<uniform> wave: GpuWave;
+@group(0) @binding(25) var<storage, read_write> wf_rays: array<GpuPathRay>;
+@group(0) @binding(26) var<storage, read_write> wf_paths: array<GpuPath>;
+@group(0) @binding(27) var<storage, read_write> wf_queue: array<u32>;
+@group(0) @binding(28) var<storage, read_write> wf_counters: array<atomic<u32>, WF_COUNTERS>;
+@group(0) @binding(29) var<storage, read_write> wf_args: array<GpuWaveArgs>;
+@group(0) @binding(30) var<storage, read> wf_args_in: array<GpuWaveArgs>;
+@group(0) @binding(31) var<storage, read_write> wf_shadow_rays: array<GpuShadowRay>;
+@group(0) @binding(32) var<storage, read_write> wf_shadow_terms: array<GpuShadowTerm>;
+@group(0) @binding(33) var<storage, read_write> wf_shadow_queue: array<u32>;
+@group(0) @binding(34) var<storage, read_write> wf_aovs: array<vec4<f32>>;

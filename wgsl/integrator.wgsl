@@ -110,68 +110,140 @@ fn light_dimension(depth: u32, offset: u32, k: u32) -> u32 {
     return LIGHT_DIMENSION + 2u * (depth * frame.light_samples_per_vertex + offset + k);
 }
 
+// A shadow ray from a path vertex towards a light, and what it adds there where the light is
+// visible: `f`, before an area light's scale (`light_total`). `traced` is false where the vertex
+// or the light faces away (no ray is traced, nothing is added).
+struct LightSample {
+    wi: vec3<f32>,
+    t_max: f32,
+    // The light's own primitive, which its shadow ray must not hit (NONE for a punctual light).
+    skip: u32,
+    f: vec3<f32>,
+    traced: bool,
+}
+
+// An area light's shape, as its samples need it.
+struct AreaLight {
+    normal: vec3<f32>,
+    area: f32,
+    triangle: bool,
+}
+
+fn area_light_of(light: GpuLight) -> AreaLight {
+    let c = cross(light.p1, light.p2);
+    let triangle = light.kind == LIGHT_TRIANGLE;
+    return AreaLight(normalize(c), select(1.0, 0.5, triangle) * length(c), triangle);
+}
+
+fn is_area_light(light: GpuLight) -> bool {
+    return light.kind == LIGHT_AREA || light.kind == LIGHT_TRIANGLE;
+}
+
+// The point `u` of the unit square on an area light (folded onto a triangle light's triangle),
+// seen from `surface`.
+fn area_light_sample(light: GpuLight, shape: AreaLight, square: vec2<f32>, surface: Surface,
+                     material: GpuMaterial, wo: vec3<f32>) -> LightSample {
+    var u = square;
+    if (shape.triangle && u.x + u.y > 1.0) {
+        u = vec2<f32>(1.0) - u;
+    }
+    let n = surface.shading_normal;
+    let to_light = light.p0 + u.x * light.p1 + u.y * light.p2 - surface.position;
+    let distance = length(to_light);
+    let wi = to_light / distance;
+    let cos_surface = dot(n, wi);
+    let cos_light = -dot(shape.normal, wi);
+    let traced = cos_surface > 0.0 && cos_light > 0.0 && dot(surface.geometric_normal, wi) > 0.0;
+    var f = vec3<f32>(0.0);
+    if (traced) {
+        f = eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance);
+    }
+    return LightSample(wi, shadow_ray_length(distance), light.prim, f, traced);
+}
+
+// A point, spot or directional light seen from `surface`: its whole contribution.
+fn punctual_light_sample(light: GpuLight, surface: Surface, material: GpuMaterial,
+                         wo: vec3<f32>) -> LightSample {
+    var wi = light.p0;
+    var distance = T_FAR;
+    var falloff = 1.0;
+    if (light.kind != LIGHT_DIRECTIONAL) {
+        let to_light = light.p0 - surface.position;
+        distance = length(to_light);
+        wi = to_light / distance;
+        falloff = 1.0 / (distance * distance);
+    }
+    if (light.kind == LIGHT_SPOT) {
+        let cone = clamp(-dot(light.p1, wi) * light.p2.x + light.p2.y, 0.0, 1.0);
+        falloff *= cone * cone;
+    }
+    let n = surface.shading_normal;
+    let cos_surface = dot(n, wi);
+    let traced = cos_surface > 0.0 && dot(surface.geometric_normal, wi) > 0.0;
+    var f = vec3<f32>(0.0);
+    if (traced) {
+        f = eval_brdf(material, n, wo, wi) * light.color * (cos_surface * falloff);
+    }
+    return LightSample(wi, shadow_ray_length(distance), NONE, f, traced);
+}
+
+// What a light adds from `sum`, the sum of its visible samples' terms.
+fn light_total(light: GpuLight, sum: vec3<f32>) -> vec3<f32> {
+    if (FEATURE_AREA_LIGHTS && is_area_light(light)) {
+        return light.color * sum * (area_light_of(light).area / f32(light.samples));
+    }
+    return sum;
+}
+
+// The samples of a light with `samples` samples that fall in `window`: (first, end). A
+// saturating end: start + count may exceed u32 (the whole-light window).
+fn window_samples(window: LightWindow, samples: u32) -> vec2<u32> {
+    return vec2<u32>(min(window.start, samples),
+                     min(window.start + min(window.count, samples), samples));
+}
+
+// The pixel pattern's key of an area light's samples at path vertex `depth` (`offset`: the
+// light's first sample among the vertex's), and `rng` moved to its sample `first`.
+fn seek_light_samples(rng: ptr<function, Rng>, depth: u32, offset: u32, first: u32) -> u32 {
+    let key = pixel_hash(frame.seed, (*rng).pixel, light_dimension(depth, offset, 0u));
+    rng_seek(rng, light_dimension(depth, offset, first));
+    return key;
+}
+
+// Stratified points on the area lights (numbers drawn before any test, so both paths consume
+// the same dimensions whatever the visibility) and one shadow ray per punctual light.
 fn direct_light(time: f32, surface: Surface, material: GpuMaterial, own: u32, wo: vec3<f32>,
                 depth: u32, window: LightWindow,
                 rng: ptr<function, Rng>, counters: ptr<function, PathCounters>) -> vec3<f32> {
-    let n = surface.shading_normal;
-    let ng = surface.geometric_normal;
-    let origin = offset_ray_origin(surface.position, surface.position_error, ng);
+    let origin = offset_ray_origin(surface.position, surface.position_error, surface.geometric_normal);
     var total = vec3<f32>(0.0);
     var sample_offset = 0u;
     for (var l = 0u; l < frame.light_count; l += 1u) {
         let light = lights[l];
-        if (FEATURE_AREA_LIGHTS && (light.kind == LIGHT_AREA || light.kind == LIGHT_TRIANGLE)) {
-            // Stratified points on the parallelogram (folded onto the triangle of a triangle
-            // light); numbers are drawn before any test.
-            let c = cross(light.p1, light.p2);
-            let triangle = light.kind == LIGHT_TRIANGLE;
-            let area = select(1.0, 0.5, triangle) * length(c);
-            let light_normal = normalize(c);
-            let first_sample = min(window.start, light.samples);
-            // A saturating end: start + count may exceed u32 (the whole-light window).
-            let end_sample = min(window.start + min(window.count, light.samples), light.samples);
-            let key = pixel_hash(frame.seed, (*rng).pixel, light_dimension(depth, sample_offset, 0u));
-            rng_seek(rng, light_dimension(depth, sample_offset, first_sample));
+        if (FEATURE_AREA_LIGHTS && is_area_light(light)) {
+            let shape = area_light_of(light);
+            let range = window_samples(window, light.samples);
+            let key = seek_light_samples(rng, depth, sample_offset, range.x);
             sample_offset += light.samples;
             var sum = vec3<f32>(0.0);
-            for (var k = first_sample; k < end_sample; k += 1u) {
-                var u = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
-                                        rng_next_2d(rng));
-                if (triangle && u.x + u.y > 1.0) {
-                    u = vec2<f32>(1.0) - u;
-                }
-                let to_light = light.p0 + u.x * light.p1 + u.y * light.p2 - surface.position;
-                let distance = length(to_light);
-                let wi = to_light / distance;
-                let cos_surface = dot(n, wi);
-                let cos_light = -dot(light_normal, wi);
-                if (cos_surface > 0.0 && cos_light > 0.0 && dot(ng, wi) > 0.0) {
+            for (var k = range.x; k < range.y; k += 1u) {
+                let square = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
+                                             rng_next_2d(rng));
+                let s = area_light_sample(light, shape, square, surface, material, wo);
+                if (s.traced) {
                     (*counters).rays += 1u;
-                    if (!cw_occluded(ray_at_time(ray_query_new(origin, wi), time), own, light.prim, shadow_ray_length(distance))) {
-                        sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance);
+                    if (!cw_occluded(ray_at_time(ray_query_new(origin, s.wi), time), own, s.skip, s.t_max)) {
+                        sum += s.f;
                     }
                 }
             }
-            total += light.color * sum * (area / f32(light.samples));
+            total += light_total(light, sum);
         } else if (FEATURE_PUNCTUAL_LIGHTS && window_is_first(window)) {
-            var wi = light.p0;
-            var distance = T_FAR;
-            var falloff = 1.0;
-            if (light.kind != LIGHT_DIRECTIONAL) {
-                let to_light = light.p0 - surface.position;
-                distance = length(to_light);
-                wi = to_light / distance;
-                falloff = 1.0 / (distance * distance);
-            }
-            if (light.kind == LIGHT_SPOT) {
-                let cone = clamp(-dot(light.p1, wi) * light.p2.x + light.p2.y, 0.0, 1.0);
-                falloff *= cone * cone;
-            }
-            let cos_surface = dot(n, wi);
-            if (cos_surface > 0.0 && dot(ng, wi) > 0.0) {
+            let s = punctual_light_sample(light, surface, material, wo);
+            if (s.traced) {
                 (*counters).rays += 1u;
-                if (!cw_occluded(ray_at_time(ray_query_new(origin, wi), time), own, NONE, shadow_ray_length(distance))) {
-                    total += eval_brdf(material, n, wo, wi) * light.color * (cos_surface * falloff);
+                if (!cw_occluded(ray_at_time(ray_query_new(origin, s.wi), time), own, s.skip, s.t_max)) {
+                    total += s.f;
                 }
             }
         }
@@ -212,16 +284,12 @@ fn camera_query(camera_ray: CameraRay) -> RayQuery {
     return ray_at_time(ray_query_new(camera_ray.origin, camera_ray.direction), camera_ray.time);
 }
 
-// Radiance along the path of `camera_ray`. Where `camera_hit_known`, the camera ray's closest
-// hit is `camera_hit` (`cw_closest_hit(camera_query(camera_ray), NONE, T_FAR)`, which the
-// `primary` kernel of a split render traced); else the path traces it, `camera_hit` unused.
-// Callers pass a constant: the megakernel's loop then compiles to one traversal call site, which
-// lavapipe runs 15-25% faster on mirror scenes than a traversal skipped at depth 0. The CPU twin
-// (trace_path in src/integrator.rs) takes the same choice as `CameraHit`: its `trace_pixel`
-// traces a pixel's camera rays in packets and passes each path its hit.
-fn trace_path(camera_ray: CameraRay, camera_hit_known: bool, camera_hit: PrimHit, window: LightWindow,
-              rng: ptr<function, Rng>, counters: ptr<function, PathCounters>,
-              first_hit: ptr<function, FirstHit>) -> vec3<f32> {
+// Radiance along the path of `camera_ray`, which traces every ray itself: its loop has one
+// traversal call site, which lavapipe runs 15-25% faster on mirror scenes than a loop whose
+// traversal is skipped at depth 0 for a camera ray's hit passed in. The CPU twin (trace_path in src/integrator.rs) may be given
+// the camera ray's hit (`CameraHit`): its `trace_pixel` traces a pixel's camera rays in packets.
+fn trace_path(camera_ray: CameraRay, window: LightWindow, rng: ptr<function, Rng>,
+              counters: ptr<function, PathCounters>, first_hit: ptr<function, FirstHit>) -> vec3<f32> {
     let first = window_is_first(window);
     let time = camera_ray.time;
     var radiance = vec3<f32>(0.0);
@@ -230,12 +298,7 @@ fn trace_path(camera_ray: CameraRay, camera_hit_known: bool, camera_hit: PrimHit
     var skip = NONE;
     for (var depth = 0u; depth <= frame.max_depth; depth += 1u) {
         (*counters).rays += 1u;
-        var found: PrimHit;
-        if (camera_hit_known && depth == 0u) {
-            found = camera_hit;
-        } else {
-            found = cw_closest_hit(ray, skip, T_FAR);
-        }
+        let found = cw_closest_hit(ray, skip, T_FAR);
         if (found.prim == NONE) {
             if (first) {
                 radiance += throughput * frame.background;
@@ -325,6 +388,5 @@ fn trace_sample(x: u32, y: u32, sample: u32, window: LightWindow,
                 counters: ptr<function, PathCounters>, first_hit: ptr<function, FirstHit>) -> vec3<f32> {
     var rng = sample_rng(x, y, sample);
     let camera_ray = camera_sample(x, y, sample, &rng);
-    let unused = PrimHit(NONE, miss());
-    return trace_path(camera_ray, false, unused, window, &rng, counters, first_hit);
+    return trace_path(camera_ray, window, &rng, counters, first_hit);
 }

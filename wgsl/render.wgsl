@@ -1,4 +1,4 @@
-// The render kernels: one invocation per pixel of a band of rows (or of a band of rows of the
+// The megakernel: one invocation per pixel of a band of rows (or of a band of rows of the
 // list of pixels an adaptive pass samples), a range of samples and a window of light samples
 // per dispatch. A pass's sum goes to the pixel's scratch slot (which exists only when passes are
 // split) until the pass's last light window commits it, with the sample count, to the running
@@ -6,11 +6,7 @@
 // per-pixel mean after every dispatch; the AOV layers, when asked for, sum the first hits' depth,
 // normal and albedo. Layout: src/render.rs (AccumulationLayout). Bindings: wgsl/bindings.wgsl.
 // Mirrors: src/cpu.rs (CpuRenderer::run_dispatch).
-//
-// Two ways to run a dispatch (`gpu::render::KernelSplit`): the megakernel `render` traces each
-// sample's path whole; a split render runs `primary` (the camera rays' closest hits, stored)
-// and then `render_split` (the paths from those hits), the same values in the same order, so
-// both give the same image.
+// The wavefront render (wgsl/wavefront.wgsl) commits its pixels' sums with the same functions.
 
 // The pixel of invocation `id`, or NONE where the band or the list ends.
 fn pass_pixel(id: vec3<u32>) -> u32 {
@@ -86,56 +82,6 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     for (var s = 0u; s < pass_info.sample_count; s += 1u) {
         var first_hit = FirstHit(0.0, vec3<f32>(0.0), vec3<f32>(0.0));
         let radiance = trace_sample(x, y, pass_info.sample_start + s, pass_window(), &counters, &first_hit);
-        add_sample(&sums, radiance, first_hit);
-    }
-    commit_pixel(pixel, sums, counters);
-    check_loop_limit();
-}
-
-// The slot in `primary_hits` of sample `s` of the dispatch's invocation `id`.
-fn primary_slot(id: vec3<u32>, s: u32) -> u32 {
-    return (id.y * pass_info.tile_width + id.x) * pass_info.sample_count + s;
-}
-
-// A split render's first kernel: the closest hit of each camera ray of the dispatch, so that
-// the traversal of camera rays runs apart from the shading (`render_split`).
-@compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
-fn primary(@builtin(global_invocation_id) id: vec3<u32>) {
-    let pixel = pass_pixel(id);
-    if (pixel == NONE) {
-        return;
-    }
-    let x = pixel % frame.width;
-    let y = pixel / frame.width;
-    for (var s = 0u; s < pass_info.sample_count; s += 1u) {
-        var rng = sample_rng(x, y, pass_info.sample_start + s);
-        let camera_ray = camera_sample(x, y, pass_info.sample_start + s, &rng);
-        let found = cw_closest_hit(camera_query(camera_ray), NONE, T_FAR);
-        primary_hits[primary_slot(id, s)] =
-            GpuPrimaryHit(found.prim, found.hit.t, found.hit.b1, found.hit.b2);
-    }
-    check_loop_limit();
-}
-
-// A split render's second kernel: the megakernel's paths from the camera rays' hits that
-// `primary` found (the same camera samples, drawn again: they are cheaper than storing).
-@compute @workgroup_size(WORKGROUP_SIZE, WORKGROUP_SIZE, 1)
-fn render_split(@builtin(global_invocation_id) id: vec3<u32>) {
-    let pixel = pass_pixel(id);
-    if (pixel == NONE) {
-        return;
-    }
-    let x = pixel % frame.width;
-    let y = pixel / frame.width;
-    var sums = no_sums();
-    var counters = PathCounters(0u, 0u);
-    for (var s = 0u; s < pass_info.sample_count; s += 1u) {
-        var first_hit = FirstHit(0.0, vec3<f32>(0.0), vec3<f32>(0.0));
-        var rng = sample_rng(x, y, pass_info.sample_start + s);
-        let camera_ray = camera_sample(x, y, pass_info.sample_start + s, &rng);
-        let stored = primary_hits[primary_slot(id, s)];
-        let camera_hit = PrimHit(stored.prim, Hit(stored.t, stored.b1, stored.b2));
-        let radiance = trace_path(camera_ray, true, camera_hit, pass_window(), &rng, &counters, &first_hit);
         add_sample(&sums, radiance, first_hit);
     }
     commit_pixel(pixel, sums, counters);

@@ -130,11 +130,59 @@ struct GpuRay {
     _pad0: u32,
 }
 
-struct GpuPrimaryHit {
+struct GpuHit {
     prim: u32,
     t: f32,
     b1: f32,
     b2: f32,
+}
+
+struct GpuPathRay {
+    origin: vec3<f32>,
+    time: f32,
+    direction: vec3<f32>,
+    skip: u32,
+}
+
+struct GpuPath {
+    throughput: vec3<f32>,
+    pixel: u32,
+    radiance: vec3<f32>,
+    sample: u32,
+    mirror: vec3<f32>,
+    rays: u32,
+    shadow_count: u32,
+    truncated: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+struct GpuShadowRay {
+    origin: vec3<f32>,
+    t_max: f32,
+    direction: vec3<f32>,
+    time: f32,
+    skip_a: u32,
+    skip_b: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+struct GpuShadowTerm {
+    f: vec3<f32>,
+    light: u32,
+}
+
+struct GpuWave {
+    depth: u32,
+    shadow_stride: u32,
+    path_capacity: u32,
+    _pad0: u32,
+}
+
+struct GpuWaveArgs {
+    paths: vec4<u32>,
+    shadows: vec4<u32>,
 }
 
 struct GpuReflector {

@@ -34,8 +34,9 @@ pub const SCENES: [&str; 11] = [
 /// One way of rendering a frame, and its figures.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameRun {
-    /// `cpu` or `gpu` (code specialised to the scene's features), `cpu-general` or
-    /// `gpu-general` (every feature), `gpu-rpiN` (specialised, at most N rays per invocation).
+    /// `cpu`, `gpu-mega` (the megakernel) or `gpu-wave` (the wavefront render), code
+    /// specialised to the scene's features; with `-general`, the code with every feature;
+    /// `gpu-mega-rpiN` (specialised, at most N rays per invocation).
     pub backend: String,
     /// Wall-clock time of the whole render over the timed runs (ms).
     pub frame_ms: Spread,
@@ -84,7 +85,7 @@ pub(super) enum Way {
         features: u32,
         /// Budgets other than the adapter's.
         budgets: Option<RayBudgets>,
-        /// The megakernel, or the split kernels.
+        /// The megakernel, or the wavefront render's kernels.
         kernels: PathKernels,
     },
 }
@@ -108,10 +109,12 @@ pub(super) fn render_once(
             let context = gpu
                 .expect("a GPU way is only planned with a GPU context")
                 .clone();
-            let budgets =
-                budgets.unwrap_or_else(|| RayBudgets::for_adapter(context.is_cpu_adapter));
-            let mut renderer =
-                GpuRenderer::with_kernels(context, scene, features, budgets, kernels)?;
+            let mut renderer = match budgets {
+                Some(budgets) => {
+                    GpuRenderer::with_budgets(context, scene, features, kernels, budgets)?
+                }
+                None => GpuRenderer::with_kernels(context, scene, features, kernels)?,
+            };
             render(scene, &mut renderer, &mut |_, _| {}, &cancel)
         }
     }
@@ -148,30 +151,21 @@ pub fn run(
         ];
         if let Some(context) = gpu {
             let adapters = RayBudgets::for_adapter(context.is_cpu_adapter);
-            ways.push((
-                "gpu".into(),
-                Way::Gpu {
-                    features: flat.features(),
-                    budgets: None,
-                    kernels: PathKernels::Megakernel,
-                },
-            ));
-            ways.push((
-                "gpu-general".into(),
-                Way::Gpu {
-                    features: FEATURES_ALL,
-                    budgets: None,
-                    kernels: PathKernels::Megakernel,
-                },
-            ));
-            ways.push((
-                "gpu-split".into(),
-                Way::Gpu {
-                    features: flat.features(),
-                    budgets: None,
-                    kernels: PathKernels::Split,
-                },
-            ));
+            for (name, kernels) in [
+                ("gpu-mega", PathKernels::Megakernel),
+                ("gpu-wave", PathKernels::Wavefront),
+            ] {
+                for (suffix, features) in [("", flat.features()), ("-general", FEATURES_ALL)] {
+                    ways.push((
+                        format!("{name}{suffix}"),
+                        Way::Gpu {
+                            features,
+                            budgets: None,
+                            kernels,
+                        },
+                    ));
+                }
+            }
             for &n in rays_per_invocation {
                 // A fixed shape: N rays per invocation whatever the image size.
                 let budgets = RayBudgets {
@@ -180,7 +174,7 @@ pub fn run(
                     ..adapters
                 };
                 ways.push((
-                    format!("gpu-rpi{n}"),
+                    format!("gpu-mega-rpi{n}"),
                     Way::Gpu {
                         features: flat.features(),
                         budgets: Some(budgets),
@@ -241,9 +235,9 @@ impl FrameReport {
     pub fn to_markdown(&self) -> String {
         let mut out = String::from(
             "frame: each sample scene at its own size and spp; median (min–max) ms of the timed \
-             runs, interleaved; `cpu` and `gpu` run code specialised to the scene's features, \
-             `cpu-general` and `gpu-general` the code with every feature, `gpu-split` the \
-             specialised code as two kernels (camera rays' hits, then the paths); ratios are \
+             runs, interleaved; `cpu`, `gpu-mega` (the megakernel) and `gpu-wave` (the wavefront \
+             render) run code specialised to the scene's features, `-general` the code with \
+             every feature, `gpu-mega-rpiN` the megakernel at N rays per invocation; ratios are \
              speed-ups\n\n",
         );
         out += "| scene | size x spp | triangles | features | backend | frame ms | kernel ms | Mrays/s | vs CPU | vs general |\n";

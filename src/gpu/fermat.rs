@@ -12,7 +12,7 @@ use glam::Vec3;
 use wgpu::util::DeviceExt;
 
 use super::GpuContext;
-use super::kernels::{self, FERMAT, FERMAT_CULL, FERMAT_START};
+use super::kernels::{self, FERMAT, FERMAT_CULL, FERMAT_START, slot};
 use crate::error::{Error, Result};
 use crate::layout::{GpuDrawArgs, GpuReflection, GpuReflector, REFLECTOR_PATCH};
 use crate::preview::MirrorSurface;
@@ -160,10 +160,10 @@ impl FermatPass {
                 let bind_group = self.pipelines[pipeline].1.bind_group(
                     &context.device,
                     &[
-                        ("reflectors", &searches),
-                        ("fermat_vertices", vertices),
-                        ("reflections", &output),
-                        ("fermat_starts", &starts),
+                        (slot::REFLECTORS, &searches),
+                        (slot::FERMAT_VERTICES, vertices),
+                        (slot::REFLECTIONS, &output),
+                        (slot::FERMAT_STARTS, &starts),
                     ],
                 )?;
                 Ok((pipeline, bind_group))
@@ -174,9 +174,9 @@ impl FermatPass {
             let bind_group = start.bind_group(
                 &context.device,
                 &[
-                    ("reflectors", &searches),
-                    ("fermat_vertices", vertices),
-                    ("fermat_starts", &starts),
+                    (slot::REFLECTORS, &searches),
+                    (slot::FERMAT_VERTICES, vertices),
+                    (slot::FERMAT_STARTS, &starts),
                 ],
             )?;
             let mut encoder = context.device.create_command_encoder(&Default::default());
@@ -261,12 +261,12 @@ impl FermatPass {
         let bind_group = self.cull.bind_group(
             &context.device,
             &[
-                ("reflectors", &solve.reflectors),
-                ("reflections", &solve.output),
-                ("reflected_triangles", triangles),
-                ("shown_indices", &shown),
-                ("draw_args", &args),
-                ("vertex_solves", vertex_solves),
+                (slot::REFLECTORS, &solve.reflectors),
+                (slot::REFLECTIONS, &solve.output),
+                (slot::REFLECTED_TRIANGLES, triangles),
+                (slot::SHOWN_INDICES, &shown),
+                (slot::DRAW_ARGS, &args),
+                (slot::VERTEX_SOLVES, vertex_solves),
             ],
         )?;
         Ok(FermatCull {

@@ -9,7 +9,7 @@
 //! adding an entry to [`KERNELS`], not copying set-up code.
 
 use crate::error::{Error, Result};
-use crate::layout::{FEATURES, GpuPass, wgsl_prelude};
+use crate::layout::{FEATURES, wgsl_prelude};
 
 /// How a kernel accesses a binding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,7 +36,7 @@ pub struct Binding {
     pub dynamic_size: u64,
 }
 
-const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
+const fn entry(binding: u32, name: &'static str, access: Access) -> Binding {
     Binding {
         binding,
         name,
@@ -45,122 +45,175 @@ const fn binding(binding: u32, name: &'static str, access: Access) -> Binding {
     }
 }
 
-/// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
-pub const BINDINGS: [Binding; 24] = [
-    binding(0, "camera", Access::Uniform),
-    binding(1, "frame", Access::Uniform),
-    // One GpuPass per dispatch of a batch, each at its own dynamic offset.
-    Binding {
+/// Group 0's bindings by name, as `wgsl/bindings.wgsl` declares them (same numbers, names and
+/// access: tests/wgsl.rs checks). Kernels list theirs by these names, and buffers are handed to
+/// [`Pipeline::bind_group`] with them.
+pub mod slot {
+    use super::Access::{StorageRead, StorageReadWrite, Uniform};
+    use super::{Binding, entry};
+    use crate::layout::{GpuPass, GpuWave};
+
+    /// The view camera (`GpuCamera`).
+    pub const CAMERA: Binding = entry(0, "camera", Uniform);
+    /// The render's constants (`GpuFrame`).
+    pub const FRAME: Binding = entry(1, "frame", Uniform);
+    /// One `GpuPass` per dispatch of a batch, each at its own dynamic offset.
+    pub const PASS_INFO: Binding = Binding {
         dynamic_size: size_of::<GpuPass>() as u64,
-        ..binding(2, "pass_info", Access::Uniform)
-    },
-    binding(3, "nodes", Access::StorageRead),
-    binding(4, "prims", Access::StorageRead),
-    binding(5, "normals", Access::StorageRead),
-    binding(6, "materials", Access::StorageRead),
-    binding(7, "lights", Access::StorageRead),
-    binding(8, "accumulation", Access::StorageReadWrite),
-    binding(9, "status", Access::StorageReadWrite),
-    binding(10, "sample_table", Access::StorageRead),
-    binding(11, "rays", Access::StorageRead),
-    binding(12, "distances", Access::StorageReadWrite),
-    binding(13, "cw_nodes", Access::StorageRead),
-    binding(14, "pixel_list", Access::StorageRead),
-    binding(15, "reflectors", Access::StorageRead),
-    binding(16, "fermat_vertices", Access::StorageRead),
-    binding(17, "reflections", Access::StorageReadWrite),
-    binding(18, "primary_hits", Access::StorageReadWrite),
-    binding(19, "reflected_triangles", Access::StorageRead),
-    binding(20, "shown_indices", Access::StorageReadWrite),
-    binding(21, "draw_args", Access::StorageReadWrite),
-    binding(22, "fermat_starts", Access::StorageReadWrite),
-    binding(23, "vertex_solves", Access::StorageRead),
+        ..entry(2, "pass_info", Uniform)
+    };
+    /// The BVH2's nodes (the ray benchmark's BVH2 queries).
+    pub const NODES: Binding = entry(3, "nodes", StorageRead);
+    /// The primitives, in the order of the BVH traversed.
+    pub const PRIMS: Binding = entry(4, "prims", StorageRead);
+    /// Smooth triangles' vertex normals.
+    pub const NORMALS: Binding = entry(5, "normals", StorageRead);
+    /// The materials.
+    pub const MATERIALS: Binding = entry(6, "materials", StorageRead);
+    /// The lights.
+    pub const LIGHTS: Binding = entry(7, "lights", StorageRead);
+    /// The per-pixel sums (`render::AccumulationLayout`).
+    pub const ACCUMULATION: Binding = entry(8, "accumulation", StorageReadWrite);
+    /// The status words every kernel reports through.
+    pub const STATUS: Binding = entry(9, "status", StorageReadWrite);
+    /// Precomputed sample patterns (Poisson-disk sets, interleaved tiles, apertures).
+    pub const SAMPLE_TABLE: Binding = entry(10, "sample_table", StorageRead);
+    /// The ray benchmark's rays.
+    pub const RAYS: Binding = entry(11, "rays", StorageRead);
+    /// The ray benchmark's per-ray results.
+    pub const DISTANCES: Binding = entry(12, "distances", StorageReadWrite);
+    /// The compressed wide BVH's nodes.
+    pub const CW_NODES: Binding = entry(13, "cw_nodes", StorageRead);
+    /// The pixels an adaptive pass samples.
+    pub const PIXEL_LIST: Binding = entry(14, "pixel_list", StorageRead);
+    /// The Fermat searches: a mirror and an eye each.
+    pub const REFLECTORS: Binding = entry(15, "reflectors", StorageRead);
+    /// The vertices the Fermat searches reflect.
+    pub const FERMAT_VERTICES: Binding = entry(16, "fermat_vertices", StorageRead);
+    /// The Fermat searches' reflection points.
+    pub const REFLECTIONS: Binding = entry(17, "reflections", StorageReadWrite);
+    /// The wavefront render's closest hit of each path's current ray.
+    pub const WF_HITS: Binding = entry(18, "wf_hits", StorageReadWrite);
+    /// The preview's reflected triangles.
+    pub const REFLECTED_TRIANGLES: Binding = entry(19, "reflected_triangles", StorageRead);
+    /// The index triples of the reflected triangles shown.
+    pub const SHOWN_INDICES: Binding = entry(20, "shown_indices", StorageReadWrite);
+    /// The one indirect draw of the reflected triangles.
+    pub const DRAW_ARGS: Binding = entry(21, "draw_args", StorageReadWrite);
+    /// A Bézier patch search's corner B per vertex.
+    pub const FERMAT_STARTS: Binding = entry(22, "fermat_starts", StorageReadWrite);
+    /// The Fermat solve of each distinct reflected vertex.
+    pub const VERTEX_SOLVES: Binding = entry(23, "vertex_solves", StorageRead);
+    /// One `GpuWave` per stage dispatch of a wavefront batch, each at its own dynamic offset.
+    pub const WAVE: Binding = Binding {
+        dynamic_size: size_of::<GpuWave>() as u64,
+        ..entry(24, "wave", Uniform)
+    };
+    /// Each path's current ray (`GpuPathRay`).
+    pub const WF_RAYS: Binding = entry(25, "wf_rays", StorageReadWrite);
+    /// Each path's state between stages (`GpuPath`).
+    pub const WF_PATHS: Binding = entry(26, "wf_paths", StorageReadWrite);
+    /// The paths each depth's stages take, two lists used in turn.
+    pub const WF_QUEUE: Binding = entry(27, "wf_queue", StorageReadWrite);
+    /// The live counters of the queues being filled.
+    pub const WF_COUNTERS: Binding = entry(28, "wf_counters", StorageReadWrite);
+    /// Each depth's indirect dispatch arguments, as `wf_prepare` writes them.
+    pub const WF_ARGS: Binding = entry(29, "wf_args", StorageReadWrite);
+    /// The same arguments, read by the stages they size.
+    pub const WF_ARGS_IN: Binding = entry(30, "wf_args_in", StorageRead);
+    /// The shadow rays of a depth's path vertices.
+    pub const WF_SHADOW_RAYS: Binding = entry(31, "wf_shadow_rays", StorageReadWrite);
+    /// What each shadow ray adds where the light is visible.
+    pub const WF_SHADOW_TERMS: Binding = entry(32, "wf_shadow_terms", StorageReadWrite);
+    /// The shadow rays emitted, compacted.
+    pub const WF_SHADOW_QUEUE: Binding = entry(33, "wf_shadow_queue", StorageReadWrite);
+    /// The camera ray's first hit of each path, for the AOV layers.
+    pub const WF_AOVS: Binding = entry(34, "wf_aovs", StorageReadWrite);
+}
+
+use slot::*;
+
+/// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
+pub const BINDINGS: [Binding; 35] = [
+    CAMERA,
+    FRAME,
+    PASS_INFO,
+    NODES,
+    PRIMS,
+    NORMALS,
+    MATERIALS,
+    LIGHTS,
+    ACCUMULATION,
+    STATUS,
+    SAMPLE_TABLE,
+    RAYS,
+    DISTANCES,
+    CW_NODES,
+    PIXEL_LIST,
+    REFLECTORS,
+    FERMAT_VERTICES,
+    REFLECTIONS,
+    WF_HITS,
+    REFLECTED_TRIANGLES,
+    SHOWN_INDICES,
+    DRAW_ARGS,
+    FERMAT_STARTS,
+    VERTEX_SOLVES,
+    WAVE,
+    WF_RAYS,
+    WF_PATHS,
+    WF_QUEUE,
+    WF_COUNTERS,
+    WF_ARGS,
+    WF_ARGS_IN,
+    WF_SHADOW_RAYS,
+    WF_SHADOW_TERMS,
+    WF_SHADOW_QUEUE,
+    WF_AOVS,
 ];
 
-/// The bindings of the render kernel: nine storage buffers, one more than WebGPU's baseline
+/// The bindings of the megakernel: ten storage buffers, two more than WebGPU's baseline
 /// (every Vulkan, Metal and D3D12 adapter allows more; `GpuRenderer` says so where one does not).
-const RENDER_BINDINGS: [Binding; 12] = [
-    BINDINGS[0],
-    BINDINGS[1],
-    BINDINGS[2],
-    BINDINGS[4],
-    BINDINGS[5],
-    BINDINGS[6],
-    BINDINGS[7],
-    BINDINGS[8],
-    BINDINGS[9],
-    BINDINGS[10],
-    BINDINGS[13],
-    BINDINGS[14],
+const RENDER_BINDINGS: &[Binding] = &[
+    CAMERA,
+    FRAME,
+    PASS_INFO,
+    PRIMS,
+    NORMALS,
+    MATERIALS,
+    LIGHTS,
+    ACCUMULATION,
+    STATUS,
+    SAMPLE_TABLE,
+    CW_NODES,
+    PIXEL_LIST,
 ];
-
-/// The bindings of a split render's first kernel (`primary`): what camera rays and their
-/// traversal read, and where their hits go.
-const PRIMARY_BINDINGS: [Binding; 9] = [
-    BINDINGS[0],
-    BINDINGS[1],
-    BINDINGS[2],
-    BINDINGS[4],
-    BINDINGS[9],
-    BINDINGS[10],
-    BINDINGS[13],
-    BINDINGS[14],
-    BINDINGS[18],
-];
-
-/// The bindings of a split render's second kernel (`render_split`): the megakernel's, then the
-/// camera rays' hits.
-const RENDER_SPLIT_BINDINGS: [Binding; 13] = {
-    let mut list = [BINDINGS[18]; 13];
-    let mut i = 0;
-    while i < RENDER_BINDINGS.len() {
-        list[i] = RENDER_BINDINGS[i];
-        i += 1;
-    }
-    list
-};
 
 /// The bindings of the ray-query kernels.
-const TRACE_BINDINGS: [Binding; 7] = [
-    BINDINGS[1],
-    BINDINGS[2],
-    BINDINGS[3],
-    BINDINGS[4],
-    BINDINGS[9],
-    BINDINGS[11],
-    BINDINGS[12],
-];
+const TRACE_BINDINGS: &[Binding] = &[FRAME, PASS_INFO, NODES, PRIMS, STATUS, RAYS, DISTANCES];
 
 /// The bindings of the ray-query kernels over the compressed wide BVH.
-const TRACE_CW_BINDINGS: [Binding; 7] = [
-    BINDINGS[1],
-    BINDINGS[2],
-    BINDINGS[4],
-    BINDINGS[9],
-    BINDINGS[11],
-    BINDINGS[12],
-    BINDINGS[13],
-];
+const TRACE_CW_BINDINGS: &[Binding] = &[FRAME, PASS_INFO, PRIMS, STATUS, RAYS, DISTANCES, CW_NODES];
 
 /// The bindings of the Fermat kernel.
-const FERMAT_BINDINGS: [Binding; 4] = [BINDINGS[15], BINDINGS[16], BINDINGS[17], BINDINGS[22]];
+const FERMAT_BINDINGS: &[Binding] = &[REFLECTORS, FERMAT_VERTICES, REFLECTIONS, FERMAT_STARTS];
 
 /// The bindings of the Fermat searches' eye-free start: the searches, the vertices, the starts.
-const FERMAT_START_BINDINGS: [Binding; 3] = [BINDINGS[15], BINDINGS[16], BINDINGS[22]];
+const FERMAT_START_BINDINGS: &[Binding] = &[REFLECTORS, FERMAT_VERTICES, FERMAT_STARTS];
 
 /// The bindings of the Fermat cull: the searches (their mirrors' ids), the solves' points
 /// (whether each shows), the triangles and their vertices' solves, and the draw it writes.
-const FERMAT_CULL_BINDINGS: [Binding; 6] = [
-    BINDINGS[15],
-    BINDINGS[17],
-    BINDINGS[19],
-    BINDINGS[20],
-    BINDINGS[21],
-    BINDINGS[23],
+const FERMAT_CULL_BINDINGS: &[Binding] = &[
+    REFLECTORS,
+    REFLECTIONS,
+    REFLECTED_TRIANGLES,
+    SHOWN_INDICES,
+    DRAW_ARGS,
+    VERTEX_SOLVES,
 ];
 
 /// (file name, source) of every WGSL module a kernel may compose.
-pub const MODULES: [(&str, &str); 15] = [
+pub const MODULES: [(&str, &str); 16] = [
     ("types.wgsl", include_str!("../../wgsl/types.wgsl")),
     ("bindings.wgsl", include_str!("../../wgsl/bindings.wgsl")),
     ("status.wgsl", include_str!("../../wgsl/status.wgsl")),
@@ -180,6 +233,7 @@ pub const MODULES: [(&str, &str); 15] = [
         include_str!("../../wgsl/integrator.wgsl"),
     ),
     ("render.wgsl", include_str!("../../wgsl/render.wgsl")),
+    ("wavefront.wgsl", include_str!("../../wgsl/wavefront.wgsl")),
     ("trace.wgsl", include_str!("../../wgsl/trace.wgsl")),
     ("fermat.wgsl", include_str!("../../wgsl/fermat.wgsl")),
 ];
@@ -223,23 +277,142 @@ pub const RENDER: Kernel = Kernel {
         "render.wgsl",
     ],
     entry_point: "render",
-    bindings: &RENDER_BINDINGS,
+    bindings: RENDER_BINDINGS,
 };
 
-/// A split render's first kernel: each camera ray's closest hit, stored for `RENDER_SPLIT`.
-pub const RENDER_PRIMARY: Kernel = Kernel {
-    name: "render_primary",
-    modules: RENDER.modules,
-    entry_point: "primary",
-    bindings: &PRIMARY_BINDINGS,
+/// The wavefront render's modules: the megakernel's, whose functions its stages share, and its own.
+const WAVEFRONT_MODULES: &[&str] = &[
+    "types.wgsl",
+    "bindings.wgsl",
+    "status.wgsl",
+    "rng.wgsl",
+    "sampling.wgsl",
+    "camera.wgsl",
+    "intersect.wgsl",
+    "curved.wgsl",
+    "traverse_cwbvh.wgsl",
+    "sampler.wgsl",
+    "integrator.wgsl",
+    "render.wgsl",
+    "wavefront.wgsl",
+];
+
+/// The wavefront render's camera rays: one path per camera sample of the dispatch.
+pub const WF_CAMERA: Kernel = Kernel {
+    name: "wf_camera",
+    modules: WAVEFRONT_MODULES,
+    entry_point: "wf_camera",
+    bindings: &[
+        CAMERA,
+        FRAME,
+        PASS_INFO,
+        STATUS,
+        SAMPLE_TABLE,
+        PIXEL_LIST,
+        WAVE,
+        WF_RAYS,
+        WF_PATHS,
+        WF_QUEUE,
+        WF_ARGS_IN,
+    ],
 };
 
-/// A split render's second kernel: the megakernel's paths from the stored camera-ray hits.
-pub const RENDER_SPLIT: Kernel = Kernel {
-    name: "render_split",
-    modules: RENDER.modules,
-    entry_point: "render_split",
-    bindings: &RENDER_SPLIT_BINDINGS,
+/// The wavefront render's closest hits: one ray an invocation, as the ray queries trace them.
+pub const WF_CLOSEST: Kernel = Kernel {
+    name: "wf_closest",
+    modules: WAVEFRONT_MODULES,
+    entry_point: "wf_closest",
+    bindings: &[
+        FRAME, PASS_INFO, PRIMS, STATUS, CW_NODES, WF_HITS, WAVE, WF_RAYS, WF_QUEUE, WF_ARGS_IN,
+    ],
+};
+
+/// The wavefront render's shading: what a vertex adds without shadow rays, its shadow rays and
+/// its mirror bounce, queued.
+pub const WF_SHADE: Kernel = Kernel {
+    name: "wf_shade",
+    modules: WAVEFRONT_MODULES,
+    entry_point: "wf_shade",
+    bindings: &[
+        FRAME,
+        PASS_INFO,
+        PRIMS,
+        NORMALS,
+        MATERIALS,
+        LIGHTS,
+        STATUS,
+        WF_HITS,
+        WAVE,
+        WF_RAYS,
+        WF_PATHS,
+        WF_QUEUE,
+        WF_COUNTERS,
+        WF_ARGS_IN,
+        WF_SHADOW_RAYS,
+        WF_SHADOW_TERMS,
+        WF_SHADOW_QUEUE,
+        WF_AOVS,
+    ],
+};
+
+/// The wavefront render's indirect dispatches of a depth, from its queues' counters.
+pub const WF_PREPARE: Kernel = Kernel {
+    name: "wf_prepare",
+    modules: WAVEFRONT_MODULES,
+    entry_point: "wf_prepare",
+    bindings: &[WAVE, WF_COUNTERS, WF_ARGS],
+};
+
+/// The wavefront render's shadow rays: one any-hit query an invocation.
+pub const WF_OCCLUDED: Kernel = Kernel {
+    name: "wf_occluded",
+    modules: WAVEFRONT_MODULES,
+    entry_point: "wf_occluded",
+    bindings: &[
+        FRAME,
+        PASS_INFO,
+        PRIMS,
+        STATUS,
+        CW_NODES,
+        WAVE,
+        WF_ARGS_IN,
+        WF_SHADOW_RAYS,
+        WF_SHADOW_TERMS,
+        WF_SHADOW_QUEUE,
+    ],
+};
+
+/// The wavefront render's direct light: each path vertex's visible shadow terms, summed.
+pub const WF_RESOLVE: Kernel = Kernel {
+    name: "wf_resolve",
+    modules: WAVEFRONT_MODULES,
+    entry_point: "wf_resolve",
+    bindings: &[
+        PASS_INFO,
+        LIGHTS,
+        STATUS,
+        WAVE,
+        WF_PATHS,
+        WF_QUEUE,
+        WF_ARGS_IN,
+        WF_SHADOW_TERMS,
+    ],
+};
+
+/// The wavefront render's pixel sums: a pixel's samples added in order and committed.
+pub const WF_ACCUMULATE: Kernel = Kernel {
+    name: "wf_accumulate",
+    modules: WAVEFRONT_MODULES,
+    entry_point: "wf_accumulate",
+    bindings: &[
+        FRAME,
+        PASS_INFO,
+        ACCUMULATION,
+        STATUS,
+        PIXEL_LIST,
+        WF_PATHS,
+        WF_AOVS,
+    ],
 };
 
 const TRACE_MODULES: &[&str] = &[
@@ -258,7 +431,7 @@ pub const TRACE_CLOSEST: Kernel = Kernel {
     name: "trace_closest",
     modules: TRACE_MODULES,
     entry_point: "trace_closest",
-    bindings: &TRACE_BINDINGS,
+    bindings: TRACE_BINDINGS,
 };
 
 /// Any hit of each ray of a buffer (the ray benchmark).
@@ -266,7 +439,7 @@ pub const TRACE_ANY: Kernel = Kernel {
     name: "trace_any",
     modules: TRACE_MODULES,
     entry_point: "trace_any",
-    bindings: &TRACE_BINDINGS,
+    bindings: TRACE_BINDINGS,
 };
 
 /// Closest hit of each ray of a buffer through the compressed wide BVH (the ray benchmark).
@@ -274,7 +447,7 @@ pub const TRACE_CLOSEST_CW: Kernel = Kernel {
     name: "trace_closest_cw",
     modules: TRACE_MODULES,
     entry_point: "trace_closest_cw",
-    bindings: &TRACE_CW_BINDINGS,
+    bindings: TRACE_CW_BINDINGS,
 };
 
 /// Any hit of each ray of a buffer through the compressed wide BVH (the ray benchmark).
@@ -282,7 +455,7 @@ pub const TRACE_ANY_CW: Kernel = Kernel {
     name: "trace_any_cw",
     modules: TRACE_MODULES,
     entry_point: "trace_any_cw",
-    bindings: &TRACE_CW_BINDINGS,
+    bindings: TRACE_CW_BINDINGS,
 };
 
 /// Reflection points of vertices on a curved mirror by Fermat's principle, one invocation per
@@ -291,7 +464,7 @@ pub const FERMAT: Kernel = Kernel {
     name: "fermat",
     modules: &["types.wgsl", "bindings.wgsl", "fermat.wgsl"],
     entry_point: "fermat",
-    bindings: &FERMAT_BINDINGS,
+    bindings: FERMAT_BINDINGS,
 };
 
 /// A Bézier patch's corner B for each vertex, where the segment from the vertex to the patch's
@@ -302,7 +475,7 @@ pub const FERMAT_START: Kernel = Kernel {
     name: "fermat_start",
     modules: FERMAT.modules,
     entry_point: "fermat_start",
-    bindings: &FERMAT_START_BINDINGS,
+    bindings: FERMAT_START_BINDINGS,
 };
 
 /// The preview's reflected triangles whose three vertices' reflections show on one curved
@@ -312,14 +485,19 @@ pub const FERMAT_CULL: Kernel = Kernel {
     name: "fermat_cull",
     modules: FERMAT.modules,
     entry_point: "fermat_cull",
-    bindings: &FERMAT_CULL_BINDINGS,
+    bindings: FERMAT_CULL_BINDINGS,
 };
 
 /// Every kernel chambre builds.
-pub const KERNELS: [&Kernel; 10] = [
+pub const KERNELS: [&Kernel; 15] = [
     &RENDER,
-    &RENDER_PRIMARY,
-    &RENDER_SPLIT,
+    &WF_CAMERA,
+    &WF_CLOSEST,
+    &WF_SHADE,
+    &WF_PREPARE,
+    &WF_OCCLUDED,
+    &WF_RESOLVE,
+    &WF_ACCUMULATE,
     &TRACE_CLOSEST,
     &TRACE_ANY,
     &TRACE_CLOSEST_CW,
@@ -429,18 +607,18 @@ pub fn build_pipeline_with(
 }
 
 impl Pipeline {
-    /// A bind group with `buffers` (binding name, buffer) in the kernel's binding order; every
-    /// binding the kernel reads must be given.
+    /// A bind group with `buffers` (binding, buffer; any order, more than the kernel reads
+    /// allowed); every binding the kernel reads must be given.
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
-        buffers: &[(&str, &wgpu::Buffer)],
+        buffers: &[(Binding, &wgpu::Buffer)],
     ) -> Result<wgpu::BindGroup> {
         let mut entries = Vec::with_capacity(self.kernel.bindings.len());
         for b in self.kernel.bindings {
             let (_, buffer) = buffers
                 .iter()
-                .find(|(name, _)| *name == b.name)
+                .find(|(given, _)| given.binding == b.binding)
                 .ok_or_else(|| {
                     Error::Gpu(format!(
                         "kernel {}: no buffer for binding {} `{}`",
@@ -465,5 +643,16 @@ impl Pipeline {
             layout: &self.bind_group_layout,
             entries: &entries,
         }))
+    }
+
+    /// The dynamic offsets of the kernel's bind group, in binding order: `offset` of each of
+    /// its bindings bound at a dynamic offset.
+    pub fn dynamic_offsets(&self, offset: impl Fn(&Binding) -> u32) -> Vec<u32> {
+        self.kernel
+            .bindings
+            .iter()
+            .filter(|b| b.dynamic_size > 0)
+            .map(offset)
+            .collect()
     }
 }

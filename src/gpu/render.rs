@@ -1,4 +1,4 @@
-//! The GPU render backend: the scene uploaded, the render kernel built for the scene's
+//! The GPU render backend: the scene uploaded, the render kernels built for the scene's
 //! features, and batches of dispatches queued without waiting.
 //!
 //! A batch is one submission: its dispatches (whole rows of the image each, one `GpuPass` per
@@ -6,38 +6,81 @@
 //! timestamps to mappable buffers whose mapping is requested at once. The host waits only in
 //! `finish`, for the oldest batch, while the next one is already queued.
 //!
-//! A dispatch runs the megakernel, or the split kernels one after the other
-//! ([`PathKernels`]): the same paths, the same image.
+//! A dispatch runs the megakernel, or the wavefront render's kernels ([`PathKernels`]): the
+//! same paths with the same random numbers, the same image.
 
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use super::kernels::{self, Pipeline};
+use super::kernels::{self, Binding, Pipeline, slot};
 use super::{GpuContext, wgpu_error_text};
 use crate::error::{Error, Result};
-use crate::layout::{GpuLight, GpuPass, GpuPrimaryHit, WORKGROUP_SIZE};
+use crate::layout::{
+    GpuHit, GpuLight, GpuPass, GpuPath, GpuPathRay, GpuShadowRay, GpuShadowTerm, GpuWave,
+    GpuWaveArgs, MAX_WORKGROUPS_PER_DIMENSION, TRACE_WORKGROUP_SIZE, WF_COUNTERS, WORKGROUP_SIZE,
+};
 use crate::pack::FlatScene;
-use crate::render::{AccumulationLayout, Backend, DispatchStatus, RayBudgets, plan_passes};
+use crate::render::{
+    AccumulationLayout, Backend, DispatchStatus, RayBound, RayBudgets, RenderPlan, plan_passes,
+};
 
 /// How the device runs a dispatch's camera samples.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PathKernels {
-    /// One kernel traces each sample's path whole (`render` in wgsl/render.wgsl).
+    /// One kernel traces each sample's path whole (`render` in wgsl/render.wgsl), one
+    /// invocation per pixel.
     #[default]
     Megakernel,
-    /// The camera rays' closest hits in a kernel of their own (`primary`), stored, then the
-    /// paths from them (`render_split`): the traversal of the camera rays, most of a frame's
-    /// work, runs apart from the shading's code and registers.
-    Split,
+    /// The wavefront render (wgsl/wavefront.wgsl): paths in buffers, one kernel per stage of a
+    /// path vertex, each traversal kernel one ray an invocation as the ray queries are.
+    Wavefront,
 }
 
 impl PathKernels {
-    /// The kernels a dispatch runs, in order.
+    /// The kernels a dispatch may run.
     pub fn kernels(self) -> &'static [&'static kernels::Kernel] {
         match self {
             PathKernels::Megakernel => &[&kernels::RENDER],
-            PathKernels::Split => &[&kernels::RENDER_PRIMARY, &kernels::RENDER_SPLIT],
+            PathKernels::Wavefront => &[
+                &kernels::WF_CAMERA,
+                &kernels::WF_CLOSEST,
+                &kernels::WF_SHADE,
+                &kernels::WF_PREPARE,
+                &kernels::WF_OCCLUDED,
+                &kernels::WF_RESOLVE,
+                &kernels::WF_ACCUMULATE,
+            ],
+        }
+    }
+
+    /// The kernels for an adapter. A CPU implementation of the API (lavapipe) runs the
+    /// megakernel, which it runs faster: it has few threads to fill, and every kernel boundary
+    /// costs it a pass over memory (BENCHMARKS.md). A real GPU runs the wavefront render: on an
+    /// H200 the megakernel traced the dragon's camera rays at 220-265 Mrays/s while the ray-query
+    /// kernel traced the same rays at ~1,550, and the wavefront's traversal kernels are that one.
+    pub fn for_adapter(is_cpu_adapter: bool) -> PathKernels {
+        if is_cpu_adapter {
+            PathKernels::Megakernel
+        } else {
+            PathKernels::Wavefront
+        }
+    }
+
+    /// The budgets renders with these kernels are planned with on an adapter whose storage
+    /// bindings hold `binding_limit` bytes. The wavefront render traces one ray an invocation, so
+    /// no invocation nears a loop limit; a dispatch's paths and shadow rays live in buffers,
+    /// so its rays are bounded by what a binding holds (64 bytes a path or shadow ray at most).
+    pub fn budgets(self, is_cpu_adapter: bool, binding_limit: u64) -> RayBudgets {
+        match self {
+            PathKernels::Megakernel => RayBudgets::for_adapter(is_cpu_adapter),
+            PathKernels::Wavefront => RayBudgets {
+                per_invocation: 1 << 10,
+                loop_iterations_per_invocation: f64::INFINITY,
+                per_dispatch: (1 << 23).min(binding_limit / 64),
+                per_batch: 1 << 25,
+                min_invocations_per_dispatch: 0,
+            },
         }
     }
 }
@@ -91,70 +134,102 @@ struct Batch {
     submission: wgpu::SubmissionIndex,
     status: Readback,
     timestamps: Option<Readback>,
-    _passes: wgpu::Buffer,
+    _uniforms: Vec<wgpu::Buffer>,
     _status: wgpu::Buffer,
     _bind_groups: Vec<wgpu::BindGroup>,
 }
 
-/// The scene uploaded and the kernel compiled; runs batches into a device-side accumulation.
+/// What the wavefront render sizes its buffers and dispatches with.
+struct Wavefront {
+    /// Paths the path buffers hold: the most camera samples one dispatch takes.
+    path_capacity: u32,
+    /// Shadow-ray slots the shadow buffers hold.
+    shadow_capacity: u64,
+    /// Path vertices a sample may reach (`RayBound::vertices`): the depths the host runs.
+    vertices: u32,
+    /// Per light: whether it is an area light, and its samples.
+    lights: Vec<(bool, u32)>,
+}
+
+impl Wavefront {
+    /// Shadow rays one path vertex may emit in `pass`'s light window: one per punctual light
+    /// in the first window, and the area lights' samples in the window.
+    fn shadow_stride(&self, pass: &GpuPass) -> u32 {
+        let window = crate::integrator::LightWindow::of_pass(pass);
+        self.lights
+            .iter()
+            .map(|&(area, samples)| match area {
+                true => window.clip(samples).len() as u32,
+                false => window.is_first() as u32,
+            })
+            .sum()
+    }
+}
+
+/// The scene uploaded and the kernels compiled; runs batches into a device-side accumulation.
 pub struct GpuRenderer {
     context: GpuContext,
-    /// The kernels a dispatch runs, in order.
+    /// The kernels a dispatch runs (`PathKernels::kernels`, in that order).
     pipelines: Vec<Pipeline>,
-    /// The megakernel or the split kernels.
+    /// The megakernel or the wavefront render's kernels.
     path_kernels: PathKernels,
-    /// Camera samples one dispatch may take (the split kernels' `primary_hits` hold as many).
-    samples_per_dispatch: u64,
-    /// Every buffer of the bind group but the per-batch `pass_info` and `status`.
-    scene_buffers: Vec<(&'static str, wgpu::Buffer)>,
-    /// The `layout::FEATURE_*` bits the kernel was built with.
+    /// The wavefront render's sizes, when it runs.
+    wavefront: Option<Wavefront>,
+    /// Every buffer the kernels bind but the per-batch uniforms and `status`.
+    scene_buffers: Vec<(Binding, wgpu::Buffer)>,
+    /// The `layout::FEATURE_*` bits the kernels were built with.
     features: u32,
     /// Where the accumulation buffer keeps what.
     layout: AccumulationLayout,
-    /// Bytes between consecutive `GpuPass` of a batch (the dynamic-offset alignment).
-    pass_stride: u64,
+    /// Bytes between consecutive `GpuPass` or `GpuWave` of a batch (the dynamic-offset
+    /// alignment).
+    uniform_stride: u64,
     in_flight: VecDeque<Batch>,
     kernel_time: Option<Duration>,
-    /// Chosen with the adapter ([`RayBudgets::for_adapter`]); the accumulation's scratch half
-    /// exists when they split passes into light windows.
+    /// Chosen with the adapter and the kernels ([`PathKernels::budgets`]); the accumulation's
+    /// scratch half exists when they split passes into light windows.
     budgets: RayBudgets,
 }
 
 impl GpuRenderer {
-    /// Uploads `scene` and builds the render kernel specialised to the scene's features.
+    /// Uploads `scene` and builds the kernels the adapter runs best, specialised to the scene's
+    /// features.
     pub fn new(context: GpuContext, scene: &FlatScene) -> Result<GpuRenderer> {
         GpuRenderer::with_features(context, scene, scene.features())
     }
 
-    /// Like [`GpuRenderer::new`] with the kernel built for `features` (`layout::FEATURE_*`;
+    /// Like [`GpuRenderer::new`] with the kernels built for `features` (`layout::FEATURE_*`;
     /// `FEATURES_ALL` is the general kernel), which must include every feature of the scene.
     pub fn with_features(
         context: GpuContext,
         scene: &FlatScene,
         features: u32,
     ) -> Result<GpuRenderer> {
-        let budgets = RayBudgets::for_adapter(context.is_cpu_adapter);
-        GpuRenderer::with_budgets(context, scene, features, budgets)
+        let kernels = PathKernels::for_adapter(context.is_cpu_adapter);
+        GpuRenderer::with_kernels(context, scene, features, kernels)
     }
 
-    /// Like [`GpuRenderer::with_features`], planning renders with `budgets` (`bench frame`
+    /// Like [`GpuRenderer::with_features`], running each dispatch with `path_kernels`, planned
+    /// with their budgets on this adapter.
+    pub fn with_kernels(
+        context: GpuContext,
+        scene: &FlatScene,
+        features: u32,
+        path_kernels: PathKernels,
+    ) -> Result<GpuRenderer> {
+        let limit = context.device.limits().max_storage_buffer_binding_size;
+        let budgets = path_kernels.budgets(context.is_cpu_adapter, limit);
+        GpuRenderer::with_budgets(context, scene, features, path_kernels, budgets)
+    }
+
+    /// Like [`GpuRenderer::with_kernels`], planning renders with `budgets` (`bench frame`
     /// measures dispatch shapes with it).
     pub fn with_budgets(
         context: GpuContext,
         scene: &FlatScene,
         features: u32,
-        budgets: RayBudgets,
-    ) -> Result<GpuRenderer> {
-        GpuRenderer::with_kernels(context, scene, features, budgets, PathKernels::Megakernel)
-    }
-
-    /// Like [`GpuRenderer::with_budgets`], running each dispatch with `path_kernels`.
-    pub fn with_kernels(
-        context: GpuContext,
-        scene: &FlatScene,
-        features: u32,
-        budgets: RayBudgets,
         path_kernels: PathKernels,
+        budgets: RayBudgets,
     ) -> Result<GpuRenderer> {
         let missing = scene.features() & !features;
         if missing != 0 {
@@ -176,14 +251,15 @@ impl GpuRenderer {
             }
         }
         let plan = plan_passes(scene, &budgets);
-        let samples_per_dispatch = plan.samples_per_dispatch();
         let mut scene_buffers = upload_scene(&context, scene, &plan.layout)?;
-        if path_kernels == PathKernels::Split {
-            scene_buffers.push((
-                "primary_hits",
-                primary_hits_buffer(&context, samples_per_dispatch)?,
-            ));
-        }
+        let wavefront = match path_kernels {
+            PathKernels::Megakernel => None,
+            PathKernels::Wavefront => {
+                let wavefront = plan_wavefront(scene, &plan)?;
+                scene_buffers.extend(wavefront_buffers(&context, &wavefront, &plan.layout)?);
+                Some(wavefront)
+            }
+        };
         let pipelines = path_kernels
             .kernels()
             .iter()
@@ -191,30 +267,36 @@ impl GpuRenderer {
             .collect();
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
-                "creating the render pipeline: {}",
+                "creating the render pipelines: {}",
                 wgpu_error_text(&e)
             )));
         }
         let alignment = device.limits().min_uniform_buffer_offset_alignment as u64;
-        let pass_stride = (size_of::<GpuPass>() as u64).div_ceil(alignment) * alignment;
+        let largest = size_of::<GpuPass>().max(size_of::<GpuWave>()) as u64;
+        let uniform_stride = largest.div_ceil(alignment) * alignment;
         Ok(GpuRenderer {
             kernel_time: context.has_timestamps().then_some(Duration::ZERO),
             context,
             pipelines,
             path_kernels,
-            samples_per_dispatch,
+            wavefront,
             scene_buffers,
             features,
             layout: plan.layout,
-            pass_stride,
+            uniform_stride,
             in_flight: VecDeque::new(),
             budgets,
         })
     }
 
-    /// The `layout::FEATURE_*` bits the kernel was built with.
+    /// The `layout::FEATURE_*` bits the kernels were built with.
     pub fn features(&self) -> u32 {
         self.features
+    }
+
+    /// The kernels each dispatch runs.
+    pub fn path_kernels(&self) -> PathKernels {
+        self.path_kernels
     }
 
     /// The adapter rendering, as [`super::describe_adapter`] writes it.
@@ -222,41 +304,132 @@ impl GpuRenderer {
         &self.context.adapter_description
     }
 
-    fn buffer(&self, name: &str) -> &wgpu::Buffer {
+    fn buffer(&self, binding: Binding) -> &wgpu::Buffer {
         &self
             .scene_buffers
             .iter()
-            .find(|(n, _)| *n == name)
+            .find(|(b, _)| b.binding == binding.binding)
             .expect("uploaded with the scene")
             .1
     }
 }
 
-/// The split kernels' store of camera-ray hits: one per camera sample of a dispatch.
-fn primary_hits_buffer(context: &GpuContext, samples: u64) -> Result<wgpu::Buffer> {
-    let size = samples.max(1) * size_of::<GpuPrimaryHit>() as u64;
+/// The wavefront render's sizes for `plan`: paths for its largest dispatch, shadow-ray slots
+/// for its widest light window.
+fn plan_wavefront(scene: &FlatScene, plan: &RenderPlan) -> Result<Wavefront> {
+    let paths = plan.samples_per_dispatch();
+    let path_capacity = u32::try_from(paths)
+        .map_err(|_| Error::Gpu(format!("{paths} camera samples in one dispatch")))?;
+    let mut wavefront = Wavefront {
+        path_capacity,
+        shadow_capacity: 0,
+        vertices: RayBound::of(scene).vertices as u32,
+        lights: scene
+            .lights
+            .iter()
+            .map(|l| (l.is_area(), l.samples))
+            .collect(),
+    };
+    let widest = plan
+        .dispatches(0)
+        .iter()
+        .map(|pass| wavefront.shadow_stride(pass))
+        .max()
+        .unwrap_or(0);
+    wavefront.shadow_capacity = paths * widest as u64;
+    Ok(wavefront)
+}
+
+/// A storage buffer of `count` elements of `T` (one at least: wgpu refuses empty bindings),
+/// refused with its size over the binding limit.
+fn wave_buffer<T>(
+    context: &GpuContext,
+    what: &str,
+    count: u64,
+    usage: wgpu::BufferUsages,
+) -> Result<wgpu::Buffer> {
+    let size = count.max(1) * size_of::<T>() as u64;
     let limit = context.device.limits().max_storage_buffer_binding_size;
     if size > limit {
-        let what = format!("the camera-ray hits of a dispatch ({samples} samples)");
-        return Err(super::over_binding_limit(&what, size, limit));
+        return Err(super::over_binding_limit(what, size, limit));
     }
     Ok(context.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("primary hits"),
+        label: Some(what),
         size,
-        usage: wgpu::BufferUsages::STORAGE,
+        usage: wgpu::BufferUsages::STORAGE | usage,
         mapped_at_creation: false,
     }))
 }
 
-/// Uploads what the render kernel reads, named by binding.
+/// The wavefront render's buffers (zeroed, as wgpu creates them: the counters start at zero).
+fn wavefront_buffers(
+    context: &GpuContext,
+    wave: &Wavefront,
+    layout: &AccumulationLayout,
+) -> Result<Vec<(Binding, wgpu::Buffer)>> {
+    let none = wgpu::BufferUsages::empty();
+    let paths = wave.path_capacity as u64;
+    let shadows = wave.shadow_capacity;
+    let aovs = if layout.aovs { 2 * paths } else { 0 };
+    let what = |thing: &str, count: u64| format!("the wavefront render's {count} {thing}");
+    Ok(vec![
+        (
+            slot::WF_RAYS,
+            wave_buffer::<GpuPathRay>(context, &what("path rays", paths), paths, none)?,
+        ),
+        (
+            slot::WF_PATHS,
+            wave_buffer::<GpuPath>(context, &what("paths", paths), paths, none)?,
+        ),
+        (
+            slot::WF_HITS,
+            wave_buffer::<GpuHit>(context, &what("path hits", paths), paths, none)?,
+        ),
+        (
+            slot::WF_QUEUE,
+            wave_buffer::<u32>(context, &what("queued paths", 2 * paths), 2 * paths, none)?,
+        ),
+        (
+            slot::WF_COUNTERS,
+            wave_buffer::<u32>(context, "counters", WF_COUNTERS as u64, none)?,
+        ),
+        (
+            slot::WF_ARGS,
+            wave_buffer::<GpuWaveArgs>(
+                context,
+                "indirect dispatches",
+                wave.vertices as u64 + 1,
+                wgpu::BufferUsages::INDIRECT,
+            )?,
+        ),
+        (
+            slot::WF_SHADOW_RAYS,
+            wave_buffer::<GpuShadowRay>(context, &what("shadow rays", shadows), shadows, none)?,
+        ),
+        (
+            slot::WF_SHADOW_TERMS,
+            wave_buffer::<GpuShadowTerm>(context, &what("shadow terms", shadows), shadows, none)?,
+        ),
+        (
+            slot::WF_SHADOW_QUEUE,
+            wave_buffer::<u32>(context, &what("queued shadow rays", shadows), shadows, none)?,
+        ),
+        (
+            slot::WF_AOVS,
+            wave_buffer::<[f32; 4]>(context, &what("first hits", aovs), aovs, none)?,
+        ),
+    ])
+}
+
+/// Uploads what the render kernels read, by binding.
 fn upload_scene(
     context: &GpuContext,
     scene: &FlatScene,
     layout: &AccumulationLayout,
-) -> Result<Vec<(&'static str, wgpu::Buffer)>> {
+) -> Result<Vec<(Binding, wgpu::Buffer)>> {
     let uniform = |label: &str, bytes: &[u8]| context.uniform_buffer(label, bytes);
     let storage = |label: &str, bytes: &[u8]| context.storage_buffer(label, bytes);
-    // The kernel traverses the compressed wide BVH, with the primitives in its order; a light's
+    // The kernels traverse the compressed wide BVH, with the primitives in its order; a light's
     // primitive index follows them.
     let cw = scene.cwbvh().map_err(Error::Gpu)?;
     let (cw_nodes, prims) = context.cwbvh_buffers(cw)?;
@@ -292,26 +465,188 @@ fn upload_scene(
     });
     Ok(vec![
         (
-            "camera",
+            slot::CAMERA,
             uniform("camera", bytemuck::bytes_of(&scene.camera)),
         ),
-        ("frame", uniform("frame", bytemuck::bytes_of(&scene.frame))),
-        ("cw_nodes", cw_nodes),
-        ("prims", prims),
-        ("normals", normals),
         (
-            "materials",
+            slot::FRAME,
+            uniform("frame", bytemuck::bytes_of(&scene.frame)),
+        ),
+        (slot::CW_NODES, cw_nodes),
+        (slot::PRIMS, prims),
+        (slot::NORMALS, normals),
+        (
+            slot::MATERIALS,
             storage("materials", bytemuck::cast_slice(&scene.materials))?,
         ),
-        ("lights", storage("lights", bytemuck::cast_slice(&lights))?),
-        ("accumulation", accumulation),
         (
-            "sample_table",
+            slot::LIGHTS,
+            storage("lights", bytemuck::cast_slice(&lights))?,
+        ),
+        (slot::ACCUMULATION, accumulation),
+        (
+            slot::SAMPLE_TABLE,
             storage("sample table", bytemuck::cast_slice(&scene.sample_table))?,
         ),
         // Replaced by `set_pixel_list` in an adaptive render.
-        ("pixel_list", storage("pixel list", &[0; 4])?),
+        (slot::PIXEL_LIST, storage("pixel list", &[0; 4])?),
     ])
+}
+
+/// The workgroups of a 1-D grid over `count` invocations, in rows of at most
+/// `MAX_WORKGROUPS_PER_DIMENSION` (`wave_groups` in wgsl/wavefront.wgsl).
+fn wave_grid(count: u32) -> (u32, u32) {
+    let groups = count.div_ceil(TRACE_WORKGROUP_SIZE);
+    (
+        groups.min(MAX_WORKGROUPS_PER_DIMENSION),
+        groups.div_ceil(MAX_WORKGROUPS_PER_DIMENSION),
+    )
+}
+
+/// A uniform buffer of `values`, each at its own multiple of `stride` bytes.
+fn uniform_array<T: bytemuck::Pod>(
+    context: &GpuContext,
+    label: &str,
+    values: &[T],
+    stride: u64,
+) -> wgpu::Buffer {
+    let stride = stride as usize;
+    let mut bytes = vec![0u8; stride * values.len().max(1)];
+    for (i, value) in values.iter().enumerate() {
+        bytes[i * stride..i * stride + size_of::<T>()].copy_from_slice(bytemuck::bytes_of(value));
+    }
+    context.uniform_buffer(label, &bytes)
+}
+
+/// How a stage of the wavefront render is sized: a grid over a count the host knows, or the
+/// paths or shadow rays a depth queued, read from the indirect arguments.
+enum Grid {
+    Direct(u32),
+    QueuedPaths(u32),
+    QueuedShadows(u32),
+}
+
+/// The stages of one wavefront dispatch, in order: (kernel index in `PathKernels::kernels`,
+/// depth, grid).
+fn wavefront_stages(wave: &Wavefront, pass: &GpuPass) -> Vec<(usize, u32, Grid)> {
+    const CAMERA: usize = 0;
+    const CLOSEST: usize = 1;
+    const SHADE: usize = 2;
+    const PREPARE: usize = 3;
+    const OCCLUDED: usize = 4;
+    const RESOLVE: usize = 5;
+    const ACCUMULATE: usize = 6;
+    let entries = pass.tile_width * pass.tile_height;
+    let paths = entries * pass.sample_count;
+    let shadows = wave.shadow_stride(pass) > 0;
+    let mut stages = vec![(CAMERA, 0, Grid::Direct(paths))];
+    for depth in 0..wave.vertices {
+        let grid = || match depth {
+            0 => Grid::Direct(paths),
+            _ => Grid::QueuedPaths(depth),
+        };
+        stages.push((CLOSEST, depth, grid()));
+        stages.push((SHADE, depth, grid()));
+        // The next depth's queue, or this depth's shadow rays, need their counts.
+        if shadows || depth + 1 < wave.vertices {
+            stages.push((PREPARE, depth, Grid::Direct(1)));
+        }
+        if shadows {
+            stages.push((OCCLUDED, depth, Grid::QueuedShadows(depth)));
+            stages.push((RESOLVE, depth, grid()));
+        }
+    }
+    stages.push((ACCUMULATE, 0, Grid::Direct(entries)));
+    stages
+}
+
+impl GpuRenderer {
+    /// Records `dispatches` with the megakernel.
+    fn record_megakernel(
+        &self,
+        compute: &mut wgpu::ComputePass<'_>,
+        dispatches: &[GpuPass],
+        bind_group: &wgpu::BindGroup,
+    ) {
+        let pipeline = &self.pipelines[0];
+        compute.set_pipeline(&pipeline.pipeline);
+        for (i, pass) in dispatches.iter().enumerate() {
+            compute.set_bind_group(0, bind_group, &[(i as u64 * self.uniform_stride) as u32]);
+            compute.dispatch_workgroups(
+                pass.tile_width.div_ceil(WORKGROUP_SIZE),
+                pass.tile_height.div_ceil(WORKGROUP_SIZE),
+                1,
+            );
+        }
+    }
+
+    /// Records `dispatches` with the wavefront render's stages, dispatch after dispatch;
+    /// `GpuWave` `i * vertices + depth` of the batch's wave array is dispatch `i`'s at `depth`.
+    fn record_wavefront(
+        &self,
+        compute: &mut wgpu::ComputePass<'_>,
+        dispatches: &[GpuPass],
+        bind_groups: &[wgpu::BindGroup],
+    ) {
+        let wave = self.wavefront.as_ref().expect("a wavefront renderer");
+        let args = self.buffer(slot::WF_ARGS);
+        let args_size = size_of::<GpuWaveArgs>() as u64;
+        for (i, pass) in dispatches.iter().enumerate() {
+            for (kernel, depth, grid) in wavefront_stages(wave, pass) {
+                let pipeline = &self.pipelines[kernel];
+                let wave_index = i as u64 * wave.vertices as u64 + depth as u64;
+                let offsets = pipeline.dynamic_offsets(|b| {
+                    let index = match b.binding == slot::WAVE.binding {
+                        true => wave_index,
+                        false => i as u64,
+                    };
+                    (index * self.uniform_stride) as u32
+                });
+                compute.set_pipeline(&pipeline.pipeline);
+                compute.set_bind_group(0, &bind_groups[kernel], &offsets);
+                match grid {
+                    Grid::Direct(count) => {
+                        let (x, y) = wave_grid(count);
+                        compute.dispatch_workgroups(x, y, 1);
+                    }
+                    Grid::QueuedPaths(depth) => {
+                        compute.dispatch_workgroups_indirect(args, depth as u64 * args_size);
+                    }
+                    Grid::QueuedShadows(depth) => {
+                        compute.dispatch_workgroups_indirect(args, depth as u64 * args_size + 16);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The batch's `GpuWave`s: one per dispatch and depth.
+    fn waves(&self, dispatches: &[GpuPass]) -> Result<Vec<GpuWave>> {
+        let Some(wave) = &self.wavefront else {
+            return Ok(Vec::new());
+        };
+        let mut waves = Vec::with_capacity(dispatches.len() * wave.vertices as usize);
+        for pass in dispatches {
+            let paths = pass.tile_width as u64 * pass.tile_height as u64 * pass.sample_count as u64;
+            let shadow_stride = wave.shadow_stride(pass);
+            if paths > wave.path_capacity as u64
+                || paths * shadow_stride as u64 > wave.shadow_capacity
+            {
+                return Err(Error::Gpu(format!(
+                    "a dispatch of {paths} paths with {shadow_stride} shadow rays each exceeds \
+                     the wavefront render's {} paths and {} shadow rays",
+                    wave.path_capacity, wave.shadow_capacity
+                )));
+            }
+            waves.extend((0..wave.vertices).map(|depth| GpuWave {
+                depth,
+                shadow_stride,
+                path_capacity: wave.path_capacity,
+                _pad0: 0,
+            }));
+        }
+        Ok(waves)
+    }
 }
 
 impl Backend for GpuRenderer {
@@ -320,33 +655,24 @@ impl Backend for GpuRenderer {
     }
 
     fn submit(&mut self, dispatches: &[GpuPass]) -> Result<()> {
-        let samples =
-            |p: &GpuPass| p.tile_width as u64 * p.tile_height as u64 * p.sample_count as u64;
-        let split = self.path_kernels == PathKernels::Split;
-        if let Some(pass) = dispatches
-            .iter()
-            .find(|&p| split && samples(p) > self.samples_per_dispatch)
-        {
-            return Err(Error::Gpu(format!(
-                "a dispatch of {}x{} pixels and {} samples exceeds the {} camera-ray hits \
-                 the split kernels store",
-                pass.tile_width, pass.tile_height, pass.sample_count, self.samples_per_dispatch
-            )));
-        }
         let context = &self.context;
         let device = &context.device;
-        let stride = self.pass_stride as usize;
-        let mut pass_bytes = vec![0u8; stride * dispatches.len()];
-        for (i, pass) in dispatches.iter().enumerate() {
-            pass_bytes[i * stride..i * stride + size_of::<GpuPass>()]
-                .copy_from_slice(bytemuck::bytes_of(pass));
-        }
-        let passes = context.uniform_buffer("passes", &pass_bytes);
+        let waves = self.waves(dispatches)?;
+        let passes = uniform_array(context, "passes", dispatches, self.uniform_stride);
+        let wave_array = uniform_array(context, "waves", &waves, self.uniform_stride);
         let status = context.status_buffer();
-        let mut buffers: Vec<(&str, &wgpu::Buffer)> =
-            self.scene_buffers.iter().map(|(n, b)| (*n, b)).collect();
-        buffers.push(("pass_info", &passes));
-        buffers.push(("status", &status));
+        let mut buffers: Vec<(Binding, &wgpu::Buffer)> = self
+            .scene_buffers
+            .iter()
+            .map(|(b, buffer)| (*b, buffer))
+            .collect();
+        buffers.push((slot::PASS_INFO, &passes));
+        buffers.push((slot::WAVE, &wave_array));
+        if self.wavefront.is_some() {
+            // Read by the stages the indirect arguments size, written by `wf_prepare`.
+            buffers.push((slot::WF_ARGS_IN, self.buffer(slot::WF_ARGS)));
+        }
+        buffers.push((slot::STATUS, &status));
         let bind_groups = self
             .pipelines
             .iter()
@@ -373,17 +699,13 @@ impl Backend for GpuRenderer {
                 label: Some("render batch"),
                 timestamp_writes,
             });
-            for (i, pass) in dispatches.iter().enumerate() {
-                // A split dispatch's kernels run in order: a compute pass orders the writes
-                // of one dispatch before the reads of the next.
-                for (pipeline, bind_group) in self.pipelines.iter().zip(&bind_groups) {
-                    compute.set_pipeline(&pipeline.pipeline);
-                    compute.set_bind_group(0, bind_group, &[(i * stride) as u32]);
-                    compute.dispatch_workgroups(
-                        pass.tile_width.div_ceil(WORKGROUP_SIZE),
-                        pass.tile_height.div_ceil(WORKGROUP_SIZE),
-                        1,
-                    );
+            // A compute pass orders each dispatch's writes before the next dispatch's reads.
+            match self.path_kernels {
+                PathKernels::Megakernel => {
+                    self.record_megakernel(&mut compute, dispatches, &bind_groups[0])
+                }
+                PathKernels::Wavefront => {
+                    self.record_wavefront(&mut compute, dispatches, &bind_groups)
                 }
             }
         }
@@ -410,7 +732,7 @@ impl Backend for GpuRenderer {
             submission,
             status: status_readback,
             timestamps,
-            _passes: passes,
+            _uniforms: vec![passes, wave_array],
             _status: status,
             _bind_groups: bind_groups,
         });
@@ -445,7 +767,8 @@ impl Backend for GpuRenderer {
     fn read_slots(&mut self, slots: std::ops::Range<usize>) -> Result<Vec<[f32; 4]>> {
         const SLOT: u64 = std::mem::size_of::<[f32; 4]>() as u64;
         let bytes = slots.start as u64 * SLOT..slots.end as u64 * SLOT;
-        self.context.read_range(self.buffer("accumulation"), bytes)
+        self.context
+            .read_range(self.buffer(slot::ACCUMULATION), bytes)
     }
 
     /// A new buffer: the batches in flight keep the one they were bound with.
@@ -460,7 +783,7 @@ impl Backend for GpuRenderer {
         let slot = self
             .scene_buffers
             .iter_mut()
-            .find(|(name, _)| *name == "pixel_list")
+            .find(|(b, _)| b.binding == slot::PIXEL_LIST.binding)
             .expect("uploaded with the scene");
         slot.1 = buffer;
         Ok(())

@@ -8,7 +8,7 @@
 use std::time::{Duration, Instant};
 
 use super::GpuContext;
-use super::kernels::{self, Pipeline};
+use super::kernels::{self, Pipeline, slot};
 use crate::accel::cwbvh::CwGeometry;
 use crate::bench::rays::{Query, RaySet};
 use crate::error::{Error, Result};
@@ -85,14 +85,14 @@ impl GpuTracer {
             };
             let pass_info = context.uniform_buffer("pass", bytemuck::bytes_of(&pass));
             let buffers = [
-                ("frame", &frame),
-                ("pass_info", &pass_info),
-                ("nodes", &nodes),
-                ("cw_nodes", &nodes),
-                ("prims", &prims),
-                ("status", &status),
-                ("rays", &ray_buffer),
-                ("distances", &distances),
+                (slot::FRAME, &frame),
+                (slot::PASS_INFO, &pass_info),
+                (slot::NODES, &nodes),
+                (slot::CW_NODES, &nodes),
+                (slot::PRIMS, &prims),
+                (slot::STATUS, &status),
+                (slot::RAYS, &ray_buffer),
+                (slot::DISTANCES, &distances),
             ];
             chunks.push(Chunk {
                 rays: end - start,
