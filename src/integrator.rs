@@ -12,8 +12,10 @@
 //! take the `layout::FEATURE_*` bits as a const generic `F`, so code for a feature the scene
 //! lacks is compiled out (`FEATURES_ALL` is the general integrator); `cpu.rs` picks the
 //! instance for the scene. The CPU renders a pixel's samples with [`trace_pixel`], which traces
-//! their camera rays in packets (`accel::wide::packet`), as the GPU's split render traces them
-//! in a kernel of their own, and then each path from its camera ray's hit.
+//! their camera rays in packets (`accel::wide::packet`), and then each path from its camera
+//! ray's hit. The GPU's wavefront render runs [`trace_path`]'s loop a vertex at a time over all
+//! of a dispatch's paths (`wgsl/wavefront.wgsl`): the same operations on each path, in the same
+//! order.
 
 use std::f32::consts::PI;
 
@@ -228,9 +230,120 @@ fn light_dimension(frame: &GpuFrame, depth: u32, offset: u32, k: u32) -> u32 {
     LIGHT_DIMENSION.wrapping_add(index.wrapping_mul(2))
 }
 
+/// A shadow ray from a path vertex towards a light, and what it adds there where the light is
+/// visible: `f`, before an area light's scale ([`light_total`]). Twin: `LightSample` in
+/// integrator.wgsl, which the wavefront render stores per shadow ray.
+struct LightSample {
+    wi: Vec3,
+    t_max: f32,
+    /// The light's own primitive, which its shadow ray must not hit (`NONE`: a punctual light).
+    skip: u32,
+    f: Vec3,
+    /// False where the vertex or the light faces away: no ray is traced, nothing is added.
+    traced: bool,
+}
+
+/// An area light's shape, as its samples need it.
+struct AreaLight {
+    normal: Vec3,
+    area: f32,
+    triangle: bool,
+}
+
+fn area_light_of(light: &GpuLight) -> AreaLight {
+    let cross = Vec3::from(light.p1).cross(Vec3::from(light.p2));
+    let triangle = light.kind == LIGHT_TRIANGLE;
+    AreaLight {
+        normal: cross.normalize(),
+        area: if triangle { 0.5 } else { 1.0 } * cross.length(),
+        triangle,
+    }
+}
+
+/// The point `square` of the unit square on an area light (folded onto a triangle light's
+/// triangle), seen from `surface`.
+fn area_light_sample(
+    light: &GpuLight,
+    shape: &AreaLight,
+    square: [f32; 2],
+    surface: &Surface,
+    material: &GpuMaterial,
+    wo: Vec3,
+) -> LightSample {
+    let u = if shape.triangle && square[0] + square[1] > 1.0 {
+        [1.0 - square[0], 1.0 - square[1]]
+    } else {
+        square
+    };
+    let n = surface.shading_normal;
+    let point = Vec3::from(light.p0) + u[0] * Vec3::from(light.p1) + u[1] * Vec3::from(light.p2);
+    let to_light = point - surface.position;
+    let distance = to_light.length();
+    let wi = to_light / distance;
+    let cos_surface = n.dot(wi);
+    let cos_light = -shape.normal.dot(wi);
+    let traced = cos_surface > 0.0 && cos_light > 0.0 && surface.geometric_normal.dot(wi) > 0.0;
+    let f = match traced {
+        true => eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance),
+        false => Vec3::ZERO,
+    };
+    LightSample {
+        wi,
+        t_max: shadow_ray_length(distance),
+        skip: light.prim,
+        f,
+        traced,
+    }
+}
+
+/// A point, spot or directional light seen from `surface`: its whole contribution.
+fn punctual_light_sample(
+    light: &GpuLight,
+    surface: &Surface,
+    material: &GpuMaterial,
+    wo: Vec3,
+) -> LightSample {
+    let (wi, distance, mut falloff) = if light.kind == LIGHT_DIRECTIONAL {
+        (Vec3::from(light.p0), T_FAR, 1.0)
+    } else {
+        let to_light = Vec3::from(light.p0) - surface.position;
+        let distance = to_light.length();
+        (to_light / distance, distance, 1.0 / (distance * distance))
+    };
+    if light.kind == LIGHT_SPOT {
+        let cos = -Vec3::from(light.p1).dot(wi);
+        let cone = (cos * light.p2[0] + light.p2[1]).clamp(0.0, 1.0);
+        falloff *= cone * cone;
+    }
+    let n = surface.shading_normal;
+    let cos_surface = n.dot(wi);
+    let traced = cos_surface > 0.0 && surface.geometric_normal.dot(wi) > 0.0;
+    let f = match traced {
+        true => eval_brdf(material, n, wo, wi) * Vec3::from(light.color) * (cos_surface * falloff),
+        false => Vec3::ZERO,
+    };
+    LightSample {
+        wi,
+        t_max: shadow_ray_length(distance),
+        skip: NONE,
+        f,
+        traced,
+    }
+}
+
+/// What a light adds from `sum`, the sum of its visible samples' terms.
+fn light_total(light: &GpuLight, sum: Vec3) -> Vec3 {
+    if light.is_area() {
+        Vec3::from(light.color) * sum * (area_light_of(light).area / light.samples as f32)
+    } else {
+        sum
+    }
+}
+
 /// Light reflected towards `wo` from every light, with shadow rays (which skip primitive
-/// `own`): the area-light samples in `window`, and the point and directional lights in the
-/// first window.
+/// `own`): stratified points on the area lights in `window` (each sample draws its numbers
+/// first, so both paths consume the same dimensions whatever the visibility), and the point and
+/// directional lights in the first window.
 #[allow(clippy::too_many_arguments)]
 fn direct_light<const F: u32>(
     scene: &FlatScene,
@@ -244,23 +357,21 @@ fn direct_light<const F: u32>(
     rng: &mut Rng,
     stats: &mut SampleStats,
 ) -> Vec3 {
-    let n = surface.shading_normal;
-    let ng = surface.geometric_normal;
-    let origin = offset_ray_origin(surface.position, surface.position_error, ng);
+    let origin = offset_ray_origin(
+        surface.position,
+        surface.position_error,
+        surface.geometric_normal,
+    );
+    let visible = |s: &LightSample, stats: &mut SampleStats| {
+        stats.rays += 1;
+        let ray = RayQuery::new(origin, s.wi).at_time(time);
+        !scene.tracer().occluded::<F>(&ray, own, s.skip, s.t_max)
+    };
     let mut total = Vec3::ZERO;
     let mut sample_offset = 0;
     for light in &scene.lights[..scene.frame.light_count as usize] {
-        let color = Vec3::from(light.color);
         if has(F, FEATURE_AREA_LIGHTS) && light.is_area() {
-            // Stratified points on the parallelogram (folded onto the triangle of a triangle
-            // light); each sample draws its numbers first so both paths consume the same
-            // dimensions whatever the visibility.
-            let corner = Vec3::from(light.p0);
-            let (edge_u, edge_v) = (Vec3::from(light.p1), Vec3::from(light.p2));
-            let cross = edge_u.cross(edge_v);
-            let triangle = light.kind == LIGHT_TRIANGLE;
-            let area = if triangle { 0.5 } else { 1.0 } * cross.length();
-            let light_normal = cross.normalize();
+            let shape = area_light_of(light);
             let samples = window.clip(light.samples);
             let light_dim = light_dimension(&scene.frame, depth, sample_offset, 0);
             let key = pixel_hash(scene.frame.seed, rng.pixel, light_dim);
@@ -273,7 +384,7 @@ fn direct_light<const F: u32>(
             sample_offset += light.samples;
             let mut sum = Vec3::ZERO;
             for k in samples {
-                let mut u = light_sample_2d(
+                let square = light_sample_2d(
                     &scene.frame,
                     light.samples,
                     light.strata_columns,
@@ -283,52 +394,16 @@ fn direct_light<const F: u32>(
                     rng.next_2d(),
                     &mut stats.flags,
                 );
-                if triangle && u[0] + u[1] > 1.0 {
-                    u = [1.0 - u[0], 1.0 - u[1]];
-                }
-                let to_light = corner + u[0] * edge_u + u[1] * edge_v - surface.position;
-                let distance = to_light.length();
-                let wi = to_light / distance;
-                let cos_surface = n.dot(wi);
-                let cos_light = -light_normal.dot(wi);
-                if cos_surface > 0.0 && cos_light > 0.0 && ng.dot(wi) > 0.0 {
-                    stats.rays += 1;
-                    if !scene.tracer().occluded::<F>(
-                        &RayQuery::new(origin, wi).at_time(time),
-                        own,
-                        light.prim,
-                        shadow_ray_length(distance),
-                    ) {
-                        sum += eval_brdf(material, n, wo, wi) * cos_surface * cos_light
-                            / (distance * distance);
-                    }
+                let s = area_light_sample(light, &shape, square, surface, material, wo);
+                if s.traced && visible(&s, stats) {
+                    sum += s.f;
                 }
             }
-            total += color * sum * (area / light.samples as f32);
+            total += light_total(light, sum);
         } else if has(F, FEATURE_PUNCTUAL_LIGHTS) && window.is_first() {
-            let (wi, distance, mut falloff) = if light.kind == LIGHT_DIRECTIONAL {
-                (Vec3::from(light.p0), T_FAR, 1.0)
-            } else {
-                let to_light = Vec3::from(light.p0) - surface.position;
-                let distance = to_light.length();
-                (to_light / distance, distance, 1.0 / (distance * distance))
-            };
-            if light.kind == LIGHT_SPOT {
-                let cos = -Vec3::from(light.p1).dot(wi);
-                let cone = (cos * light.p2[0] + light.p2[1]).clamp(0.0, 1.0);
-                falloff *= cone * cone;
-            }
-            let cos_surface = n.dot(wi);
-            if cos_surface > 0.0 && ng.dot(wi) > 0.0 {
-                stats.rays += 1;
-                if !scene.tracer().occluded::<F>(
-                    &RayQuery::new(origin, wi).at_time(time),
-                    own,
-                    NONE,
-                    shadow_ray_length(distance),
-                ) {
-                    total += eval_brdf(material, n, wo, wi) * color * (cos_surface * falloff);
-                }
+            let s = punctual_light_sample(light, surface, material, wo);
+            if s.traced && visible(&s, stats) {
+                total += s.f;
             }
         }
     }

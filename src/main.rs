@@ -16,6 +16,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use chambre::camera::Focus;
 use chambre::camera::report::camera_report;
 use chambre::cpu::CpuRenderer;
+use chambre::gpu::render::PathKernels;
 use chambre::gpu::{GpuContext, GpuRenderer, describe_adapters};
 use chambre::output::{Display, ImageFormat, OutputTarget, ToneMap};
 use chambre::pack::{FlatScene, flatten};
@@ -176,6 +177,10 @@ struct RenderArgs {
     /// Where to render.
     #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
     backend: BackendChoice,
+    /// How the GPU runs the paths: `auto` (the wavefront render on a real GPU, the megakernel
+    /// on a CPU adapter such as lavapipe), `megakernel` or `wavefront`.
+    #[arg(long, value_enum, default_value_t = KernelChoice::Auto)]
+    gpu_kernels: KernelChoice,
     /// Worker threads of the CPU path (default: one per core).
     #[arg(long)]
     threads: Option<usize>,
@@ -348,6 +353,26 @@ enum BackendChoice {
     Gpu,
     /// chambre's CPU path.
     Cpu,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum KernelChoice {
+    /// The adapter's best: the wavefront render on a real GPU, the megakernel on a CPU adapter.
+    Auto,
+    /// One kernel traces each sample's path whole.
+    Megakernel,
+    /// A kernel per stage of a path vertex, paths and shadow rays in queues.
+    Wavefront,
+}
+
+impl KernelChoice {
+    fn for_adapter(self, context: &GpuContext) -> PathKernels {
+        match self {
+            KernelChoice::Auto => PathKernels::for_adapter(context.is_cpu_adapter),
+            KernelChoice::Megakernel => PathKernels::Megakernel,
+            KernelChoice::Wavefront => PathKernels::Wavefront,
+        }
+    }
 }
 
 fn main() -> ExitCode {
@@ -693,9 +718,13 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         (None, Some(deadline)) => render_until(&flat, backend, progress, &cancel, deadline),
         (None, None) => render(&flat, backend, progress, &cancel),
     };
-    let (output, backend_name, features) = match gpu_renderer(choice, &flat)? {
+    let (output, backend_name, features) = match gpu_renderer(choice, args.gpu_kernels, &flat)? {
         Some(mut renderer) => {
-            let name = format!("GPU: {}", renderer.adapter_description());
+            let name = format!(
+                "GPU: {} ({:?})",
+                renderer.adapter_description(),
+                renderer.path_kernels()
+            );
             let features = renderer.features();
             (run(&mut renderer, progress.as_mut())?, name, features)
         }
@@ -992,12 +1021,18 @@ fn render_stats(output: &RenderOutput, flat: &FlatScene, features: u32) -> Strin
 /// adapter is a CPU implementation of the API (chambre's own CPU path is 2.5-5x faster than
 /// lavapipe: BENCHMARKS.md), and whenever the GPU refuses: no adapter, a buffer over a binding
 /// limit.
-fn gpu_renderer(choice: BackendChoice, flat: &FlatScene) -> Result<Option<GpuRenderer>> {
+fn gpu_renderer(
+    choice: BackendChoice,
+    kernels: KernelChoice,
+    flat: &FlatScene,
+) -> Result<Option<GpuRenderer>> {
+    let renderer = |context: GpuContext| {
+        let kernels = kernels.for_adapter(&context);
+        GpuRenderer::with_kernels(context, flat, flat.features(), kernels)
+    };
     match choice {
         BackendChoice::Cpu => Ok(None),
-        BackendChoice::Gpu => GpuContext::new()
-            .and_then(|context| GpuRenderer::new(context, flat))
-            .map(Some),
+        BackendChoice::Gpu => GpuContext::new().and_then(renderer).map(Some),
         BackendChoice::Auto => {
             let context = match GpuContext::new() {
                 Ok(context) if context.is_cpu_adapter => {
@@ -1014,7 +1049,7 @@ fn gpu_renderer(choice: BackendChoice, flat: &FlatScene) -> Result<Option<GpuRen
                     return Ok(None);
                 }
             };
-            match GpuRenderer::new(context, flat) {
+            match renderer(context) {
                 Ok(renderer) => Ok(Some(renderer)),
                 Err(e) => {
                     note!("notice: {e}; rendering on the CPU");
