@@ -29,6 +29,7 @@ use crate::fermat::{
     reflection_error, seen_from_outside,
 };
 use crate::gpu::GpuContext;
+use crate::gpu::kernels::ShaderChecks;
 use crate::gpu::preview::{PreviewOptions, PreviewRenderer, StageTimes, extent_and_far};
 use crate::gpu::render::PathKernels;
 use crate::layout::{FEATURES_ALL, NONE, T_FAR};
@@ -190,7 +191,8 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
     let on_gpu = Way::Gpu {
         features,
         budgets: None,
-        kernels: PathKernels::Megakernel,
+        kernels: PathKernels::for_adapter(context.is_cpu_adapter),
+        checks: ShaderChecks::default(),
     };
     let mut cpu_ms = Vec::new();
     for run in 0..=config.runs.max(1) {

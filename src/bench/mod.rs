@@ -30,6 +30,8 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
+use crate::gpu::kernels::ShaderChecks;
+use crate::gpu::render::PathKernels;
 use rays::{Backend, Bvh, Pinhole, RaysConfig};
 
 /// `chambre bench` and its parts.
@@ -190,8 +192,7 @@ pub struct Output {
 /// The backends a benchmark measures side by side.
 #[derive(Debug, clap::Args)]
 pub struct Backends {
-    /// Backends to measure, side by side (`bench frame` always measures the CPU, the reference
-    /// of its ratios).
+    /// Backends to measure, side by side.
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::Gpu])]
     pub backends: Vec<Backend>,
 }
@@ -292,6 +293,24 @@ pub struct BuildArgs {
     pub output: Output,
 }
 
+/// A GPU way of running paths, as `bench frame --gpu-kernels` names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum GpuKernels {
+    /// One kernel traces each sample's path whole.
+    Megakernel,
+    /// A kernel per stage of a path vertex.
+    Wavefront,
+}
+
+impl From<GpuKernels> for PathKernels {
+    fn from(kernels: GpuKernels) -> PathKernels {
+        match kernels {
+            GpuKernels::Megakernel => PathKernels::Megakernel,
+            GpuKernels::Wavefront => PathKernels::Wavefront,
+        }
+    }
+}
+
 /// Arguments of `chambre bench frame`.
 #[derive(Debug, clap::Args)]
 pub struct FrameArgs {
@@ -301,10 +320,20 @@ pub struct FrameArgs {
     /// Timed runs after one warm-up, interleaved across backends.
     #[arg(long, value_parser = positive(), default_value_t = 3)]
     pub runs: u32,
-    /// Also render on the GPU with at most N rays per invocation whatever the image size, for
-    /// each N given: the dispatch shapes behind `RayBudgets::for_adapter`.
+    /// Also render on the GPU with the megakernel at most N rays per invocation whatever the
+    /// image size, for each N given: the dispatch shapes behind `RayBudgets::for_adapter`.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..), value_delimiter = ',')]
     pub gpu_rays_per_invocation: Vec<u64>,
+    /// The GPU's ways of running paths to measure, side by side.
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [GpuKernels::Megakernel, GpuKernels::Wavefront])]
+    pub gpu_kernels: Vec<GpuKernels>,
+    /// Leave out the code with every feature (measured by default: the specialisation's
+    /// speed-up).
+    #[arg(long)]
+    pub no_general: bool,
+    /// wgpu's run-time checks of the GPU kernels, side by side (default: chambre's).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub shader_checks: Vec<ShaderChecks>,
     /// Override a field of every scene, e.g. --set camera.shutter=[0.0,1.0] (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,
@@ -355,6 +384,9 @@ pub struct RaysArgs {
     /// Acceleration structures to traverse, side by side (`wide` on the CPU only).
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh, Bvh::Wide, Bvh::Packets])]
     pub bvh: Vec<Bvh>,
+    /// wgpu's run-time checks of the GPU kernels, side by side (default: chambre's).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub shader_checks: Vec<ShaderChecks>,
     /// Backends to measure.
     #[command(flatten)]
     pub backends: Backends,
@@ -396,6 +428,7 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 runs: args.runs,
                 seed: args.seed,
                 bvhs: args.bvh.clone(),
+                shader_checks: args.shader_checks.clone(),
             };
             let gpu = args.backends.gpu().then(|| usable(&context)).transpose()?;
             let report = rays::run(&config, &args.backends.backends, gpu)?;
@@ -424,13 +457,18 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 args.scenes.clone()
             };
             let gpu = args.backends.gpu().then(|| usable(&context)).transpose()?;
-            let report = frame::run(
-                &scenes,
-                &args.set,
+            let kernels: Vec<PathKernels> = args.gpu_kernels.iter().map(|&k| k.into()).collect();
+            let report = frame::run(&frame::FrameConfig {
+                scenes: &scenes,
+                overrides: &args.set,
+                cpu: args.backends.backends.contains(&Backend::Cpu),
                 gpu,
-                &args.gpu_rays_per_invocation,
-                args.runs,
-            )?;
+                kernels: &kernels,
+                general: !args.no_general,
+                checks: &args.shader_checks,
+                rays_per_invocation: &args.gpu_rays_per_invocation,
+                runs: args.runs,
+            })?;
             finish(
                 &command_line,
                 &machine,

@@ -21,6 +21,7 @@ use crate::accel::traverse::{closest_hit, occluded};
 use crate::accel::wide::{PACKET, WideBvh};
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
+use crate::gpu::kernels::ShaderChecks;
 use crate::gpu::trace::GpuTracer;
 use crate::layout::{FEATURES_ALL, GpuCwNode, GpuPrimitive, GpuRay, NONE, T_FAR};
 use crate::math::rng::Rng;
@@ -71,6 +72,18 @@ pub struct RaysConfig {
     pub seed: u32,
     /// The acceleration structures traversed, side by side.
     pub bvhs: Vec<Bvh>,
+    /// wgpu's run-time checks the GPU kernels are built with, side by side.
+    pub shader_checks: Vec<ShaderChecks>,
+}
+
+impl RaysConfig {
+    /// The checks each GPU measurement is made with.
+    fn gpu_checks(&self) -> Vec<Option<ShaderChecks>> {
+        match self.shader_checks.is_empty() {
+            true => vec![Some(ShaderChecks::default())],
+            false => self.shader_checks.iter().copied().map(Some).collect(),
+        }
+    }
 }
 
 /// The acceleration structure rays traverse: the renderer's BVH2, the compressed wide BVH
@@ -514,6 +527,7 @@ pub fn run(
     let coherent = coherent_rays(&config.camera, config.frames, config.seed);
     let (lo, hi) = bounds(&scene);
     let incoherent = incoherent_rays(lo, hi, coherent.len(), config.seed);
+    let gpu_checks = config.gpu_checks();
     let mut results = Vec::new();
     let mut cwbvh_reads = Vec::new();
     let mut set_up = Vec::new();
@@ -535,32 +549,51 @@ pub fn run(
                     continue;
                 }
                 let cwbvh = (bvh == Bvh::Cwbvh).then_some(cw);
-                let (name, tracer) = match backend {
-                    Backend::Cpu => (
-                        format!("cpu ({} threads)", rayon::current_num_threads()),
-                        None,
-                    ),
-                    Backend::Gpu => {
-                        let context =
-                            gpu.expect("the GPU backend is only asked for with a context");
-                        let tracer = GpuTracer::new(context.clone(), &scene, cwbvh, rays)?;
-                        (format!("gpu ({})", tracer.adapter_name()), Some(tracer))
-                    }
+                let checks: &[Option<ShaderChecks>] = match backend {
+                    Backend::Cpu => &[None],
+                    Backend::Gpu => &gpu_checks,
                 };
-                for query in [Query::ClosestHit, Query::AnyHit] {
-                    let (mrays_per_s, checksum) = match &tracer {
-                        None => measure_cpu(&scene, bvh, rays, query, config.runs)?,
-                        Some(tracer) => measure_gpu(tracer, rays, query, config.runs)?,
+                for &checks in checks {
+                    let (name, tracer) = match (backend, checks) {
+                        (Backend::Gpu, Some(checks)) => {
+                            let context =
+                                gpu.expect("the GPU backend is only asked for with a context");
+                            let tracer = GpuTracer::with_checks(
+                                context.clone(),
+                                &scene,
+                                cwbvh,
+                                rays,
+                                checks,
+                            )?;
+                            let label = match checks == ShaderChecks::default() {
+                                true => String::new(),
+                                false => format!(", checks: {}", checks.label()),
+                            };
+                            (
+                                format!("gpu ({}{label})", tracer.adapter_name()),
+                                Some(tracer),
+                            )
+                        }
+                        _ => (
+                            format!("cpu ({} threads)", rayon::current_num_threads()),
+                            None,
+                        ),
                     };
-                    results.push(RaysResult {
-                        set,
-                        query,
-                        backend: name.clone(),
-                        bvh,
-                        rays: rays.len(),
-                        mrays_per_s,
-                        checksum,
-                    });
+                    for query in [Query::ClosestHit, Query::AnyHit] {
+                        let (mrays_per_s, checksum) = match &tracer {
+                            None => measure_cpu(&scene, bvh, rays, query, config.runs)?,
+                            Some(tracer) => measure_gpu(tracer, rays, query, config.runs)?,
+                        };
+                        results.push(RaysResult {
+                            set,
+                            query,
+                            backend: name.clone(),
+                            bvh,
+                            rays: rays.len(),
+                            mrays_per_s,
+                            checksum,
+                        });
+                    }
                 }
             }
         }

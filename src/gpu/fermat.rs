@@ -97,8 +97,13 @@ impl FermatPass {
                     ("REFLECTOR_KIND", kind as f64),
                     ("OWN_POINTS_SEARCHED_AGAIN", own_points as u32 as f64),
                 ];
-                let pipeline =
-                    kernels::build_pipeline_with(&context.device, &FERMAT, 0, &overrides);
+                let pipeline = kernels::build_pipeline_with(
+                    &context.device,
+                    &FERMAT,
+                    0,
+                    &overrides,
+                    kernels::ShaderChecks::default(),
+                );
                 (kind, pipeline)
             })
             .collect();

@@ -558,24 +558,69 @@ fn layout_entry(b: &Binding) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+/// Which of the checks wgpu adds to a shader at run time a kernel is built with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+pub enum ShaderChecks {
+    /// wgpu's own: every array index bounded (beyond what the driver's robust buffer access
+    /// already bounds), every loop bounded by a counter, every integer division guarded.
+    #[default]
+    All,
+    /// All but the loop counters: every loop of chambre's kernels ends by construction (a
+    /// traversal by `GpuFrame::traversal_cap`, which it reports; a bit loop when its bits run
+    /// out; the others at a count from a uniform), so the counter only costs time.
+    NoLoopBounding,
+    /// None of them: for measuring what the checks cost, not for rendering.
+    None,
+}
+
+impl ShaderChecks {
+    /// Its name on the command line and in reports.
+    pub fn label(self) -> &'static str {
+        match self {
+            ShaderChecks::All => "all",
+            ShaderChecks::NoLoopBounding => "no-loop-bounding",
+            ShaderChecks::None => "none",
+        }
+    }
+
+    fn runtime_checks(self) -> wgpu::ShaderRuntimeChecks {
+        let mut checks = wgpu::ShaderRuntimeChecks::checked();
+        match self {
+            ShaderChecks::All => {}
+            ShaderChecks::NoLoopBounding => checks.force_loop_bounding = false,
+            ShaderChecks::None => {
+                checks.force_loop_bounding = false;
+                checks.bounds_checks = false;
+                checks.int_div_checks = false;
+            }
+        }
+        checks
+    }
+}
+
 /// Builds `kernel` specialised to `features`. Validation errors come back through the
 /// device's error handling (see `GpuContext`), not as panics.
 pub fn build_pipeline(device: &wgpu::Device, kernel: &'static Kernel, features: u32) -> Pipeline {
-    build_pipeline_with(device, kernel, features, &[])
+    build_pipeline_with(device, kernel, features, &[], ShaderChecks::default())
 }
 
 /// [`build_pipeline`], with values for the kernel's own override constants too (e.g. the
-/// fermat kernel's `FERMAT_STEPS`).
+/// fermat kernel's `FERMAT_STEPS`), and the shader checks `checks`.
 pub fn build_pipeline_with(
     device: &wgpu::Device,
     kernel: &'static Kernel,
     features: u32,
     overrides: &[(&'static str, f64)],
+    checks: ShaderChecks,
 ) -> Pipeline {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+    let descriptor = wgpu::ShaderModuleDescriptor {
         label: Some(kernel.name),
         source: wgpu::ShaderSource::Wgsl(kernel_source(kernel).into()),
-    });
+    };
+    // SAFETY: the checks left out are those `ShaderChecks` documents as unneeded: chambre's
+    // loops all end (the loop counters), and `ShaderChecks::None` only measures.
+    let module =
+        unsafe { device.create_shader_module_trusted(descriptor, checks.runtime_checks()) };
     let entries: Vec<_> = kernel.bindings.iter().map(layout_entry).collect();
     let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some(kernel.name),

@@ -13,7 +13,7 @@ use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use super::kernels::{self, Binding, Pipeline, slot};
+use super::kernels::{self, Binding, Pipeline, ShaderChecks, slot};
 use super::{GpuContext, wgpu_error_text};
 use crate::error::{Error, Result};
 use crate::layout::{
@@ -85,6 +85,33 @@ impl PathKernels {
     }
 }
 
+/// How a GPU renderer is built.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RendererOptions {
+    /// The `layout::FEATURE_*` bits the kernels are built with (`FEATURES_ALL`: the general
+    /// code); they must include every feature of the scene.
+    pub features: u32,
+    /// The megakernel or the wavefront render.
+    pub kernels: PathKernels,
+    /// The budgets renders are planned with; `None`: the kernels' own on this adapter.
+    pub budgets: Option<RayBudgets>,
+    /// wgpu's run-time checks the kernels are built with.
+    pub checks: ShaderChecks,
+}
+
+impl RendererOptions {
+    /// The adapter's best for `scene`: code specialised to its features, the kernels the
+    /// adapter runs best, their budgets, the default checks.
+    pub fn for_scene(scene: &FlatScene, context: &GpuContext) -> RendererOptions {
+        RendererOptions {
+            features: scene.features(),
+            kernels: PathKernels::for_adapter(context.is_cpu_adapter),
+            budgets: None,
+            checks: ShaderChecks::default(),
+        }
+    }
+}
+
 /// A buffer copied back to the host after a submission: the map is requested when the batch
 /// is submitted, and read when the batch is finished.
 struct Readback {
@@ -134,6 +161,8 @@ struct Batch {
     submission: wgpu::SubmissionIndex,
     status: Readback,
     timestamps: Option<Readback>,
+    /// Each stage's kernel, in order, when its stages are timed one by one.
+    stage_kernels: Vec<usize>,
     _uniforms: Vec<wgpu::Buffer>,
     _status: wgpu::Buffer,
     _bind_groups: Vec<wgpu::BindGroup>,
@@ -186,6 +215,8 @@ pub struct GpuRenderer {
     uniform_stride: u64,
     in_flight: VecDeque<Batch>,
     kernel_time: Option<Duration>,
+    /// Per kernel, its device time, when each stage is timed (`profile_stages`).
+    stage_times: Option<Vec<StageTime>>,
     /// Chosen with the adapter and the kernels ([`PathKernels::budgets`]); the accumulation's
     /// scratch half exists when they split passes into light windows.
     budgets: RayBudgets,
@@ -217,9 +248,12 @@ impl GpuRenderer {
         features: u32,
         path_kernels: PathKernels,
     ) -> Result<GpuRenderer> {
-        let limit = context.device.limits().max_storage_buffer_binding_size;
-        let budgets = path_kernels.budgets(context.is_cpu_adapter, limit);
-        GpuRenderer::with_budgets(context, scene, features, path_kernels, budgets)
+        let options = RendererOptions {
+            features,
+            kernels: path_kernels,
+            ..RendererOptions::for_scene(scene, &context)
+        };
+        GpuRenderer::with_options(context, scene, options)
     }
 
     /// Like [`GpuRenderer::with_kernels`], planning renders with `budgets` (`bench frame`
@@ -231,6 +265,30 @@ impl GpuRenderer {
         path_kernels: PathKernels,
         budgets: RayBudgets,
     ) -> Result<GpuRenderer> {
+        let options = RendererOptions {
+            features,
+            kernels: path_kernels,
+            budgets: Some(budgets),
+            ..RendererOptions::for_scene(scene, &context)
+        };
+        GpuRenderer::with_options(context, scene, options)
+    }
+
+    /// Uploads `scene` and builds the kernels as `options` say.
+    pub fn with_options(
+        context: GpuContext,
+        scene: &FlatScene,
+        options: RendererOptions,
+    ) -> Result<GpuRenderer> {
+        let RendererOptions {
+            features,
+            kernels: path_kernels,
+            budgets,
+            checks,
+        } = options;
+        let limit = context.device.limits().max_storage_buffer_binding_size;
+        let budgets =
+            budgets.unwrap_or_else(|| path_kernels.budgets(context.is_cpu_adapter, limit));
         let missing = scene.features() & !features;
         if missing != 0 {
             return Err(Error::Gpu(format!(
@@ -263,7 +321,7 @@ impl GpuRenderer {
         let pipelines = path_kernels
             .kernels()
             .iter()
-            .map(|&kernel| kernels::build_pipeline(device, kernel, features))
+            .map(|&kernel| kernels::build_pipeline_with(device, kernel, features, &[], checks))
             .collect();
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
@@ -285,6 +343,7 @@ impl GpuRenderer {
             layout: plan.layout,
             uniform_stride,
             in_flight: VecDeque::new(),
+            stage_times: None,
             budgets,
         })
     }
@@ -518,17 +577,28 @@ fn uniform_array<T: bytemuck::Pod>(
     context.uniform_buffer(label, &bytes)
 }
 
-/// How a stage of the wavefront render is sized: a grid over a count the host knows, or the
-/// paths or shadow rays a depth queued, read from the indirect arguments.
+/// How a stage dispatch is sized: the megakernel's tiles of pixels, a grid over a count the host
+/// knows, or the paths or shadow rays a depth queued, read from the indirect arguments.
+#[derive(Clone, Copy, Debug)]
 enum Grid {
+    Tiles(u32, u32),
     Direct(u32),
     QueuedPaths(u32),
     QueuedShadows(u32),
 }
 
-/// The stages of one wavefront dispatch, in order: (kernel index in `PathKernels::kernels`,
-/// depth, grid).
-fn wavefront_stages(wave: &Wavefront, pass: &GpuPass) -> Vec<(usize, u32, Grid)> {
+/// One kernel dispatch of a batch: the kernel (its index in `PathKernels::kernels`), the
+/// batch's dispatch (`GpuPass`) it works on, the path depth (its `GpuWave`), and its grid.
+#[derive(Clone, Copy, Debug)]
+struct Stage {
+    kernel: usize,
+    dispatch: usize,
+    depth: u32,
+    grid: Grid,
+}
+
+/// The stages of one wavefront dispatch, in order.
+fn wavefront_stages(wave: &Wavefront, dispatch: usize, pass: &GpuPass) -> Vec<Stage> {
     const CAMERA: usize = 0;
     const CLOSEST: usize = 1;
     const SHADE: usize = 2;
@@ -536,86 +606,100 @@ fn wavefront_stages(wave: &Wavefront, pass: &GpuPass) -> Vec<(usize, u32, Grid)>
     const OCCLUDED: usize = 4;
     const RESOLVE: usize = 5;
     const ACCUMULATE: usize = 6;
+    let stage = |kernel, depth, grid| Stage {
+        kernel,
+        dispatch,
+        depth,
+        grid,
+    };
     let entries = pass.tile_width * pass.tile_height;
     let paths = entries * pass.sample_count;
     let shadows = wave.shadow_stride(pass) > 0;
-    let mut stages = vec![(CAMERA, 0, Grid::Direct(paths))];
+    let mut stages = vec![stage(CAMERA, 0, Grid::Direct(paths))];
     for depth in 0..wave.vertices {
-        let grid = || match depth {
+        let grid = match depth {
             0 => Grid::Direct(paths),
             _ => Grid::QueuedPaths(depth),
         };
-        stages.push((CLOSEST, depth, grid()));
-        stages.push((SHADE, depth, grid()));
+        stages.push(stage(CLOSEST, depth, grid));
+        stages.push(stage(SHADE, depth, grid));
         // The next depth's queue, or this depth's shadow rays, need their counts.
         if shadows || depth + 1 < wave.vertices {
-            stages.push((PREPARE, depth, Grid::Direct(1)));
+            stages.push(stage(PREPARE, depth, Grid::Direct(1)));
         }
         if shadows {
-            stages.push((OCCLUDED, depth, Grid::QueuedShadows(depth)));
-            stages.push((RESOLVE, depth, grid()));
+            stages.push(stage(OCCLUDED, depth, Grid::QueuedShadows(depth)));
+            stages.push(stage(RESOLVE, depth, grid));
         }
     }
-    stages.push((ACCUMULATE, 0, Grid::Direct(entries)));
+    stages.push(stage(ACCUMULATE, 0, Grid::Direct(entries)));
     stages
 }
 
+/// Timestamp queries a query set may hold (wgpu's limit): a profiled batch times at most half
+/// as many stages.
+const MAX_QUERIES: usize = 4096;
+
 impl GpuRenderer {
-    /// Records `dispatches` with the megakernel.
-    fn record_megakernel(
-        &self,
-        compute: &mut wgpu::ComputePass<'_>,
-        dispatches: &[GpuPass],
-        bind_group: &wgpu::BindGroup,
-    ) {
-        let pipeline = &self.pipelines[0];
-        compute.set_pipeline(&pipeline.pipeline);
-        for (i, pass) in dispatches.iter().enumerate() {
-            compute.set_bind_group(0, bind_group, &[(i as u64 * self.uniform_stride) as u32]);
-            compute.dispatch_workgroups(
-                pass.tile_width.div_ceil(WORKGROUP_SIZE),
-                pass.tile_height.div_ceil(WORKGROUP_SIZE),
-                1,
-            );
+    /// The stages of `dispatches`, in order.
+    fn batch_stages(&self, dispatches: &[GpuPass]) -> Vec<Stage> {
+        match &self.wavefront {
+            None => dispatches
+                .iter()
+                .enumerate()
+                .map(|(dispatch, pass)| Stage {
+                    kernel: 0,
+                    dispatch,
+                    depth: 0,
+                    grid: Grid::Tiles(pass.tile_width, pass.tile_height),
+                })
+                .collect(),
+            Some(wave) => dispatches
+                .iter()
+                .enumerate()
+                .flat_map(|(i, pass)| wavefront_stages(wave, i, pass))
+                .collect(),
         }
     }
 
-    /// Records `dispatches` with the wavefront render's stages, dispatch after dispatch;
-    /// `GpuWave` `i * vertices + depth` of the batch's wave array is dispatch `i`'s at `depth`.
-    fn record_wavefront(
+    /// Records one stage; `GpuWave` `dispatch * vertices + depth` of the batch's wave array is
+    /// its dispatch's at its depth.
+    fn record_stage(
         &self,
         compute: &mut wgpu::ComputePass<'_>,
-        dispatches: &[GpuPass],
+        stage: Stage,
         bind_groups: &[wgpu::BindGroup],
     ) {
-        let wave = self.wavefront.as_ref().expect("a wavefront renderer");
-        let args = self.buffer(slot::WF_ARGS);
+        let pipeline = &self.pipelines[stage.kernel];
+        let vertices = self.wavefront.as_ref().map_or(1, |w| w.vertices) as u64;
+        let wave_index = stage.dispatch as u64 * vertices + stage.depth as u64;
+        let offsets = pipeline.dynamic_offsets(|b| {
+            let index = match b.binding == slot::WAVE.binding {
+                true => wave_index,
+                false => stage.dispatch as u64,
+            };
+            (index * self.uniform_stride) as u32
+        });
+        compute.set_pipeline(&pipeline.pipeline);
+        compute.set_bind_group(0, &bind_groups[stage.kernel], &offsets);
         let args_size = size_of::<GpuWaveArgs>() as u64;
-        for (i, pass) in dispatches.iter().enumerate() {
-            for (kernel, depth, grid) in wavefront_stages(wave, pass) {
-                let pipeline = &self.pipelines[kernel];
-                let wave_index = i as u64 * wave.vertices as u64 + depth as u64;
-                let offsets = pipeline.dynamic_offsets(|b| {
-                    let index = match b.binding == slot::WAVE.binding {
-                        true => wave_index,
-                        false => i as u64,
-                    };
-                    (index * self.uniform_stride) as u32
-                });
-                compute.set_pipeline(&pipeline.pipeline);
-                compute.set_bind_group(0, &bind_groups[kernel], &offsets);
-                match grid {
-                    Grid::Direct(count) => {
-                        let (x, y) = wave_grid(count);
-                        compute.dispatch_workgroups(x, y, 1);
-                    }
-                    Grid::QueuedPaths(depth) => {
-                        compute.dispatch_workgroups_indirect(args, depth as u64 * args_size);
-                    }
-                    Grid::QueuedShadows(depth) => {
-                        compute.dispatch_workgroups_indirect(args, depth as u64 * args_size + 16);
-                    }
-                }
+        match stage.grid {
+            Grid::Tiles(width, height) => compute.dispatch_workgroups(
+                width.div_ceil(WORKGROUP_SIZE),
+                height.div_ceil(WORKGROUP_SIZE),
+                1,
+            ),
+            Grid::Direct(count) => {
+                let (x, y) = wave_grid(count);
+                compute.dispatch_workgroups(x, y, 1);
+            }
+            Grid::QueuedPaths(depth) => {
+                let args = self.buffer(slot::WF_ARGS);
+                compute.dispatch_workgroups_indirect(args, depth as u64 * args_size);
+            }
+            Grid::QueuedShadows(depth) => {
+                let args = self.buffer(slot::WF_ARGS);
+                compute.dispatch_workgroups_indirect(args, depth as u64 * args_size + 16);
             }
         }
     }
@@ -647,6 +731,38 @@ impl GpuRenderer {
         }
         Ok(waves)
     }
+
+    /// Times each kernel apart from the next (`stage_times`), on adapters with timestamps:
+    /// every stage then runs in a compute pass of its own, which costs a little time itself.
+    pub fn profile_stages(&mut self) {
+        if self.context.has_timestamps() {
+            self.stage_times = Some(vec![StageTime::default(); self.pipelines.len()]);
+        }
+    }
+
+    /// Device time of each kernel over the finished batches, when `profile_stages` was asked
+    /// for and the adapter has timestamps: (kernel name, its stages' time).
+    pub fn stage_times(&self) -> Option<Vec<(&'static str, StageTime)>> {
+        let times = self.stage_times.as_ref()?;
+        Some(
+            self.pipelines
+                .iter()
+                .zip(times)
+                .map(|(pipeline, time)| (pipeline.kernel.name, *time))
+                .collect(),
+        )
+    }
+}
+
+/// A kernel's share of the device time of a profiled render.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageTime {
+    /// Its stages' time, summed.
+    pub time: Duration,
+    /// Its stages timed.
+    pub stages: u64,
+    /// Its stages recorded past the query set's room, so not timed.
+    pub untimed: u64,
 }
 
 impl Backend for GpuRenderer {
@@ -678,49 +794,61 @@ impl Backend for GpuRenderer {
             .iter()
             .map(|pipeline| pipeline.bind_group(device, &buffers))
             .collect::<Result<Vec<_>>>()?;
-        let queries = context.has_timestamps().then(|| {
+        let stages = self.batch_stages(dispatches);
+        // Profiled: a pair of timestamps per stage (as many as fit); else one pair for all.
+        let timed = match (&self.stage_times, context.has_timestamps()) {
+            (_, false) => 0,
+            (Some(_), true) => stages.len().min(MAX_QUERIES / 2),
+            (None, true) => 1,
+        };
+        let queries = (timed > 0).then(|| {
             device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("kernel time"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 2,
+                count: 2 * timed as u32,
             })
         });
+        let timestamp_writes = |pair: usize| {
+            queries.as_ref().and_then(|query_set| {
+                (pair < timed).then(|| wgpu::ComputePassTimestampWrites {
+                    query_set,
+                    beginning_of_pass_write_index: Some(2 * pair as u32),
+                    end_of_pass_write_index: Some(2 * pair as u32 + 1),
+                })
+            })
+        };
         let mut encoder = device.create_command_encoder(&Default::default());
-        {
-            let timestamp_writes =
-                queries
-                    .as_ref()
-                    .map(|query_set| wgpu::ComputePassTimestampWrites {
-                        query_set,
-                        beginning_of_pass_write_index: Some(0),
-                        end_of_pass_write_index: Some(1),
-                    });
+        if self.stage_times.is_some() {
+            for (i, &stage) in stages.iter().enumerate() {
+                let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(self.pipelines[stage.kernel].kernel.name),
+                    timestamp_writes: timestamp_writes(i),
+                });
+                self.record_stage(&mut compute, stage, &bind_groups);
+            }
+        } else {
             let mut compute = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render batch"),
-                timestamp_writes,
+                timestamp_writes: timestamp_writes(0),
             });
             // A compute pass orders each dispatch's writes before the next dispatch's reads.
-            match self.path_kernels {
-                PathKernels::Megakernel => {
-                    self.record_megakernel(&mut compute, dispatches, &bind_groups[0])
-                }
-                PathKernels::Wavefront => {
-                    self.record_wavefront(&mut compute, dispatches, &bind_groups)
-                }
+            for &stage in &stages {
+                self.record_stage(&mut compute, stage, &bind_groups);
             }
         }
         let status_readback = Readback::new(device, "status readback", status.size());
         encoder.copy_buffer_to_buffer(&status, 0, &status_readback.buffer, 0, status.size());
         let timestamps = queries.as_ref().map(|query_set| {
+            let size = 16 * timed as u64;
             let resolved = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("timestamps"),
-                size: 16,
+                size,
                 usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
-            encoder.resolve_query_set(query_set, 0..2, &resolved, 0);
-            let readback = Readback::new(device, "timestamp readback", 16);
-            encoder.copy_buffer_to_buffer(&resolved, 0, &readback.buffer, 0, 16);
+            encoder.resolve_query_set(query_set, 0..2 * timed as u32, &resolved, 0);
+            let readback = Readback::new(device, "timestamp readback", size);
+            encoder.copy_buffer_to_buffer(&resolved, 0, &readback.buffer, 0, size);
             readback
         });
         let submission = context.queue.submit([encoder.finish()]);
@@ -728,10 +856,15 @@ impl Backend for GpuRenderer {
         if let Some(t) = &timestamps {
             t.request();
         }
+        let stage_kernels = match self.stage_times {
+            Some(_) => stages.iter().map(|stage| stage.kernel).collect(),
+            None => Vec::new(),
+        };
         self.in_flight.push_back(Batch {
             submission,
             status: status_readback,
             timestamps,
+            stage_kernels,
             _uniforms: vec![passes, wave_array],
             _status: status,
             _bind_groups: bind_groups,
@@ -748,8 +881,26 @@ impl Backend for GpuRenderer {
         if let (Some(readback), Some(total)) = (&batch.timestamps, &mut self.kernel_time) {
             let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&readback.bytes(&self.context)?);
             let period_ns = self.context.queue.get_timestamp_period() as f64;
-            let ns = ticks[1].saturating_sub(ticks[0]) as f64 * period_ns;
-            *total += Duration::from_nanos(ns as u64);
+            let times: Vec<Duration> = ticks
+                .chunks_exact(2)
+                .map(|pair| {
+                    Duration::from_nanos(
+                        (pair[1].saturating_sub(pair[0]) as f64 * period_ns) as u64,
+                    )
+                })
+                .collect();
+            *total += times.iter().sum::<Duration>();
+            if let Some(stage_times) = &mut self.stage_times {
+                for (i, &kernel) in batch.stage_kernels.iter().enumerate() {
+                    match times.get(i) {
+                        Some(&time) => {
+                            stage_times[kernel].time += time;
+                            stage_times[kernel].stages += 1;
+                        }
+                        None => stage_times[kernel].untimed += 1,
+                    }
+                }
+            }
         }
         Ok(DispatchStatus::from_words(&words))
     }

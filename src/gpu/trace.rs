@@ -8,7 +8,7 @@
 use std::time::{Duration, Instant};
 
 use super::GpuContext;
-use super::kernels::{self, Pipeline, slot};
+use super::kernels::{self, Pipeline, ShaderChecks, slot};
 use crate::accel::cwbvh::CwGeometry;
 use crate::bench::rays::{Query, RaySet};
 use crate::error::{Error, Result};
@@ -45,6 +45,17 @@ impl GpuTracer {
         cwbvh: Option<&CwGeometry>,
         rays: &RaySet,
     ) -> Result<GpuTracer> {
+        GpuTracer::with_checks(context, scene, cwbvh, rays, ShaderChecks::default())
+    }
+
+    /// [`GpuTracer::new`] with the kernels built with `checks`.
+    pub fn with_checks(
+        context: GpuContext,
+        scene: &FlatScene,
+        cwbvh: Option<&CwGeometry>,
+        rays: &RaySet,
+        checks: ShaderChecks,
+    ) -> Result<GpuTracer> {
         let device = &context.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let features = scene.features();
@@ -52,8 +63,8 @@ impl GpuTracer {
             None => (&kernels::TRACE_CLOSEST, &kernels::TRACE_ANY),
             Some(_) => (&kernels::TRACE_CLOSEST_CW, &kernels::TRACE_ANY_CW),
         };
-        let closest = kernels::build_pipeline(device, closest_kernel, features);
-        let any = kernels::build_pipeline(device, any_kernel, features);
+        let closest = kernels::build_pipeline_with(device, closest_kernel, features, &[], checks);
+        let any = kernels::build_pipeline_with(device, any_kernel, features, &[], checks);
         let frame = context.uniform_buffer("frame", bytemuck::bytes_of(&scene.frame));
         let (nodes, prims) = match cwbvh {
             None => context.geometry_buffers(scene)?,
