@@ -287,4 +287,11 @@ impl Backend for CpuRenderer<'_> {
         self.pixel_list = pixels.to_vec();
         Ok(())
     }
+
+    /// A new buffer: `accumulation` may have moved the last render's out.
+    fn clear(&mut self) -> Result<()> {
+        self.accumulation = vec![[0.0; 4]; self.layout().len()];
+        self.pixel_list.clear();
+        Ok(())
+    }
 }

@@ -20,7 +20,8 @@
 //! | BVH traversal        | `accel/traverse.rs` (obvhs BVH2) | `wgsl/traverse.wgsl` (ray queries) |
 //! | CWBVH traversal      | `accel/cwbvh.rs`            | `wgsl/traverse_cwbvh.wgsl` (the render kernel's) |
 //! | shading, shadows, mirrors | `integrator.rs`        | `wgsl/integrator.wgsl` |
-//! | pixel loop           | `cpu.rs`                    | `wgsl/render.wgsl`     |
+//! | pixel loop           | `cpu.rs`                    | `wgsl/render.wgsl` (the megakernel) |
+//! | a path vertex per stage | `integrator.rs` (`trace_path`, vertex by vertex) | `wgsl/wavefront.wgsl` (the wavefront render; `docs/gpu.md`) |
 //! | status and loop caps | `render.rs`                 | `wgsl/status.wgsl`     |
 //! | adaptive sampling    | `adaptive.rs` (decisions on the host, for both paths) | `wgsl/render.wgsl` (pixel lists, halves) |
 //! | ray queries (bench)  | `bench/rays.rs`             | `wgsl/trace.wgsl`      |

@@ -127,6 +127,9 @@ pub trait Backend {
     /// The pixels (`y * width + x`) that dispatches with `listed_pixels` sample, from the next
     /// batch submitted on.
     fn set_pixel_list(&mut self, pixels: &[u32]) -> Result<()>;
+    /// Empties the accumulation, so that the next render starts from zero: every render
+    /// starts so, and a backend may render its scene again.
+    fn clear(&mut self) -> Result<()>;
     /// Device time spent in the kernels of finished batches, where the device measures it.
     fn kernel_time(&self) -> Option<Duration> {
         None
@@ -616,6 +619,7 @@ fn drive(
 ) -> Result<RenderOutput> {
     let frame = &scene.frame;
     let plan = plan_passes(scene, &backend.budgets());
+    backend.clear()?;
     let mut run = Run {
         scene,
         progress,
@@ -692,7 +696,7 @@ fn drive(
     // The crop window's pixels alone (the whole image unless `render.crop` narrows it).
     let accumulation = crop(backend.accumulation()?);
     output.image = Image::from_accumulation(x1 - x0, y1 - y0, &accumulation);
-    output.sample_counts = accumulation.iter().map(|a| a[3] as u32).collect();
+    output.sample_counts = sample_counts(&accumulation);
     if let Some(sums) = aov_sums {
         let (normal_depth, albedo) = sums.split_at(layout.pixels);
         let (normal_depth, albedo) = (crop(normal_depth.to_vec()), crop(albedo.to_vec()));
@@ -922,6 +926,12 @@ fn crop_rows<T: Copy>(pixels: Vec<T>, width: u32, crop: [u32; 4]) -> Vec<T> {
         .take(y1 - y0)
         .flat_map(|row| row[x0..x1].iter().copied())
         .collect()
+}
+
+/// Each pixel's samples, from its sums' count, on all cores.
+fn sample_counts(accumulation: &[[f32; 4]]) -> Vec<u32> {
+    use rayon::prelude::*;
+    accumulation.par_iter().map(|a| a[3] as u32).collect()
 }
 
 /// A one-line explanation of kernel status flags.

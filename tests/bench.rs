@@ -142,6 +142,8 @@ fn bench_scale_measures_each_size_and_plots_them() {
             "100,1000",
             "--copies",
             "2",
+            "--pad-mib",
+            "1",
             "--size",
             "32",
             "--runs",
@@ -150,14 +152,18 @@ fn bench_scale_measures_each_size_and_plots_them() {
             plot.to_str().unwrap(),
         ],
         &dir.join("scale.json"),
-        "| triangles | build ms |",
+        "| triangles | padding MiB | build ms |",
     );
     let results = report["report"]["results"].as_array().unwrap();
     let triangles: Vec<u64> = results
         .iter()
         .map(|r| r["triangles"].as_u64().unwrap())
         .collect();
-    assert_eq!(triangles, [100, 1000, 2 * 3674]);
+    assert_eq!(triangles, [100, 1000, 2 * 3674, 3674]);
+    // The padded mesh: the whole mesh's tree over a buffer a MiB larger.
+    let padded = &results[3];
+    assert_eq!(padded["padding_bytes"], 1 << 20, "{padded}");
+    assert!(padded["scene_bytes"].as_u64().unwrap() >= (1 << 20) + 48 * 3674);
     for r in results {
         assert!(r["cpu_mrays_per_s"]["median"].as_f64().unwrap() > 0.0);
         assert!(

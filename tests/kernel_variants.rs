@@ -286,3 +286,48 @@ fn specialised_cpu_integrators_render_the_general_integrators_image() {
     ));
     assert!(CpuRenderer::new(&flat).with_features(0).is_err());
 }
+
+/// A renderer renders its scene again from zero: the same image and sample counts the second
+/// time (not the sums of both), on both GPU ways and on the CPU path, adaptive sampling and a
+/// pass split into light windows included.
+#[test]
+fn a_renderer_renders_its_scene_again_from_zero() {
+    let flat = flatten(&common::load(
+        "scenes/area_light.toml",
+        &[
+            "render.width=24",
+            "render.height=24",
+            "render.spp=4",
+            "lights[0].samples=8",
+            "render.noise_target=0.05",
+        ],
+    ));
+    let few_rays = RayBudgets {
+        per_invocation: 4,
+        ..RayBudgets::DEFAULT
+    };
+    let twice = |backend: &mut dyn chambre::render::Backend, what: &str| {
+        let first = common::render_through(&flat, backend);
+        let second = common::render_through(&flat, backend);
+        assert_eq!(first.sample_counts, second.sample_counts, "{what}");
+        assert_eq!(
+            common::differing_pixels(&first.image, &second.image),
+            0,
+            "{what}"
+        );
+        assert_eq!(first.rays, second.rays, "{what}");
+    };
+    twice(
+        &mut chambre::cpu::CpuRenderer::new(&flat).with_budgets(few_rays),
+        "CPU",
+    );
+    let Some(context) = common::gpu_context() else {
+        return;
+    };
+    for kernels in [PathKernels::Megakernel, PathKernels::Wavefront] {
+        let mut renderer =
+            GpuRenderer::with_budgets(context.clone(), &flat, flat.features(), kernels, few_rays)
+                .unwrap();
+        twice(&mut renderer, &format!("{kernels:?}"));
+    }
+}

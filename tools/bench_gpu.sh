@@ -52,7 +52,11 @@ done
 
 stamp "chambre: scale (the dragon and 4 and 12 copies beside it, 512x512 camera rays)"
 "$chambre" bench scale --backends gpu --prefixes 1000000000 --copies 4,12 --size 512 --runs "$runs" \
-    --json "$out/scale.json"
+    --pad-mib 64,128,256,512 --json "$out/scale.json"
+# The same copies far apart (no camera ray reaches them): the BVH and buffers of 4 and 12
+# dragons with one dragon's work.
+"$chambre" bench scale --backends gpu --prefixes 1000000000 --copies 4,12 --size 512 --runs "$runs" \
+    --copy-spacing 50 --json "$out/scale_far.json"
 
 if [ -n "${PEER:-}" ]; then
     stamp "Mitsuba 3: unpacking"

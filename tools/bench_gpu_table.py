@@ -129,22 +129,39 @@ def scale_table(folder):
     report = load(folder, "scale.json")
     if report is None:
         return []
+    far = load(folder, "scale_far.json")
     out = ["## Scale: 512x512 camera rays on the dragon and copies beside it (Mrays/s)", "",
-           "| triangles | chambre | chambre's share of one dragon's rate | Mitsuba 3 | Mitsuba's share |",
-           "|---|---|---|---|---|"]
-    results = report["report"]["results"]
-    first = None
+           "| scene | triangles | chambre | chambre's share of one dragon's rate | Mitsuba 3 | "
+           "Mitsuba's share |", "|---|---|---|---|---|---|"]
+    rate = lambda r: r["gpu_mrays_per_s"]["median"] if r.get("gpu_mrays_per_s") else None
+    rows = report["report"]["results"]
+    plain = [r for r in rows if r.get("padding_bytes", 0) == 0]
+    first = rate(plain[0]) if plain else None
     peer_first = None
-    for i, r in enumerate(results):
-        c = r["gpu_mrays_per_s"]["median"] if r.get("gpu_mrays_per_s") else None
-        copies = [1, 4, 12][i] if i < 3 else None
-        peer = load(folder, f"mitsuba_scale_{copies}.json") if copies else None
+    for copies, r in zip([1, 4, 12], plain):
+        c = rate(r)
+        peer = load(folder, f"mitsuba_scale_{copies}.json")
         m = peer["closest"]["mrays_per_s"] if peer else None
-        first = first or c
         peer_first = peer_first or m
         share = "-" if not (c and first) else f"{100 * c / first:.0f}%"
         peer_share = "-" if not (m and peer_first) else f"{100 * m / peer_first:.0f}%"
-        out.append(f"| {r['triangles']:,} | {fmt(c)} | {share} | {fmt(m)} | {peer_share} |")
+        label = "the dragon" if copies == 1 else f"{copies} dragons, 1.1 widths apart"
+        out.append(f"| {label} | {r['triangles']:,} | {fmt(c)} | {share} | {fmt(m)} | {peer_share} |")
+    for r in rows:
+        if r.get("padding_bytes", 0):
+            c = rate(r)
+            share = "-" if not (c and first) else f"{100 * c / first:.0f}%"
+            label = f"the dragon, primitives padded by {r['padding_bytes'] >> 20} MiB unread"
+            out.append(f"| {label} | {r['triangles']:,} | {fmt(c)} | {share} | - | - |")
+    if far:
+        far_plain = [r for r in far["report"]["results"] if r.get("padding_bytes", 0) == 0]
+        for copies, r in zip([1, 4, 12], far_plain):
+            if copies == 1:
+                continue
+            c = rate(r)
+            share = "-" if not (c and first) else f"{100 * c / first:.0f}%"
+            label = f"{copies} dragons, 50 widths apart (no ray reaches the others)"
+            out.append(f"| {label} | {r['triangles']:,} | {fmt(c)} | {share} | - | - |")
     return out
 
 

@@ -103,6 +103,21 @@ pub fn build(geometry: Primitives<'_>) -> Result<CwGeometry, String> {
 }
 
 impl CwGeometry {
+    /// A copy whose primitive array ends with `bytes` of primitives no leaf indexes: the same
+    /// tree and traversals over a larger buffer (`bench scale --pad-mib`, which tells the cost
+    /// of a buffer's size from that of the rays' work).
+    pub fn padded(&self, bytes: usize) -> CwGeometry {
+        let extra = bytes.div_ceil(size_of::<GpuPrimitive>());
+        let mut prims = self.prims.clone();
+        prims.resize(prims.len() + extra, GpuPrimitive::default());
+        CwGeometry {
+            nodes: self.nodes.clone(),
+            prims,
+            position_of: self.position_of.clone(),
+            ..*self
+        }
+    }
+
     /// The planes' indices in `prims`.
     pub fn planes(&self) -> std::ops::Range<u32> {
         self.plane_start..self.plane_start + self.plane_count

@@ -99,36 +99,59 @@ pub(super) enum Way {
     },
 }
 
+/// A renderer built for a way, kept between the frames it renders (as a viewer keeps its scene
+/// loaded and its kernels built; every render starts from a cleared accumulation).
+pub(super) enum WayRenderer<'a> {
+    Cpu(CpuRenderer<'a>),
+    Gpu(Box<GpuRenderer>),
+}
+
+impl<'a> WayRenderer<'a> {
+    pub(super) fn new(scene: &'a FlatScene, way: Way, gpu: Option<&GpuContext>) -> Result<Self> {
+        Ok(match way {
+            Way::Cpu { features } => {
+                WayRenderer::Cpu(CpuRenderer::new(scene).with_features(features)?)
+            }
+            Way::Gpu {
+                features,
+                budgets,
+                kernels,
+                checks,
+            } => {
+                let context = gpu
+                    .expect("a GPU way is only planned with a GPU context")
+                    .clone();
+                let options = RendererOptions {
+                    features,
+                    kernels,
+                    budgets,
+                    checks,
+                };
+                WayRenderer::Gpu(Box::new(GpuRenderer::with_options(
+                    context, scene, options,
+                )?))
+            }
+        })
+    }
+
+    /// Renders the scene once more.
+    pub(super) fn render(&mut self, scene: &FlatScene) -> Result<RenderOutput> {
+        let cancel = AtomicBool::new(false);
+        let backend: &mut dyn crate::render::Backend = match self {
+            WayRenderer::Cpu(renderer) => renderer,
+            WayRenderer::Gpu(renderer) => renderer.as_mut(),
+        };
+        render(scene, backend, &mut |_, _| {}, &cancel)
+    }
+}
+
+/// Renders `scene` once with a renderer built for `way`.
 pub(super) fn render_once(
     scene: &FlatScene,
     way: Way,
     gpu: Option<&GpuContext>,
 ) -> Result<RenderOutput> {
-    let cancel = AtomicBool::new(false);
-    match way {
-        Way::Cpu { features } => {
-            let mut renderer = CpuRenderer::new(scene).with_features(features)?;
-            render(scene, &mut renderer, &mut |_, _| {}, &cancel)
-        }
-        Way::Gpu {
-            features,
-            budgets,
-            kernels,
-            checks,
-        } => {
-            let context = gpu
-                .expect("a GPU way is only planned with a GPU context")
-                .clone();
-            let options = RendererOptions {
-                features,
-                kernels,
-                budgets,
-                checks,
-            };
-            let mut renderer = GpuRenderer::with_options(context, scene, options)?;
-            render(scene, &mut renderer, &mut |_, _| {}, &cancel)
-        }
-    }
+    WayRenderer::new(scene, way, gpu)?.render(scene)
 }
 
 /// What `run` measures.
@@ -222,22 +245,32 @@ fn gpu_way_name(kernels: PathKernels) -> &'static str {
 }
 
 /// Renders each scene with each way of `config` interleaved run by run, after one warm-up run
-/// each; then, on a GPU with timestamps, once more with the wavefront render's stages timed one
-/// by one (where its time goes).
+/// each, each way with one renderer for all its runs; then, on a GPU with timestamps, once more
+/// with the wavefront render's stages timed one by one (where its time goes).
 pub fn run(config: &FrameConfig<'_>) -> Result<FrameReport> {
     let mut results = Vec::new();
     for name in config.scenes {
         let scene = Scene::load(&super::sample_scene(name), config.overrides)?;
         let flat = flatten(&scene);
         let ways = config.ways(&flat);
+        let mut renderers = ways
+            .iter()
+            .map(|&(_, way)| WayRenderer::new(&flat, way, config.gpu))
+            .collect::<Result<Vec<_>>>()?;
         let mut frame_ms = vec![Vec::new(); ways.len()];
         let mut traced_ms = vec![Vec::new(); ways.len()];
         let mut kernel_ms = vec![Vec::new(); ways.len()];
         // Per way: a plan with more light windows retraces each path once per window.
         let mut rays = vec![0; ways.len()];
         for run in 0..=config.runs.max(1) {
-            for (i, &(_, way)) in ways.iter().enumerate() {
-                let output = render_once(&flat, way, config.gpu)?;
+            for (i, renderer) in renderers.iter_mut().enumerate() {
+                // A GPU left idle while the CPU ways ran has lowered its clocks: an untimed
+                // frame just before each timed one brings them (and its caches) back, or the
+                // first GPU way after a CPU way runs up to 4x slower than the rest.
+                if let WayRenderer::Gpu(_) = renderer {
+                    renderer.render(&flat)?;
+                }
+                let output = renderer.render(&flat)?;
                 if let Some(e) = output.stopped {
                     return Err(e);
                 }

@@ -216,6 +216,15 @@ pub fn fermat_steps() -> clap::builder::RangedI64ValueParser<u32> {
     clap::value_parser!(u32).range(1..=i64::from(crate::gpu::fermat::MAX_FERMAT_STEPS))
 }
 
+/// A spacing of copies in mesh widths: at least 1, so that they do not overlap.
+pub fn at_least_one_width(text: &str) -> std::result::Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 1.0 => Ok(v),
+        Ok(_) => Err("must be a finite number of widths, at least 1".into()),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
 /// A count given on the command line that must be at least 1 (a size, a number of runs or
 /// copies): 0 would measure nothing and report NaN, or be taken silently as 1.
 pub fn at_least_one(text: &str) -> std::result::Result<usize, String> {
@@ -254,6 +263,13 @@ pub struct ScaleArgs {
     /// Image size of the camera rays (one per pixel; the rays benchmark's camera).
     #[arg(long, value_parser = positive(), default_value_t = 512)]
     pub size: u32,
+    /// Copies stand this many mesh widths apart (farther, no camera ray reaches the others).
+    #[arg(long, default_value_t = 1.1, value_parser = at_least_one_width)]
+    pub copy_spacing: f32,
+    /// The whole mesh once more for each N, its GPU primitive array padded by N MiB that no ray
+    /// reads: what the buffer's size costs apart from the rays' work.
+    #[arg(long, value_delimiter = ',')]
+    pub pad_mib: Vec<usize>,
     /// Timed runs after one warm-up.
     #[arg(long, value_parser = positive(), default_value_t = 3)]
     pub runs: u32,
@@ -490,6 +506,10 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 &camera,
                 &args.prefixes,
                 &args.copies,
+                scale::Layout {
+                    spacing: args.copy_spacing,
+                    padding_mib: args.pad_mib.clone(),
+                },
                 args.runs,
                 gpu,
             )?;

@@ -36,6 +36,8 @@ pub const COPIES: [usize; 2] = [4, 12];
 pub struct ScaleResult {
     /// Triangles of the scene.
     pub triangles: usize,
+    /// Bytes of primitives no leaf indexes at the end of the GPU's primitive array.
+    pub padding_bytes: usize,
     /// The BVH2 build by obvhs (ms).
     pub build_ms: f64,
     /// The CWBVH made from the BVH2, and the CPU's wide BVH from that (ms).
@@ -96,11 +98,12 @@ fn prefix(mesh: &TriangleMesh, n: usize) -> TriangleMesh {
     }
 }
 
-/// `count` copies of `mesh` on a grid in x and z, one mesh width apart, the first in place.
-fn copies(mesh: &TriangleMesh, count: usize) -> Vec<TriangleMesh> {
+/// `count` copies of `mesh` on a grid in x and z, `spacing` mesh widths apart (1.1: a tenth of
+/// a width between them), the first in place.
+fn copies(mesh: &TriangleMesh, count: usize, spacing: f32) -> Vec<TriangleMesh> {
     let lo = mesh.positions.iter().fold(Vec3::MAX, |a, &p| a.min(p));
     let hi = mesh.positions.iter().fold(Vec3::MIN, |a, &p| a.max(p));
-    let step = 1.1 * (hi - lo);
+    let step = spacing * (hi - lo);
     let columns = (count as f64).sqrt().ceil() as usize;
     (0..count)
         .map(|i| {
@@ -139,10 +142,15 @@ fn measure(
     camera: &Pinhole,
     runs: u32,
     gpu: Option<&Result<GpuContext>>,
+    padding_bytes: usize,
 ) -> Result<ScaleResult> {
     let scene = meshes_scene(meshes)?;
     let start = Instant::now();
-    let cwbvh = scene.cwbvh().ok();
+    let padded = match padding_bytes {
+        0 => None,
+        bytes => scene.cwbvh().ok().map(|cw| cw.padded(bytes)),
+    };
+    let cwbvh = padded.as_ref().or(scene.cwbvh().ok());
     let cpu_bvh = match scene.wide() {
         Ok(_) => Bvh::Packets,
         Err(_) => Bvh::Bvh2,
@@ -178,12 +186,14 @@ fn measure(
     };
     Ok(ScaleResult {
         triangles: scene.triangle_count,
+        padding_bytes,
         build_ms: scene.build_time.as_secs_f64() * 1e3,
         wide_build_ms,
         cpu_bvh,
         gpu_bvh,
         bvh_nodes,
         scene_bytes: node_bytes
+            + padding_bytes
             + scene.prims.len() * size_of::<GpuPrimitive>()
             + scene.normals.len() * size_of::<GpuNormals>(),
         peak_rss_bytes: peak_rss_bytes(),
@@ -194,6 +204,17 @@ fn measure(
     })
 }
 
+/// How the copies and padded rows of `run` are laid out.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Layout {
+    /// Copies stand this many mesh widths apart (1.1 by default; farther, no camera ray
+    /// reaches the others).
+    pub spacing: f32,
+    /// The whole mesh once more for each of these, its GPU primitive array padded by this many
+    /// MiB that no ray reads: what a buffer's size costs apart from the rays' work.
+    pub padding_mib: Vec<usize>,
+}
+
 /// Measures every prefix and copy count of `mesh` (smallest first, so the peak memory column
 /// grows with the scene) with `camera`'s rays, one frame.
 pub fn run(
@@ -201,6 +222,7 @@ pub fn run(
     camera: &Pinhole,
     prefixes: &[usize],
     copy_counts: &[usize],
+    layout: Layout,
     runs: u32,
     gpu: Option<&Result<GpuContext>>,
 ) -> Result<ScaleReport> {
@@ -210,10 +232,15 @@ pub fn run(
     })?;
     let mut results = Vec::new();
     for &n in prefixes {
-        results.push(measure(vec![prefix(&full, n)], camera, runs, gpu)?);
+        results.push(measure(vec![prefix(&full, n)], camera, runs, gpu, 0)?);
     }
     for &count in copy_counts {
-        results.push(measure(copies(&full, count), camera, runs, gpu)?);
+        let meshes = copies(&full, count, layout.spacing);
+        results.push(measure(meshes, camera, runs, gpu, 0)?);
+    }
+    for &mib in &layout.padding_mib {
+        let whole = vec![prefix(&full, usize::MAX)];
+        results.push(measure(whole, camera, runs, gpu, mib << 20)?);
     }
     Ok(ScaleReport {
         mesh: mesh.display().to_string(),
@@ -232,8 +259,8 @@ impl ScaleReport {
              the GPU's BVH nodes and arrays\n\n",
             self.mesh, self.rays
         );
-        out += "| triangles | build ms | wide BVHs ms | BVH nodes | scene MiB | peak RSS MiB | CPU BVH | CPU Mrays/s | GPU BVH | GPU Mrays/s | hits |\n";
-        out += "|---|---|---|---|---|---|---|---|---|---|---|\n";
+        out += "| triangles | padding MiB | build ms | wide BVHs ms | BVH nodes | scene MiB | peak RSS MiB | CPU BVH | CPU Mrays/s | GPU BVH | GPU Mrays/s | hits |\n";
+        out += "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
         let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
         for r in &self.results {
             let gpu = match (&r.gpu_mrays_per_s, &r.gpu_refused) {
@@ -242,8 +269,9 @@ impl ScaleReport {
                 (None, None) => "-".into(),
             };
             out += &format!(
-                "| {} | {:.1} | {:.1} | {} | {:.1} | {} | {} | {:.2} | {} | {gpu} | {} |\n",
+                "| {} | {} | {:.1} | {:.1} | {} | {:.1} | {} | {} | {:.2} | {} | {gpu} | {} |\n",
                 r.triangles,
+                r.padding_bytes >> 20,
                 r.build_ms,
                 r.wide_build_ms,
                 r.bvh_nodes,

@@ -284,16 +284,17 @@ impl GpuContext {
     }
 
     /// Copies `buffer`'s values back to the host (it must have COPY_SRC usage).
-    pub(crate) fn read_buffer<T: bytemuck::Pod>(&self, buffer: &wgpu::Buffer) -> Result<Vec<T>> {
+    pub(crate) fn read_buffer<T: bytemuck::Pod + Send + Sync>(
+        &self,
+        buffer: &wgpu::Buffer,
+    ) -> Result<Vec<T>> {
         self.read_range(buffer, 0..buffer.size())
     }
 
     /// Copies the values in bytes `range` of `buffer` back to the host (it must have COPY_SRC
-    /// usage; the range a multiple of 4 bytes, as copies are): a staging buffer as large as the
-    /// range, and one copy out of its mapping into aligned values. (Reading the whole buffer,
-    /// then casting and cutting it, copied an image's sums three times: 0.43 s of a 2560x1920
-    /// frame's 3.29 s on lavapipe, and nearly all of it on an H200.)
-    pub(crate) fn read_range<T: bytemuck::Pod>(
+    /// usage; the range a multiple of 4 bytes, as copies are), through a staging buffer as large
+    /// as the range.
+    pub(crate) fn read_range<T: bytemuck::Pod + Send + Sync>(
         &self,
         buffer: &wgpu::Buffer,
         range: std::ops::Range<u64>,
@@ -302,16 +303,40 @@ impl GpuContext {
         if size == 0 {
             return Ok(Vec::new());
         }
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
+        let staging = self.staging_buffer(size);
+        self.read_range_through(buffer, range, &staging)
+    }
+
+    /// A mappable buffer of `size` bytes to read results back through.
+    pub(crate) fn staging_buffer(&self, size: u64) -> wgpu::Buffer {
+        self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size,
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
-        });
+        })
+    }
+
+    /// [`GpuContext::read_range`] through `staging` (at least as large as the range), which a
+    /// caller reading the same range again keeps: a new mappable buffer costs the driver an
+    /// allocation and the host a page fault per page on first touch. The values are collected
+    /// out of the mapping once, on all cores. (Reading the whole buffer, then casting and
+    /// cutting it, copied an image's sums three times: 0.43 s of a 2560x1920 frame's 3.29 s on
+    /// lavapipe, and nearly all of it on an H200.)
+    pub(crate) fn read_range_through<T: bytemuck::Pod + Send + Sync>(
+        &self,
+        buffer: &wgpu::Buffer,
+        range: std::ops::Range<u64>,
+        staging: &wgpu::Buffer,
+    ) -> Result<Vec<T>> {
+        let size = range.end - range.start;
+        if size == 0 {
+            return Ok(Vec::new());
+        }
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(buffer, range.start, &staging, 0, size);
+        encoder.copy_buffer_to_buffer(buffer, range.start, staging, 0, size);
         self.queue.submit([encoder.finish()]);
-        let slice = staging.slice(..);
+        let slice = staging.slice(..size);
         let mapped: Mapped = Arc::new(Mutex::new(None));
         let signal = mapped.clone();
         slice.map_async(wgpu::MapMode::Read, move |r| {
@@ -324,8 +349,7 @@ impl GpuContext {
             })
             .map_err(|e| Error::Gpu(format!("reading back results: {e}")))?;
         self.await_mapping(&mapped)?;
-        // Collected, not cast: the mapping's alignment is not T's to rely on.
-        let values = bytemuck::pod_collect_to_vec(
+        let values = collect_values(
             &slice
                 .get_mapped_range()
                 .map_err(|e| Error::Gpu(format!("mapping results: {e}")))?,
@@ -333,4 +357,18 @@ impl GpuContext {
         staging.unmap();
         Ok(values)
     }
+}
+
+/// The values in `bytes`, copied out on all cores into aligned storage (the mapping's alignment
+/// is not `T`'s to rely on); the new vector's pages are first touched in parallel too.
+fn collect_values<T: bytemuck::Pod + Send + Sync>(bytes: &[u8]) -> Vec<T> {
+    use rayon::prelude::*;
+    const CHUNK: usize = 1 << 16;
+    let size = size_of::<T>();
+    let mut values = vec![T::zeroed(); bytes.len() / size];
+    values
+        .par_chunks_mut(CHUNK)
+        .zip(bytes.par_chunks(CHUNK * size))
+        .for_each(|(out, input)| bytemuck::cast_slice_mut::<T, u8>(out).copy_from_slice(input));
+    values
 }

@@ -217,6 +217,8 @@ pub struct GpuRenderer {
     kernel_time: Option<Duration>,
     /// Per kernel, its device time, when each stage is timed (`profile_stages`).
     stage_times: Option<Vec<StageTime>>,
+    /// The mappable buffer the accumulation is read back through, kept between reads.
+    staging: Option<wgpu::Buffer>,
     /// Chosen with the adapter and the kernels ([`PathKernels::budgets`]); the accumulation's
     /// scratch half exists when they split passes into light windows.
     budgets: RayBudgets,
@@ -344,6 +346,7 @@ impl GpuRenderer {
             uniform_stride,
             in_flight: VecDeque::new(),
             stage_times: None,
+            staging: None,
             budgets,
         })
     }
@@ -519,7 +522,10 @@ fn upload_scene(
     let accumulation = context.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("accumulation"),
         size: accumulation_size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        // Read back (COPY_SRC), cleared before each render (COPY_DST).
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
     Ok(vec![
@@ -914,12 +920,18 @@ impl Backend for GpuRenderer {
         Ok(self.layout.image_sums(halves))
     }
 
-    /// Read after the batches in flight, like the snapshot.
+    /// Read after the batches in flight, like the snapshot, through a staging buffer kept for
+    /// the next read (snapshots, adaptive decisions and the image read the same slots again).
     fn read_slots(&mut self, slots: std::ops::Range<usize>) -> Result<Vec<[f32; 4]>> {
         const SLOT: u64 = std::mem::size_of::<[f32; 4]>() as u64;
         let bytes = slots.start as u64 * SLOT..slots.end as u64 * SLOT;
+        let size = bytes.end - bytes.start;
+        if self.staging.as_ref().is_none_or(|s| s.size() < size) {
+            self.staging = Some(self.context.staging_buffer(size));
+        }
+        let staging = self.staging.as_ref().expect("made above");
         self.context
-            .read_range(self.buffer(slot::ACCUMULATION), bytes)
+            .read_range_through(self.buffer(slot::ACCUMULATION), bytes, staging)
     }
 
     /// A new buffer: the batches in flight keep the one they were bound with.
@@ -937,6 +949,24 @@ impl Backend for GpuRenderer {
             .find(|(b, _)| b.binding == slot::PIXEL_LIST.binding)
             .expect("uploaded with the scene");
         slot.1 = buffer;
+        Ok(())
+    }
+
+    /// Queued after the batches in flight: a renderer renders the scene again from zero, its
+    /// kernels' times too.
+    fn clear(&mut self) -> Result<()> {
+        if let Some(time) = &mut self.kernel_time {
+            *time = Duration::ZERO;
+        }
+        if let Some(times) = &mut self.stage_times {
+            times.fill(StageTime::default());
+        }
+        let mut encoder = self
+            .context
+            .device
+            .create_command_encoder(&Default::default());
+        encoder.clear_buffer(self.buffer(slot::ACCUMULATION), 0, None);
+        self.context.queue.submit([encoder.finish()]);
         Ok(())
     }
 
