@@ -105,6 +105,11 @@ pub const FOCUS_SPHERE: u32 = 1;
 /// A cylinder whose axis is the lens's vertical through its centre.
 pub const FOCUS_CYLINDER: u32 = 2;
 
+/// Projections (`GpuCamera::projection`): rays through a lens centre (pinhole or thin lens).
+pub const PROJECTION_PERSPECTIVE: u32 = 0;
+/// Parallel rays along the viewing axis from a window (docs/camera.md, "Orthographic camera").
+pub const PROJECTION_ORTHOGRAPHIC: u32 = 1;
+
 /// Light kinds (`GpuLight::kind`; fields per kind on [`GpuLight`]): a point light.
 pub const LIGHT_POINT: u32 = 0;
 /// A directional light (light from infinitely far away, one direction).
@@ -395,7 +400,7 @@ pub struct GpuLight {
 pub struct GpuCamera {
     /// The lens frame's x axis (right) in world space.
     pub lens_to_world_x: [f32; 3],
-    /// Focal length (mm).
+    /// Focal length (mm); 0 for an orthographic camera.
     pub focal_length_mm: f32,
     /// The lens frame's y axis (up) in world space.
     pub lens_to_world_y: [f32; 3],
@@ -407,7 +412,7 @@ pub struct GpuCamera {
     pub units_per_mm: f32,
     /// The lens centre in world space (scene units): the lens frame's origin.
     pub lens_center: [f32; 3],
-    /// 1 / focal length (1/mm): the ray-transfer refraction term.
+    /// 1 / focal length (1/mm): the ray-transfer refraction term; 0 for an orthographic camera.
     pub inv_focal_length_mm: f32,
     /// The film centre in the lens frame (mm).
     pub film_center: [f32; 3],
@@ -435,8 +440,10 @@ pub struct GpuCamera {
     pub focus_surface: u32,
     /// The curved focal surface's radius (mm in the lens frame).
     pub focus_radius_mm: f32,
-    /// Padding to the WGSL layout.
-    pub _pad3: u32,
+    /// `PROJECTION_PERSPECTIVE`, or `PROJECTION_ORTHOGRAPHIC`: rays parallel to the lens
+    /// frame's z axis (the rays' direction), each from its film point (the film then is the
+    /// window, in mm as scene units / `units_per_mm`; no lens, the focal length 0).
+    pub projection: u32,
     /// Padding to the WGSL layout.
     pub _pad4: u32,
     /// Padding to the WGSL layout.
@@ -904,6 +911,8 @@ pub fn wgsl_prelude() -> String {
         ("FOCUS_PLANE", FOCUS_PLANE),
         ("FOCUS_SPHERE", FOCUS_SPHERE),
         ("FOCUS_CYLINDER", FOCUS_CYLINDER),
+        ("PROJECTION_PERSPECTIVE", PROJECTION_PERSPECTIVE),
+        ("PROJECTION_ORTHOGRAPHIC", PROJECTION_ORTHOGRAPHIC),
         ("LIGHT_AREA", LIGHT_AREA),
         ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),
         ("SAMPLER_RANDOM", SAMPLER_RANDOM),

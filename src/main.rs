@@ -14,7 +14,7 @@ use anyhow::{Context, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use chambre::camera::Focus;
-use chambre::camera::report::camera_report;
+use chambre::camera::report::{camera_report, camera_summary};
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::render::PathKernels;
 use chambre::gpu::{GpuContext, GpuRenderer, describe_adapters};
@@ -497,7 +497,6 @@ fn run_check(path: &Path, overrides: &[String]) -> anyhow::Result<ExitCode> {
     let scene = load_and_note(path, overrides)?;
     let flat = flatten(&scene);
     let camera = &scene.camera;
-    let fov = camera.field_of_view_deg();
     let mut text = String::new();
     writeln!(
         text,
@@ -511,19 +510,7 @@ fn run_check(path: &Path, overrides: &[String]) -> anyhow::Result<ExitCode> {
         scene.lights.len(),
         scene.materials.len()
     )?;
-    writeln!(
-        text,
-        "camera: f = {:.2} mm, film at {:.3} mm, field of view {:.2} x {:.2} deg, {}",
-        camera.focal_length_mm,
-        camera.film_distance_mm,
-        fov[0],
-        fov[1],
-        if camera.is_pinhole() {
-            "pinhole".to_string()
-        } else {
-            format!("f/{}", camera.f_number)
-        }
-    )?;
+    writeln!(text, "{}", camera_summary(camera))?;
     if let Focus::Points(_) = camera.focus {
         let m = &camera.movements;
         writeln!(

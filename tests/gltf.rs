@@ -338,3 +338,226 @@ fn gltf_camera_names_the_camera_to_render_with() {
         "{error}"
     );
 }
+
+/// Khronos' `Cameras` sample (scenes/meshes/Cameras.gltf, CC0): a unit square turned -45° about
+/// x, a perspective camera (yfov 0.7, square) and an orthographic one (xmag = ymag = 1), both
+/// at (0.5, 0.5, 3) looking down -Z; no names, no lights.
+fn cameras_sample() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/Cameras.gltf")
+}
+
+/// The square under the orthographic camera: its x in [0, 1] and its y in [0, cos 45°] fill,
+/// of the 2 x 2 window centred on (0.5, 0.5), the fraction 0.5 x 0.3536 of the image; the
+/// surface is flat and lit by one directional light, so every pixel it covers has one value and
+/// the mean over the image is that fraction of it.
+const SQUARE_FRACTION: f64 = 0.5 * std::f64::consts::FRAC_1_SQRT_2 / 2.0;
+
+fn covered_fraction(image: &chambre::render::Image) -> f64 {
+    let full = image.get(image.width / 2, image.height * 2 / 3).x as f64;
+    assert!(full > 0.0);
+    let sum: f64 = image.pixels.iter().map(|p| p.x as f64).sum();
+    sum / image.pixels.len() as f64 / full
+}
+
+#[test]
+fn khronos_cameras_sample_renders_with_its_first_camera_and_each_by_index() {
+    let path = cameras_sample();
+    let first = Scene::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        !first.camera.is_orthographic(),
+        "the first camera is the perspective one"
+    );
+    assert_eq!(first.camera.position, glam::DVec3::new(0.5, 0.5, 3.0));
+    assert_eq!((first.render.width, first.render.height), (960, 960));
+    assert!((first.camera.field_of_view_deg()[1] - (0.7f32 as f64).to_degrees()).abs() < 1e-4);
+    let by_index = Scene::load(&path, &["gltf.camera=0".into()]).unwrap();
+    assert_eq!(by_index.camera, first.camera);
+    let ortho = Scene::load(&path, &["gltf.camera=1".into()]).unwrap();
+    assert!(ortho.camera.is_orthographic());
+    let [w, h] = ortho.camera.window();
+    assert!(
+        (w - 2.0).abs() < 1e-12 && (h - 2.0).abs() < 1e-12,
+        "{w} x {h}"
+    );
+    let size = ["render.width=64".into(), "render.height=64".into()];
+    let render = |camera: &str, extra: &[&str]| {
+        let mut overrides: Vec<String> = size.to_vec();
+        overrides.push(format!("gltf.camera={camera}"));
+        overrides.extend(extra.iter().map(|s| s.to_string()));
+        let flat = flatten(&Scene::load(&path, &overrides).unwrap_or_else(|e| panic!("{e}")));
+        (common::render_cpu(&flat), flat)
+    };
+    let (image, flat) = render("1", &[]);
+    let fraction = covered_fraction(&image);
+    assert!(
+        (fraction / SQUARE_FRACTION - 1.0).abs() < 0.01,
+        "{fraction} of the image against {SQUARE_FRACTION}"
+    );
+    // Its edges: x from 16 to 48 pixels, y (down) from 64 (1.5 - 0.7071) / 2 = 25.4 to 48.
+    assert!(image.get(16, 30).x > 0.0 && image.get(47, 47).x > 0.0);
+    assert_eq!(image.get(14, 30).x, 0.0);
+    assert_eq!(image.get(49, 30).x, 0.0);
+    assert_eq!(image.get(30, 24).x, 0.0);
+    assert_eq!(image.get(30, 49).x, 0.0);
+    // Ten times farther away the orthographic square is as large; the perspective one is not.
+    let far = [
+        "camera.position=[0.5, 0.5, 30.0]",
+        "camera.look_at=[0.5, 0.5, 0.0]",
+    ];
+    let (far_image, _) = render("1", &far);
+    let far_fraction = covered_fraction(&far_image);
+    assert!(
+        (far_fraction / fraction - 1.0).abs() < 1e-3,
+        "{far_fraction} against {fraction}"
+    );
+    let (near_view, _) = render("0", &[]);
+    let (far_view, _) = render("0", &far);
+    let lit = |i: &chambre::render::Image| i.pixels.iter().filter(|p| p.x > 0.0).count();
+    assert!(
+        lit(&far_view) * 20 < lit(&near_view),
+        "{} {}",
+        lit(&far_view),
+        lit(&near_view)
+    );
+    if let Some(gpu) = common::render_gpu(&flat) {
+        let (within, mean_abs) = common::agreement(&image, &gpu, 1e-3);
+        assert!(within > 0.995 && mean_abs < 1e-4, "{within} {mean_abs}");
+    }
+}
+
+#[test]
+fn an_explicit_size_of_another_aspect_keeps_the_cameras_vertical_extent() {
+    // The quad file's camera: yfov 0.6, aspect 1. A 2:1 image widens the film, the vertical
+    // field of view stays.
+    let dir = scratch("aspect");
+    let path = write_gltf(&dir, true);
+    let wide = Scene::load(
+        &path,
+        &["render.width=200".into(), "render.height=100".into()],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(wide.camera.film_mm, [48.0, 24.0]);
+    assert!((wide.camera.field_of_view_deg()[1] - (0.6f32 as f64).to_degrees()).abs() < 1e-9);
+    // A side given alone takes its partner from the camera's aspect.
+    let alone = Scene::load(&path, &["render.height=50".into()]).unwrap();
+    assert_eq!((alone.render.width, alone.render.height), (50, 50));
+    // The orthographic camera keeps its window's height, 2 ymag.
+    let ortho = Scene::load(
+        &cameras_sample(),
+        &[
+            "gltf.camera=1".into(),
+            "render.width=128".into(),
+            "render.height=64".into(),
+        ],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let [w, h] = ortho.camera.window();
+    assert!(
+        (w - 4.0).abs() < 1e-12 && (h - 2.0).abs() < 1e-12,
+        "{w} x {h}"
+    );
+}
+
+#[test]
+fn a_gltf_without_a_camera_renders_at_any_explicit_size_with_its_bounds_in_view() {
+    let dir = scratch("sized");
+    let path = write_gltf(&dir, false);
+    for (w, h) in [(96u32, 96u32), (40, 120), (120, 40)] {
+        let size = [format!("render.width={w}"), format!("render.height={h}")];
+        let scene = Scene::load(&path, &size).unwrap_or_else(|e| panic!("{w}x{h}: {e}"));
+        let film = scene.camera.film_mm;
+        assert!((film[0] / film[1] - w as f64 / h as f64).abs() < 1e-12);
+        let image = common::render_cpu(&flatten(&scene));
+        assert!(image.get(w / 2, h / 2).x > 0.05, "{w}x{h}");
+        // The framing camera fits the bounding sphere in the narrower field of view: the
+        // quad touches no edge of the image.
+        let border = (0..w)
+            .flat_map(|x| [(x, 0), (x, h - 1)])
+            .chain((0..h).flat_map(|y| [(0, y), (w - 1, y)]));
+        for (x, y) in border {
+            assert_eq!(image.get(x, y).x, 0.0, "{w}x{h}: pixel ({x}, {y})");
+        }
+    }
+}
+
+#[test]
+fn the_first_camera_is_the_first_reached_depth_first_in_node_order() {
+    let dir = scratch("order");
+    std::fs::write(dir.join("quad.bin"), quad_buffer()).unwrap();
+    // Node 0 (the mesh) has a child camera "child"; the second root node holds "later".
+    let json = gltf_json(Some("quad.bin"), true)
+        .replace(
+            r#""cameras": [{"type": "perspective","#,
+            r#""cameras": [{"name": "later", "type": "perspective",
+                            "perspective": {"yfov": 0.5, "znear": 0.01}},
+                           {"name": "child", "type": "perspective","#,
+        )
+        .replace(
+            r#""nodes": [{"mesh": 0, "translation": [0, 0, -1], "scale": [2, 2, 2]}"#,
+            r#""nodes": [{"mesh": 0, "translation": [0, 0, -1], "scale": [2, 2, 2],
+                          "children": [3]}"#,
+        )
+        .replace(
+            r#"{"KHR_lights_punctual": {"light": 0}}}"#,
+            r#"{"KHR_lights_punctual": {"light": 0}}},
+               {"camera": 1, "translation": [0, 0, 3]}"#,
+        );
+    let path = dir.join("quad.gltf");
+    std::fs::write(&path, json).unwrap();
+    let scene = Scene::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    // The child sits 3 units up its parent's z, scaled 2 and moved to z = -1: at z = 5.
+    assert!((scene.camera.position - glam::DVec3::new(0.0, 0.0, 5.0)).length() < 1e-9);
+    assert!((scene.camera.field_of_view_deg()[1] - (0.6f32 as f64).to_degrees()).abs() < 1e-9);
+    let later = Scene::load(&path, &["gltf.camera=later".into()]).unwrap();
+    assert!((later.camera.field_of_view_deg()[1] - (0.5f32 as f64).to_degrees()).abs() < 1e-9);
+}
+
+#[test]
+fn bad_camera_names_and_degenerate_cameras_are_refused_with_the_file_and_field() {
+    let error = Scene::load(&cameras_sample(), &["gltf.camera=top".into()])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("Cameras.gltf")
+            && error.contains("\"top\"")
+            && error.contains("0 (unnamed), 1 (unnamed)"),
+        "{error}"
+    );
+    let sample = std::fs::read_to_string(cameras_sample()).unwrap();
+    let dir = scratch("degenerate");
+    for (from, to, camera, field) in [
+        ("\"xmag\": 1.0", "\"xmag\": 0.0", "1", "orthographic.xmag"),
+        ("\"ymag\": 1.0", "\"ymag\": -1.0", "1", "orthographic.ymag"),
+        ("\"xmag\": 1.0", "\"xmag\": 1e39", "1", "orthographic.xmag"),
+        ("\"yfov\": 0.7", "\"yfov\": 0.0", "0", "perspective.yfov"),
+        ("\"yfov\": 0.7", "\"yfov\": 3.5", "0", "perspective.yfov"),
+        (
+            "\"aspectRatio\": 1.0",
+            "\"aspectRatio\": -2.0",
+            "0",
+            "perspective.aspectRatio",
+        ),
+    ] {
+        let json = sample.replace(from, to);
+        assert_ne!(json, sample, "{from}");
+        let path = dir.join("bad.gltf");
+        std::fs::write(&path, json).unwrap();
+        let error = Scene::load(&path, &[format!("gltf.camera={camera}")])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains("bad.gltf") && error.contains(field) && error.contains("camera"),
+            "{to}: {error}"
+        );
+    }
+    // A degenerate camera that is not chosen does not stop the file.
+    let json = sample.replace("\"xmag\": 1.0", "\"xmag\": 0.0");
+    std::fs::write(dir.join("unused.gltf"), json).unwrap();
+    let scene = Scene::load(&dir.join("unused.gltf"), &[]).unwrap_or_else(|e| panic!("{e}"));
+    assert!(!scene.camera.is_orthographic());
+    // Read as a mesh, a file's cameras do not matter at all.
+    assert_eq!(
+        load_mesh(&dir.join("unused.gltf")).unwrap().triangles.len(),
+        2
+    );
+}

@@ -94,6 +94,14 @@ fn random_pixel_sampler_agrees() {
 // tilt, hexagonal bokeh, and every pixel and lens sampler.
 
 #[test]
+fn orthographic_oblique_elevation_agrees() {
+    check(
+        "scenes/elevation.toml",
+        &["render.width=64", "render.height=96", "render.spp=4"],
+    );
+}
+
+#[test]
 fn film_tilt_and_rise_agree() {
     check(
         "scenes/architecture.toml",

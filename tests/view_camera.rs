@@ -798,3 +798,306 @@ fn curved_focal_surfaces_render_alike_on_both_paths() {
         }
     }
 }
+
+/// An orthographic camera over the sphere scene: at (0.3, 1.2, 5) looking at (0, 0.8, 0), a
+/// 3 x 2 window for the 360 x 240 image, and `fields`.
+fn orthographic(fields: &str) -> CameraSpec {
+    camera(&format!(
+        "projection = \"orthographic\"\nwindow = [3.0, 2.0]\n{fields}"
+    ))
+}
+
+/// The rays' direction of docs/camera.md's orthographic camera, in the camera frame:
+/// r = T^-1 z = (sin swing, cos swing sin tilt, cos swing cos tilt).
+fn orthographic_rays(c: &CameraSpec) -> DVec3 {
+    let (t, s) = (
+        c.movements.film_tilt.to_radians(),
+        c.movements.film_swing.to_radians(),
+    );
+    DVec3::new(s.sin(), s.cos() * t.sin(), s.cos() * t.cos())
+}
+
+/// Where docs/camera.md's orthographic camera puts world point `p`, from its equations alone:
+/// the ray from window point (s_x + a, s_y + b, 0) along r meets the camera-frame point
+/// (x, y, z) when a = x - (r_x / r_z) z - s_x, b = y - (r_y / r_z) z - s_y; returned in raster
+/// coordinates (pixels, y down) of a `size` image of a `window` (scene units).
+fn orthographic_raster(
+    c: &CameraSpec,
+    window: [f64; 2],
+    shift: [f64; 2],
+    p: DVec3,
+    size: [f64; 2],
+) -> DVec2 {
+    let forward = (c.look_at - c.position).normalize();
+    let right = forward.cross(c.up).normalize();
+    let up = right.cross(forward);
+    let r = orthographic_rays(c);
+    let q = p - c.position;
+    let (x, y, z) = (q.dot(right), q.dot(up), q.dot(forward));
+    let a = x - r.x / r.z * z - shift[0];
+    let b = y - r.y / r.z * z - shift[1];
+    DVec2::new(
+        (a / window[0] + 0.5) * size[0],
+        (0.5 - b / window[1]) * size[1],
+    )
+}
+
+#[test]
+fn an_orthographic_camera_sends_each_pixel_parallel_rays_through_its_points() {
+    let mut rng = Rng::new(41, 0, 0);
+    let (w, h) = (360u32, 240u32);
+    for (fields, shift) in [
+        ("", [0.0, 0.0]),
+        ("film_shift = [0.4, -0.3]", [0.4, -0.3]),
+        ("film_tilt = 25.0", [0.0, 0.0]),
+        ("film_swing = -35.0", [0.0, 0.0]),
+        (
+            "film_tilt = -40.0\nfilm_swing = 20.0\nfilm_shift = [-0.7, 0.2]",
+            [-0.7, 0.2],
+        ),
+    ] {
+        let c = orthographic(fields);
+        assert!(c.is_orthographic() && c.is_pinhole(), "{fields}");
+        let gpu = c.to_gpu(0);
+        let raster = c.raster_projection(100.0);
+        let basis = c.basis();
+        let rays = basis.to_world(orthographic_rays(&c));
+        assert!((c.ray_direction() - rays).length() < 1e-12, "{fields}");
+        for _ in 0..50 {
+            let mut r = |lo: f32, hi: f32| (lo + (hi - lo) * rng.next_f32()) as f64;
+            let p = DVec3::new(r(-2.0, 2.0), r(-1.0, 3.0), r(-3.0, 3.0));
+            let expected = orthographic_raster(&c, [3.0, 2.0], shift, p, [w as f64, h as f64]);
+            let projected = raster.project(p, w, h).unwrap();
+            assert!(
+                (projected - expected).length() < 1e-9 * w as f64,
+                "{fields}: raster projection {projected} against {expected}"
+            );
+            // The f32 ray of that pixel position, and its f64 twin, pass through the point.
+            let film = film_position_mm(&gpu, w, h, expected.as_vec2());
+            let ray = generate_ray(&gpu, film, Vec2::ZERO);
+            let direction = ray.direction.as_dvec3();
+            assert!((direction - rays).length() < 1e-6, "{fields}: {direction}");
+            let miss = (p - ray.origin.as_dvec3())
+                .reject_from_normalized(rays)
+                .length();
+            assert!(miss < 2e-5, "{fields}: the ray misses {p} by {miss}");
+            let film64 = DVec2::new(
+                (expected.x / w as f64 - 0.5) * c.film_mm[0],
+                (0.5 - expected.y / h as f64) * c.film_mm[1],
+            );
+            let (origin, direction) = generate_ray_f64(&c, film64, DVec2::ZERO);
+            assert!((direction - rays).length() < 1e-12);
+            assert!((p - origin).reject_from_normalized(direction).length() < 1e-9);
+            // Every ray leaves the window's plane, through the position and square to the view.
+            assert!((origin - c.position).dot(basis.forward).abs() < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn orthographic_sizes_do_not_change_with_distance_and_parallel_lines_stay_parallel() {
+    let near = orthographic("film_tilt = 15.0\nfilm_swing = 10.0\nfilm_shift = [0.2, 0.1]");
+    // Backed away 40 units along its rays, it sees every point where it saw it.
+    let back = near.ray_direction() * 40.0;
+    let far = CameraSpec {
+        position: near.position - back,
+        look_at: near.look_at - back,
+        ..near.clone()
+    };
+    let image =
+        |c: &CameraSpec, p: DVec3| c.raster_projection(1000.0).project(p, 360, 240).unwrap();
+    let points = [
+        DVec3::new(-1.0, 0.0, 0.5),
+        DVec3::new(0.8, 2.0, -2.0),
+        DVec3::new(0.1, 1.0, 2.5),
+    ];
+    for p in points {
+        assert!((image(&near, p) - image(&far, p)).length() < 1e-9, "{p}");
+    }
+    // Two parallel segments, at different depths: their images are parallel and as long.
+    let d = DVec3::new(0.3, 0.7, -1.1);
+    let a = image(&near, points[0] + d) - image(&near, points[0]);
+    let b = image(&near, points[1] + d) - image(&near, points[1]);
+    assert!((a - b).length() < 1e-9, "{a} against {b}");
+    // A perspective camera at the same place draws the nearer one larger.
+    let perspective = camera("vertical_fov = 25.0");
+    let seen = |p: DVec3| {
+        perspective
+            .raster_projection(1000.0)
+            .project(p, 360, 240)
+            .unwrap()
+    };
+    let near_seg = seen(points[2] + d) - seen(points[2]);
+    let far_seg = seen(points[1] + d) - seen(points[1]);
+    assert!(near_seg.length() > 1.5 * far_seg.length());
+}
+
+#[test]
+fn slanted_rays_keep_a_facade_square_to_the_window_true_and_show_its_depth() {
+    // scenes/elevation.toml's camera: square to the facade (z = -18), rays 20 degrees down and
+    // 25 degrees left.
+    let text = |movements: &str| {
+        format!(
+            "[render]\nwidth = 240\nheight = 360\n\
+             [camera]\nprojection = \"orthographic\"\nposition = [31.26, 39.93, 40.0]\n\
+             look_at = [31.26, 39.93, 0.0]\nwindow = [32.0, 48.0]\n{movements}\n\
+             [[materials]]\nname = \"m\"\nmodel = \"lambert\"\n\
+             [[shapes]]\ntype = \"sphere\"\ncenter = [0.0, 17.0, -23.0]\nradius = 1.0\n\
+             material = \"m\"\n"
+        )
+    };
+    let load = |movements: &str| {
+        Scene::from_str(Path::new("t.toml"), &text(movements), &[])
+            .unwrap_or_else(|e| panic!("{e}"))
+            .camera
+    };
+    let units_per_pixel = 32.0 / 240.0;
+    let image = |c: &CameraSpec, p: [f64; 3]| {
+        c.raster_projection(1000.0)
+            .project(DVec3::from(p), 240, 360)
+            .unwrap()
+            * units_per_pixel
+    };
+    let oblique = load("film_tilt = -20.0\nfilm_swing = -25.0");
+    let corner = image(&oblique, [-5.0, 0.0, -18.0]);
+    let across = image(&oblique, [5.0, 0.0, -18.0]) - corner;
+    let upward = image(&oblique, [-5.0, 34.0, -18.0]) - corner;
+    // Pixels run down: a vertical of 34 units is 34 units straight up the image.
+    assert!((across - DVec2::new(10.0, 0.0)).length() < 1e-9, "{across}");
+    assert!(
+        (upward - DVec2::new(0.0, -34.0)).length() < 1e-9,
+        "{upward}"
+    );
+    // Depth recedes along the rays' slant, up and right (they run down and left), 10 units of
+    // it as 10 tan(angle), the angle between the rays and the window's normal.
+    let depth = image(&oblique, [5.0, 0.0, -28.0]) - image(&oblique, [5.0, 0.0, -18.0]);
+    let angle = oblique.oblique_angle_deg().to_radians();
+    let expected_cos = 25f64.to_radians().cos() * 20f64.to_radians().cos();
+    assert!((angle.cos() - expected_cos).abs() < 1e-12, "{angle}");
+    assert!(
+        (depth.length() - 10.0 * angle.tan()).abs() < 1e-9,
+        "{depth}"
+    );
+    assert!(depth.x > 0.0 && depth.y < 0.0, "{depth}");
+    // The rays through the tower's centre pass near the window's centre: the scene's framing.
+    let centre = image(&oblique, [0.0, 17.0, -23.0]) - DVec2::new(16.0, 24.0);
+    assert!(centre.length() < 0.01, "{centre}");
+    // Square rays: a plain elevation, the depth hidden.
+    let plain = load("");
+    assert_eq!(plain.oblique_angle_deg(), 0.0);
+    let depth = image(&plain, [5.0, 0.0, -28.0]) - image(&plain, [5.0, 0.0, -18.0]);
+    assert!(depth.length() < 1e-9, "{depth}");
+}
+
+#[test]
+fn an_orthographic_film_shift_moves_the_image_by_minus_the_shift() {
+    let plain = orthographic("");
+    let shifted = orthographic("film_shift = [0.5, -0.25]");
+    let p = DVec3::new(0.4, 1.3, -0.6);
+    let moved = shifted
+        .raster_projection(100.0)
+        .project(p, 360, 240)
+        .unwrap()
+        - plain.raster_projection(100.0).project(p, 360, 240).unwrap();
+    // 0.5 units right of a 3-unit window is 60 pixels; 0.25 down of a 2-unit one, 30 (y down).
+    assert!(
+        (moved - DVec2::new(-60.0, -30.0)).length() < 1e-9,
+        "{moved}"
+    );
+}
+
+#[test]
+fn an_orthographic_camera_refuses_lens_fields_by_name() {
+    let ortho = "projection = \"orthographic\"\nwindow = [3.0, 2.0]\n";
+    for (field, line) in [
+        ("f_number", "f_number = 2.8"),
+        ("focal_length", "focal_length = 50.0"),
+        ("vertical_fov", "vertical_fov = 30.0"),
+        ("film", "film = [36.0, 24.0]"),
+        ("focus_distance", "focus_distance = 4.0"),
+        ("film_distance", "film_distance = 52.0"),
+        ("lens_tilt", "lens_tilt = 3.0"),
+        ("lens_shift", "lens_shift = [1.0, 0.0]"),
+        ("aperture_blades", "aperture_blades = 6"),
+        ("focus_surface", "focus_surface = \"sphere\""),
+    ] {
+        let message = error(&format!("{ortho}{line}"));
+        assert!(
+            message.contains(&format!("camera.{field}")) && message.contains("orthographic"),
+            "{field}: {message}"
+        );
+    }
+    let message = error("projection = \"orthographic\"");
+    assert!(message.contains("window"), "{message}");
+    for (window, field) in [
+        ("[0.0, 2.0]", "camera.window[0]"),
+        ("[3.0, -2.0]", "camera.window[1]"),
+        ("[nan, 2.0]", "camera.window[0]"),
+        ("[3.0, inf]", "camera.window[1]"),
+        ("[4.0, 2.0]", "window aspect 2.0000"),
+    ] {
+        let message = error(&format!("projection = \"orthographic\"\nwindow = {window}"));
+        assert!(message.contains(field), "{window}: {message}");
+    }
+    let message = error(&format!("{ortho}film_tilt = 90.0"));
+    assert!(message.contains("camera.film_tilt"), "{message}");
+    let message = error("window = [3.0, 2.0]");
+    assert!(
+        message.contains("camera.window") && message.contains("orthographic"),
+        "{message}"
+    );
+}
+
+#[test]
+fn the_camera_report_of_an_orthographic_camera_has_no_lens_figures() {
+    use chambre::camera::report::{camera_report, camera_summary};
+    let c = orthographic("film_tilt = 10.0\nfilm_shift = [0.5, 0.0]");
+    let report = camera_report(&c, 0.03, 100.0);
+    for wanted in [
+        "projection: orthographic",
+        "window: 3.000000 x 2.000000 scene units",
+        "shift [0.500000, 0.000000] scene units",
+        "10.000000 deg from the window's normal",
+    ] {
+        assert!(report.contains(wanted), "{wanted:?} in\n{report}");
+    }
+    for unwanted in [
+        "inf",
+        "NaN",
+        "focal",
+        "f = ",
+        "hinge",
+        "field of view",
+        "mm",
+    ] {
+        assert!(!report.contains(unwanted), "{unwanted:?} in\n{report}");
+    }
+    let summary = camera_summary(&c);
+    assert!(
+        summary.contains("orthographic, window 3.000000 x 2.000000"),
+        "{summary}"
+    );
+    assert!(
+        !summary.contains("inf") && !summary.contains("NaN"),
+        "{summary}"
+    );
+}
+
+#[test]
+fn an_orthographic_render_agrees_on_both_paths_and_is_not_black() {
+    let text = scene_text(
+        "projection = \"orthographic\"\nwindow = [3.0, 2.0]\nfilm_tilt = 12.0\n\
+         film_swing = -8.0\nfilm_shift = [0.1, 0.2]",
+        48,
+        32,
+    );
+    let scene = Scene::from_str(Path::new("t.toml"), &text, &[]).unwrap();
+    let flat = flatten(&scene);
+    let cpu = common::render_cpu(&flat);
+    let lit = cpu.pixels.iter().filter(|p| p.x > 0.0).count();
+    assert!(lit > 100 && lit < 48 * 32, "{lit} pixels see the sphere");
+    if let Some(gpu) = common::render_gpu(&flat) {
+        let (within, mean_abs) = common::agreement(&cpu, &gpu, 1e-3);
+        assert!(within > 0.995 && mean_abs < 1e-4, "{within} {mean_abs}");
+    }
+}

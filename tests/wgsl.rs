@@ -375,7 +375,7 @@ fn shared_structs_have_identical_layouts() {
             shutter_span,
             focus_surface,
             focus_radius_mm,
-            _pad3,
+            projection,
             _pad4,
             _pad5
         }

@@ -1,4 +1,5 @@
-// Primary-ray generation: the view camera (pinhole or thin lens, with movements).
+// Primary-ray generation: the view camera (pinhole or thin lens, with movements), or an
+// orthographic camera (parallel rays from a window).
 // Mirrors: src/camera/mod.rs (see there and docs/camera.md for the ray-transfer form; film
 // and lens movements are folded into GpuCamera on the CPU).
 
@@ -31,6 +32,12 @@ fn curved_focus_point(surface: u32, radius_mm: f32, film_point: vec3<f32>) -> ve
 
 fn generate_ray(camera: GpuCamera, film_mm: vec2<f32>, lens_mm: vec2<f32>) -> Ray {
     let film_point = camera.film_center + film_mm.x * camera.film_u + film_mm.y * camera.film_v;
+    if (camera.projection == PROJECTION_ORTHOGRAPHIC) {
+        // Parallel rays along the lens frame's z, each from its window point. A uniform
+        // branch: every invocation of a dispatch takes the same side.
+        let origin_lens = film_point * camera.units_per_mm;
+        return Ray(camera.lens_center + lens_to_world(camera, origin_lens), camera.lens_to_world_z);
+    }
     var direction_lens: vec3<f32>;
     if (camera.focus_surface == FOCUS_PLANE) {
         // Thin-lens ray transfer: outgoing slope = incoming slope - h / f.

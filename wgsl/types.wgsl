@@ -76,7 +76,7 @@ struct GpuCamera {
     shutter_span: f32,
     focus_surface: u32,
     focus_radius_mm: f32,
-    _pad3: u32,
+    projection: u32,
     _pad4: u32,
     _pad5: u32,
 }

@@ -14,13 +14,24 @@
 //! (s_i - f), and focus at infinity (parallel rays) or a film point nearer than f (a virtual
 //! conjugate) is not a special case. All movements fold into the uploaded [`GpuCamera`]; ray
 //! generation costs the same with or without them.
+//!
+//! An orthographic camera ([`Projection::Orthographic`]) has no lens: its film is a window in the
+//! camera frame's plane z = 0 (through `position`, square to the view), of the scene file's size
+//! in scene units (held here in mm, divided by `units_per_mm`, so that both projections share one
+//! frame) and moved within it by the film shift; every ray leaves its window point along one
+//! direction, T^-1 z for the film rotation T: the film tilt and swing turn the rays away from the
+//! window's normal as they turn a view camera's film away from its rays, which makes the
+//! projection oblique (docs/camera.md, "Orthographic camera").
 
 pub mod optics;
 pub mod report;
 
 use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
 
-use crate::layout::{FOCUS_CYLINDER, FOCUS_PLANE, FOCUS_SPHERE, GpuCamera};
+use crate::layout::{
+    FOCUS_CYLINDER, FOCUS_PLANE, FOCUS_SPHERE, GpuCamera, PROJECTION_ORTHOGRAPHIC,
+    PROJECTION_PERSPECTIVE,
+};
 use crate::sampler::SamplerName;
 
 /// Film and lens movements in the scene file's units: degrees and millimetres.
@@ -30,7 +41,8 @@ pub struct Movements {
     pub film_tilt: f64,
     /// Film rotation about the vertical axis (degrees): corrects a camera yawed right by it.
     pub film_swing: f64,
-    /// [right, up] movement of the film within its plane (mm): moves the framing.
+    /// [right, up] movement of the film within its plane (mm): moves the framing. An
+    /// orthographic camera's window moves by it in its plane (given in scene units, held in mm).
     pub film_shift: [f64; 2],
     /// Lens rotation about its horizontal axis (degrees); positive turns the plane of sharp focus
     /// down.
@@ -55,24 +67,41 @@ pub enum Focus {
     Points([DVec3; 3]),
 }
 
+/// How the camera's rays leave it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Projection {
+    /// Through the lens centre (a pinhole) or the aperture (a thin lens): the view camera.
+    #[default]
+    Perspective,
+    /// Parallel rays along the viewing axis from a window in scene units: an architect's
+    /// elevation, glTF's orthographic camera. No lens.
+    Orthographic,
+}
+
 /// The validated camera of a scene, in the units of the scene file (f64 until uploaded).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraSpec {
+    /// Perspective (the view camera) or orthographic (parallel rays, no lens).
+    pub projection: Projection,
     /// Lens centre before any lens shift (world, scene units).
     pub position: DVec3,
     /// The point the unmoved optical axis passes through (world, scene units).
     pub look_at: DVec3,
     /// World up direction for the view; not parallel to it.
     pub up: DVec3,
-    /// Focal length (mm).
+    /// Focal length (mm); infinite for an orthographic camera (the limit its parallel rays
+    /// are).
     pub focal_length_mm: f64,
-    /// Film width and height (mm).
+    /// Film width and height (mm); an orthographic camera's window (its scene units divided by
+    /// `units_per_mm`).
     pub film_mm: [f64; 2],
     /// 0: pinhole.
     pub f_number: f64,
     /// How the focus was set.
     pub focus: Focus,
-    /// Lens centre to the film's pivot (the rail axis), in mm: the bellows extension.
+    /// Lens centre to the film's pivot (the rail axis), in mm: the bellows extension; 0 for an
+    /// orthographic camera (its window lies in the plane through `position`).
     pub film_distance_mm: f64,
     /// Film and lens tilts, swings and shifts.
     pub movements: Movements,
@@ -175,9 +204,21 @@ impl CameraSpec {
         }
     }
 
-    /// Whether there is no lens (`f_number` 0): every ray passes through the lens centre.
+    /// Whether there is no lens (`f_number` 0): every ray passes through the lens centre (or,
+    /// orthographic, they all run parallel).
     pub fn is_pinhole(&self) -> bool {
         self.f_number == 0.0
+    }
+
+    /// Whether the rays are parallel (an orthographic camera).
+    pub fn is_orthographic(&self) -> bool {
+        self.projection == Projection::Orthographic
+    }
+
+    /// An orthographic camera's window [width, height] in scene units (the film scaled by
+    /// `units_per_mm`).
+    pub fn window(&self) -> [f64; 2] {
+        self.film_mm.map(|v| v * self.units_per_mm)
     }
 
     /// Aperture radius, f / (2 N), in mm; 0 for a pinhole.
@@ -191,6 +232,9 @@ impl CameraSpec {
 
     /// The lens and film placed by the movements, in the camera frame (mm).
     pub fn standards(&self) -> Standards {
+        if self.is_orthographic() {
+            return self.orthographic_window();
+        }
         let m = &self.movements;
         let lens = standard_rotation(m.lens_tilt, m.lens_swing);
         let film = standard_rotation(m.film_tilt, -m.film_swing);
@@ -207,6 +251,25 @@ impl CameraSpec {
             film_center: film_pivot + m.film_shift[0] * film_u + m.film_shift[1] * film_v,
             film_u,
             film_v,
+        }
+    }
+
+    /// An orthographic camera's window as its `Standards`: the window in the camera frame's
+    /// plane z = 0, image right and up along x and y (nothing inverts it: there is no lens), its
+    /// centre moved by the film shift; `film` is the film rotation T, and `lens` (the frame the
+    /// kernels work in) its inverse, whose z axis T^-1 z is the rays' direction. So the rays
+    /// stand to the window as a view camera's rays to its film turned by T.
+    fn orthographic_window(&self) -> Standards {
+        let m = &self.movements;
+        let film = standard_rotation(m.film_tilt, -m.film_swing);
+        Standards {
+            lens_center: DVec3::ZERO,
+            lens: film.transpose(),
+            film_pivot: DVec3::ZERO,
+            film,
+            film_center: DVec3::new(m.film_shift[0], m.film_shift[1], 0.0),
+            film_u: DVec3::X,
+            film_v: DVec3::Y,
         }
     }
 
@@ -229,8 +292,12 @@ impl CameraSpec {
     }
 
     /// Horizontal and vertical field of view in degrees: the angles the film's edge midpoints
-    /// subtend at the lens centre (for an unmoved camera, 2 atan(size / 2 s_i)).
+    /// subtend at the lens centre (for an unmoved camera, 2 atan(size / 2 s_i)); 0 for an
+    /// orthographic camera, whose rays are parallel.
     pub fn field_of_view_deg(&self) -> [f64; 2] {
+        if self.is_orthographic() {
+            return [0.0; 2];
+        }
         let s = self.standards();
         let angle = |a: DVec2, b: DVec2| {
             let (pa, pb) = (
@@ -246,6 +313,22 @@ impl CameraSpec {
         ]
     }
 
+    /// The angle between an orthographic camera's rays and its window's normal (the view
+    /// direction), in degrees: 0 for rays square to the window, otherwise the obliquity the film
+    /// tilt and swing give the projection.
+    pub fn oblique_angle_deg(&self) -> f64 {
+        self.standards()
+            .lens
+            .z_axis
+            .angle_between(DVec3::Z)
+            .to_degrees()
+    }
+
+    /// An orthographic camera's rays' direction in the world: T^-1 z in the camera frame.
+    pub fn ray_direction(&self) -> DVec3 {
+        self.basis().to_world(self.standards().lens.z_axis)
+    }
+
     /// The camera as the kernels see it. `aperture_table_offset` locates the polygon's vertices
     /// in the sample table.
     pub fn to_gpu(&self, aperture_table_offset: u32) -> GpuCamera {
@@ -254,15 +337,23 @@ impl CameraSpec {
         let f32x3 = |v: DVec3| v.as_vec3().to_array();
         let lens_axis_world = |column: DVec3| f32x3(basis.to_world(column));
         let film_dir = |v: DVec3| f32x3(s.lens.transpose() * v);
+        let (focal_length_mm, inv_focal_length_mm, projection) = match self.projection {
+            Projection::Perspective => (
+                self.focal_length_mm as f32,
+                (1.0 / self.focal_length_mm) as f32,
+                PROJECTION_PERSPECTIVE,
+            ),
+            Projection::Orthographic => (0.0, 0.0, PROJECTION_ORTHOGRAPHIC),
+        };
         GpuCamera {
             lens_to_world_x: lens_axis_world(s.lens.x_axis),
-            focal_length_mm: self.focal_length_mm as f32,
+            focal_length_mm,
             lens_to_world_y: lens_axis_world(s.lens.y_axis),
             lens_radius_mm: self.lens_radius_mm() as f32,
             lens_to_world_z: lens_axis_world(s.lens.z_axis),
             units_per_mm: self.units_per_mm as f32,
             lens_center: f32x3(self.camera_to_world(s.lens_center)),
-            inv_focal_length_mm: (1.0 / self.focal_length_mm) as f32,
+            inv_focal_length_mm,
             film_center: f32x3(s.to_lens_frame(s.film_center)),
             film_width_mm: self.film_mm[0] as f32,
             film_u: film_dir(s.film_u),
@@ -281,6 +372,7 @@ impl CameraSpec {
                 Focus::Distance(Some(d)) => (d / self.units_per_mm) as f32,
                 _ => 0.0,
             },
+            projection,
             ..Default::default()
         }
     }
@@ -310,6 +402,14 @@ pub fn generate_ray(camera: &GpuCamera, film_mm: Vec2, lens_mm: Vec2) -> Ray {
     let film_point = Vec3::from(camera.film_center)
         + film_mm.x * Vec3::from(camera.film_u)
         + film_mm.y * Vec3::from(camera.film_v);
+    if camera.projection == PROJECTION_ORTHOGRAPHIC {
+        // Parallel rays along the lens frame's z, each from its window point.
+        let origin_lens = film_point * camera.units_per_mm;
+        return Ray {
+            origin: Vec3::from(camera.lens_center) + lens_to_world(camera, origin_lens),
+            direction: Vec3::from(camera.lens_to_world_z),
+        };
+    }
     let direction_lens = if camera.focus_surface == FOCUS_PLANE {
         // Thin-lens ray transfer: outgoing slope = incoming slope - h / f.
         let slope_in = (lens_mm - film_point.truncate()) / -film_point.z;
@@ -348,6 +448,12 @@ pub fn generate_ray_f64(camera: &CameraSpec, film_mm: DVec2, lens_mm: DVec2) -> 
     let s = camera.standards();
     let basis = camera.basis();
     let film_point = s.to_lens_frame(s.film_point(film_mm));
+    if camera.is_orthographic() {
+        return (
+            camera.camera_to_world(s.film_point(film_mm)),
+            basis.to_world(s.lens.z_axis),
+        );
+    }
     let direction_lens = match (camera.focus_surface, camera.focus) {
         (FocusSurface::Sphere | FocusSurface::Cylinder, Focus::Distance(Some(d))) => {
             let radius = d / camera.units_per_mm;

@@ -192,8 +192,12 @@ impl CameraSpec {
     /// The film-tilted pinhole camera as a raster pipeline would set it up: a view matrix whose
     /// axis is the film normal, and an off-axis frustum whose window is the film mirrored
     /// through the lens centre. Lens tilt and swing do not move a pinhole's rays and are
-    /// ignored; the aperture is taken as a point.
+    /// ignored; the aperture is taken as a point. An orthographic camera gets
+    /// [`Self::orthographic_projection`].
     pub fn raster_projection(&self, far: f64) -> RasterProjection {
+        if self.is_orthographic() {
+            return self.orthographic_projection(far);
+        }
         let s = self.standards();
         let basis = self.basis();
         let eye = self.camera_to_world(s.lens_center);
@@ -215,20 +219,59 @@ impl CameraSpec {
             near: near_mm * scale,
             far,
         };
-        // OpenGL convention: the eye looks down -z of the view frame.
-        let back = -forward;
-        let view = DMat4::from_cols(
-            DVec4::new(right.x, up.x, back.x, 0.0),
-            DVec4::new(right.y, up.y, back.y, 0.0),
-            DVec4::new(right.z, up.z, back.z, 0.0),
-            DVec4::new(-right.dot(eye), -up.dot(eye), -back.dot(eye), 1.0),
-        );
+        let view = view_matrix(right, up, forward, eye);
         RasterProjection {
             view,
             frustum,
             projection: frustum.matrix(),
         }
     }
+
+    /// An orthographic camera as a raster pipeline would set it up: the view square to its
+    /// window (the camera frame, eye at `position`), and the oblique parallel projection that
+    /// gives a point at camera-frame (x, y, z) its window coordinates. The ray from window point
+    /// (c_x + a, c_y + b, 0) (c the shift) along r = T^-1 z meets the point after z / r_z, so
+    /// a = x - (r_x / r_z) z - c_x and b = y - (r_y / r_z) z - c_y: glOrtho's matrix with the
+    /// shear of a cavalier projection. Depth is z, from the window's plane (near 0) to `far`.
+    /// `frustum` holds the window's edges (glOrtho's left, right, bottom, top).
+    pub fn orthographic_projection(&self, far: f64) -> RasterProjection {
+        let s = self.standards();
+        let basis = self.basis();
+        let scale = self.units_per_mm;
+        let r = s.lens.z_axis;
+        let centre = s.film_center.truncate() * scale;
+        let [w, h] = self.film_mm.map(|v| 0.5 * v * scale);
+        // ndc = (a / w, b / h), z_ndc = 2 z / far - 1, with the view frame's z = -z.
+        let projection = DMat4::from_cols(
+            DVec4::new(1.0 / w, 0.0, 0.0, 0.0),
+            DVec4::new(0.0, 1.0 / h, 0.0, 0.0),
+            DVec4::new(r.x / r.z / w, r.y / r.z / h, -2.0 / far, 0.0),
+            DVec4::new(-centre.x / w, -centre.y / h, -1.0, 1.0),
+        );
+        RasterProjection {
+            view: view_matrix(basis.right, basis.up, basis.forward, self.position),
+            frustum: Frustum {
+                left: centre.x - w,
+                right: centre.x + w,
+                bottom: centre.y - h,
+                top: centre.y + h,
+                near: 0.0,
+                far,
+            },
+            projection,
+        }
+    }
+}
+
+/// World to view space, OpenGL's convention: the eye at `eye` looking down -z along `forward`.
+fn view_matrix(right: DVec3, up: DVec3, forward: DVec3, eye: DVec3) -> DMat4 {
+    let back = -forward;
+    DMat4::from_cols(
+        DVec4::new(right.x, up.x, back.x, 0.0),
+        DVec4::new(right.y, up.y, back.y, 0.0),
+        DVec4::new(right.z, up.z, back.z, 0.0),
+        DVec4::new(-right.dot(eye), -up.dot(eye), -back.dot(eye), 1.0),
+    )
 }
 
 /// glFrustum's parameters, in scene units.
@@ -273,7 +316,8 @@ impl Frustum {
     }
 }
 
-/// View rotation + off-axis frustum; `projection * view` maps world points to clip space.
+/// View rotation + off-axis frustum (an orthographic camera: its window and oblique parallel
+/// projection); `projection * view` maps world points to clip space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RasterProjection {
     /// World to view space (OpenGL convention: the eye at the origin, looking down -z, along the

@@ -40,6 +40,9 @@ fn matrix(m: DMat4) -> String {
 /// The multi-line report for circle of confusion `coc_mm` and a far clipping plane `far`
 /// (scene units) for the raster projection.
 pub fn camera_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
+    if camera.is_orthographic() {
+        return orthographic_report(camera, far);
+    }
     let mut out = String::new();
     let m = &camera.movements;
     let fov = camera.field_of_view_deg();
@@ -141,15 +144,63 @@ pub fn camera_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
             let _ = writeln!(w, "  far limit:  {}", limit(far_limit, "beyond infinity"));
         }
     }
-    let raster = camera.raster_projection(far);
-    let f = raster.frustum;
     let _ = writeln!(
         w,
         "raster equivalent of the film-tilted pinhole (OpenGL conventions, scene units):"
     );
+    raster_section(w, camera, far, "frustum");
+    out
+}
+
+/// An orthographic camera has no lens, focus or field of view: its window, the direction of
+/// its rays against the window, and its raster equivalent.
+fn orthographic_report(camera: &CameraSpec, far: f64) -> String {
+    let mut out = String::new();
+    let m = &camera.movements;
+    let [width, height] = camera.window();
+    let shift = m.film_shift.map(|v| v * camera.units_per_mm);
+    let w = &mut out;
     let _ = writeln!(
         w,
-        "  frustum: left {:.8}, right {:.8}, bottom {:.8}, top {:.8}, near {:.8}, far {}",
+        "projection: orthographic (parallel rays from a window; no lens, everything sharp)"
+    );
+    let _ = writeln!(
+        w,
+        "window: {width:.6} x {height:.6} scene units, square to the view, in the plane \
+         through the camera position"
+    );
+    let _ = writeln!(
+        w,
+        "movements: film tilt {:.6}, swing {:.6} deg, shift [{:.6}, {:.6}] scene units",
+        m.film_tilt, m.film_swing, shift[0], shift[1]
+    );
+    let _ = writeln!(
+        w,
+        "rays: direction {}, {:.6} deg from the window's normal{}",
+        v3(camera.ray_direction()),
+        camera.oblique_angle_deg(),
+        if camera.oblique_angle_deg() == 0.0 {
+            ""
+        } else {
+            " (an oblique projection: planes parallel to the window keep their true shape)"
+        }
+    );
+    let _ = writeln!(
+        w,
+        "raster equivalent of the orthographic camera (OpenGL conventions, scene units; the \
+         film tilt and swing shear it):"
+    );
+    raster_section(w, camera, far, "window");
+    out
+}
+
+/// The raster projection's parameters and matrices; `what` names the first line's figures.
+fn raster_section(w: &mut String, camera: &CameraSpec, far: f64, what: &str) {
+    let raster = camera.raster_projection(far);
+    let f = raster.frustum;
+    let _ = writeln!(
+        w,
+        "  {what}: left {:.8}, right {:.8}, bottom {:.8}, top {:.8}, near {:.8}, far {}",
         f.left, f.right, f.bottom, f.top, f.near, f.far
     );
     let _ = write!(
@@ -167,5 +218,29 @@ pub fn camera_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
         "  projection * view (rows):\n{}",
         matrix(raster.matrix())
     );
-    out
+}
+
+/// The camera in one line, as `chambre check` prints it.
+pub fn camera_summary(camera: &CameraSpec) -> String {
+    if camera.is_orthographic() {
+        let [w, h] = camera.window();
+        return format!(
+            "camera: orthographic, window {w:.6} x {h:.6} scene units, rays {:.2} deg from its \
+             normal",
+            camera.oblique_angle_deg()
+        );
+    }
+    let fov = camera.field_of_view_deg();
+    format!(
+        "camera: f = {:.2} mm, film at {:.3} mm, field of view {:.2} x {:.2} deg, {}",
+        camera.focal_length_mm,
+        camera.film_distance_mm,
+        fov[0],
+        fov[1],
+        if camera.is_pinhole() {
+            "pinhole".to_string()
+        } else {
+            format!("f/{}", camera.f_number)
+        }
+    )
 }

@@ -1,5 +1,5 @@
-//! A pixel's camera samples eight at a time, for the common cameras: an instant shutter, a
-//! plane of focus, and random or stratified pixel and lens points with a power-of-two sample
+//! A pixel's camera samples eight at a time, for the common cameras: a perspective one with an
+//! instant shutter, a plane of focus, and random or stratified pixel and lens points with a power-of-two sample
 //! count (the aperture's shape is drawn lane by lane with the scalar function). Each step of [`camera_sample`](super::camera_sample) (the random stream's keys and
 //! draws, the strata's permutation, the film position, the thin lens, the ray) runs as a loop over the eight
 //! lanes with the scalar code's operations in its order, which the compiler turns into 8-wide
@@ -13,8 +13,8 @@ use super::CameraRay;
 use crate::accel::wide::PACKET;
 use crate::camera::Ray;
 use crate::layout::{
-    FEATURE_LENS, FOCUS_PLANE, LENS_DIMENSION, PIXEL_DIMENSION, SAMPLER_RANDOM, SAMPLER_STRATIFIED,
-    has,
+    FEATURE_LENS, FOCUS_PLANE, LENS_DIMENSION, PIXEL_DIMENSION, PROJECTION_PERSPECTIVE,
+    SAMPLER_RANDOM, SAMPLER_STRATIFIED, has,
 };
 use crate::math::rng::{Rng, draw_bits, stream_key};
 use crate::pack::FlatScene;
@@ -34,6 +34,7 @@ pub fn batches<const F: u32>(scene: &FlatScene) -> bool {
         && (!lens || pattern(frame.lens_sampler, frame.lens_strata_columns))
         && camera.shutter_span == 0.0
         && camera.focus_surface == FOCUS_PLANE
+        && camera.projection == PROJECTION_PERSPECTIVE
 }
 
 /// Camera samples `first..first + PACKET` of pixel (x, y) and their random streams, as
@@ -314,5 +315,12 @@ mod tests {
             }
         }
         assert_eq!(batched, 7, "every case's camera is one the batch takes");
+    }
+
+    /// An orthographic camera's parallel rays are drawn one by one, by `generate_ray`.
+    #[test]
+    fn an_orthographic_camera_is_not_batched() {
+        let flat = flatten(&sample_scene("elevation.toml", &["render.spp=8"]));
+        assert!(!batches::<FEATURES_ALL>(&flat));
     }
 }

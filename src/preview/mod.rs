@@ -17,7 +17,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 
-use crate::camera::CameraSpec;
+use crate::camera::{CameraSpec, Projection};
 use crate::fermat::{
     BezierPatch, Cylinder, Ellipsoid, Reflector as _, TorusHalf, TorusSearch, anchored_on_patch,
     anchored_on_torus_half,
@@ -488,6 +488,14 @@ pub fn omissions(scene: &Scene, shadows: Option<u32>) -> Vec<String> {
             }
         ));
     }
+    if camera.is_orthographic() {
+        notes.push(
+            "the orthographic camera's geometry is drawn parallel, but its mirrors and highlights \
+             are drawn as seen from its position (the preview's reflections need a centre of \
+             projection)"
+                .into(),
+        );
+    }
     if camera.shutter[1] > camera.shutter[0] {
         notes.push("the preview shows moving shapes where they stand at time 0, unblurred".into());
     }
@@ -548,7 +556,8 @@ pub enum ComposeAction {
 
 /// Degrees a tilt, swing, pan or pitch key turns.
 pub const TURN_STEP_DEG: f64 = 1.0;
-/// Millimetres a shift key, or a notch of the mouse wheel, moves the film.
+/// Millimetres a shift key, or a notch of the mouse wheel, moves the film (an orthographic
+/// camera's window: the same fraction of its height as of a 24 mm film's).
 pub const SHIFT_STEP_MM: f64 = 1.0;
 /// Degrees a mouse drag turns the camera or the film for each pixel the mouse moves: a drag
 /// across a 320-pixel preview turns 32°.
@@ -605,15 +614,16 @@ impl Composer {
     /// Applies one key; film tilt and swing stay inside the scene format's (−90°, 90°).
     pub fn apply(&mut self, key: ComposeKey) -> ComposeAction {
         let turn = |v: &mut f64, d: f64| *v = turned(*v, d);
+        let step = self.shift_step_mm();
         match key {
             ComposeKey::Up => turn(&mut self.film_tilt, TURN_STEP_DEG),
             ComposeKey::Down => turn(&mut self.film_tilt, -TURN_STEP_DEG),
             ComposeKey::Left => turn(&mut self.film_swing, -TURN_STEP_DEG),
             ComposeKey::Right => turn(&mut self.film_swing, TURN_STEP_DEG),
-            ComposeKey::Char('i') => self.film_shift[1] += SHIFT_STEP_MM,
-            ComposeKey::Char('k') => self.film_shift[1] -= SHIFT_STEP_MM,
-            ComposeKey::Char('j') => self.film_shift[0] -= SHIFT_STEP_MM,
-            ComposeKey::Char('l') => self.film_shift[0] += SHIFT_STEP_MM,
+            ComposeKey::Char('i') => self.film_shift[1] += step,
+            ComposeKey::Char('k') => self.film_shift[1] -= step,
+            ComposeKey::Char('j') => self.film_shift[0] -= step,
+            ComposeKey::Char('l') => self.film_shift[0] += step,
             ComposeKey::Char('a') => self.pan -= TURN_STEP_DEG,
             ComposeKey::Char('d') => self.pan += TURN_STEP_DEG,
             ComposeKey::Char('w') => turn(&mut self.pitch, TURN_STEP_DEG),
@@ -653,8 +663,9 @@ impl Composer {
         if across == 0.0 && notches == 0.0 {
             return ComposeAction::Nothing;
         }
-        self.film_shift[0] += across * SHIFT_STEP_MM;
-        self.film_shift[1] += notches * SHIFT_STEP_MM;
+        let step = self.shift_step_mm();
+        self.film_shift[0] += across * step;
+        self.film_shift[1] += notches * step;
         ComposeAction::Changed
     }
 
@@ -681,32 +692,47 @@ impl Composer {
         camera
     }
 
+    /// How far a shift key moves the film (mm): `SHIFT_STEP_MM`, or for an orthographic
+    /// camera the same fraction of its window's height as of a 24 mm film.
+    fn shift_step_mm(&self) -> f64 {
+        match self.base.projection {
+            Projection::Perspective => SHIFT_STEP_MM,
+            Projection::Orthographic => SHIFT_STEP_MM * self.base.film_mm[1] / 24.0,
+        }
+    }
+
+    /// The film shift in the scene file's units, and their name: mm, or scene units for an
+    /// orthographic camera's window.
+    fn shift_as_given(&self) -> ([f64; 2], &'static str) {
+        match self.base.projection {
+            Projection::Perspective => (self.film_shift, "mm"),
+            Projection::Orthographic => (
+                self.film_shift.map(|v| v * self.base.units_per_mm),
+                "scene units",
+            ),
+        }
+    }
+
     /// The scene overrides (`--set` syntax) that give a scene this composition.
     pub fn overrides(&self) -> Vec<String> {
         // `{:?}` writes 1.0 as `1.0`, which TOML reads as a float, as the fields are.
         let [x, y, z] = self.look_at().to_array();
+        let (shift, _) = self.shift_as_given();
         vec![
             format!("camera.film_tilt={:?}", self.film_tilt),
             format!("camera.film_swing={:?}", self.film_swing),
-            format!(
-                "camera.film_shift=[{:?}, {:?}]",
-                self.film_shift[0], self.film_shift[1]
-            ),
+            format!("camera.film_shift=[{:?}, {:?}]", shift[0], shift[1]),
             format!("camera.look_at=[{x:?}, {y:?}, {z:?}]"),
         ]
     }
 
     /// The movements and turns, for the window's title and the terminal.
     pub fn figures(&self) -> String {
+        let (shift, unit) = self.shift_as_given();
         format!(
-            "film tilt {:+.1}°, swing {:+.1}°, shift [{:+.1}, {:+.1}] mm; camera pan {:+.1}°, \
-             pitch {:+.1}°",
-            self.film_tilt,
-            self.film_swing,
-            self.film_shift[0],
-            self.film_shift[1],
-            self.pan,
-            self.pitch
+            "film tilt {:+.1}°, swing {:+.1}°, shift [{:+.1}, {:+.1}] {unit}; camera pan \
+             {:+.1}°, pitch {:+.1}°",
+            self.film_tilt, self.film_swing, shift[0], shift[1], self.pan, self.pitch
         )
     }
 }
@@ -822,6 +848,34 @@ mod tests {
         let composed = composer.camera();
         assert_eq!(reloaded.movements, composed.movements);
         assert!((reloaded.look_at - composed.look_at).length() < 1e-9);
+    }
+
+    #[test]
+    fn an_orthographic_composition_saves_its_shift_in_scene_units() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/elevation.toml");
+        let camera = Scene::load(&path, &[]).unwrap().camera;
+        let mut composer = Composer::new(&camera);
+        for key in ["i", "i", "l", "up"] {
+            composer.apply(ComposeKey::parse(key).unwrap());
+        }
+        // A step is 1/24 of the 48-unit window's height: 2 units.
+        let [x, y] = camera.movements.film_shift.map(|v| v * camera.units_per_mm);
+        assert!(composer.figures().contains(&format!(
+            "shift [{:+.1}, {:+.1}] scene units",
+            x + 2.0,
+            y + 4.0
+        )));
+        let reloaded = Scene::load(&path, &composer.overrides()).unwrap().camera;
+        let composed = composer.camera();
+        for (a, b) in reloaded
+            .movements
+            .film_shift
+            .iter()
+            .zip(composed.movements.film_shift)
+        {
+            assert!((a - b).abs() < 1e-9 * b.abs().max(1.0), "{a} against {b}");
+        }
+        assert_eq!(reloaded.movements.film_tilt, composed.movements.film_tilt);
     }
 
     /// A triangle cut n times along each edge gives n² triangles of the same orientation that

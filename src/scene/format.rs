@@ -146,11 +146,15 @@ pub struct CameraSection {
     /// The world's up direction for the view (default [0, 1, 0]); not parallel to the view.
     #[serde(default = "default_up")]
     pub up: Vec3,
+    /// "perspective" (default: the view camera) or "orthographic" (parallel rays, no lens)
+    #[serde(default)]
+    pub projection: crate::camera::Projection,
+    /// scene units, width x height: an orthographic camera's window (required by it)
+    pub window: Option<Pair>,
     /// mm
     pub focal_length: Option<f64>,
-    /// mm, width x height
-    #[serde(default = "default_film")]
-    pub film: Pair,
+    /// mm, width x height (default 36 x 24); a perspective camera's only
+    pub film: Option<Pair>,
     /// degrees; sets the focal length of a pinhole with this vertical field of view
     pub vertical_fov: Option<f64>,
     /// 0 or absent: pinhole
@@ -165,7 +169,8 @@ pub struct CameraSection {
     pub film_tilt: Option<f64>,
     /// degrees: film rotation about the vertical axis (corrects a camera yawed right by it)
     pub film_swing: Option<f64>,
-    /// mm: [right, up] movement of the framing (rear standard shift, rise/fall)
+    /// mm: [right, up] movement of the framing (rear standard shift, rise/fall); scene units
+    /// for an orthographic camera's window
     pub film_shift: Option<Pair>,
     /// degrees: positive turns the plane of sharp focus down towards the ground
     pub lens_tilt: Option<f64>,
@@ -191,9 +196,8 @@ pub struct CameraSection {
 fn default_up() -> Vec3 {
     Exact([0.0, 1.0, 0.0])
 }
-fn default_film() -> Pair {
-    Exact([36.0, 24.0])
-}
+/// A perspective camera's film when the scene gives none (mm): 35 mm film's frame.
+pub const DEFAULT_FILM: [f64; 2] = [36.0, 24.0];
 
 /// A material's reflection model (`materials[].model`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]

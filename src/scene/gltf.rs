@@ -1,8 +1,9 @@
 //! glTF 2.0 files (`.gltf` with its buffers, or `.glb`), through the `gltf` crate: the triangles
 //! of every mesh of the default scene placed by their node transforms, their materials mapped
-//! to chambre's models, the first perspective camera, and KHR_lights_punctual lights. A mesh
-//! shape can name a glTF file (`load_mesh`), and `chambre render model.glb` renders one as a
-//! scene (`scene_text`). The mappings are in docs/scene-format.md ("glTF").
+//! to chambre's models, its cameras (perspective or orthographic), and KHR_lights_punctual
+//! lights. A mesh shape can name a glTF file (`load_mesh`), and `chambre render model.glb`
+//! renders one as a scene (`scene_text`), with the first camera reached from the scene's nodes
+//! or the one `gltf.camera` names. The mappings are in docs/scene-format.md ("glTF").
 
 use std::path::Path;
 
@@ -18,15 +19,48 @@ pub const LUMENS_PER_WATT: f64 = 683.0;
 pub struct GltfScene {
     /// Every triangle of the default scene in world space, with its materials.
     pub mesh: TriangleMesh,
-    /// The first perspective camera met in the node tree.
-    pub camera: Option<GltfCamera>,
+    /// Every camera node of the default scene, in the order a viewer reaches them: depth
+    /// first, children in node order.
+    pub cameras: Vec<CameraNode>,
     /// KHR_lights_punctual lights, radiometric.
     pub lights: Vec<GltfLight>,
     /// What the mapping left out (textures), for the user to read.
     pub notes: Vec<String>,
 }
 
-/// A perspective camera, placed by its node.
+/// A camera as the file gives it, with the world transform of the node that places it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraNode {
+    /// Its index in the file's `cameras`.
+    pub index: usize,
+    /// Its `name`, if it has one.
+    pub name: Option<String>,
+    /// Its projection, unchecked.
+    pub projection: RawProjection,
+    /// The node's world transform.
+    pub world: DMat4,
+}
+
+/// A glTF camera's projection as the file gives it (radians, scene units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RawProjection {
+    /// `perspective`: `yfov` and `aspectRatio`.
+    Perspective {
+        /// Vertical field of view, radians.
+        yfov: f32,
+        /// Width over height, when given.
+        aspect_ratio: Option<f32>,
+    },
+    /// `orthographic`: half the window's width and height.
+    Orthographic {
+        /// Half the width (scene units).
+        xmag: f32,
+        /// Half the height (scene units).
+        ymag: f32,
+    },
+}
+
+/// A checked camera, placed by its node.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GltfCamera {
     /// Where it is, world space.
@@ -35,10 +69,37 @@ pub struct GltfCamera {
     pub look_at: DVec3,
     /// Its +Y axis.
     pub up: DVec3,
-    /// Vertical field of view, degrees.
-    pub vertical_fov: f64,
-    /// Width over height, when the file gives it.
-    pub aspect: Option<f64>,
+    /// How it projects.
+    pub projection: GltfProjection,
+}
+
+/// A checked glTF projection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum GltfProjection {
+    /// Through a point.
+    Perspective {
+        /// Vertical field of view, degrees, in (0, 180).
+        vertical_fov: f64,
+        /// Width over height, when the file gives it.
+        aspect: Option<f64>,
+    },
+    /// Parallel.
+    Orthographic {
+        /// Half the window's width (scene units), > 0.
+        xmag: f64,
+        /// Half the window's height (scene units), > 0.
+        ymag: f64,
+    },
+}
+
+impl GltfProjection {
+    /// Width over height, when the camera fixes it: `aspectRatio`, or xmag / ymag.
+    pub fn aspect(&self) -> Option<f64> {
+        match *self {
+            GltfProjection::Perspective { aspect, .. } => aspect,
+            GltfProjection::Orthographic { xmag, ymag } => Some(xmag / ymag),
+        }
+    }
 }
 
 /// A KHR_lights_punctual light in chambre's radiometric units.
@@ -73,15 +134,9 @@ pub enum GltfLight {
     },
 }
 
-/// Reads a glTF or GLB file, with its first perspective camera: the error is a sentence
-/// without the path (the caller adds it).
+/// Reads a glTF or GLB file: the error is a sentence without the path (the caller adds it).
+/// Its cameras are listed, not checked: a file read as a mesh does not need them.
 pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
-    read_gltf_with_camera(path, None)
-}
-
-/// [`read_gltf`] with the perspective camera named `camera` (an error naming the cameras
-/// found if there is none of that name), or the first when `None`.
-pub fn read_gltf_with_camera(path: &Path, camera: Option<&str>) -> Result<GltfScene, String> {
     let gltf = gltf::Gltf::open(path).map_err(|e| format!("not a readable glTF file: {e}"))?;
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
@@ -100,7 +155,9 @@ pub fn read_gltf_with_camera(path: &Path, camera: Option<&str>) -> Result<GltfSc
     };
     let mut normals = Vec::new();
     let mut any_normals = false;
+    // Depth first in node order: the stack holds the nodes still to visit in reverse.
     let mut stack: Vec<(gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
+    stack.reverse();
     while let Some((node, parent)) = stack.pop() {
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * local;
@@ -111,29 +168,14 @@ pub fn read_gltf_with_camera(path: &Path, camera: Option<&str>) -> Result<GltfSc
                 any_normals |= added;
             }
         }
-        if let (None, Some(found)) = (out.camera, node.camera())
-            && camera.is_none_or(|name| found.name() == Some(name))
-        {
-            out.camera = Some(placed_camera(&found, world)?);
+        if let Some(camera) = node.camera() {
+            out.cameras.push(camera_node(&camera, world));
         }
         if let Some(light) = node.light() {
             out.lights.push(placed_light(&light, world));
         }
-        stack.extend(node.children().map(|c| (c, world)));
-    }
-    if let (Some(name), None) = (camera, out.camera) {
-        let names: Vec<String> = document
-            .cameras()
-            .map(|c| format!("{:?}", c.name().unwrap_or("(unnamed)")))
-            .collect();
-        return Err(format!(
-            "no camera named {name:?} in the default scene (cameras: {})",
-            if names.is_empty() {
-                "none".to_string()
-            } else {
-                names.join(", ")
-            }
-        ));
+        let children: Vec<_> = node.children().map(|c| (c, world)).collect();
+        stack.extend(children.into_iter().rev());
     }
     if any_normals {
         out.mesh.normals = Some(normals);
@@ -274,22 +316,133 @@ pub fn map_factors(
     }
 }
 
-fn placed_camera(camera: &gltf::Camera, world: DMat4) -> Result<GltfCamera, String> {
-    let gltf::camera::Projection::Perspective(p) = camera.projection() else {
-        return Err(format!(
-            "camera {:?} is orthographic: chambre's cameras have a perspective",
-            camera.name().unwrap_or("(unnamed)")
-        ));
-    };
-    let position = world.transform_point3(DVec3::ZERO);
-    let forward = world.transform_vector3(DVec3::NEG_Z).normalize();
-    Ok(GltfCamera {
-        position,
-        look_at: position + forward,
-        up: world.transform_vector3(DVec3::Y).normalize(),
-        vertical_fov: (p.yfov() as f64).to_degrees(),
-        aspect: p.aspect_ratio().map(f64::from),
-    })
+fn camera_node(camera: &gltf::Camera, world: DMat4) -> CameraNode {
+    use gltf::camera::Projection;
+    CameraNode {
+        index: camera.index(),
+        name: camera.name().map(str::to_string),
+        projection: match camera.projection() {
+            Projection::Perspective(p) => RawProjection::Perspective {
+                yfov: p.yfov(),
+                aspect_ratio: p.aspect_ratio(),
+            },
+            Projection::Orthographic(o) => RawProjection::Orthographic {
+                xmag: o.xmag(),
+                ymag: o.ymag(),
+            },
+        },
+        world,
+    }
+}
+
+impl CameraNode {
+    /// How messages name it: `camera 1 "side"`, or `camera 0` when it has no name.
+    pub fn label(&self) -> String {
+        match &self.name {
+            Some(name) => format!("camera {} {name:?}", self.index),
+            None => format!("camera {}", self.index),
+        }
+    }
+
+    /// The camera checked and placed: a perspective one's `yfov` in (0, pi) and `aspectRatio`
+    /// positive, an orthographic one's `xmag` and `ymag` positive (glTF forbids 0; a negative
+    /// one, which glTF discourages, would mirror the image), all finite, and its node's
+    /// transform invertible (its -Z and +Y axes give the view).
+    pub fn placed(&self) -> Result<GltfCamera, String> {
+        let at = |field: &str, why: &str, value: f32| {
+            format!("{}: {field} {why}, got {value}", self.label())
+        };
+        let projection = match self.projection {
+            RawProjection::Perspective { yfov, aspect_ratio } => {
+                if !(yfov.is_finite() && yfov > 0.0 && yfov < std::f32::consts::PI) {
+                    return Err(at("perspective.yfov", "must lie in (0, pi) radians", yfov));
+                }
+                if let Some(a) = aspect_ratio.filter(|a| !(a.is_finite() && *a > 0.0)) {
+                    return Err(at("perspective.aspectRatio", "must be positive", a));
+                }
+                GltfProjection::Perspective {
+                    vertical_fov: (yfov as f64).to_degrees(),
+                    aspect: aspect_ratio.map(f64::from),
+                }
+            }
+            RawProjection::Orthographic { xmag, ymag } => {
+                for (field, v) in [("orthographic.xmag", xmag), ("orthographic.ymag", ymag)] {
+                    if !(v.is_finite() && v > 0.0) {
+                        return Err(at(field, "must be positive and finite", v));
+                    }
+                }
+                GltfProjection::Orthographic {
+                    xmag: xmag as f64,
+                    ymag: ymag as f64,
+                }
+            }
+        };
+        let position = self.world.transform_point3(DVec3::ZERO);
+        let forward = self.world.transform_vector3(DVec3::NEG_Z);
+        let up = self.world.transform_vector3(DVec3::Y);
+        let square = forward.length() * up.length();
+        if !(position.is_finite() && square.is_finite())
+            || forward.cross(up).length() <= 1e-9 * square
+        {
+            return Err(format!(
+                "{}: its node's transform leaves no viewing direction and up (a zero scale?)",
+                self.label()
+            ));
+        }
+        Ok(GltfCamera {
+            position,
+            look_at: position + forward.normalize(),
+            up: up.normalize(),
+            projection,
+        })
+    }
+}
+
+impl GltfScene {
+    /// The camera to render with, as viewers choose it: the one `name` names (its name, or its
+    /// index in the file's cameras when no camera has that name), else the first reached from
+    /// the scene's nodes; `None` when the scene has no camera and no name was given. An absent
+    /// name is an error listing the cameras there are.
+    pub fn camera(&self, name: Option<&str>) -> Result<Option<GltfCamera>, String> {
+        let Some(name) = name else {
+            return self.cameras.first().map(CameraNode::placed).transpose();
+        };
+        let chosen = self
+            .cameras
+            .iter()
+            .find(|c| c.name.as_deref() == Some(name))
+            .or_else(|| {
+                let index = name.parse::<usize>().ok()?;
+                self.cameras.iter().find(|c| c.index == index)
+            });
+        match chosen {
+            Some(camera) => camera.placed().map(Some),
+            None => {
+                // In the file's order, once each (two nodes may place one camera).
+                let by_index: std::collections::BTreeMap<usize, String> = self
+                    .cameras
+                    .iter()
+                    .map(|c| {
+                        let label = match &c.name {
+                            Some(n) => format!("{n:?}"),
+                            None => format!("{} (unnamed)", c.index),
+                        };
+                        (c.index, label)
+                    })
+                    .collect();
+                let listed: Vec<String> = by_index.into_values().collect();
+                Err(format!(
+                    "no camera named {name:?} in the default scene (cameras, by name or by \
+                     index: {})",
+                    if listed.is_empty() {
+                        "none".to_string()
+                    } else {
+                        listed.join(", ")
+                    }
+                ))
+            }
+        }
+    }
 }
 
 fn placed_light(light: &gltf::khr_lights_punctual::Light, world: DMat4) -> GltfLight {
@@ -319,16 +472,47 @@ fn placed_light(light: &gltf::khr_lights_punctual::Light, world: DMat4) -> GltfL
     }
 }
 
-/// Image width of a glTF file rendered as a scene; the height follows the camera's aspect.
+/// Image width of a glTF file rendered as a scene when the user gives no size; the height
+/// follows the camera's aspect.
 pub const DEFAULT_WIDTH: u32 = 960;
 
+/// The image size the user asked for (`--width`, `--height`, or `render.width` and
+/// `render.height` overrides), each side optional.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ImageSize {
+    /// Width in pixels, if given.
+    pub width: Option<u32>,
+    /// Height in pixels, if given.
+    pub height: Option<u32>,
+}
+
+impl ImageSize {
+    /// Both sides: those given, a missing one from `aspect` (width over height), and
+    /// `DEFAULT_WIDTH` wide when neither is given. A user's size wins over the camera's aspect.
+    pub fn resolve(&self, aspect: f64) -> (u32, u32) {
+        let fit = |v: f64| (v.round() as u32).max(1);
+        match (self.width, self.height) {
+            (Some(w), Some(h)) => (w, h),
+            (Some(w), None) => (w, fit(w as f64 / aspect)),
+            (None, Some(h)) => (fit(h as f64 * aspect), h),
+            (None, None) => (DEFAULT_WIDTH, fit(DEFAULT_WIDTH as f64 / aspect)),
+        }
+    }
+}
+
 /// A glTF file as chambre scene text, so that `chambre render model.glb` renders it (with
-/// `--set` overrides as for any scene): the file as one mesh shape with its own materials, its
-/// perspective camera named `camera` or its first (or one framing its bounds: 40° vertical field of view, from above
-/// the front right, the bounds filling the view), its lights (or, when it has none, a default
-/// key light: a directional light of irradiance 3 from above the camera, and ambient 0.1).
-pub fn scene_text(path: &Path, camera: Option<&str>) -> Result<String, String> {
-    let scene = read_gltf_with_camera(path, camera)?;
+/// `--set` overrides as for any scene): the file as one mesh shape with its own materials, the
+/// camera `camera` names or the first reached from the scene's nodes (or one framing its bounds:
+/// 40° vertical field of view, from above the front right, the bounds filling the view), its
+/// lights (or, when it has none, a default key light: a directional light of irradiance 3 from
+/// above the camera, and ambient 0.1).
+///
+/// The image is `size` where the user gives it, a missing side from the camera's aspect (4:3
+/// when it has none). The film (or an orthographic window) then takes the image's aspect,
+/// keeping the camera's vertical extent, as glTF viewers do with a viewport of another shape:
+/// `yfov` stays the vertical field of view, `2 ymag` the window's height.
+pub fn scene_text(path: &Path, camera: Option<&str>, size: ImageSize) -> Result<String, String> {
+    let scene = read_gltf(path)?;
     if scene.mesh.triangles.is_empty() {
         return Err("the file's default scene has no triangles".into());
     }
@@ -336,15 +520,29 @@ pub fn scene_text(path: &Path, camera: Option<&str>) -> Result<String, String> {
         (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
         |(lo, hi), p| (lo.min(p.as_dvec3()), hi.max(p.as_dvec3())),
     );
-    let camera = scene.camera.unwrap_or_else(|| framing_camera(lo, hi));
-    let aspect = camera.aspect.unwrap_or(4.0 / 3.0).clamp(0.05, 20.0);
-    let height = ((DEFAULT_WIDTH as f64 / aspect).round() as u32).max(1);
+    let chosen = scene.camera(camera)?;
+    let camera_aspect = chosen.and_then(|c| c.projection.aspect());
+    let (width, height) = size.resolve(camera_aspect.unwrap_or(4.0 / 3.0).clamp(0.05, 20.0));
+    let aspect = width as f64 / height as f64;
+    let camera = chosen.unwrap_or_else(|| framing_camera(lo, hi, aspect));
     let v = |d: DVec3| format!("[{:?}, {:?}, {:?}]", d.x, d.y, d.z);
+    let projection = match camera.projection {
+        GltfProjection::Perspective { vertical_fov, .. } => {
+            format!(
+                "vertical_fov = {vertical_fov:?}\nfilm = [{:?}, 24.0]\n",
+                24.0 * aspect
+            )
+        }
+        GltfProjection::Orthographic { ymag, .. } => format!(
+            "projection = \"orthographic\"\nwindow = [{:?}, {:?}]\n",
+            2.0 * ymag * aspect,
+            2.0 * ymag
+        ),
+    };
     let absolute = std::path::absolute(path).map_err(|e| e.to_string())?;
     let mut text = format!(
-        "[render]\nwidth = {DEFAULT_WIDTH}\nheight = {height}\n{}\n\
-         [camera]\nposition = {}\nlook_at = {}\nup = {}\nvertical_fov = {:?}\n\
-         film = [{:?}, 24.0]\n\n\
+        "[render]\nwidth = {width}\nheight = {height}\n{}\n\
+         [camera]\nposition = {}\nlook_at = {}\nup = {}\n{projection}\n\
          [[shapes]]\ntype = \"mesh\"\nfile = {}\n",
         if scene.lights.is_empty() {
             "ambient = [0.1, 0.1, 0.1]\n"
@@ -354,8 +552,6 @@ pub fn scene_text(path: &Path, camera: Option<&str>) -> Result<String, String> {
         v(camera.position),
         v(camera.look_at),
         v(camera.up),
-        camera.vertical_fov,
-        24.0 * DEFAULT_WIDTH as f64 / height as f64,
         toml::Value::String(absolute.to_string_lossy().into_owned()),
     );
     let rgb = |c: Vec3| format!("[{:?}, {:?}, {:?}]", c.x, c.y, c.z);
@@ -405,18 +601,23 @@ pub fn scene_text(path: &Path, camera: Option<&str>) -> Result<String, String> {
     Ok(text)
 }
 
-/// A camera that frames the box `lo..hi`: 40° vertical field of view, looking at its centre
-/// from the front right and above, far enough for the bounding sphere to fit the view.
-fn framing_camera(lo: DVec3, hi: DVec3) -> GltfCamera {
+/// A camera that frames the box `lo..hi` in an image of `aspect` (width over height): 40°
+/// vertical field of view, looking at its centre from the front right and above, far enough for
+/// the bounding sphere to fit the narrower of the two fields of view.
+fn framing_camera(lo: DVec3, hi: DVec3, aspect: f64) -> GltfCamera {
     let centre = (lo + hi) / 2.0;
     let radius = ((hi - lo).length() / 2.0).max(1e-6);
-    let distance = radius / 20f64.to_radians().sin();
+    let half_vertical = 20f64.to_radians();
+    let half_horizontal = (half_vertical.tan() * aspect).atan();
+    let distance = radius / half_vertical.min(half_horizontal).sin();
     let position = centre + DVec3::new(0.4, 0.3, 1.0).normalize() * distance;
     GltfCamera {
         position,
         look_at: centre,
         up: DVec3::Y,
-        vertical_fov: 40.0,
-        aspect: None,
+        projection: GltfProjection::Perspective {
+            vertical_fov: 40.0,
+            aspect: None,
+        },
     }
 }

@@ -237,7 +237,8 @@ impl Scene {
             .as_ref()
             .is_some_and(|e| e == "gltf" || e == "glb")
         {
-            // `gltf.camera=NAME` picks the file's camera; the other overrides apply to the scene.
+            // `gltf.camera=NAME` picks the file's camera; the other overrides apply to the scene,
+            // and the image size among them shapes its camera too.
             let (camera, overrides): (Vec<&String>, Vec<&String>) = overrides
                 .iter()
                 .partition(|o| o.trim_start().starts_with(GLTF_CAMERA_KEY));
@@ -245,10 +246,12 @@ impl Scene {
                 let value = o.split_once('=').map_or("", |(_, v)| v).trim();
                 value.trim_matches('"').to_string()
             });
-            let text = gltf::scene_text(path, name.as_deref()).map_err(|message| Error::File {
-                path: path.to_path_buf(),
-                message,
-            })?;
+            let size = image_size_given(&overrides);
+            let text =
+                gltf::scene_text(path, name.as_deref(), size).map_err(|message| Error::File {
+                    path: path.to_path_buf(),
+                    message,
+                })?;
             let overrides: Vec<String> = overrides.into_iter().cloned().collect();
             return Scene::from_str(path, &text, &overrides);
         }
@@ -281,6 +284,24 @@ impl Scene {
             })
             .sum()
     }
+}
+
+/// The image size `render.width` and `render.height` overrides give (the last of each); one
+/// that is not a pixel count is left to the scene's validation, which names it.
+fn image_size_given(overrides: &[&String]) -> gltf::ImageSize {
+    let mut size = gltf::ImageSize::default();
+    for (key, value) in overrides.iter().filter_map(|o| parse_override(o).ok()) {
+        let pixels = value
+            .as_integer()
+            .and_then(|v| u32::try_from(v).ok())
+            .filter(|&v| v > 0);
+        match key.as_str() {
+            "render.width" => size.width = pixels,
+            "render.height" => size.height = pixels,
+            _ => {}
+        }
+    }
+    size
 }
 
 /// Sample scene `name` of the project's `scenes/` with `overrides` (`--set` style), for unit

@@ -7,8 +7,8 @@
 use glam::{DVec3, Vec3};
 
 use super::format::{
-    Exact, LightType, MaterialModel, Pair, RenderSection, SamplerName, Scale, SceneFile,
-    ShapeEntry, ShapeType, Vec3 as F3,
+    CameraSection, DEFAULT_FILM, Exact, LightType, MaterialModel, Pair, RenderSection, SamplerName,
+    Scale, SceneFile, ShapeEntry, ShapeType, Vec3 as F3,
 };
 use super::load::ParsedScene;
 use super::mesh::{compute_vertex_normals, load_mesh, orientation_of, rotation_of, transform_mesh};
@@ -16,7 +16,7 @@ use super::surface::{CurvedSurface, Surface, load_bezier_patches, orient_outward
 use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
 use crate::camera::optics::solve_focus_points;
-use crate::camera::{Focus, Movements};
+use crate::camera::{Focus, FocusSurface, Movements, Projection};
 use crate::error::{Error, Result};
 use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use crate::layout;
@@ -393,43 +393,23 @@ fn validate_camera(
     meters_per_unit: f64,
 ) -> Result<CameraSpec> {
     let c = &file.camera;
-    let position = check.point("camera.position", c.position)?;
-    let look_at = check.point("camera.look_at", c.look_at)?;
-    let up = check.nonzero("camera.up", c.up)?;
-    let forward = look_at - position;
-    if forward.length() <= 1e-12 * position.length().max(1.0) {
+    let (position, look_at, up) = view(check, c)?;
+    if c.projection == Projection::Orthographic {
+        return validate_orthographic(check, c, render, meters_per_unit, [position, look_at, up]);
+    }
+    if c.window.is_some() {
         return Err(check.err(
-            "camera.look_at",
-            "equals camera.position: no viewing direction",
+            "camera.window",
+            "only an orthographic camera (projection = \"orthographic\") has a window; a \
+             perspective camera's is its `film`, in mm",
         ));
     }
-    if forward.normalize().cross(up.normalize()).length() < 1e-9 {
-        return Err(check.err("camera.up", "is parallel to the viewing direction"));
-    }
+    let [w, h] = c.film.map_or(DEFAULT_FILM, |f| f.0);
     let film = [
-        check.positive("camera.film[0]", c.film.0[0])?,
-        check.positive("camera.film[1]", c.film.0[1])?,
+        check.positive("camera.film[0]", w)?,
+        check.positive("camera.film[1]", h)?,
     ];
-    let film_aspect = film[0] / film[1];
-    let image_aspect = render.width as f64 / render.height as f64;
-    // Whole pixels cannot always match the film exactly: allow the aspect a side's rounding
-    // to the nearest pixel gives (or 0.1%, whichever is larger).
-    let rounding = 0.5 / render.width.min(render.height) as f64;
-    if (film_aspect / image_aspect - 1.0).abs() > rounding.max(1e-3) {
-        return Err(check.err(
-            "camera.film",
-            format!(
-                "film aspect {} ({} x {} mm) does not match the image aspect {} ({} x {} \
-                 pixels)",
-                ratio(film_aspect),
-                num(film[0]),
-                num(film[1]),
-                ratio(image_aspect),
-                render.width,
-                render.height
-            ),
-        ));
-    }
+    check_aspect(check, "camera.film", film, "mm", render)?;
     let focal_length_mm = match (c.focal_length, c.vertical_fov) {
         (Some(_), Some(_)) => {
             return Err(check.err(
@@ -484,27 +464,8 @@ fn validate_camera(
         }
         None => None,
     };
-    let angle = |field: &str, v: Option<f64>| -> Result<f64> {
-        let a = check.finite(field, v.unwrap_or(0.0))?;
-        if a.abs() >= MAX_MOVEMENT_DEG {
-            return Err(check.err(
-                field,
-                format!(
-                    "{} degrees turns the standard edge-on or past it: movements lie strictly \
-                     between -{MAX_MOVEMENT_DEG} and {MAX_MOVEMENT_DEG} degrees",
-                    num(a)
-                ),
-            ));
-        }
-        Ok(a)
-    };
-    let shift = |field: &str, v: Option<Pair>| -> Result<[f64; 2]> {
-        let [x, y] = v.unwrap_or_default().0;
-        Ok([
-            check.finite(&format!("{field}[0]"), x)?,
-            check.finite(&format!("{field}[1]"), y)?,
-        ])
-    };
+    let angle = |field: &str, v: Option<f64>| movement_angle(check, field, v);
+    let shift = |field: &str, v: Option<Pair>| movement_shift(check, field, v);
     let movements = Movements {
         film_tilt: angle("camera.film_tilt", c.film_tilt)?,
         film_swing: angle("camera.film_swing", c.film_swing)?,
@@ -524,6 +485,7 @@ fn validate_camera(
         Some(n) => check.integer("camera.aperture_blades", n, 3, MAX_BLADES as i64)?,
     };
     let mut camera = CameraSpec {
+        projection: Projection::Perspective,
         position,
         look_at,
         up,
@@ -620,6 +582,160 @@ fn validate_camera(
     check_film_behind_lens(check, &camera)?;
     check_focus_surface(check, &camera)?;
     Ok(camera)
+}
+
+/// `camera.position`, `look_at` and `up`: a viewing direction, and an up not along it.
+fn view(check: &Checker, c: &CameraSection) -> Result<(DVec3, DVec3, DVec3)> {
+    let position = check.point("camera.position", c.position)?;
+    let look_at = check.point("camera.look_at", c.look_at)?;
+    let up = check.nonzero("camera.up", c.up)?;
+    let forward = look_at - position;
+    if forward.length() <= 1e-12 * position.length().max(1.0) {
+        return Err(check.err(
+            "camera.look_at",
+            "equals camera.position: no viewing direction",
+        ));
+    }
+    if forward.normalize().cross(up.normalize()).length() < 1e-9 {
+        return Err(check.err("camera.up", "is parallel to the viewing direction"));
+    }
+    Ok((position, look_at, up))
+}
+
+/// The film's (or window's) aspect must be the image's: whole pixels cannot always match it
+/// exactly, so the aspect a side's rounding to the nearest pixel gives (or 0.1%, whichever is
+/// larger) is allowed.
+fn check_aspect(
+    check: &Checker,
+    field: &str,
+    size: [f64; 2],
+    unit: &str,
+    render: &RenderSettings,
+) -> Result<()> {
+    let aspect = size[0] / size[1];
+    let image_aspect = render.width as f64 / render.height as f64;
+    let rounding = 0.5 / render.width.min(render.height) as f64;
+    if (aspect / image_aspect - 1.0).abs() > rounding.max(1e-3) {
+        return Err(check.err(
+            field,
+            format!(
+                "{} aspect {} ({} x {} {unit}) does not match the image aspect {} ({} x {} \
+                 pixels)",
+                field.trim_start_matches("camera."),
+                ratio(aspect),
+                num(size[0]),
+                num(size[1]),
+                ratio(image_aspect),
+                render.width,
+                render.height
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A film or lens rotation (degrees, 0 when absent), strictly inside +-`MAX_MOVEMENT_DEG`.
+fn movement_angle(check: &Checker, field: &str, v: Option<f64>) -> Result<f64> {
+    let a = check.finite(field, v.unwrap_or(0.0))?;
+    if a.abs() >= MAX_MOVEMENT_DEG {
+        return Err(check.err(
+            field,
+            format!(
+                "{} degrees turns the standard edge-on or past it: movements lie strictly \
+                 between -{MAX_MOVEMENT_DEG} and {MAX_MOVEMENT_DEG} degrees",
+                num(a)
+            ),
+        ));
+    }
+    Ok(a)
+}
+
+/// A film or lens shift ([0, 0] when absent), finite.
+fn movement_shift(check: &Checker, field: &str, v: Option<Pair>) -> Result<[f64; 2]> {
+    let [x, y] = v.unwrap_or_default().0;
+    Ok([
+        check.finite(&format!("{field}[0]"), x)?,
+        check.finite(&format!("{field}[1]"), y)?,
+    ])
+}
+
+/// An orthographic camera: its `window` (scene units) with the image's aspect, the film tilt,
+/// swing and shift (scene units) that move it, and none of the lens's fields: its rays are
+/// parallel, so a lens, an aperture or a focus would mean nothing, and a field that asks for
+/// one is refused by name rather than ignored.
+fn validate_orthographic(
+    check: &Checker,
+    c: &CameraSection,
+    render: &RenderSettings,
+    meters_per_unit: f64,
+    [position, look_at, up]: [DVec3; 3],
+) -> Result<CameraSpec> {
+    let lens_fields = [
+        ("film", c.film.is_some()),
+        ("focal_length", c.focal_length.is_some()),
+        ("vertical_fov", c.vertical_fov.is_some()),
+        ("f_number", c.f_number.is_some()),
+        ("focus_distance", c.focus_distance.is_some()),
+        ("film_distance", c.film_distance.is_some()),
+        ("focus_points", c.focus_points.is_some()),
+        ("lens_tilt", c.lens_tilt.is_some()),
+        ("lens_swing", c.lens_swing.is_some()),
+        ("lens_shift", c.lens_shift.is_some()),
+        ("aperture_blades", c.aperture_blades.is_some()),
+        ("aperture_rotation", c.aperture_rotation.is_some()),
+        ("focus_surface", c.focus_surface.is_some()),
+    ];
+    if let Some((name, _)) = lens_fields.iter().find(|(_, given)| *given) {
+        let why = match *name {
+            "film" => "an orthographic camera's film is its `window`, in scene units",
+            _ => "an orthographic camera has no lens (its rays are parallel and all sharp)",
+        };
+        return Err(check.err(&format!("camera.{name}"), format!("{why}: leave it out")));
+    }
+    let Some(Exact([w, h])) = c.window else {
+        return Err(check.err(
+            "camera.projection",
+            "an orthographic camera needs `window = [width, height]`, in scene units",
+        ));
+    };
+    let mut window = [0.0; 2];
+    for (i, v) in [w, h].into_iter().enumerate() {
+        let field = format!("camera.window[{i}]");
+        window[i] = check.positive(&field, v)?;
+        if window[i] > MAX_COORDINATE {
+            return Err(check.err(
+                &field,
+                format!("{} is wider than {MAX_COORDINATE:e} scene units", num(v)),
+            ));
+        }
+    }
+    check_aspect(check, "camera.window", window, "scene units", render)?;
+    let units_per_mm = 0.001 / meters_per_unit;
+    let shift = movement_shift(check, "camera.film_shift", c.film_shift)?;
+    let movements = Movements {
+        film_tilt: movement_angle(check, "camera.film_tilt", c.film_tilt)?,
+        film_swing: movement_angle(check, "camera.film_swing", c.film_swing)?,
+        film_shift: shift.map(|v| v / units_per_mm),
+        ..Movements::default()
+    };
+    Ok(CameraSpec {
+        projection: Projection::Orthographic,
+        position,
+        look_at,
+        up,
+        focal_length_mm: f64::INFINITY,
+        film_mm: window.map(|v| v / units_per_mm),
+        f_number: 0.0,
+        focus: Focus::Pinhole,
+        film_distance_mm: 0.0,
+        movements,
+        aperture_blades: 0,
+        aperture_rotation_deg: 0.0,
+        lens_sampler: c.lens_sampler,
+        units_per_mm,
+        shutter: shutter(check, c.shutter)?,
+        focus_surface: FocusSurface::Plane,
+    })
 }
 
 /// A curved focal surface needs a lens focused at a distance (its radius), and no lens tilt or
