@@ -438,6 +438,9 @@ fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
 /// Loads the scene a command works on, and says what loading left out (a glTF's textures).
 fn load_and_note(path: &Path, overrides: &[String]) -> Result<Scene> {
     let scene = load(path, overrides)?;
+    for w in scene.warnings() {
+        note!("warning: {w}");
+    }
     for n in scene.notes() {
         note!("note: {n}");
     }
