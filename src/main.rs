@@ -449,19 +449,25 @@ fn load_and_note(path: &Path, overrides: &[String]) -> Result<Scene> {
 
 fn run_converge(args: &chambre::converge::ConvergeArgs) -> anyhow::Result<ExitCode> {
     use chambre::output::OutputTarget;
-    // Both outputs are checked before the first render, and written whole or not at all.
+    // Every output is checked before the first render, and written whole or not at all.
+    let plots = args.plots();
     OutputTarget::prepare_beside(&args.csv)?;
-    for plot in &args.plot {
+    for plot in &plots {
         OutputTarget::prepare_beside(plot)?;
     }
     let study = chambre::converge::run(args)?;
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     OutputTarget::write_beside(&args.csv, study.to_csv(&command).as_bytes())?;
-    for plot in &args.plot {
+    for plot in &plots {
         let bytes = chambre::plot::figure_bytes(&study, plot)
             .map_err(|e| anyhow::anyhow!("{}: {e}", plot.display()))?;
         OutputTarget::write_beside(plot, &bytes)?;
     }
+    let written: Vec<String> = std::iter::once(&args.csv)
+        .chain(&plots)
+        .map(|p| p.display().to_string())
+        .collect();
+    note!("wrote {}", written.join(", "));
     print(&study.to_markdown())?;
     Ok(ExitCode::SUCCESS)
 }
