@@ -67,6 +67,10 @@ pub struct ConvergeArgs {
     /// Write the CSV alone, no plot.
     #[arg(long)]
     pub no_plot: bool,
+    /// Replace the CSV and the plots even where they are write-protected files (refused
+    /// otherwise, before the first render).
+    #[arg(long)]
+    pub force: bool,
     /// Override any scene field, e.g. --set render.width=200 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,

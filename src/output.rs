@@ -6,6 +6,10 @@
 //! ([`OutputTarget::write`]): encoded in memory, written to a temporary file beside the target,
 //! synced, and renamed over the target. A failed or killed write leaves the previous image
 //! whole; when two renders write one path, the last rename wins and the file is never a mix.
+//!
+//! A rename replaces a file whatever its mode, so the check before the render also refuses an
+//! existing file that is write-protected, as `cp` would, unless the command is forced
+//! ([`Protected::Replace`], `--force`).
 
 use std::ffi::OsStr;
 use std::fs::{File, OpenOptions};
@@ -158,6 +162,29 @@ pub struct Display {
     pub tone_map: ToneMap,
 }
 
+/// What becomes of an existing output file that is write-protected: one with no write
+/// permission bit at all (`chmod a-w`), or that the user running chambre may not write. Root
+/// may write any file, so the mode bits alone decide for root, as `rm` asks before removing a
+/// write-protected file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Protected {
+    /// Refuse before any work is done, naming the file and `--force`.
+    #[default]
+    Refuse,
+    /// Replace it like any other (`--force`).
+    Replace,
+}
+
+impl Protected {
+    /// [`Protected::Replace`] when a command's `--force` is given.
+    pub fn replaced_if(force: bool) -> Protected {
+        match force {
+            true => Protected::Replace,
+            false => Protected::Refuse,
+        }
+    }
+}
+
 /// A checked place to write the image: a new path or an existing regular file, with a known
 /// format, in a directory where files can be created.
 #[derive(Debug)]
@@ -174,14 +201,22 @@ impl OutputTarget {
     /// Checks everything that can be checked before rendering: the extension, that the target
     /// is a regular file or does not exist yet, and that its directory accepts a new file.
     /// Devices and FIFOs (`/dev/full`, a named pipe) are refused: they cannot be replaced
-    /// atomically, and renaming over a device node would remove it.
+    /// atomically, and renaming over a device node would remove it. So is a write-protected
+    /// file ([`Protected`]; [`OutputTarget::prepare_with`] can replace it).
     pub fn prepare(path: &Path) -> Result<OutputTarget> {
+        Self::prepare_with(path, Protected::Refuse)
+    }
+
+    /// [`OutputTarget::prepare`], with a write-protected file refused or replaced as
+    /// `protected` says.
+    pub fn prepare_with(path: &Path, protected: Protected) -> Result<OutputTarget> {
         let fail = |message: String| Error::Output {
             path: path.to_path_buf(),
             message,
         };
         let format = format_of(path).map_err(fail)?;
         let file = resolve_target(path).map_err(fail)?;
+        check_protection(&file, protected).map_err(fail)?;
         check_directory(directory_of(&file)).map_err(fail)?;
         Ok(OutputTarget {
             path: path.to_path_buf(),
@@ -240,13 +275,21 @@ impl OutputTarget {
     }
 
     /// Checks, before a render, that `path` (e.g. a JSON sidecar) can be written as the image
-    /// can: a regular file or a new name, in a directory that accepts a new file.
+    /// can: a regular file that is not write-protected or a new name, in a directory that
+    /// accepts a new file.
     pub fn prepare_beside(path: &Path) -> Result<()> {
+        Self::prepare_beside_with(path, Protected::Refuse)
+    }
+
+    /// [`OutputTarget::prepare_beside`], with a write-protected file refused or replaced as
+    /// `protected` says.
+    pub fn prepare_beside_with(path: &Path, protected: Protected) -> Result<()> {
         let fail = |message: String| Error::Output {
             path: path.to_path_buf(),
             message,
         };
         let file = resolve_target(path).map_err(fail)?;
+        check_protection(&file, protected).map_err(fail)?;
         check_directory(directory_of(&file)).map_err(fail)
     }
 
@@ -299,6 +342,62 @@ fn resolve_target(path: &Path) -> std::result::Result<PathBuf, String> {
             Ok(path.to_path_buf())
         }
         Err(e) => Err(e.to_string()),
+    }
+}
+
+/// Refuses an existing `file` that is write-protected, unless `protected` lets it be replaced.
+fn check_protection(file: &Path, protected: Protected) -> std::result::Result<(), String> {
+    if protected == Protected::Replace {
+        return Ok(());
+    }
+    let Ok(meta) = std::fs::metadata(file) else {
+        return Ok(());
+    };
+    if meta.permissions().readonly() || !writable_by_this_user(file) {
+        return Err(format!(
+            "the file is write-protected{}; it is replaced only with --force",
+            mode_text(&meta)
+        ));
+    }
+    Ok(())
+}
+
+/// Whether the user running chambre may write `file`, as the system answers (for root, always,
+/// which is why the mode bits are read too).
+#[cfg(unix)]
+fn writable_by_this_user(file: &Path) -> bool {
+    use std::os::unix::ffi::OsStrExt;
+    let Ok(name) = std::ffi::CString::new(file.as_os_str().as_bytes()) else {
+        return true;
+    };
+    // SAFETY: `name` is a NUL-terminated path that outlives the call.
+    unsafe { libc::faccessat(libc::AT_FDCWD, name.as_ptr(), libc::W_OK, libc::AT_EACCESS) == 0 }
+}
+
+/// Elsewhere the read-only attribute (`Permissions::readonly`) is the whole answer.
+#[cfg(not(unix))]
+fn writable_by_this_user(_file: &Path) -> bool {
+    true
+}
+
+/// ` (mode -r--r--r--)`, as `ls -l` shows it, where the system has modes.
+fn mode_text(meta: &std::fs::Metadata) -> String {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = meta.permissions().mode();
+        let bits: String = (0..9)
+            .map(|i| match (mode >> (8 - i)) & 1 {
+                0 => '-',
+                _ => ['r', 'w', 'x'][i % 3],
+            })
+            .collect();
+        format!(" (mode -{bits})")
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        " (read-only)".to_string()
     }
 }
 

@@ -106,6 +106,85 @@ fn an_output_path_that_cannot_take_the_image_fails_before_the_render() {
     assert_eq!(entries(&dir), before, "a refused output creates nothing");
 }
 
+/// An existing, write-protected file among a command's outputs is refused before any work, as
+/// `cp` refuses to overwrite one, naming the file and `--force`; `--force` replaces it. The mode
+/// bits decide, so this holds when the tests run as root, whom the system lets write any file.
+#[test]
+fn write_protected_outputs_are_refused_before_the_work_unless_forced() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = scratch_dir("protected");
+    let kept = b"a file its owner made read-only".to_vec();
+    let protect = |name: &str, mode: u32| {
+        let path = dir.join(name);
+        std::fs::write(&path, &kept).unwrap();
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(mode)).unwrap();
+        path
+    };
+    let at = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    let image = protect("out.png", 0o444);
+    let sidecar = protect("side.png.json", 0o444);
+    let counts = protect("counts.exr", 0o400);
+    let manifest = protect("band.shard-1-of-2.json", 0o444);
+    let merged = protect("merged.png", 0o444);
+    let csv = protect("study.csv", 0o444);
+    let plot = protect("plotted.svg", 0o444);
+    let preview = protect("preview.png", 0o444);
+    let render = ["render", "scenes/spheres.toml", "--backend", "cpu", "--spp", "1"];
+    let cases: Vec<(Vec<String>, &PathBuf)> = vec![
+        (vec!["-o".into(), at("out.png")], &image),
+        (vec!["-o".into(), at("side.png"), "--sidecar".into()], &sidecar),
+        (
+            vec!["-o".into(), at("a.exr"), "--sample-counts".into(), at("counts.exr")],
+            &counts,
+        ),
+        (vec!["-o".into(), at("band.exr"), "--shard".into(), "1/2".into()], &manifest),
+    ];
+    let mut commands: Vec<(Vec<String>, &PathBuf)> = cases
+        .into_iter()
+        .map(|(args, file)| {
+            let mut all: Vec<String> = render.iter().map(|a| a.to_string()).collect();
+            all.extend(args);
+            (all, file)
+        })
+        .collect();
+    let strings = |args: &[&str]| args.iter().map(|a| a.to_string()).collect::<Vec<_>>();
+    commands.push((strings(&["merge", "missing.json", "-o", &at("merged.png")]), &merged));
+    let study = ["converge", "scenes/spheres.toml", "--max-spp", "1", "--reference-spp", "1"];
+    let mut csv_args = strings(&study);
+    csv_args.extend(strings(&["--csv", &at("study.csv")]));
+    commands.push((csv_args, &csv));
+    let mut plot_args = strings(&study);
+    plot_args.extend(strings(&["--csv", &at("plotted.csv")]));
+    commands.push((plot_args, &plot));
+    commands.push((strings(&["preview", "scenes/spheres.toml", "-o", &at("preview.png")]), &preview));
+    let before = entries(&dir);
+    for (args, file) in &commands {
+        let output = chambre().args(args).output().unwrap();
+        let message = stderr_of(&output);
+        assert_eq!(output.status.code(), Some(1), "{args:?}: {message}");
+        for part in [file.to_string_lossy().as_ref(), "write-protected", "--force"] {
+            assert!(message.contains(part), "{args:?}: `{part}` not in {message}");
+        }
+        assert!(!message.contains("spp in"), "{args:?} rendered first: {message}");
+        assert_eq!(std::fs::read(file).unwrap(), kept, "{args:?}");
+    }
+    assert_eq!(entries(&dir), before, "a refused command writes nothing");
+    // A file its group or others may write is not protected from its owner's renders.
+    let shared = protect("shared.png", 0o664);
+    assert!(small_render(&shared, &[]).status.success());
+    // --force replaces it, with a new file of the ordinary mode.
+    for (args, file) in &commands[..1] {
+        let output = chambre().args(args).arg("--force").output().unwrap();
+        assert!(output.status.success(), "{args:?}: {}", stderr_of(&output));
+        assert_eq!(image::open(file).unwrap().width(), 480);
+        let mode = std::fs::metadata(file).unwrap().permissions().mode();
+        assert_ne!(mode & 0o200, 0, "{mode:o}");
+    }
+    let output = chambre().args(&commands[1].0).arg("--force").output().unwrap();
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    assert!(std::fs::read_to_string(&sidecar).unwrap().contains("\"seed\""));
+}
+
 #[test]
 fn a_failed_write_keeps_the_previous_image_and_a_good_one_replaces_it() {
     let dir = scratch_dir("atomic");
