@@ -16,7 +16,6 @@ use std::fs::{File, OpenOptions};
 use std::io::{Cursor, ErrorKind, Write};
 use std::path::{Path, PathBuf};
 
-use image::codecs::openexr::OpenExrEncoder;
 use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
 use rayon::prelude::*;
@@ -264,7 +263,7 @@ impl OutputTarget {
         if self.format != ImageFormat::Exr {
             return Err(fail("extra channels (AOVs) need an .exr image".into()));
         }
-        let bytes = exr_with_channels(image, channels).map_err(fail)?;
+        let bytes = exr_bytes(image, channels).map_err(fail)?;
         replace_atomically(&self.file, &bytes).map_err(fail)
     }
 
@@ -439,12 +438,7 @@ fn encode(
             ExtendedColorType::Rgb8,
         ),
         ImageFormat::Pfm => return Ok(pfm_bytes(image)),
-        ImageFormat::Exr => OpenExrEncoder::new(Cursor::new(&mut bytes)).write_image(
-            bytemuck::cast_slice(&image.pixels),
-            w,
-            h,
-            ExtendedColorType::Rgb32F,
-        ),
+        ImageFormat::Exr => return exr_bytes(image, &[]),
     };
     encoded.map_err(|e| format!("encoding: {e}"))?;
     Ok(bytes)
@@ -509,41 +503,91 @@ pub fn aov_channels(
 const XYZ: [&str; 3] = ["X", "Y", "Z"];
 const RGB: [&str; 3] = ["R", "G", "B"];
 
-/// An EXR of `image`'s R, G, B and `channels`, 32-bit floats, losslessly compressed.
-fn exr_with_channels(
-    image: &Image,
-    channels: &[(String, Vec<f32>)],
-) -> std::result::Result<Vec<u8>, String> {
-    use exr::prelude::{
-        AnyChannel, AnyChannels, Encoding, FlatSamples, Image as ExrImage, Layer, LayerAttributes,
-        SmallVec, WritableImage,
-    };
-    let size = (image.width as usize, image.height as usize);
-    let component = |c: usize| image.pixels.iter().map(|p| p[c]).collect::<Vec<f32>>();
-    let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
-    for (c, name) in ["R", "G", "B"].iter().enumerate() {
-        list.push(AnyChannel::new(*name, FlatSamples::F32(component(c))));
-    }
+/// One channel of an EXR: a component of the image's pixels, or a layer of its own.
+#[derive(Clone, Copy)]
+enum Samples<'a> {
+    Component(&'a [glam::Vec3], usize),
+    Layer(&'a [f32]),
+}
+
+/// An EXR of `image`'s R, G, B and `channels` (name, a value a pixel), 32-bit floats in 64x64
+/// tiles compressed by RLE (the exr crate's default). The tiles are filled and compressed on
+/// all cores and written in order, so the same image is the same bytes; the exr crate's own
+/// writer fills them on one thread, which was two thirds of writing a 16384^2 image on two
+/// cores (`docs/robustness.md`).
+fn exr_bytes(image: &Image, channels: &[(String, Vec<f32>)]) -> std::result::Result<Vec<u8>, String> {
+    use exr::block::writer::ChunksWriter;
+    use exr::block::{BlockIndex, UncompressedBlock};
+    use exr::meta::header::Header;
+    use exr::prelude::{ChannelDescription, LineOrder, SampleType, SmallVec, Text};
+    let (width, height) = (image.width as usize, image.height as usize);
+    let mut named: Vec<(&str, Samples)> = ["R", "G", "B"]
+        .iter()
+        .enumerate()
+        .map(|(c, name)| (*name, Samples::Component(&image.pixels, c)))
+        .collect();
     for (name, values) in channels {
-        if values.len() != size.0 * size.1 {
+        if values.len() != width * height {
             return Err(format!("channel {name} has {} values", values.len()));
         }
-        list.push(AnyChannel::new(
-            name.as_str(),
-            FlatSamples::F32(values.clone()),
-        ));
+        named.push((name, Samples::Layer(values)));
     }
-    let layer = Layer::new(
-        size,
-        LayerAttributes::default(),
-        Encoding::SMALL_LOSSLESS,
-        AnyChannels::sort(list),
-    );
+    // EXR lists channels sorted by name, and a tile's lines hold them in that order.
+    named.sort_by(|a, b| a.0.cmp(b.0));
+    let descriptions: SmallVec<[ChannelDescription; 5]> = named
+        .iter()
+        .map(|(name, _)| ChannelDescription::named(*name, SampleType::F32))
+        .collect();
+    let mut header = Header::new(Text::from("image"), (width, height), descriptions);
+    header.own_attributes.layer_name = None;
+    header.line_order = LineOrder::Increasing;
+    let tile_bytes = |index: &BlockIndex| {
+        let (x0, y0) = (index.pixel_position.x(), index.pixel_position.y());
+        let (w, h) = (index.pixel_size.width(), index.pixel_size.height());
+        let mut data = Vec::with_capacity(w * h * named.len() * 4);
+        for y in y0..y0 + h {
+            let row = y * width + x0..y * width + x0 + w;
+            for (_, samples) in &named {
+                match *samples {
+                    Samples::Component(pixels, c) => {
+                        for p in &pixels[row.clone()] {
+                            data.extend_from_slice(&p[c].to_ne_bytes());
+                        }
+                    }
+                    Samples::Layer(values) => {
+                        for v in &values[row.clone()] {
+                            data.extend_from_slice(&v.to_ne_bytes());
+                        }
+                    }
+                }
+            }
+        }
+        data
+    };
     let mut bytes = Vec::new();
-    ExrImage::from_layer(layer)
-        .write()
-        .to_buffered(Cursor::new(&mut bytes))
-        .map_err(|e| format!("encoding: {e}"))?;
+    let headers: SmallVec<[Header; 3]> = SmallVec::from_elem(header, 1);
+    exr::block::write(Cursor::new(&mut bytes), headers, true, |meta, writer| {
+        let order: Vec<(usize, BlockIndex)> =
+            exr::block::enumerate_ordered_header_block_indices(&meta.headers).collect();
+        // A few tiles a thread at a time: the compressed ones wait in memory for their turn.
+        for part in order.chunks(8 * rayon::current_num_threads()) {
+            let chunks: Vec<_> = part
+                .par_iter()
+                .map(|(_, index)| {
+                    let block = UncompressedBlock {
+                        index: *index,
+                        data: tile_bytes(index),
+                    };
+                    block.compress_to_chunk(&meta.headers)
+                })
+                .collect();
+            for ((i, _), chunk) in part.iter().zip(chunks) {
+                writer.write_chunk(*i, chunk?)?;
+            }
+        }
+        Ok(())
+    })
+    .map_err(|e| format!("encoding: {e}"))?;
     Ok(bytes)
 }
 

@@ -276,6 +276,83 @@ fn sigterm_stops_a_long_render_and_keeps_its_samples() {
     signal_stops_a_long_render_and_keeps_its_samples("TERM");
 }
 
+/// Waits for `child` as `wait_at_most` does, and returns with its status the most memory it
+/// held at once (its peak resident set, from the kernel's accounting at its exit).
+fn wait_with_peak_memory(child: &mut Child, limit: Duration) -> (i32, u64) {
+    let start = Instant::now();
+    let pid = child.id() as libc::pid_t;
+    loop {
+        let mut status = 0;
+        // SAFETY: `rusage` is plain data that wait4 fills; `pid` is our own child, reaped here
+        // (std's `Child` is not waited on afterwards).
+        let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+        let reaped = unsafe { libc::wait4(pid, &mut status, libc::WNOHANG, &mut usage) };
+        assert!(reaped >= 0, "wait4: {}", std::io::Error::last_os_error());
+        if reaped == pid {
+            assert!(libc::WIFEXITED(status), "chambre ended by a signal: {status:#x}");
+            // ru_maxrss is in KiB on Linux.
+            return (libc::WEXITSTATUS(status), usage.ru_maxrss as u64 * 1024);
+        }
+        if start.elapsed() > limit {
+            child.kill().unwrap();
+            panic!("chambre did not stop within {limit:?} of the signal");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// A huge render stopped early writes its image without touching memory for the pixels that
+/// have no sample: it holds at most the rows it sampled, not the 8192^2 image's 2 GiB of sums,
+/// means and counts (touched whole, they made a 16384^2 render take 13 s from SIGINT to its
+/// image on 2 cores; `docs/robustness.md`). The memory is the property tested, not the time;
+/// the time limit is only there so that a hang fails.
+#[test]
+fn a_huge_render_stopped_early_holds_memory_for_its_samples_alone() {
+    let dir = scratch_dir("huge");
+    let target = dir.join("huge.exr");
+    let mut child = chambre()
+        .args(["render", "scenes/spheres.toml", "--backend", "cpu"])
+        .args(["-D", "camera.film=[24.0, 24.0]", "--width", "8192", "--height", "8192"])
+        .args(["--spp", "1048576", "-o"])
+        .arg(&target)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Loading takes milliseconds; two seconds render a few dozen to a few hundred rows.
+    std::thread::sleep(Duration::from_secs(2));
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let (code, peak) = wait_with_peak_memory(&mut child, Duration::from_secs(300));
+    let mut message = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut message).unwrap();
+    assert_eq!(code, 130, "{message}");
+    assert!(message.contains("wrote the partial image"), "{message}");
+    let unsampled: u64 = message
+        .split(" pixels without a sample")
+        .next()
+        .and_then(|head| head.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no count of pixels without a sample in {message}"));
+    let pixels = 8192 * 8192;
+    assert!(unsampled > pixels / 2, "most pixels were still to sample: {message}");
+    // What the sampled rows take (16 bytes of sums, 12 of mean, 4 of count a pixel, and the
+    // encoded EXR's 12 more), with 256 MiB for the rest of the process; a whole image's would
+    // be 2 GiB of sums, means and counts.
+    let sampled = pixels - unsampled;
+    let bound = sampled * (16 + 12 + 4 + 12) + (256 << 20);
+    assert!(
+        peak < bound,
+        "peak memory {} MiB for {sampled} sampled pixels (bound {} MiB)",
+        peak >> 20,
+        bound >> 20
+    );
+    let mut reader = image::ImageReader::open(&target).unwrap();
+    reader.no_limits();
+    let written = reader.decode().unwrap().into_rgb32f();
+    assert_eq!(written.dimensions(), (8192, 8192));
+    let first_rows = written.pixels().take(8192 * 8);
+    assert!(first_rows.filter(|p| p.0 != [0.0; 3]).count() > 8192, "the first rows hold their samples");
+}
+
 /// `spheres` at 192 x 128 pixels and 4 spp in one pass, with budgets small enough that a
 /// dispatch covers 8 rows and a batch one dispatch: 16 batches.
 fn eight_row_batches() -> (chambre::pack::FlatScene, RayBudgets) {
