@@ -905,6 +905,36 @@ fn shards_merge_into_the_single_render_bit_for_bit() {
     assert!(!dir.join("partial.exr").exists());
 }
 
+/// A band over the image crate's default decoding limit (512 MiB; a quarter of a 16384^2 render
+/// is 768 MiB) merges like any other.
+#[test]
+fn a_band_larger_than_512_mib_merges() {
+    let dir = scratch_dir("big-band");
+    let (width, height) = (8192u32, 5500u32);
+    let mut pixels: Vec<Vec3> = bytemuck::zeroed_vec((width * height) as usize);
+    pixels[0] = Vec3::new(0.25, 0.5, 0.75);
+    let band = Image { width, height, pixels };
+    assert!(band.pixels.len() * 12 > 512 << 20);
+    let image = dir.join("big.shard-0-of-1.exr");
+    OutputTarget::prepare(&image).unwrap().write(&band).unwrap();
+    let manifest = chambre::shard::Manifest {
+        shard: chambre::shard::Shard { index: 0, count: 1 },
+        width,
+        height,
+        band: [0, width, 0, height],
+        image: "big.shard-0-of-1.exr".into(),
+        render_hash: "0".into(),
+        spp_min: 1,
+        spp_max: 1,
+    };
+    let manifest_path = dir.join("big.shard-0-of-1.json");
+    std::fs::write(&manifest_path, serde_json::to_string(&manifest).unwrap()).unwrap();
+    let merged = chambre::shard::merge(&[manifest_path]).unwrap();
+    assert_eq!((merged.width, merged.height), (width, height));
+    assert_eq!(merged.pixels[0], band.pixels[0]);
+    assert_eq!(merged.pixels[1], Vec3::ZERO);
+}
+
 /// `--time-budget` stops a render that would take hours once the time is spent, successfully,
 /// with an image of the samples taken and a note saying how many; a budget longer than the
 /// render changes nothing.
