@@ -515,7 +515,10 @@ enum Samples<'a> {
 /// all cores and written in order, so the same image is the same bytes; the exr crate's own
 /// writer fills them on one thread, which was two thirds of writing a 16384^2 image on two
 /// cores (`docs/robustness.md`).
-fn exr_bytes(image: &Image, channels: &[(String, Vec<f32>)]) -> std::result::Result<Vec<u8>, String> {
+fn exr_bytes(
+    image: &Image,
+    channels: &[(String, Vec<f32>)],
+) -> std::result::Result<Vec<u8>, String> {
     use exr::block::writer::ChunksWriter;
     use exr::block::{BlockIndex, UncompressedBlock};
     use exr::meta::header::Header;

@@ -129,15 +129,33 @@ fn write_protected_outputs_are_refused_before_the_work_unless_forced() {
     let csv = protect("study.csv", 0o444);
     let plot = protect("plotted.svg", 0o444);
     let preview = protect("preview.png", 0o444);
-    let render = ["render", "scenes/spheres.toml", "--backend", "cpu", "--spp", "1"];
+    let render = [
+        "render",
+        "scenes/spheres.toml",
+        "--backend",
+        "cpu",
+        "--spp",
+        "1",
+    ];
     let cases: Vec<(Vec<String>, &PathBuf)> = vec![
         (vec!["-o".into(), at("out.png")], &image),
-        (vec!["-o".into(), at("side.png"), "--sidecar".into()], &sidecar),
         (
-            vec!["-o".into(), at("a.exr"), "--sample-counts".into(), at("counts.exr")],
+            vec!["-o".into(), at("side.png"), "--sidecar".into()],
+            &sidecar,
+        ),
+        (
+            vec![
+                "-o".into(),
+                at("a.exr"),
+                "--sample-counts".into(),
+                at("counts.exr"),
+            ],
             &counts,
         ),
-        (vec!["-o".into(), at("band.exr"), "--shard".into(), "1/2".into()], &manifest),
+        (
+            vec!["-o".into(), at("band.exr"), "--shard".into(), "1/2".into()],
+            &manifest,
+        ),
     ];
     let mut commands: Vec<(Vec<String>, &PathBuf)> = cases
         .into_iter()
@@ -148,24 +166,47 @@ fn write_protected_outputs_are_refused_before_the_work_unless_forced() {
         })
         .collect();
     let strings = |args: &[&str]| args.iter().map(|a| a.to_string()).collect::<Vec<_>>();
-    commands.push((strings(&["merge", "missing.json", "-o", &at("merged.png")]), &merged));
-    let study = ["converge", "scenes/spheres.toml", "--max-spp", "1", "--reference-spp", "1"];
+    commands.push((
+        strings(&["merge", "missing.json", "-o", &at("merged.png")]),
+        &merged,
+    ));
+    let study = [
+        "converge",
+        "scenes/spheres.toml",
+        "--max-spp",
+        "1",
+        "--reference-spp",
+        "1",
+    ];
     let mut csv_args = strings(&study);
     csv_args.extend(strings(&["--csv", &at("study.csv")]));
     commands.push((csv_args, &csv));
     let mut plot_args = strings(&study);
     plot_args.extend(strings(&["--csv", &at("plotted.csv")]));
     commands.push((plot_args, &plot));
-    commands.push((strings(&["preview", "scenes/spheres.toml", "-o", &at("preview.png")]), &preview));
+    commands.push((
+        strings(&["preview", "scenes/spheres.toml", "-o", &at("preview.png")]),
+        &preview,
+    ));
     let before = entries(&dir);
     for (args, file) in &commands {
         let output = chambre().args(args).output().unwrap();
         let message = stderr_of(&output);
         assert_eq!(output.status.code(), Some(1), "{args:?}: {message}");
-        for part in [file.to_string_lossy().as_ref(), "write-protected", "--force"] {
-            assert!(message.contains(part), "{args:?}: `{part}` not in {message}");
+        for part in [
+            file.to_string_lossy().as_ref(),
+            "write-protected",
+            "--force",
+        ] {
+            assert!(
+                message.contains(part),
+                "{args:?}: `{part}` not in {message}"
+            );
         }
-        assert!(!message.contains("spp in"), "{args:?} rendered first: {message}");
+        assert!(
+            !message.contains("spp in"),
+            "{args:?} rendered first: {message}"
+        );
         assert_eq!(std::fs::read(file).unwrap(), kept, "{args:?}");
     }
     assert_eq!(entries(&dir), before, "a refused command writes nothing");
@@ -180,9 +221,17 @@ fn write_protected_outputs_are_refused_before_the_work_unless_forced() {
         let mode = std::fs::metadata(file).unwrap().permissions().mode();
         assert_ne!(mode & 0o200, 0, "{mode:o}");
     }
-    let output = chambre().args(&commands[1].0).arg("--force").output().unwrap();
+    let output = chambre()
+        .args(&commands[1].0)
+        .arg("--force")
+        .output()
+        .unwrap();
     assert!(output.status.success(), "{}", stderr_of(&output));
-    assert!(std::fs::read_to_string(&sidecar).unwrap().contains("\"seed\""));
+    assert!(
+        std::fs::read_to_string(&sidecar)
+            .unwrap()
+            .contains("\"seed\"")
+    );
 }
 
 #[test]
@@ -289,7 +338,10 @@ fn wait_with_peak_memory(child: &mut Child, limit: Duration) -> (i32, u64) {
         let reaped = unsafe { libc::wait4(pid, &mut status, libc::WNOHANG, &mut usage) };
         assert!(reaped >= 0, "wait4: {}", std::io::Error::last_os_error());
         if reaped == pid {
-            assert!(libc::WIFEXITED(status), "chambre ended by a signal: {status:#x}");
+            assert!(
+                libc::WIFEXITED(status),
+                "chambre ended by a signal: {status:#x}"
+            );
             // ru_maxrss is in KiB on Linux.
             return (libc::WEXITSTATUS(status), usage.ru_maxrss as u64 * 1024);
         }
@@ -312,7 +364,14 @@ fn a_huge_render_stopped_early_holds_memory_for_its_samples_alone() {
     let target = dir.join("huge.exr");
     let mut child = chambre()
         .args(["render", "scenes/spheres.toml", "--backend", "cpu"])
-        .args(["-D", "camera.film=[24.0, 24.0]", "--width", "8192", "--height", "8192"])
+        .args([
+            "-D",
+            "camera.film=[24.0, 24.0]",
+            "--width",
+            "8192",
+            "--height",
+            "8192",
+        ])
         .args(["--spp", "1048576", "-o"])
         .arg(&target)
         .stderr(Stdio::piped())
@@ -320,7 +379,13 @@ fn a_huge_render_stopped_early_holds_memory_for_its_samples_alone() {
         .unwrap();
     // Loading takes milliseconds; two seconds render a few dozen to a few hundred rows.
     std::thread::sleep(Duration::from_secs(2));
-    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    assert!(
+        Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap()
+            .success()
+    );
     let (code, peak) = wait_with_peak_memory(&mut child, Duration::from_secs(300));
     let mut message = String::new();
     std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut message).unwrap();
@@ -333,7 +398,10 @@ fn a_huge_render_stopped_early_holds_memory_for_its_samples_alone() {
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("no count of pixels without a sample in {message}"));
     let pixels = 8192 * 8192;
-    assert!(unsampled > pixels / 2, "most pixels were still to sample: {message}");
+    assert!(
+        unsampled > pixels / 2,
+        "most pixels were still to sample: {message}"
+    );
     // What the sampled rows take (16 bytes of sums, 12 of mean, 4 of count a pixel, and the
     // encoded EXR's 12 more), with 256 MiB for the rest of the process; a whole image's would
     // be 2 GiB of sums, means and counts.
@@ -350,7 +418,10 @@ fn a_huge_render_stopped_early_holds_memory_for_its_samples_alone() {
     let written = reader.decode().unwrap().into_rgb32f();
     assert_eq!(written.dimensions(), (8192, 8192));
     let first_rows = written.pixels().take(8192 * 8);
-    assert!(first_rows.filter(|p| p.0 != [0.0; 3]).count() > 8192, "the first rows hold their samples");
+    assert!(
+        first_rows.filter(|p| p.0 != [0.0; 3]).count() > 8192,
+        "the first rows hold their samples"
+    );
 }
 
 /// `spheres` at 192 x 128 pixels and 4 spp in one pass, with budgets small enough that a
@@ -913,7 +984,11 @@ fn a_band_larger_than_512_mib_merges() {
     let (width, height) = (8192u32, 5500u32);
     let mut pixels: Vec<Vec3> = bytemuck::zeroed_vec((width * height) as usize);
     pixels[0] = Vec3::new(0.25, 0.5, 0.75);
-    let band = Image { width, height, pixels };
+    let band = Image {
+        width,
+        height,
+        pixels,
+    };
     assert!(band.pixels.len() * 12 > 512 << 20);
     let image = dir.join("big.shard-0-of-1.exr");
     OutputTarget::prepare(&image).unwrap().write(&band).unwrap();

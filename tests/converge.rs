@@ -158,7 +158,14 @@ fn small_study(dir: &std::path::Path, flags: &[&str]) -> (std::process::Output, 
     let output = Command::new(env!("CARGO_BIN_EXE_chambre"))
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .args(["converge", "scenes/area_light.toml", "-D", "render.width=8"])
-        .args(["-D", "render.height=8", "--reference-spp", "8", "--max-spp", "2"])
+        .args([
+            "-D",
+            "render.height=8",
+            "--reference-spp",
+            "8",
+            "--max-spp",
+            "2",
+        ])
         .args(["--samplers", "random", "--csv"])
         .arg(dir.join("c.csv"))
         .args(flags)
@@ -181,16 +188,27 @@ fn the_plot_is_written_beside_the_csv_unless_no_plot_is_given() {
     assert_eq!(files, ["c.csv", "c.svg"]);
     let svg = std::fs::read_to_string(root.join("default/c.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("slope"), "{svg}");
-    assert!(stderr.contains("c.csv, ") && stderr.contains("c.svg"), "{stderr}");
+    assert!(
+        stderr.contains("c.csv, ") && stderr.contains("c.svg"),
+        "{stderr}"
+    );
 
     let (output, files) = small_study(&root.join("none"), &["--no-plot"]);
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
     assert_eq!(files, ["c.csv"]);
 
     // Named plots replace the default one.
     let named = root.join("named");
     let (output, files) = small_study(&named, &["--plot", named.join("p.png").to_str().unwrap()]);
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
     assert_eq!(files, ["c.csv", "p.png"]);
 
     let (output, files) = small_study(&root.join("both"), &["--no-plot", "--plot", "x.svg"]);

@@ -195,7 +195,10 @@ fn a_missing_library_is_a_warning_when_the_scene_gives_the_mesh_a_material() {
     let flat = flatten(&loaded);
     assert_eq!(flat.materials.len(), 1, "grey alone");
     let image = common::render_cpu(&flat);
-    assert!(image.pixels.iter().any(|p| p.x > 0.0), "the triangle is lit");
+    assert!(
+        image.pixels.iter().any(|p| p.x > 0.0),
+        "the triangle is lit"
+    );
 }
 
 /// Where the faces' materials must come from the file, a missing library is an error naming the

@@ -275,7 +275,9 @@ impl BufRead for GuardedReader {
                 position.lines.set(position.lines.get() + breaks);
                 position.line_length.set(amount - last - 1);
             }
-            None => position.line_length.set(position.line_length.get() + amount),
+            None => position
+                .line_length
+                .set(position.line_length.get() + amount),
         }
         self.consumed += amount as u64;
         self.inner.consume(amount);
