@@ -60,12 +60,40 @@ pub struct ConvergeArgs {
     /// The CSV to write: one row per run, the command and machine in `#` comments.
     #[arg(long, default_value = "converge.csv")]
     pub csv: PathBuf,
-    /// Also write the log-log plot here: SVG, or PNG for a `.png` (repeat for both).
-    #[arg(long)]
+    /// Where to write the log-log plot: SVG, or PNG for a `.png` (repeat for both). Default:
+    /// beside the CSV, its name with `.svg`.
+    #[arg(long, value_name = "F.svg|F.png", conflicts_with = "no_plot")]
     pub plot: Vec<PathBuf>,
+    /// Write the CSV alone, no plot.
+    #[arg(long)]
+    pub no_plot: bool,
+    /// Replace the CSV and the plots even where they are write-protected files (refused
+    /// otherwise, before the first render).
+    #[arg(long)]
+    pub force: bool,
     /// Override any scene field, e.g. --set render.width=200 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+}
+
+impl ConvergeArgs {
+    /// The plots to write: those `--plot` names, else one beside the CSV (its name with `.svg`,
+    /// or `.svg` added when the CSV's own name ends so), none with `--no-plot`.
+    pub fn plots(&self) -> Vec<PathBuf> {
+        if self.no_plot {
+            return Vec::new();
+        }
+        if !self.plot.is_empty() {
+            return self.plot.clone();
+        }
+        let beside = self.csv.with_extension("svg");
+        if beside != self.csv {
+            return vec![beside];
+        }
+        let mut name = self.csv.clone().into_os_string();
+        name.push(".svg");
+        vec![PathBuf::from(name)]
+    }
 }
 
 /// One render and its error against the reference.

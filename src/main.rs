@@ -18,7 +18,7 @@ use chambre::camera::report::{camera_report, camera_summary};
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::render::PathKernels;
 use chambre::gpu::{GpuContext, GpuRenderer, describe_adapters};
-use chambre::output::{Display, ImageFormat, OutputTarget, ToneMap};
+use chambre::output::{Display, ImageFormat, OutputTarget, Protected, ToneMap};
 use chambre::pack::{FlatScene, flatten};
 use chambre::render::{
     Backend, Progress, RenderOutput, describe_status_flags, render, render_until,
@@ -75,6 +75,9 @@ enum Command {
         /// Image to write: .png, .exr or .pfm (required without --window).
         #[arg(short, long, required_unless_present = "window")]
         output: Option<PathBuf>,
+        /// Replace the image even where it is a write-protected file (refused otherwise).
+        #[arg(long, requires = "output")]
+        force: bool,
         /// Timed frames after a warm-up; the median is reported.
         #[arg(long, value_parser = chambre::bench::positive(), default_value_t = 5)]
         frames: u32,
@@ -135,6 +138,9 @@ enum Command {
         /// The image to write (.png, .exr or .pfm).
         #[arg(short, long)]
         output: PathBuf,
+        /// Replace the output even where it is a write-protected file (refused otherwise).
+        #[arg(long)]
+        force: bool,
     },
     /// Measure: the figures of BENCHMARKS.md, as a table and optionally JSON.
     #[command(subcommand)]
@@ -254,6 +260,11 @@ struct RenderArgs {
     /// SLURM_ARRAY_TASK_ID or AWS_BATCH_JOB_ARRAY_INDEX.
     #[arg(long, value_name = "I/N")]
     shard: Option<String>,
+    /// Replace the files the render writes even where they are write-protected (without it, an
+    /// existing write-protected image, sidecar, sample-count image or shard file is refused
+    /// before the render starts).
+    #[arg(long)]
+    force: bool,
 }
 
 impl RenderArgs {
@@ -391,6 +402,7 @@ fn main() -> ExitCode {
         Command::Preview {
             scene,
             output,
+            force,
             frames,
             window,
             keys,
@@ -415,12 +427,19 @@ fn main() -> ExitCode {
             };
             match (window, output) {
                 (true, _) => run_window(&scene, &set, &keys, screenshot, save, options),
-                (false, Some(output)) => run_preview(&scene, &output, frames, &set, options),
+                (false, Some(output)) => {
+                    let target = (output.as_path(), Protected::replaced_if(force));
+                    run_preview(&scene, target, frames, &set, options)
+                }
                 (false, None) => unreachable!("clap requires --output without --window"),
             }
         }
         Command::Info => run_info(),
-        Command::Merge { manifests, output } => run_merge(&manifests, &output),
+        Command::Merge {
+            manifests,
+            output,
+            force,
+        } => run_merge(&manifests, &output, Protected::replaced_if(force)),
     };
     match result {
         Ok(code) => code,
@@ -463,6 +482,9 @@ fn load(path: &Path, overrides: &[String]) -> Result<Scene> {
 /// Loads the scene a command works on, and says what loading left out (a glTF's textures).
 fn load_and_note(path: &Path, overrides: &[String]) -> Result<Scene> {
     let scene = load(path, overrides)?;
+    for w in scene.warnings() {
+        note!("warning: {w}");
+    }
     for n in scene.notes() {
         note!("note: {n}");
     }
@@ -471,19 +493,25 @@ fn load_and_note(path: &Path, overrides: &[String]) -> Result<Scene> {
 
 fn run_converge(args: &chambre::converge::ConvergeArgs) -> anyhow::Result<ExitCode> {
     use chambre::output::OutputTarget;
-    // Both outputs are checked before the first render, and written whole or not at all.
-    OutputTarget::prepare_beside(&args.csv)?;
-    for plot in &args.plot {
-        OutputTarget::prepare_beside(plot)?;
+    // Every output is checked before the first render, and written whole or not at all.
+    let (plots, protected) = (args.plots(), Protected::replaced_if(args.force));
+    OutputTarget::prepare_beside_with(&args.csv, protected)?;
+    for plot in &plots {
+        OutputTarget::prepare_beside_with(plot, protected)?;
     }
     let study = chambre::converge::run(args)?;
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     OutputTarget::write_beside(&args.csv, study.to_csv(&command).as_bytes())?;
-    for plot in &args.plot {
+    for plot in &plots {
         let bytes = chambre::plot::figure_bytes(&study, plot)
             .map_err(|e| anyhow::anyhow!("{}: {e}", plot.display()))?;
         OutputTarget::write_beside(plot, &bytes)?;
     }
+    let written: Vec<String> = std::iter::once(&args.csv)
+        .chain(&plots)
+        .map(|p| p.display().to_string())
+        .collect();
+    note!("wrote {}", written.join(", "));
     print(&study.to_markdown())?;
     Ok(ExitCode::SUCCESS)
 }
@@ -635,13 +663,14 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         .as_ref()
         .map_or(output_path.as_path(), |(image, _)| image);
     // Before any render time is spent: a path that cannot take the image fails now.
-    let target = OutputTarget::prepare(output_path)?.with_display(Display {
+    let protected = Protected::replaced_if(args.force);
+    let target = OutputTarget::prepare_with(output_path, protected)?.with_display(Display {
         exposure_ev: args.exposure,
         tone_map: args.tonemap,
     });
     let counts_target = match &args.sample_counts {
         Some(path) => {
-            let target = OutputTarget::prepare(path)?;
+            let target = OutputTarget::prepare_with(path, protected)?;
             if !target.format().is_linear() {
                 bail!(
                     "--sample-counts {}: use .exr or .pfm (counts are not colours)",
@@ -657,7 +686,7 @@ fn run_render(args: &RenderArgs) -> anyhow::Result<ExitCode> {
         .iter()
         .chain(shard_paths.as_ref().map(|(_, m)| m))
     {
-        OutputTarget::prepare_beside(beside)?;
+        OutputTarget::prepare_beside_with(beside, protected)?;
     }
     if !args.aov.is_empty() {
         if target.format() != chambre::output::ImageFormat::Exr {
@@ -811,12 +840,12 @@ fn note_what_the_preview_leaves_out(
 
 fn run_preview(
     path: &Path,
-    output: &Path,
+    (output, protected): (&Path, Protected),
     frames: u32,
     overrides: &[String],
     options: chambre::gpu::preview::PreviewOptions,
 ) -> anyhow::Result<ExitCode> {
-    let target = OutputTarget::prepare(output)?;
+    let target = OutputTarget::prepare_with(output, protected)?;
     let scene = load_and_note(path, overrides)?;
     let flat = flatten(&scene);
     note_what_the_preview_leaves_out(&scene, &flat, &options);
@@ -910,8 +939,12 @@ fn run_window(
 }
 
 /// `chambre merge`: the shards' bands stacked into one image, written atomically.
-fn run_merge(manifests: &[PathBuf], output: &Path) -> anyhow::Result<ExitCode> {
-    let target = OutputTarget::prepare(output)?;
+fn run_merge(
+    manifests: &[PathBuf],
+    output: &Path,
+    protected: Protected,
+) -> anyhow::Result<ExitCode> {
+    let target = OutputTarget::prepare_with(output, protected)?;
     let image = chambre::shard::merge(manifests)?;
     target.write(&image)?;
     note!(

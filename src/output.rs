@@ -6,13 +6,16 @@
 //! ([`OutputTarget::write`]): encoded in memory, written to a temporary file beside the target,
 //! synced, and renamed over the target. A failed or killed write leaves the previous image
 //! whole; when two renders write one path, the last rename wins and the file is never a mix.
+//!
+//! A rename replaces a file whatever its mode, so the check before the render also refuses an
+//! existing file that is write-protected, as `cp` would, unless the command is forced
+//! ([`Protected::Replace`], `--force`).
 
 use std::ffi::OsStr;
 use std::fs::{File, OpenOptions};
 use std::io::{Cursor, ErrorKind, Write};
 use std::path::{Path, PathBuf};
 
-use image::codecs::openexr::OpenExrEncoder;
 use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
 use rayon::prelude::*;
@@ -158,6 +161,29 @@ pub struct Display {
     pub tone_map: ToneMap,
 }
 
+/// What becomes of an existing output file that is write-protected: one with no write
+/// permission bit at all (`chmod a-w`), or that the user running chambre may not write. Root
+/// may write any file, so the mode bits alone decide for root, as `rm` asks before removing a
+/// write-protected file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Protected {
+    /// Refuse before any work is done, naming the file and `--force`.
+    #[default]
+    Refuse,
+    /// Replace it like any other (`--force`).
+    Replace,
+}
+
+impl Protected {
+    /// [`Protected::Replace`] when a command's `--force` is given.
+    pub fn replaced_if(force: bool) -> Protected {
+        match force {
+            true => Protected::Replace,
+            false => Protected::Refuse,
+        }
+    }
+}
+
 /// A checked place to write the image: a new path or an existing regular file, with a known
 /// format, in a directory where files can be created.
 #[derive(Debug)]
@@ -174,14 +200,22 @@ impl OutputTarget {
     /// Checks everything that can be checked before rendering: the extension, that the target
     /// is a regular file or does not exist yet, and that its directory accepts a new file.
     /// Devices and FIFOs (`/dev/full`, a named pipe) are refused: they cannot be replaced
-    /// atomically, and renaming over a device node would remove it.
+    /// atomically, and renaming over a device node would remove it. So is a write-protected
+    /// file ([`Protected`]; [`OutputTarget::prepare_with`] can replace it).
     pub fn prepare(path: &Path) -> Result<OutputTarget> {
+        Self::prepare_with(path, Protected::Refuse)
+    }
+
+    /// [`OutputTarget::prepare`], with a write-protected file refused or replaced as
+    /// `protected` says.
+    pub fn prepare_with(path: &Path, protected: Protected) -> Result<OutputTarget> {
         let fail = |message: String| Error::Output {
             path: path.to_path_buf(),
             message,
         };
         let format = format_of(path).map_err(fail)?;
         let file = resolve_target(path).map_err(fail)?;
+        check_protection(&file, protected).map_err(fail)?;
         check_directory(directory_of(&file)).map_err(fail)?;
         Ok(OutputTarget {
             path: path.to_path_buf(),
@@ -229,7 +263,7 @@ impl OutputTarget {
         if self.format != ImageFormat::Exr {
             return Err(fail("extra channels (AOVs) need an .exr image".into()));
         }
-        let bytes = exr_with_channels(image, channels).map_err(fail)?;
+        let bytes = exr_bytes(image, channels).map_err(fail)?;
         replace_atomically(&self.file, &bytes).map_err(fail)
     }
 
@@ -240,13 +274,21 @@ impl OutputTarget {
     }
 
     /// Checks, before a render, that `path` (e.g. a JSON sidecar) can be written as the image
-    /// can: a regular file or a new name, in a directory that accepts a new file.
+    /// can: a regular file that is not write-protected or a new name, in a directory that
+    /// accepts a new file.
     pub fn prepare_beside(path: &Path) -> Result<()> {
+        Self::prepare_beside_with(path, Protected::Refuse)
+    }
+
+    /// [`OutputTarget::prepare_beside`], with a write-protected file refused or replaced as
+    /// `protected` says.
+    pub fn prepare_beside_with(path: &Path, protected: Protected) -> Result<()> {
         let fail = |message: String| Error::Output {
             path: path.to_path_buf(),
             message,
         };
         let file = resolve_target(path).map_err(fail)?;
+        check_protection(&file, protected).map_err(fail)?;
         check_directory(directory_of(&file)).map_err(fail)
     }
 
@@ -302,6 +344,62 @@ fn resolve_target(path: &Path) -> std::result::Result<PathBuf, String> {
     }
 }
 
+/// Refuses an existing `file` that is write-protected, unless `protected` lets it be replaced.
+fn check_protection(file: &Path, protected: Protected) -> std::result::Result<(), String> {
+    if protected == Protected::Replace {
+        return Ok(());
+    }
+    let Ok(meta) = std::fs::metadata(file) else {
+        return Ok(());
+    };
+    if meta.permissions().readonly() || !writable_by_this_user(file) {
+        return Err(format!(
+            "the file is write-protected{}; it is replaced only with --force",
+            mode_text(&meta)
+        ));
+    }
+    Ok(())
+}
+
+/// Whether the user running chambre may write `file`, as the system answers (for root, always,
+/// which is why the mode bits are read too).
+#[cfg(unix)]
+fn writable_by_this_user(file: &Path) -> bool {
+    use std::os::unix::ffi::OsStrExt;
+    let Ok(name) = std::ffi::CString::new(file.as_os_str().as_bytes()) else {
+        return true;
+    };
+    // SAFETY: `name` is a NUL-terminated path that outlives the call.
+    unsafe { libc::faccessat(libc::AT_FDCWD, name.as_ptr(), libc::W_OK, libc::AT_EACCESS) == 0 }
+}
+
+/// Elsewhere the read-only attribute (`Permissions::readonly`) is the whole answer.
+#[cfg(not(unix))]
+fn writable_by_this_user(_file: &Path) -> bool {
+    true
+}
+
+/// ` (mode -r--r--r--)`, as `ls -l` shows it, where the system has modes.
+fn mode_text(meta: &std::fs::Metadata) -> String {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = meta.permissions().mode();
+        let bits: String = (0..9)
+            .map(|i| match (mode >> (8 - i)) & 1 {
+                0 => '-',
+                _ => ['r', 'w', 'x'][i % 3],
+            })
+            .collect();
+        format!(" (mode -{bits})")
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        " (read-only)".to_string()
+    }
+}
+
 fn directory_of(file: &Path) -> &Path {
     match file.parent() {
         Some(dir) if !dir.as_os_str().is_empty() => dir,
@@ -340,12 +438,7 @@ fn encode(
             ExtendedColorType::Rgb8,
         ),
         ImageFormat::Pfm => return Ok(pfm_bytes(image)),
-        ImageFormat::Exr => OpenExrEncoder::new(Cursor::new(&mut bytes)).write_image(
-            bytemuck::cast_slice(&image.pixels),
-            w,
-            h,
-            ExtendedColorType::Rgb32F,
-        ),
+        ImageFormat::Exr => return exr_bytes(image, &[]),
     };
     encoded.map_err(|e| format!("encoding: {e}"))?;
     Ok(bytes)
@@ -410,41 +503,94 @@ pub fn aov_channels(
 const XYZ: [&str; 3] = ["X", "Y", "Z"];
 const RGB: [&str; 3] = ["R", "G", "B"];
 
-/// An EXR of `image`'s R, G, B and `channels`, 32-bit floats, losslessly compressed.
-fn exr_with_channels(
+/// One channel of an EXR: a component of the image's pixels, or a layer of its own.
+#[derive(Clone, Copy)]
+enum Samples<'a> {
+    Component(&'a [glam::Vec3], usize),
+    Layer(&'a [f32]),
+}
+
+/// An EXR of `image`'s R, G, B and `channels` (name, a value a pixel), 32-bit floats in 64x64
+/// tiles compressed by RLE (the exr crate's default). The tiles are filled and compressed on
+/// all cores and written in order, so the same image is the same bytes; the exr crate's own
+/// writer fills them on one thread, which was two thirds of writing a 16384^2 image on two
+/// cores (`docs/robustness.md`).
+fn exr_bytes(
     image: &Image,
     channels: &[(String, Vec<f32>)],
 ) -> std::result::Result<Vec<u8>, String> {
-    use exr::prelude::{
-        AnyChannel, AnyChannels, Encoding, FlatSamples, Image as ExrImage, Layer, LayerAttributes,
-        SmallVec, WritableImage,
-    };
-    let size = (image.width as usize, image.height as usize);
-    let component = |c: usize| image.pixels.iter().map(|p| p[c]).collect::<Vec<f32>>();
-    let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
-    for (c, name) in ["R", "G", "B"].iter().enumerate() {
-        list.push(AnyChannel::new(*name, FlatSamples::F32(component(c))));
-    }
+    use exr::block::writer::ChunksWriter;
+    use exr::block::{BlockIndex, UncompressedBlock};
+    use exr::meta::header::Header;
+    use exr::prelude::{ChannelDescription, LineOrder, SampleType, SmallVec, Text};
+    let (width, height) = (image.width as usize, image.height as usize);
+    let mut named: Vec<(&str, Samples)> = ["R", "G", "B"]
+        .iter()
+        .enumerate()
+        .map(|(c, name)| (*name, Samples::Component(&image.pixels, c)))
+        .collect();
     for (name, values) in channels {
-        if values.len() != size.0 * size.1 {
+        if values.len() != width * height {
             return Err(format!("channel {name} has {} values", values.len()));
         }
-        list.push(AnyChannel::new(
-            name.as_str(),
-            FlatSamples::F32(values.clone()),
-        ));
+        named.push((name, Samples::Layer(values)));
     }
-    let layer = Layer::new(
-        size,
-        LayerAttributes::default(),
-        Encoding::SMALL_LOSSLESS,
-        AnyChannels::sort(list),
-    );
+    // EXR lists channels sorted by name, and a tile's lines hold them in that order.
+    named.sort_by(|a, b| a.0.cmp(b.0));
+    let descriptions: SmallVec<[ChannelDescription; 5]> = named
+        .iter()
+        .map(|(name, _)| ChannelDescription::named(*name, SampleType::F32))
+        .collect();
+    let mut header = Header::new(Text::from("image"), (width, height), descriptions);
+    header.own_attributes.layer_name = None;
+    header.line_order = LineOrder::Increasing;
+    let tile_bytes = |index: &BlockIndex| {
+        let (x0, y0) = (index.pixel_position.x(), index.pixel_position.y());
+        let (w, h) = (index.pixel_size.width(), index.pixel_size.height());
+        let mut data = Vec::with_capacity(w * h * named.len() * 4);
+        for y in y0..y0 + h {
+            let row = y * width + x0..y * width + x0 + w;
+            for (_, samples) in &named {
+                match *samples {
+                    Samples::Component(pixels, c) => {
+                        for p in &pixels[row.clone()] {
+                            data.extend_from_slice(&p[c].to_ne_bytes());
+                        }
+                    }
+                    Samples::Layer(values) => {
+                        for v in &values[row.clone()] {
+                            data.extend_from_slice(&v.to_ne_bytes());
+                        }
+                    }
+                }
+            }
+        }
+        data
+    };
     let mut bytes = Vec::new();
-    ExrImage::from_layer(layer)
-        .write()
-        .to_buffered(Cursor::new(&mut bytes))
-        .map_err(|e| format!("encoding: {e}"))?;
+    let headers: SmallVec<[Header; 3]> = SmallVec::from_elem(header, 1);
+    exr::block::write(Cursor::new(&mut bytes), headers, true, |meta, writer| {
+        let order: Vec<(usize, BlockIndex)> =
+            exr::block::enumerate_ordered_header_block_indices(&meta.headers).collect();
+        // A few tiles a thread at a time: the compressed ones wait in memory for their turn.
+        for part in order.chunks(8 * rayon::current_num_threads()) {
+            let chunks: Vec<_> = part
+                .par_iter()
+                .map(|(_, index)| {
+                    let block = UncompressedBlock {
+                        index: *index,
+                        data: tile_bytes(index),
+                    };
+                    block.compress_to_chunk(&meta.headers)
+                })
+                .collect();
+            for ((i, _), chunk) in part.iter().zip(chunks) {
+                writer.write_chunk(*i, chunk?)?;
+            }
+        }
+        Ok(())
+    })
+    .map_err(|e| format!("encoding: {e}"))?;
     Ok(bytes)
 }
 

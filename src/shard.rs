@@ -165,9 +165,7 @@ pub fn merge(manifest_paths: &[PathBuf]) -> Result<Image> {
             ));
         }
         let image_path = path.parent().unwrap_or(Path::new(".")).join(&m.image);
-        let band = image::open(&image_path)
-            .map_err(|e| merge_error(&image_path, e.to_string()))?
-            .into_rgb32f();
+        let band = read_band(&image_path).map_err(|e| merge_error(&image_path, e.to_string()))?;
         let expected = (x1 - x0, m.band[3] - m.band[2]);
         if band.dimensions() != expected {
             return Err(merge_error(
@@ -186,6 +184,14 @@ pub fn merge(manifest_paths: &[PathBuf]) -> Result<Image> {
         height: next_row - first.band[2],
         pixels,
     })
+}
+
+/// A band's pixels, whatever its size: the image crate's default limit (512 MiB a decode) would
+/// refuse the bands of the renders large enough to be split (a quarter of 16384^2 is 768 MiB).
+fn read_band(path: &Path) -> image::ImageResult<image::Rgb32FImage> {
+    let mut reader = image::ImageReader::open(path)?;
+    reader.no_limits();
+    Ok(reader.decode()?.into_rgb32f())
 }
 
 #[cfg(test)]

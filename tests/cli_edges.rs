@@ -106,6 +106,134 @@ fn an_output_path_that_cannot_take_the_image_fails_before_the_render() {
     assert_eq!(entries(&dir), before, "a refused output creates nothing");
 }
 
+/// An existing, write-protected file among a command's outputs is refused before any work, as
+/// `cp` refuses to overwrite one, naming the file and `--force`; `--force` replaces it. The mode
+/// bits decide, so this holds when the tests run as root, whom the system lets write any file.
+#[test]
+fn write_protected_outputs_are_refused_before_the_work_unless_forced() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = scratch_dir("protected");
+    let kept = b"a file its owner made read-only".to_vec();
+    let protect = |name: &str, mode: u32| {
+        let path = dir.join(name);
+        std::fs::write(&path, &kept).unwrap();
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(mode)).unwrap();
+        path
+    };
+    let at = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    let image = protect("out.png", 0o444);
+    let sidecar = protect("side.png.json", 0o444);
+    let counts = protect("counts.exr", 0o400);
+    let manifest = protect("band.shard-1-of-2.json", 0o444);
+    let merged = protect("merged.png", 0o444);
+    let csv = protect("study.csv", 0o444);
+    let plot = protect("plotted.svg", 0o444);
+    let preview = protect("preview.png", 0o444);
+    let render = [
+        "render",
+        "scenes/spheres.toml",
+        "--backend",
+        "cpu",
+        "--spp",
+        "1",
+    ];
+    let cases: Vec<(Vec<String>, &PathBuf)> = vec![
+        (vec!["-o".into(), at("out.png")], &image),
+        (
+            vec!["-o".into(), at("side.png"), "--sidecar".into()],
+            &sidecar,
+        ),
+        (
+            vec![
+                "-o".into(),
+                at("a.exr"),
+                "--sample-counts".into(),
+                at("counts.exr"),
+            ],
+            &counts,
+        ),
+        (
+            vec!["-o".into(), at("band.exr"), "--shard".into(), "1/2".into()],
+            &manifest,
+        ),
+    ];
+    let mut commands: Vec<(Vec<String>, &PathBuf)> = cases
+        .into_iter()
+        .map(|(args, file)| {
+            let mut all: Vec<String> = render.iter().map(|a| a.to_string()).collect();
+            all.extend(args);
+            (all, file)
+        })
+        .collect();
+    let strings = |args: &[&str]| args.iter().map(|a| a.to_string()).collect::<Vec<_>>();
+    commands.push((
+        strings(&["merge", "missing.json", "-o", &at("merged.png")]),
+        &merged,
+    ));
+    let study = [
+        "converge",
+        "scenes/spheres.toml",
+        "--max-spp",
+        "1",
+        "--reference-spp",
+        "1",
+    ];
+    let mut csv_args = strings(&study);
+    csv_args.extend(strings(&["--csv", &at("study.csv")]));
+    commands.push((csv_args, &csv));
+    let mut plot_args = strings(&study);
+    plot_args.extend(strings(&["--csv", &at("plotted.csv")]));
+    commands.push((plot_args, &plot));
+    commands.push((
+        strings(&["preview", "scenes/spheres.toml", "-o", &at("preview.png")]),
+        &preview,
+    ));
+    let before = entries(&dir);
+    for (args, file) in &commands {
+        let output = chambre().args(args).output().unwrap();
+        let message = stderr_of(&output);
+        assert_eq!(output.status.code(), Some(1), "{args:?}: {message}");
+        for part in [
+            file.to_string_lossy().as_ref(),
+            "write-protected",
+            "--force",
+        ] {
+            assert!(
+                message.contains(part),
+                "{args:?}: `{part}` not in {message}"
+            );
+        }
+        assert!(
+            !message.contains("spp in"),
+            "{args:?} rendered first: {message}"
+        );
+        assert_eq!(std::fs::read(file).unwrap(), kept, "{args:?}");
+    }
+    assert_eq!(entries(&dir), before, "a refused command writes nothing");
+    // A file its group or others may write is not protected from its owner's renders.
+    let shared = protect("shared.png", 0o664);
+    assert!(small_render(&shared, &[]).status.success());
+    // --force replaces it, with a new file of the ordinary mode.
+    for (args, file) in &commands[..1] {
+        let output = chambre().args(args).arg("--force").output().unwrap();
+        assert!(output.status.success(), "{args:?}: {}", stderr_of(&output));
+        assert_eq!(image::open(file).unwrap().width(), 480);
+        let mode = std::fs::metadata(file).unwrap().permissions().mode();
+        assert_ne!(mode & 0o200, 0, "{mode:o}");
+    }
+    let output = chambre()
+        .args(&commands[1].0)
+        .arg("--force")
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    assert!(
+        std::fs::read_to_string(&sidecar)
+            .unwrap()
+            .contains("\"seed\"")
+    );
+}
+
 #[test]
 fn a_failed_write_keeps_the_previous_image_and_a_good_one_replaces_it() {
     let dir = scratch_dir("atomic");
@@ -195,6 +323,105 @@ fn sigint_stops_a_long_render_and_keeps_its_samples() {
 #[test]
 fn sigterm_stops_a_long_render_and_keeps_its_samples() {
     signal_stops_a_long_render_and_keeps_its_samples("TERM");
+}
+
+/// Waits for `child` as `wait_at_most` does, and returns with its status the most memory it
+/// held at once (its peak resident set, from the kernel's accounting at its exit).
+fn wait_with_peak_memory(child: &mut Child, limit: Duration) -> (i32, u64) {
+    let start = Instant::now();
+    let pid = child.id() as libc::pid_t;
+    loop {
+        let mut status = 0;
+        // SAFETY: `rusage` is plain data that wait4 fills; `pid` is our own child, reaped here
+        // (std's `Child` is not waited on afterwards).
+        let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+        let reaped = unsafe { libc::wait4(pid, &mut status, libc::WNOHANG, &mut usage) };
+        assert!(reaped >= 0, "wait4: {}", std::io::Error::last_os_error());
+        if reaped == pid {
+            assert!(
+                libc::WIFEXITED(status),
+                "chambre ended by a signal: {status:#x}"
+            );
+            // ru_maxrss is in KiB on Linux.
+            return (libc::WEXITSTATUS(status), usage.ru_maxrss as u64 * 1024);
+        }
+        if start.elapsed() > limit {
+            child.kill().unwrap();
+            panic!("chambre did not stop within {limit:?} of the signal");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// A huge render stopped early writes its image without touching memory for the pixels that
+/// have no sample: it holds at most the rows it sampled, not the 8192^2 image's 2 GiB of sums,
+/// means and counts (touched whole, they made a 16384^2 render take 13 s from SIGINT to its
+/// image on 2 cores; `docs/robustness.md`). The memory is the property tested, not the time;
+/// the time limit is only there so that a hang fails.
+#[test]
+fn a_huge_render_stopped_early_holds_memory_for_its_samples_alone() {
+    let dir = scratch_dir("huge");
+    let target = dir.join("huge.exr");
+    let mut child = chambre()
+        .args(["render", "scenes/spheres.toml", "--backend", "cpu"])
+        .args([
+            "-D",
+            "camera.film=[24.0, 24.0]",
+            "--width",
+            "8192",
+            "--height",
+            "8192",
+        ])
+        .args(["--spp", "1048576", "-o"])
+        .arg(&target)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Loading takes milliseconds; two seconds render a few dozen to a few hundred rows.
+    std::thread::sleep(Duration::from_secs(2));
+    assert!(
+        Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let (code, peak) = wait_with_peak_memory(&mut child, Duration::from_secs(300));
+    let mut message = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut message).unwrap();
+    assert_eq!(code, 130, "{message}");
+    assert!(message.contains("wrote the partial image"), "{message}");
+    let unsampled: u64 = message
+        .split(" pixels without a sample")
+        .next()
+        .and_then(|head| head.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no count of pixels without a sample in {message}"));
+    let pixels = 8192 * 8192;
+    assert!(
+        unsampled > pixels / 2,
+        "most pixels were still to sample: {message}"
+    );
+    // What the sampled rows take (16 bytes of sums, 12 of mean, 4 of count a pixel, and the
+    // encoded EXR's 12 more), with 256 MiB for the rest of the process; a whole image's would
+    // be 2 GiB of sums, means and counts.
+    let sampled = pixels - unsampled;
+    let bound = sampled * (16 + 12 + 4 + 12) + (256 << 20);
+    assert!(
+        peak < bound,
+        "peak memory {} MiB for {sampled} sampled pixels (bound {} MiB)",
+        peak >> 20,
+        bound >> 20
+    );
+    let mut reader = image::ImageReader::open(&target).unwrap();
+    reader.no_limits();
+    let written = reader.decode().unwrap().into_rgb32f();
+    assert_eq!(written.dimensions(), (8192, 8192));
+    let first_rows = written.pixels().take(8192 * 8);
+    assert!(
+        first_rows.filter(|p| p.0 != [0.0; 3]).count() > 8192,
+        "the first rows hold their samples"
+    );
 }
 
 /// `spheres` at 192 x 128 pixels and 4 spp in one pass, with budgets small enough that a
@@ -747,6 +974,40 @@ fn shards_merge_into_the_single_render_bit_for_bit() {
     assert_eq!(output.status.code(), Some(1));
     assert!(stderr_of(&output).contains("2 manifests given for a render of 3 shards"));
     assert!(!dir.join("partial.exr").exists());
+}
+
+/// A band over the image crate's default decoding limit (512 MiB; a quarter of a 16384^2 render
+/// is 768 MiB) merges like any other.
+#[test]
+fn a_band_larger_than_512_mib_merges() {
+    let dir = scratch_dir("big-band");
+    let (width, height) = (8192u32, 5500u32);
+    let mut pixels: Vec<Vec3> = bytemuck::zeroed_vec((width * height) as usize);
+    pixels[0] = Vec3::new(0.25, 0.5, 0.75);
+    let band = Image {
+        width,
+        height,
+        pixels,
+    };
+    assert!(band.pixels.len() * 12 > 512 << 20);
+    let image = dir.join("big.shard-0-of-1.exr");
+    OutputTarget::prepare(&image).unwrap().write(&band).unwrap();
+    let manifest = chambre::shard::Manifest {
+        shard: chambre::shard::Shard { index: 0, count: 1 },
+        width,
+        height,
+        band: [0, width, 0, height],
+        image: "big.shard-0-of-1.exr".into(),
+        render_hash: "0".into(),
+        spp_min: 1,
+        spp_max: 1,
+    };
+    let manifest_path = dir.join("big.shard-0-of-1.json");
+    std::fs::write(&manifest_path, serde_json::to_string(&manifest).unwrap()).unwrap();
+    let merged = chambre::shard::merge(&[manifest_path]).unwrap();
+    assert_eq!((merged.width, merged.height), (width, height));
+    assert_eq!(merged.pixels[0], band.pixels[0]);
+    assert_eq!(merged.pixels[1], Vec3::ZERO);
 }
 
 /// `--time-budget` stops a render that would take hours once the time is spent, successfully,

@@ -150,3 +150,70 @@ fn the_stress_scenes_load_with_what_they_stress() {
     );
     assert!(scene.triangle_count() >= 512, "the 16x16 board");
 }
+
+/// A small CPU study into `dir` with `flags` after the CSV's: its stderr, and the files `dir`
+/// then holds, sorted.
+fn small_study(dir: &std::path::Path, flags: &[&str]) -> (std::process::Output, Vec<String>) {
+    std::fs::create_dir_all(dir).unwrap();
+    let output = Command::new(env!("CARGO_BIN_EXE_chambre"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["converge", "scenes/area_light.toml", "-D", "render.width=8"])
+        .args([
+            "-D",
+            "render.height=8",
+            "--reference-spp",
+            "8",
+            "--max-spp",
+            "2",
+        ])
+        .args(["--samplers", "random", "--csv"])
+        .arg(dir.join("c.csv"))
+        .args(flags)
+        .output()
+        .unwrap();
+    let mut files: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    (output, files)
+}
+
+#[test]
+fn the_plot_is_written_beside_the_csv_unless_no_plot_is_given() {
+    let root = std::env::temp_dir().join(format!("chambre-converge-plot-{}", std::process::id()));
+    let (output, files) = small_study(&root.join("default"), &[]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert_eq!(files, ["c.csv", "c.svg"]);
+    let svg = std::fs::read_to_string(root.join("default/c.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("slope"), "{svg}");
+    assert!(
+        stderr.contains("c.csv, ") && stderr.contains("c.svg"),
+        "{stderr}"
+    );
+
+    let (output, files) = small_study(&root.join("none"), &["--no-plot"]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert_eq!(files, ["c.csv"]);
+
+    // Named plots replace the default one.
+    let named = root.join("named");
+    let (output, files) = small_study(&named, &["--plot", named.join("p.png").to_str().unwrap()]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert_eq!(files, ["c.csv", "p.png"]);
+
+    let (output, files) = small_study(&root.join("both"), &["--no-plot", "--plot", "x.svg"]);
+    assert!(!output.status.success());
+    assert!(String::from_utf8_lossy(&output.stderr).contains("cannot be used with"));
+    assert!(files.is_empty(), "{files:?}");
+    std::fs::remove_dir_all(&root).unwrap();
+}

@@ -121,3 +121,115 @@ fn a_triangle_light_gives_its_analytic_irradiance() {
         );
     }
 }
+
+/// A scene of one OBJ triangle in its own folder: `mtllib` lines for `libraries` (of which only
+/// `present` exist beside it, each defining `red`), faces that `usemtl red`, and a scene
+/// material `grey` given to the mesh when `scene_material`. Returns the scene file.
+fn scene_with_libraries(
+    folder: &str,
+    libraries: &[&str],
+    present: &[&str],
+    scene_material: bool,
+) -> PathBuf {
+    let dir = scratch(folder);
+    std::fs::create_dir_all(&dir).unwrap();
+    for name in present {
+        std::fs::write(dir.join(name), "newmtl red\nKd 0.8 0.1 0.1\n").unwrap();
+    }
+    let mut obj = String::from("# a triangle\n");
+    for name in libraries {
+        obj.push_str(&format!("mtllib {name}\n"));
+    }
+    obj.push_str("usemtl red\nv -1 0 -3\nv 1 0 -3\nv 0 1 -3\nf 1 2 3\n");
+    std::fs::write(dir.join("tri.obj"), obj).unwrap();
+    let material = match scene_material {
+        true => "material = \"grey\"\n",
+        false => "",
+    };
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[render]\nwidth = 8\nheight = 8\nspp = 1\n\
+             [camera]\nposition = [0.0, 0.3, 0.0]\nlook_at = [0.0, 0.3, -3.0]\n\
+             vertical_fov = 40.0\nfilm = [24.0, 24.0]\n\
+             [[materials]]\nname = \"grey\"\nmodel = \"lambert\"\n\
+             [[lights]]\ntype = \"point\"\nposition = [0.0, 1.0, 0.0]\nintensity = [5.0, 5.0, 5.0]\n\
+             [[shapes]]\ntype = \"mesh\"\nfile = \"tri.obj\"\n{material}"
+        ),
+    )
+    .unwrap();
+    scene
+}
+
+fn check(scene: &std::path::Path) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_chambre"))
+        .arg("check")
+        .arg(scene)
+        .output()
+        .unwrap()
+}
+
+/// A missing `mtllib` is a warning with the OBJ's file and line where the scene gives the mesh
+/// its own material (Blender and pbrt go on too), and the mesh renders with that material.
+#[test]
+fn a_missing_library_is_a_warning_when_the_scene_gives_the_mesh_a_material() {
+    let scene = scene_with_libraries("warn", &["gone.mtl"], &[], true);
+    let output = check(&scene);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let obj = scene.with_file_name("tri.obj");
+    let expected = format!(
+        "warning: {}:2: mtllib {}: ",
+        obj.display(),
+        scene.with_file_name("gone.mtl").display()
+    );
+    assert!(stderr.contains(&expected), "{expected} not in {stderr}");
+    assert!(stderr.contains("No such file"), "{stderr}");
+    assert!(
+        stderr.contains("the scene's material `grey` is used"),
+        "{stderr}"
+    );
+    let loaded = chambre::scene::Scene::load(&scene, &[]).unwrap();
+    assert_eq!(loaded.warnings().len(), 1);
+    let flat = flatten(&loaded);
+    assert_eq!(flat.materials.len(), 1, "grey alone");
+    let image = common::render_cpu(&flat);
+    assert!(
+        image.pixels.iter().any(|p| p.x > 0.0),
+        "the triangle is lit"
+    );
+}
+
+/// Where the faces' materials must come from the file, a missing library is an error naming the
+/// scene's field, the OBJ's file and line, and the library.
+#[test]
+fn a_missing_library_is_an_error_when_the_files_materials_are_needed() {
+    let scene = scene_with_libraries("refuse", &["gone.mtl"], &[], false);
+    let output = check(&scene);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    let obj = scene.with_file_name("tri.obj");
+    for part in [
+        format!("{}:", scene.display()),
+        "`shapes[0].material`".to_string(),
+        format!(
+            "{}:2: mtllib {}: No such file",
+            obj.display(),
+            scene.with_file_name("gone.mtl").display()
+        ),
+    ] {
+        assert!(stderr.contains(&part), "{part} not in {stderr}");
+    }
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    // Two libraries, the missing one second: each face finds its material in the first, so the
+    // file's materials are used and the missing one is only a warning, with its own line.
+    let scene = scene_with_libraries("second", &["red.mtl", "gone.mtl"], &["red.mtl"], false);
+    let output = check(&scene);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("tri.obj:3: mtllib "), "{stderr}");
+    assert!(stderr.contains("no face of the mesh needs"), "{stderr}");
+    let loaded = chambre::scene::Scene::load(&scene, &[]).unwrap();
+    assert!(loaded.materials.iter().any(|m| m.name == "tri.obj:red"));
+}

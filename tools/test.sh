@@ -38,4 +38,7 @@ export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 cargo build --release --bins
 echo "== GPU adapters"
 ./target/release/chambre info
+# docs/shards.md's Slurm array on a real slurmctld and slurmd (installs slurm-wlm and munge).
+echo "== Slurm"
+tools/test_slurm.sh
 cargo test --release

@@ -4,8 +4,10 @@
 //! and groups, with or without normals); PLY through `ply-rs-bw` (ASCII and binary of either byte
 //! order; faces and triangle strips; other properties are ignored).
 
+use std::cell::{Cell, RefCell};
 use std::io::{BufRead, BufReader, Read};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
 
 use glam::{DQuat, DVec3, Mat3, Vec3};
 use ply_rs_bw::parser::{Parser, Reader};
@@ -36,6 +38,36 @@ pub struct TriangleMesh {
     pub face_materials: Vec<u32>,
     /// What reading left out that a user should know (a glTF's textures), one sentence each.
     pub notes: Vec<String>,
+    /// The OBJ's `mtllib` files that could not be read: an error where the scene needs the
+    /// file's materials, a warning where it gives the mesh its own.
+    pub missing_libraries: Vec<MissingLibrary>,
+}
+
+/// An OBJ `mtllib` file that could not be read (Blender and pbrt go on without it, as chambre
+/// does when the scene gives the mesh a material).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MissingLibrary {
+    /// The OBJ file.
+    pub obj: PathBuf,
+    /// The OBJ's line that names it (1-based).
+    pub line: usize,
+    /// Where it was looked for: beside the OBJ.
+    pub path: PathBuf,
+    /// Why it could not be read.
+    pub reason: String,
+}
+
+impl std::fmt::Display for MissingLibrary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}:{}: mtllib {}: {}",
+            self.obj.display(),
+            self.line,
+            self.path.display(),
+            self.reason
+        )
+    }
 }
 
 /// A triangle whose file gives it no material.
@@ -119,7 +151,7 @@ fn read_mesh(path: &Path) -> Result<TriangleMesh, String> {
     };
     let mut reader = GuardedReader::new(source, MAX_MESH_BYTES, MAX_LINE_BYTES);
     let mesh = if inner_name.ends_with(".obj") {
-        read_obj(&mut reader, path.parent().unwrap_or(Path::new(".")))?
+        read_obj(&mut reader, path)?
     } else if inner_name.ends_with(".ply") {
         read_ply(&mut reader, available)?
     } else {
@@ -139,11 +171,30 @@ struct GuardedReader {
     max_bytes: u64,
     line_limit: Option<usize>,
     consumed: u64,
-    /// Line breaks consumed so far.
-    lines: usize,
-    /// Bytes consumed since the last line break.
-    line_length: usize,
+    /// Where the reading stands, shared with whoever must place what it reads as it reads
+    /// (an OBJ's `mtllib` lines, whose files the parser opens mid-read).
+    position: Rc<Position>,
     failure: Option<String>,
+}
+
+/// Lines a reader has consumed.
+#[derive(Debug, Default)]
+struct Position {
+    /// Line breaks consumed so far.
+    lines: Cell<usize>,
+    /// Bytes consumed since the last line break.
+    line_length: Cell<usize>,
+}
+
+impl Position {
+    /// 1-based number of the line being read (the last one consumed, if it has no break yet).
+    fn current_line(&self) -> usize {
+        if self.line_length.get() > 0 {
+            self.lines.get() + 1
+        } else {
+            self.lines.get().max(1)
+        }
+    }
 }
 
 impl GuardedReader {
@@ -153,19 +204,14 @@ impl GuardedReader {
             max_bytes,
             line_limit: Some(line_limit),
             consumed: 0,
-            lines: 0,
-            line_length: 0,
+            position: Rc::default(),
             failure: None,
         }
     }
 
     /// 1-based number of the line being read (the last one consumed, if it has no break yet).
     fn current_line(&self) -> usize {
-        if self.line_length > 0 {
-            self.lines + 1
-        } else {
-            self.lines.max(1)
-        }
+        self.position.current_line()
     }
 
     fn fail(&mut self, reason: String) -> std::io::Error {
@@ -182,9 +228,9 @@ impl GuardedReader {
     /// Errors that must stop the read before more bytes are handed out.
     fn check_limits(&mut self, buffered: usize) -> std::io::Result<()> {
         if let Some(limit) = self.line_limit
-            && self.line_length > limit
+            && self.position.line_length.get() > limit
         {
-            let line = self.lines + 1;
+            let line = self.position.lines.get() + 1;
             return Err(self.fail(format!(
                 "line {line} is longer than {limit} bytes without a line break"
             )));
@@ -222,32 +268,52 @@ impl BufRead for GuardedReader {
 
     fn consume(&mut self, amount: usize) {
         let taken = &self.inner.buffer()[..amount];
+        let position = &self.position;
         match taken.iter().rposition(|&b| b == b'\n') {
             Some(last) => {
-                self.lines += taken.iter().filter(|&&b| b == b'\n').count();
-                self.line_length = amount - last - 1;
+                let breaks = taken.iter().filter(|&&b| b == b'\n').count();
+                position.lines.set(position.lines.get() + breaks);
+                position.line_length.set(amount - last - 1);
             }
-            None => self.line_length += amount,
+            None => position
+                .line_length
+                .set(position.line_length.get() + amount),
         }
         self.consumed += amount as u64;
         self.inner.consume(amount);
     }
 }
 
-fn read_obj(reader: &mut GuardedReader, directory: &Path) -> Result<TriangleMesh, String> {
+fn read_obj(reader: &mut GuardedReader, obj: &Path) -> Result<TriangleMesh, String> {
+    let directory = obj.parent().unwrap_or(Path::new("."));
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
         ..Default::default()
     };
-    // `mtllib` files are read beside the OBJ.
+    // `mtllib` files are read beside the OBJ. One that cannot be read is noted with its line
+    // (the parser calls this right after consuming it) and stands for no materials, so its
+    // `usemtl` faces get none: whether that matters is the scene's to say.
+    let position = reader.position.clone();
+    let missing = RefCell::new(Vec::new());
     let (models, materials) = tobj::load_obj_buf(reader, &options, |name| {
-        tobj::load_mtl(directory.join(name))
+        let path = directory.join(name);
+        tobj::load_mtl(&path).or_else(|e| {
+            missing.borrow_mut().push(MissingLibrary {
+                obj: obj.to_path_buf(),
+                line: position.current_line(),
+                reason: library_failure(&path, e),
+                path,
+            });
+            Ok(Default::default())
+        })
     })
     .map_err(|e| reader.explain(obj_error_message(e, reader.current_line())))?;
-    let materials = materials.map_err(|e| format!("its material library: {e}"))?;
+    // The loader above stands in for every library that fails, so tobj has no error to give.
+    let materials = materials.unwrap_or_default();
     let mut mesh = TriangleMesh {
         materials: materials.iter().map(MeshMaterial::from_mtl).collect(),
+        missing_libraries: missing.into_inner(),
         ..TriangleMesh::default()
     };
     let has_materials = models.iter().any(|m| m.mesh.material_id.is_some());
@@ -284,6 +350,15 @@ fn read_obj(reader: &mut GuardedReader, directory: &Path) -> Result<TriangleMesh
         mesh.normals = Some(normals);
     }
     Ok(mesh)
+}
+
+/// Why `path`, an `mtllib` file, could not be read: tobj's error says only "open error" or
+/// "read error", so the file is asked again for the system's reason.
+fn library_failure(path: &Path, e: tobj::LoadError) -> String {
+    match (e, std::fs::File::open(path)) {
+        (tobj::LoadError::OpenFileFailed, Err(io)) => io.to_string(),
+        (e, _) => format!("malformed material library: {e}"),
+    }
 }
 
 /// tobj parses line by line, except that it resolves face indices when an object ends (at the

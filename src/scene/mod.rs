@@ -268,6 +268,28 @@ impl Scene {
         meshes.flat_map(|m| m.notes.iter().cloned()).collect()
     }
 
+    /// What loading went on without and the user should hear of: an OBJ's `mtllib` file that
+    /// could not be read, where the scene does not need its materials.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut warnings = Vec::new();
+        for shape in &self.shapes {
+            let Shape::Mesh { mesh, material } = shape else {
+                continue;
+            };
+            let instead = match mesh.face_materials.is_empty() {
+                true => format!(
+                    "the scene's material `{}` is used",
+                    self.materials[*material as usize].name
+                ),
+                false => "no face of the mesh needs a material from it".to_string(),
+            };
+            for missing in &mesh.missing_libraries {
+                warnings.push(format!("{missing}; going on without it: {instead}"));
+            }
+        }
+        warnings
+    }
+
     /// Parse and validate scene text (meshes are resolved relative to `path`'s folder).
     pub fn from_str(path: &Path, text: &str, overrides: &[String]) -> Result<Scene> {
         let parsed = load::parse_scene_text(path, text, overrides)?;

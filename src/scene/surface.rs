@@ -326,6 +326,7 @@ fn empty_mesh() -> TriangleMesh {
         materials: Vec::new(),
         face_materials: Vec::new(),
         notes: Vec::new(),
+        missing_libraries: Vec::new(),
     }
 }
 

@@ -1265,7 +1265,18 @@ fn adopt_mesh_materials(
     materials: &mut Vec<Material>,
 ) -> Result<u32> {
     use super::mesh::NO_MATERIAL;
-    if mesh.face_materials.is_empty() || mesh.face_materials.contains(&NO_MATERIAL) {
+    let without = mesh.face_materials.is_empty() || mesh.face_materials.contains(&NO_MATERIAL);
+    if without && let Some(missing) = mesh.missing_libraries.first() {
+        return Err(check.err(
+            field,
+            format!(
+                "is required: {missing}, and {} faces have no material without it (give the \
+                 mesh a scene material, or put the library beside the OBJ)",
+                path.display()
+            ),
+        ));
+    }
+    if without {
         return Err(check.err(
             field,
             format!(
