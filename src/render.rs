@@ -941,12 +941,6 @@ fn crop_rows<T: Copy>(pixels: Vec<T>, width: u32, crop: [u32; 4]) -> Vec<T> {
         .collect()
 }
 
-/// Each pixel's samples, from its sums' count, on all cores.
-fn sample_counts(accumulation: &[[f32; 4]]) -> Vec<u32> {
-    use rayon::prelude::*;
-    accumulation.par_iter().map(|a| a[3] as u32).collect()
-}
-
 /// A one-line explanation of kernel status flags.
 pub fn describe_status_flags(flags: u32) -> Option<String> {
     let mut reasons = Vec::new();
