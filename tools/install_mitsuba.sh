@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs what tests/export.rs renders with: Mitsuba 3 and Dr.Jit (pinned, from PyPI) into
 # target/mitsuba-site, out of the system's Python, and a libLLVM for Dr.Jit's CPU backend (the
-# `llvm_ad_rgb` variant; Debian's libllvm16). Prints the two variables the test reads:
+# `llvm_ad_rgb` variant; Debian's libllvm19). Prints the two variables the test reads:
 #
 #   eval "$(tools/install_mitsuba.sh)"   # sets CHAMBRE_MITSUBA_SITE and DRJIT_LIBLLVM_PATH
 #
@@ -16,14 +16,16 @@ python="${PYTHON:-python3}"
 SUDO=""
 [ "$(id -u)" -ne 0 ] && SUDO="sudo"
 
-# Dr.Jit's LLVM backend loads libLLVM at run time; it needs version 16 or newer.
+# Dr.Jit's LLVM backend loads libLLVM at run time. Dr.Jit 1.5's kernels use llvm.maximum and
+# llvm.minimum, which LLVM 16's x86 backend cannot compile ("Cannot select: fmaximum"): 19.
 llvm() {
-    ls /usr/lib/x86_64-linux-gnu/libLLVM-{16,17,18,19}.so.1 2>/dev/null | tail -n 1
+    ls /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1 /usr/lib/x86_64-linux-gnu/libLLVM-19.so.1 \
+        2>/dev/null | head -n 1
 }
 if [ -z "$(llvm)" ]; then
-    echo "== installing libllvm16 (Dr.Jit's CPU backend)" >&2
+    echo "== installing libllvm19 (Dr.Jit's CPU backend)" >&2
     $SUDO apt-get update -qq >&2
-    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq libllvm16 >/dev/null
+    DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq libllvm19 >/dev/null
 fi
 
 # One folder per Python version: the wheels are built for one.

@@ -176,6 +176,8 @@ struct Exporter<'a> {
     /// Light samples per shading point in chambre: each area light's `samples`, one for each
     /// punctual light and each emitting triangle.
     light_samples: u64,
+    /// Whether the scene has a point, spot or directional light.
+    punctual_lights: bool,
 }
 
 impl<'a> Exporter<'a> {
@@ -194,6 +196,7 @@ impl<'a> Exporter<'a> {
             refusals: Vec::new(),
             mirrors: false,
             light_samples: 0,
+            punctual_lights: false,
         }
     }
 
@@ -614,6 +617,7 @@ impl<'a> Exporter<'a> {
     /// rectangles. Each is sampled in proportion to chambre's samples of it (`sampling_weight`).
     fn lights(&mut self) {
         for (i, light) in self.scene.lights.iter().enumerate() {
+            self.punctual_lights |= !matches!(light, Light::Area { .. });
             match *light {
                 Light::Point {
                     position,
@@ -743,8 +747,22 @@ impl<'a> Exporter<'a> {
             MitsubaIntegrator::Direct => {
                 // Each shading point takes as many light samples as chambre's, each light
                 // picked in proportion to its samples (`sampling_weight`); no BSDF samples, so
-                // light is never counted twice.
-                let samples = self.light_samples.max(1);
+                // light is never counted twice. But Mitsuba's `direct` leaves a point, spot or
+                // directional light's sample undivided by `emitter_samples` (its weight is 1
+                // where a delta light's MIS weight would be): with one, n samples would count
+                // it n times, so it takes one sample a hit, of a light picked as above.
+                let samples = match self.punctual_lights {
+                    true => 1,
+                    false => self.light_samples.max(1),
+                };
+                if self.punctual_lights && self.light_samples > 1 {
+                    self.notes.push(format!(
+                        "Mitsuba's direct integrator takes one light sample a hit where chambre \
+                         takes {}: with a point, spot or directional light more would count it \
+                         several times (the same image, more noise)",
+                        self.light_samples
+                    ));
+                }
                 (
                     "direct",
                     format!(
