@@ -498,12 +498,13 @@ fn run_export(args: &chambre::export::ExportArgs) -> anyhow::Result<ExitCode> {
     for n in &export.notes {
         note!("note: {n}");
     }
+    let files = export.files.len();
     print(&format!(
-        "{}: Mitsuba 3 scene (integrator `{}`, sampler `{}`), {} files beside it\n",
+        "{}: Mitsuba 3 scene (integrator `{}`, sampler `{}`), {files} {} beside it\n",
         args.mitsuba.display(),
         export.integrator,
         export.sampler,
-        export.files.len()
+        if files == 1 { "file" } else { "files" }
     ))?;
     Ok(ExitCode::SUCCESS)
 }

@@ -1409,3 +1409,44 @@ fn a_thin_lens_renders_alike() {
     );
     renders_agree("thin_lens", &scene);
 }
+
+#[test]
+fn the_command_writes_the_scene_and_its_files_or_refuses_with_the_line() {
+    let dir = folder("command");
+    let xml = dir.join("bunny.xml");
+    let out = Command::new(env!("CARGO_BIN_EXE_chambre"))
+        .args(["export", "scenes/bunny.toml", "--mitsuba"])
+        .arg(&xml)
+        .args(["-D", "render.ambient=[0.0, 0.0, 0.0]", "-D", "render.spp=4"])
+        .current_dir(ROOT)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("integrator `direct`") && stdout.contains("1 file beside it"),
+        "{stdout}"
+    );
+    let text = std::fs::read_to_string(&xml).unwrap();
+    assert!(text.contains("<string name=\"filename\" value=\"bunny-shape0.ply\"/>"));
+    assert!(dir.join("bunny-shape0.ply").is_file());
+    // Refused: exit 1, nothing written, each field at its line.
+    let refused = dir.join("phong.xml");
+    let out = Command::new(env!("CARGO_BIN_EXE_chambre"))
+        .args(["export", "scenes/phong.toml", "--mitsuba"])
+        .arg(&refused)
+        .current_dir(ROOT)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("scenes/phong.toml:50:1: field `shapes[0].material`"),
+        "{stderr}"
+    );
+    assert!(!refused.exists());
+}

@@ -373,7 +373,7 @@ impl<'a> Exporter<'a> {
         let root = (spp as f64).sqrt().floor() as u32;
         let square = root * root == spp;
         let multijitter = spp.div_ceil(root) * root == spp;
-        let power_of_four = spp.is_power_of_two() && spp.trailing_zeros() % 2 == 0;
+        let power_of_four = spp.is_power_of_two() && spp.trailing_zeros().is_multiple_of(2);
         match self.scene.render.pixel_sampler {
             SamplerName::Random => "independent",
             SamplerName::Sobol if power_of_four => "ldsampler",
