@@ -33,7 +33,8 @@ fi
 
 # tests/export.rs renders `chambre export --mitsuba` scenes with Mitsuba 3 (pinned, into
 # target/mitsuba-site) on the CPU; without it those tests fail.
-eval "$(tools/install_mitsuba.sh)"
+mitsuba_env=$(tools/install_mitsuba.sh)   # an assignment, so that a failed install stops here
+eval "$mitsuba_env"
 export CHAMBRE_REQUIRE_MITSUBA=1
 
 export CHAMBRE_REQUIRE_GPU=1
