@@ -107,6 +107,20 @@ pub enum Error {
         message: String,
     },
 
+    /// A scene an exporter cannot write as it is: each part it refused, placed in the scene
+    /// file (`file:line:column: field `...``) with the reason, one a line.
+    #[error(
+        "cannot export to {format} (--approximate writes the nearest it has and lists what it \
+         changed):\n  {}",
+        .refusals.join("\n  ")
+    )]
+    Unsupported {
+        /// The format refused, e.g. "Mitsuba 3".
+        format: String,
+        /// The refused parts, each placed and explained.
+        refusals: Vec<String>,
+    },
+
     /// The render was stopped (Ctrl-C) before all samples were taken.
     #[error("render interrupted after {done} of {total} samples per pixel")]
     Interrupted {

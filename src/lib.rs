@@ -8,6 +8,7 @@
 //! scene.toml --scene::load--> Scene --pack::flatten--> FlatScene (accel: obvhs BVH; layout::Gpu*)
 //!     |-- gpu::GpuRenderer  (wgsl/*.wgsl, wgpu compute) --|
 //!     |-- cpu::CpuRenderer  (integrator.rs, camera.rs...) --+--> render::Image --> output
+//! Scene --export::mitsuba--> Mitsuba 3 XML (+ PLY meshes), to render the same scene with a peer
 //! ```
 //!
 //! | stage                | Rust (CPU reference)        | WGSL (GPU)             |
@@ -38,6 +39,7 @@ pub mod camera;
 pub mod converge;
 pub mod cpu;
 pub mod error;
+pub mod export;
 pub mod fermat;
 pub mod gpu;
 pub mod integrator;

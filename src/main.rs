@@ -149,6 +149,9 @@ enum Command {
     /// FLIP) at 1, 2, 4, … samples per pixel for each sample pattern and backend, as a CSV and a
     /// log-log plot with each curve's convergence slope.
     Converge(chambre::converge::ConvergeArgs),
+    /// Write a scene for another renderer: `--mitsuba OUT.xml`, Mitsuba 3's XML with meshes as
+    /// PLY files beside it; what Mitsuba cannot express is refused by name (docs/mitsuba.md).
+    Export(chambre::export::ExportArgs),
 }
 
 /// `eprintln!` that cannot panic: when stderr is closed (`chambre render ... 2>&1 | head -c1`)
@@ -393,6 +396,7 @@ fn main() -> ExitCode {
         Command::Check { scene, set } => run_check(&scene, &set),
         Command::Bench(command) => run_bench(&command),
         Command::Converge(args) => run_converge(&args),
+        Command::Export(args) => run_export(&args),
         Command::Camera {
             scene,
             coc,
@@ -513,6 +517,23 @@ fn run_converge(args: &chambre::converge::ConvergeArgs) -> anyhow::Result<ExitCo
         .collect();
     note!("wrote {}", written.join(", "));
     print(&study.to_markdown())?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_export(args: &chambre::export::ExportArgs) -> anyhow::Result<ExitCode> {
+    let scene = load_and_note(&args.scene, &args.set)?;
+    let export = chambre::export::run(&scene, args)?;
+    for n in &export.notes {
+        note!("note: {n}");
+    }
+    let files = export.files.len();
+    print(&format!(
+        "{}: Mitsuba 3 scene (integrator `{}`, sampler `{}`), {files} {} beside it\n",
+        args.mitsuba.display(),
+        export.integrator,
+        export.sampler,
+        if files == 1 { "file" } else { "files" }
+    ))?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -27,14 +27,22 @@ stamp "adapter"
 "$chambre" info | tee "$out/adapter.txt"
 git rev-parse --short HEAD > "$out/commit.txt" 2>/dev/null || echo unknown > "$out/commit.txt"
 
-# The benchmark set: (name, scene, overrides), the sizes the issue states its targets at.
+# A scene's film must have its image's aspect (within 0.1%): these 36 mm films keep the
+# scenes' horizontal field of view at 1:1 and 16:9.
+square="-D camera.film=[36.0,36.0]"
+wide="-D camera.film=[36.0,20.25]"
+# The benchmark set: (name, scene, overrides, export flags), the sizes the issue states its
+# targets at. The export flags say how Mitsuba renders the same frame (docs/mitsuba.md): the
+# dragon's camera rays alone (`depth`, as its ambient-only frame is); `--approximate` where the
+# scene has what Mitsuba lacks (ambient light, Phong lobes, lens tilt, blades), written as the
+# nearest it has: the same rays' work, not the same image.
 frames=(
-    "dragon|dragon|"
-    "cornell_direct|cornell_direct|-D render.width=1024 -D render.height=1024 -D render.spp=64"
-    "thin_lens|thin_lens|-D render.width=1024 -D render.height=1024 -D render.spp=64"
-    "tabletop|tabletop|-D render.width=1920 -D render.height=1080"
-    "bunny|bunny|-D render.width=1920 -D render.height=1080"
-    "mirrors|mirrors|-D render.width=1920 -D render.height=1080"
+    "dragon|dragon||--integrator depth"
+    "cornell_direct|cornell_direct|-D render.width=1024 -D render.height=1024 -D render.spp=64|"
+    "thin_lens|thin_lens|-D render.width=1024 -D render.height=1024 -D render.spp=64 $square|--approximate"
+    "tabletop|tabletop|-D render.width=1920 -D render.height=1080 $wide|--approximate"
+    "bunny|bunny|-D render.width=1920 -D render.height=1080 $wide|--approximate"
+    "mirrors|mirrors|-D render.width=1920 -D render.height=1080 $wide|--approximate"
 )
 
 stamp "chambre: ray queries (the dragon, 1920x1080 and 1024x1024 x 8 frames)"
@@ -43,7 +51,7 @@ stamp "chambre: ray queries (the dragon, 1920x1080 and 1024x1024 x 8 frames)"
 "$chambre" bench rays --backends gpu --bvh cwbvh --runs "$runs" --json "$out/rays_1024.json"
 
 for entry in "${frames[@]}"; do
-    IFS='|' read -r name scene overrides <<< "$entry"
+    IFS='|' read -r name scene overrides _ <<< "$entry"
     stamp "chambre: frame $name"
     # shellcheck disable=SC2086
     "$chambre" bench frame --backends gpu --no-general --scenes "$scene" $overrides \
@@ -74,10 +82,11 @@ if [ -n "${PEER:-}" ]; then
             --height 512 --frames 1 --runs "$runs" --copies "$copies"
     done
     for entry in "${frames[@]}"; do
-        IFS='|' read -r name scene overrides <<< "$entry"
+        IFS='|' read -r name scene overrides export_flags <<< "$entry"
         stamp "Mitsuba 3: frame $name"
         # shellcheck disable=SC2086
-        "$chambre" export "scenes/$scene.toml" --mitsuba "$out/mitsuba_$name.xml" $overrides
+        "$chambre" export "scenes/$scene.toml" --mitsuba "$out/mitsuba_$name.xml" $overrides \
+            $export_flags
         "${peer[@]}" render "$out/mitsuba_$name.xml" "/tmp/mitsuba_$name.exr" \
             "$out/mitsuba_frame_$name.json" --runs "$runs"
     done

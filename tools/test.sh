@@ -31,6 +31,12 @@ if ! command -v Xvfb >/dev/null 2>&1 || ! command -v xdotool >/dev/null 2>&1; th
     DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq xvfb xdotool >/dev/null
 fi
 
+# tests/export.rs renders `chambre export --mitsuba` scenes with Mitsuba 3 (pinned, into
+# target/mitsuba-site) on the CPU; without it those tests fail.
+mitsuba_env=$(tools/install_mitsuba.sh)   # an assignment, so that a failed install stops here
+eval "$mitsuba_env"
+export CHAMBRE_REQUIRE_MITSUBA=1
+
 export CHAMBRE_REQUIRE_GPU=1
 # The loader's complaint about a missing XDG_RUNTIME_DIR on headless machines is noise.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"

@@ -326,6 +326,29 @@ fn image_size_given(overrides: &[&String]) -> gltf::ImageSize {
     size
 }
 
+/// Where `field` (a path such as `shapes[2].material`) stands in the scene file at `path` loaded
+/// with `overrides`: its line, or the command line where an override set it. `None` for a file
+/// that is not chambre's TOML (a glTF scene's fields are those of the scene it maps to).
+pub fn field_location(
+    path: &Path,
+    overrides: &[String],
+    field: &str,
+) -> Option<crate::error::Location> {
+    let is_toml = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    if !is_toml {
+        return None;
+    }
+    match load::parse_scene_file(path, overrides)
+        .ok()?
+        .error(field, "")
+    {
+        Error::Scene { location, .. } => Some(location),
+        _ => None,
+    }
+}
+
 /// Sample scene `name` of the project's `scenes/` with `overrides` (`--set` style), for unit
 /// tests.
 #[cfg(test)]
