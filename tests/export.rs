@@ -832,6 +832,15 @@ const REFUSED: &[(&str, &[&str])] = &[
     ("bunny.toml", &["render.ambient"]),
     ("dragon.toml", &["render.ambient"]),
     (
+        "elevation.toml",
+        &[
+            "camera.film_tilt",
+            "camera.film_swing",
+            "shapes[4].material",
+            "render.ambient",
+        ],
+    ),
+    (
         "fermat_cylinder.toml",
         &["render.ambient", "render.background"],
     ),
