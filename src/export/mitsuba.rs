@@ -225,7 +225,8 @@ impl<'a> Exporter<'a> {
         }
     }
 
-    /// The camera: Mitsuba's `perspective` (pinhole) or `thinlens`, with its sampler and film.
+    /// The camera: Mitsuba's `perspective` (pinhole), `thinlens` or `orthographic`, with its
+    /// sampler and film.
     fn sensor(&mut self) -> Sensor {
         let camera = &self.scene.camera;
         self.movements(camera);
@@ -249,12 +250,18 @@ impl<'a> Exporter<'a> {
             movements: Movements::default(),
             ..camera.clone()
         };
-        let fov = straight.field_of_view_deg()[0];
         let mut xml = String::new();
-        let kind = if lens { "thinlens" } else { "perspective" };
+        let kind = match (camera.is_orthographic(), lens) {
+            (true, _) => "orthographic",
+            (false, true) => "thinlens",
+            (false, false) => "perspective",
+        };
         let _ = writeln!(xml, "  <sensor type=\"{kind}\">");
-        let _ = writeln!(xml, "    <string name=\"fov_axis\" value=\"x\"/>");
-        let _ = writeln!(xml, "    <float name=\"fov\" value=\"{fov}\"/>");
+        if !camera.is_orthographic() {
+            let fov = straight.field_of_view_deg()[0];
+            let _ = writeln!(xml, "    <string name=\"fov_axis\" value=\"x\"/>");
+            let _ = writeln!(xml, "    <float name=\"fov\" value=\"{fov}\"/>");
+        }
         if lens {
             let radius = camera.lens_radius_mm() * camera.units_per_mm;
             let _ = writeln!(
@@ -270,9 +277,13 @@ impl<'a> Exporter<'a> {
         let (near, far) = (NEAR_CLIP * self.extent, FAR_CLIP * self.extent);
         let _ = writeln!(xml, "    <float name=\"near_clip\" value=\"{near}\"/>");
         let _ = writeln!(xml, "    <float name=\"far_clip\" value=\"{far}\"/>");
+        let _ = writeln!(xml, "    <transform name=\"to_world\">");
+        if camera.is_orthographic() {
+            let _ = writeln!(xml, "      {}", self.orthographic_window_scale(camera));
+        }
         let _ = writeln!(
             xml,
-            "    <transform name=\"to_world\">\n      <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>\n    </transform>",
+            "      <lookat origin=\"{}\" target=\"{}\" up=\"{}\"/>\n    </transform>",
             d3(camera.position),
             d3(camera.look_at),
             d3(camera.up)
@@ -311,6 +322,18 @@ impl<'a> Exporter<'a> {
         let _ = writeln!(xml, "      <string name=\"pixel_format\" value=\"rgb\"/>");
         let _ = writeln!(xml, "    </film>\n  </sensor>");
         Sensor { xml, sampler }
+    }
+
+    /// The scale that makes Mitsuba's orthographic window chambre's: Mitsuba's spans x in
+    /// [-1, 1] and y in [-1/a, 1/a] before `to_world`, `a` the image's aspect, so the half
+    /// width scales x and the half height times `a` scales y (the same number when the window
+    /// has the image's aspect, as chambre checks it does). Its rays start at the near clip
+    /// plane, `near_clip` in front of chambre's window: nothing is that close.
+    fn orthographic_window_scale(&self, camera: &CameraSpec) -> String {
+        let [w, h] = camera.window();
+        let render = &self.scene.render;
+        let aspect = render.width as f64 / render.height as f64;
+        format!("<scale x=\"{}\" y=\"{}\"/>", 0.5 * w, 0.5 * h * aspect)
     }
 
     /// Refuses every film and lens movement by its field (a tilt solved from `focus_points`
