@@ -640,7 +640,7 @@ fn png_pixels(image: &Image, display: Display) -> Vec<u8> {
 
 /// Writes `bytes` to a temporary file beside `file`, syncs it, renames it over `file`, and
 /// syncs the directory so the rename itself survives a crash.
-fn replace_atomically(file: &Path, bytes: &[u8]) -> std::result::Result<(), String> {
+pub(crate) fn replace_atomically(file: &Path, bytes: &[u8]) -> std::result::Result<(), String> {
     let dir = directory_of(file);
     let mut temp = TempFile::create(dir)
         .map_err(|e| format!("creating a temporary file in {}: {e}", dir.display()))?;

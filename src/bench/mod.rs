@@ -403,6 +403,11 @@ pub struct RaysArgs {
     /// wgpu's run-time checks of the GPU kernels, side by side (default: chambre's).
     #[arg(long, value_enum, value_delimiter = ',')]
     pub shader_checks: Vec<ShaderChecks>,
+    /// Trace nothing: write the mesh's triangles and both ray sets into this directory, raw
+    /// little-endian, for another ray tracer to trace the very same rays
+    /// (`tools/bench_embree.sh`; the files are described in `docs/embree.md`).
+    #[arg(long, value_name = "DIR")]
+    pub write_rays: Option<PathBuf>,
     /// Backends to measure.
     #[command(flatten)]
     pub backends: Backends,
@@ -446,6 +451,9 @@ pub fn run(command: &BenchCommand) -> Result<String> {
                 bvhs: args.bvh.clone(),
                 shader_checks: args.shader_checks.clone(),
             };
+            if let Some(dir) = &args.write_rays {
+                return rays::write_rays(&config, dir);
+            }
             let gpu = args.backends.gpu().then(|| usable(&context)).transpose()?;
             let report = rays::run(&config, &args.backends.backends, gpu)?;
             finish(

@@ -23,7 +23,7 @@ use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
 use crate::gpu::kernels::ShaderChecks;
 use crate::gpu::trace::GpuTracer;
-use crate::layout::{FEATURES_ALL, GpuCwNode, GpuPrimitive, GpuRay, NONE, T_FAR};
+use crate::layout::{FEATURES_ALL, GpuCwNode, GpuPrimitive, GpuRay, NONE, PRIM_TRIANGLE, T_FAR};
 use crate::math::rng::Rng;
 use crate::pack::{FlatScene, flatten};
 use crate::scene::Scene;
@@ -456,6 +456,114 @@ pub fn bounds(scene: &FlatScene) -> (Vec3, Vec3) {
         })
 }
 
+/// The files [`write_rays`] writes: what `run` traces, for another ray tracer to trace
+/// (`tools/embree/`), little-endian throughout.
+pub const WRITTEN_FILES: [&str; 5] = [
+    "rays.txt",
+    "vertices.f32",
+    "indices.u32",
+    "coherent.f32",
+    "incoherent.f32",
+];
+
+/// Writes the mesh and both ray sets of `config` into `dir`, each file atomically: the mesh's
+/// distinct vertices (x, y, z as f32, exactly as chambre loaded them) and its triangles (three
+/// u32 vertex indices each, in the scene's order), each ray set as origin and direction (six
+/// f32 a ray, in the set's order: the camera's rays frame by frame, row by row), and
+/// `rays.txt`, `key value` lines of the counts, the camera's image size and frames, and the
+/// distance rays reach (`t_far`). Returns a one-line summary.
+pub fn write_rays(config: &RaysConfig, dir: &Path) -> Result<String> {
+    let scene = mesh_scene(&config.mesh)?;
+    let (vertices, indices) = indexed_triangles(&scene.prims).map_err(|message| Error::Output {
+        path: dir.to_path_buf(),
+        message,
+    })?;
+    let coherent = coherent_rays(&config.camera, config.frames, config.seed);
+    let (lo, hi) = bounds(&scene);
+    let incoherent = incoherent_rays(lo, hi, coherent.len(), config.seed);
+    let cam = &config.camera;
+    let header = format!(
+        "triangles {}\nvertices {}\ncoherent_rays {}\nwidth {}\nheight {}\nframes {}\n\
+         incoherent_rays {}\nt_far {:e}\n",
+        indices.len() / 3,
+        vertices.len() / 3,
+        coherent.len(),
+        cam.width,
+        cam.height,
+        config.frames,
+        incoherent.len(),
+        T_FAR
+    );
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let files: [(&str, Vec<u8>); 5] = [
+        (WRITTEN_FILES[0], header.into_bytes()),
+        (WRITTEN_FILES[1], le_bytes(&vertices)),
+        (WRITTEN_FILES[2], le_bytes(&indices)),
+        (WRITTEN_FILES[3], ray_bytes(&coherent)),
+        (WRITTEN_FILES[4], ray_bytes(&incoherent)),
+    ];
+    for (name, bytes) in &files {
+        let path = dir.join(name);
+        crate::output::replace_atomically(&path, bytes)
+            .map_err(|message| Error::Output { path, message })?;
+    }
+    Ok(format!(
+        "wrote {} ({} triangles, {} vertices; {} coherent and {} incoherent rays) to {}",
+        WRITTEN_FILES.join(", "),
+        indices.len() / 3,
+        vertices.len() / 3,
+        coherent.len(),
+        incoherent.len(),
+        dir.display()
+    ))
+}
+
+/// The triangles of `prims` as an indexed mesh: each distinct vertex (by its bits) once, in
+/// the order first met, and three indices a triangle. Fails on any other primitive.
+fn indexed_triangles(prims: &[GpuPrimitive]) -> std::result::Result<(Vec<f32>, Vec<u32>), String> {
+    let mut index_of = std::collections::HashMap::new();
+    let (mut vertices, mut indices) = (Vec::new(), Vec::with_capacity(3 * prims.len()));
+    for (i, prim) in prims.iter().enumerate() {
+        if prim.kind != PRIM_TRIANGLE {
+            return Err(format!(
+                "primitive {i} is of kind {}, not a triangle: only a mesh's triangles can be \
+                 written for another ray tracer",
+                prim.kind
+            ));
+        }
+        for p in [prim.p0, prim.p1, prim.p2] {
+            let next = (vertices.len() / 3) as u32;
+            let index = *index_of.entry(p.map(f32::to_bits)).or_insert_with(|| {
+                vertices.extend_from_slice(&p);
+                next
+            });
+            indices.push(index);
+        }
+    }
+    Ok((vertices, indices))
+}
+
+/// Little-endian bytes of 32-bit values.
+fn le_bytes<T: Copy + bytemuck::NoUninit>(values: &[T]) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(4 * values.len());
+    for v in values {
+        let word: u32 = bytemuck::cast(*v);
+        bytes.extend_from_slice(&word.to_le_bytes());
+    }
+    bytes
+}
+
+/// Origin then direction of each ray, as little-endian f32s.
+fn ray_bytes(rays: &RaySet) -> Vec<u8> {
+    let floats: Vec<f32> = rays
+        .origins
+        .iter()
+        .zip(&rays.directions)
+        .flat_map(|(o, d)| o.to_array().into_iter().chain(d.to_array()))
+        .collect();
+    le_bytes(&floats)
+}
+
 /// Which path traces the rays.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
@@ -741,6 +849,88 @@ mod tests {
             octants.iter().all(|&n| n.abs_diff(2500) < 220),
             "{octants:?}"
         );
+    }
+
+    /// Little-endian words of a written file.
+    fn words(path: &Path) -> Vec<u32> {
+        std::fs::read(path)
+            .unwrap()
+            .chunks_exact(4)
+            .map(|w| u32::from_le_bytes(w.try_into().unwrap()))
+            .collect()
+    }
+
+    #[test]
+    fn written_rays_and_triangles_are_the_ones_traced() {
+        let dir = std::env::temp_dir().join(format!("chambre-write-rays-{}", std::process::id()));
+        let camera = Pinhole {
+            width: 6,
+            height: 5,
+            ..Pinhole::DRAGON
+        };
+        let config = RaysConfig {
+            mesh: PathBuf::from("scenes/meshes/bunny-npm-lowres.obj"),
+            camera,
+            frames: 2,
+            runs: 1,
+            seed: 4,
+            bvhs: vec![Bvh::Packets],
+            shader_checks: Vec::new(),
+        };
+        write_rays(&config, &dir).unwrap();
+        let scene = mesh_scene(&config.mesh).unwrap();
+        let vertices: Vec<f32> = words(&dir.join("vertices.f32"))
+            .into_iter()
+            .map(f32::from_bits)
+            .collect();
+        let indices = words(&dir.join("indices.u32"));
+        assert_eq!(indices.len(), 3 * scene.prims.len());
+        // Shared vertices are written once, and every triangle's corners come back bit for bit.
+        assert!(vertices.len() < 3 * indices.len());
+        for (prim, corners) in scene.prims.iter().zip(indices.chunks(3)) {
+            for (p, &i) in [prim.p0, prim.p1, prim.p2].iter().zip(corners) {
+                assert_eq!(&vertices[3 * i as usize..3 * i as usize + 3], p);
+            }
+        }
+        let coherent = coherent_rays(&camera, 2, 4);
+        let (lo, hi) = bounds(&scene);
+        let incoherent = incoherent_rays(lo, hi, coherent.len(), 4);
+        for (name, set) in [("coherent.f32", &coherent), ("incoherent.f32", &incoherent)] {
+            let floats: Vec<f32> = words(&dir.join(name))
+                .into_iter()
+                .map(f32::from_bits)
+                .collect();
+            assert_eq!(floats.len(), 6 * set.len(), "{name}");
+            for (i, ray) in floats.chunks(6).enumerate() {
+                assert_eq!(ray[..3], set.origins[i].to_array(), "{name}: ray {i}");
+                assert_eq!(ray[3..], set.directions[i].to_array(), "{name}: ray {i}");
+            }
+        }
+        let header = std::fs::read_to_string(dir.join("rays.txt")).unwrap();
+        for line in [
+            format!("triangles {}", scene.prims.len()),
+            format!("vertices {}", vertices.len() / 3),
+            "coherent_rays 60".to_string(),
+            "width 6".to_string(),
+            "height 5".to_string(),
+            "frames 2".to_string(),
+            "incoherent_rays 60".to_string(),
+            "t_far 1e30".to_string(),
+        ] {
+            assert!(header.lines().any(|l| l == line), "{line} in\n{header}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn only_triangles_are_written() {
+        let sphere = GpuPrimitive {
+            kind: crate::layout::PRIM_SPHERE,
+            ..Default::default()
+        };
+        let triangle = GpuPrimitive::default();
+        let err = indexed_triangles(&[triangle, sphere]).unwrap_err();
+        assert!(err.contains("primitive 1"), "{err}");
     }
 
     #[test]
