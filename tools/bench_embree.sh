@@ -11,7 +11,9 @@
 # Usage: tools/bench_embree.sh [ROUNDS] [RUNS]   (default 2 rounds of 5 runs)
 # FRAMES (default 8) and SIZE (default 1024) set the camera's rays, SIZE x SIZE x FRAMES;
 # BVH (default all of chambre's CPU variants) is passed to `--bvh`; CHAMBRE_BIN runs a binary
-# built elsewhere. Writes bench/embree/ (the JSON reports and summary.md).
+# built elsewhere; CHAMBRE_BASE, a second chambre binary (a baseline: before a change), is
+# measured too, just before the first in each round. Writes bench/embree/ (the JSON reports and
+# summary.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 rounds="${1:-2}"
@@ -46,8 +48,12 @@ export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 camera=(--width "$size" --height "$size" --frames "$frames")
 "$chambre" bench rays "${camera[@]}" --write-rays target/embree/rays >&2
 
-rm -f "$out"/chambre_*.json "$out"/embree_*.json "$out"/load_*.txt
+rm -f "$out"/chambre_*.json "$out"/base_*.json "$out"/embree_*.json "$out"/load_*.txt
 for round in $(seq 1 "$rounds"); do
+    if [ -n "${CHAMBRE_BASE:-}" ]; then
+        "$CHAMBRE_BASE" bench rays --backends cpu --bvh "$bvh" "${camera[@]}" --runs "$runs" \
+            --json "$out/base_$round.json" >&2
+    fi
     uptime > "$out/load_chambre_$round.txt"
     "$chambre" bench rays --backends cpu --bvh "$bvh" "${camera[@]}" --runs "$runs" \
         --json "$out/chambre_$round.json" >&2
@@ -64,6 +70,8 @@ import json, os, platform, statistics, subprocess, sys
 out, rounds, embree_version, commit, chambre_cmd, embree_cmd = sys.argv[1:]
 rounds = int(rounds)
 chambre = [json.load(open(f"{out}/chambre_{r}.json")) for r in range(1, rounds + 1)]
+base = [json.load(open(f"{out}/base_{r}.json")) for r in range(1, rounds + 1)
+        if os.path.exists(f"{out}/base_{r}.json")]
 embree = [json.load(open(f"{out}/embree_{r}.json")) for r in range(1, rounds + 1)]
 loads = [open(f"{out}/load_{who}_{r}.txt").read().split("load average:")[1].strip()
          for r in range(1, rounds + 1) for who in ("chambre", "embree")]
@@ -85,6 +93,7 @@ def embree_key(r):
     return (r["set"], r["query"], r["api"])
 
 c_rows = [rows(c["report"]["results"], chambre_key) for c in chambre]
+b_rows = [rows(c["report"]["results"], chambre_key) for c in base]
 e_rows = [rows(e["results"], embree_key) for e in embree]
 med = statistics.median
 print(f"chambre against Embree {embree_version}, {chambre[0]['machine']['date_utc']}, commit "
@@ -93,6 +102,9 @@ print(f"chambre against Embree {embree_version}, {chambre[0]['machine']['date_ut
       f"{'native' if embree[0]['native_ray16'] else 'emulated'}; {rounds} rounds alternating "
       f"chambre and Embree, each the median of {embree[0]['runs']} runs after a warm-up; "
       f"load averages (1, 5, 15 min) before each: {'; '.join(loads)}\n")
+if base:
+    print(f"- chambre (base): `{os.environ['CHAMBRE_BASE']}`, the same arguments, just before "
+          "chambre in each round")
 print(f"- chambre: `{chambre_cmd}`\n- Embree: `{embree_cmd}` (tools/embree/bench_embree.cpp, "
       f"built by tools/bench_embree.sh)\n")
 print("Mrays/s: the median over the rounds of each round's median (the rounds' medians' range "
@@ -117,6 +129,8 @@ for s in ("coherent", "incoherent"):
         embree_apis = [a for a in apis if (s, q, a) in e_rows[0]]
         lines = [(f"Embree, {a}", [e[(s, q, a)] for e in e_rows]) for a in embree_apis]
         for b in [k[2] for k in c_rows[0] if k[0] == s and k[1] == q]:
+            if b_rows:
+                lines.append((f"chambre (base), {bvh_label[b]}", [c[(s, q, b)] for c in b_rows]))
             lines.append((f"chambre, {bvh_label[b]}", [c[(s, q, b)] for c in c_rows]))
         reference = lines[0][1][0]
         for name, rs in lines:

@@ -508,7 +508,7 @@ pub fn write_rays(config: &RaysConfig, dir: &Path) -> Result<String> {
             .map_err(|message| Error::Output { path, message })?;
     }
     Ok(format!(
-        "wrote {} ({} triangles, {} vertices; {} coherent and {} incoherent rays) to {}",
+        "wrote {} ({} triangles, {} vertices; {} coherent and {} incoherent rays) to {}\n",
         WRITTEN_FILES.join(", "),
         indices.len() / 3,
         vertices.len() / 3,
