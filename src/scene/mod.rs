@@ -9,6 +9,7 @@ pub mod format;
 pub mod gltf;
 mod load;
 pub mod mesh;
+pub mod mesh_file;
 pub mod surface;
 mod validate;
 

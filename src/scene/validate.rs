@@ -11,7 +11,8 @@ use super::format::{
     Scale, SceneFile, ShapeEntry, ShapeType, Vec3 as F3,
 };
 use super::load::ParsedScene;
-use super::mesh::{compute_vertex_normals, load_mesh, orientation_of, rotation_of, transform_mesh};
+use super::mesh::{compute_vertex_normals, orientation_of, rotation_of, transform_mesh};
+use super::mesh_file::load_mesh;
 use super::surface::{CurvedSurface, Surface, load_bezier_patches, orient_outward};
 use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
