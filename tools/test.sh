@@ -47,4 +47,5 @@ echo "== GPU adapters"
 # docs/shards.md's Slurm array on a real slurmctld and slurmd (installs slurm-wlm and munge).
 echo "== Slurm"
 tools/test_slurm.sh
+python3 tools/test_bench_tables.py   # BENCHMARKS.md's tables from the bench reports
 cargo test --release
