@@ -45,6 +45,7 @@ pub mod gpu;
 pub mod integrator;
 pub mod layout;
 pub mod math;
+pub mod metrics;
 pub mod output;
 pub mod pack;
 pub mod plot;

@@ -85,7 +85,7 @@ fn converge_measures_the_error_of_each_pattern_and_backend() {
             assert!(rmse[4] < 0.4 * rmse[0], "{backend} {sampler}: {rmse:?}");
             assert!(flip[4] < flip[0], "{backend} {sampler}: {flip:?}");
             let points: Vec<(f64, f64)> = spp.iter().copied().zip(rmse.iter().copied()).collect();
-            let slope = chambre::converge::log_log_slope(&points);
+            let slope = chambre::metrics::log_log_slope(&points);
             if sampler == "random" {
                 assert!((-0.7..=-0.35).contains(&slope), "random slope {slope}");
             } else {

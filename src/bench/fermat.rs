@@ -502,7 +502,7 @@ fn reflector_mask(flat: &FlatScene, clip: &DMat4, reflector: &Reflector) -> Vec<
 /// Mean FLIP of `image` against `reference` over the pixels of `mask`; `None` where the mask
 /// is empty (the mirror out of the frame).
 fn masked_flip(image: &Image, reference: &Image, mask: &[bool]) -> Option<f64> {
-    let map = crate::converge::flip_map(image, reference);
+    let map = crate::metrics::flip_map(image, reference);
     let (sum, count) = map
         .iter()
         .zip(mask)
