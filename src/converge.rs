@@ -25,75 +25,31 @@ use crate::scene::Scene;
 
 /// Measure how a scene's error against a reference falls with samples per pixel and with time,
 /// for each sample pattern and backend.
-#[derive(Debug, clap::Args)]
-pub struct ConvergeArgs {
+#[derive(Clone, Debug)]
+pub struct ConvergeSettings {
     /// Scene file (TOML; see docs/scene-format.md).
     pub scene: PathBuf,
     /// Reference image: a linear EXR of the scene's size (default: rendered on the CPU path at
-    /// --reference-spp with Sobol patterns and another seed).
-    #[arg(long)]
+    /// `reference_spp` with Sobol patterns and another seed).
     pub reference: Option<PathBuf>,
     /// Samples per pixel of the rendered reference.
-    #[arg(long, value_parser = crate::bench::positive(), default_value_t = 1024)]
     pub reference_spp: u32,
     /// The largest sample count: runs at 1, 2, 4, … up to it.
-    #[arg(long, value_parser = crate::bench::positive(), default_value_t = 64)]
     pub max_spp: u32,
     /// Sample patterns to compare, each used for the pixel and the lens samples.
-    #[arg(long, value_enum, value_delimiter = ',',
-          default_values_t = [SamplerName::Random, SamplerName::Stratified, SamplerName::Sobol])]
     pub samplers: Vec<SamplerName>,
-    /// Also render adaptively (`--noise-target`) at each of these targets, with --max-spp as
+    /// Also render adaptively (`render.noise_target`) at each of these targets, with `max_spp` as
     /// the most samples a pixel takes: one more curve per pattern and backend, and a table of
     /// the time uniform sampling needs for the same RMSE.
-    #[arg(long, value_delimiter = ',', value_name = "X,Y,...")]
     pub noise_targets: Vec<f64>,
     /// The adaptive renders' `render.min_spp` (default: the scene's, or 16).
-    #[arg(long, value_name = "N")]
     pub min_spp: Option<u32>,
     /// Renders of each run: its times are their medians (the images are the same).
-    #[arg(long, value_parser = crate::bench::at_least_one, default_value_t = 1)]
     pub runs: usize,
     /// Backends to measure, side by side.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu])]
     pub backends: Vec<Backend>,
-    /// The CSV to write: one row per run, the command and machine in `#` comments.
-    #[arg(long, default_value = "converge.csv")]
-    pub csv: PathBuf,
-    /// Where to write the log-log plot: SVG, or PNG for a `.png` (repeat for both). Default:
-    /// beside the CSV, its name with `.svg`.
-    #[arg(long, value_name = "F.svg|F.png", conflicts_with = "no_plot")]
-    pub plot: Vec<PathBuf>,
-    /// Write the CSV alone, no plot.
-    #[arg(long)]
-    pub no_plot: bool,
-    /// Replace the CSV and the plots even where they are write-protected files (refused
-    /// otherwise, before the first render).
-    #[arg(long)]
-    pub force: bool,
     /// Override any scene field, e.g. --set render.width=200 (also -D).
-    #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,
-}
-
-impl ConvergeArgs {
-    /// The plots to write: those `--plot` names, else one beside the CSV (its name with `.svg`,
-    /// or `.svg` added when the CSV's own name ends so), none with `--no-plot`.
-    pub fn plots(&self) -> Vec<PathBuf> {
-        if self.no_plot {
-            return Vec::new();
-        }
-        if !self.plot.is_empty() {
-            return self.plot.clone();
-        }
-        let beside = self.csv.with_extension("svg");
-        if beside != self.csv {
-            return vec![beside];
-        }
-        let mut name = self.csv.clone().into_os_string();
-        name.push(".svg");
-        vec![PathBuf::from(name)]
-    }
 }
 
 /// One render and its error against the reference.
@@ -153,7 +109,7 @@ fn render_once(
 }
 
 /// The reference: read from `path` (a linear EXR of the scene's size), or rendered.
-fn reference(args: &ConvergeArgs, width: u32, height: u32, seed: u32) -> Result<Image> {
+fn reference(args: &ConvergeSettings, width: u32, height: u32, seed: u32) -> Result<Image> {
     if let Some(path) = &args.reference {
         let read = image::open(path)
             .map_err(|e| Error::File {
@@ -202,7 +158,7 @@ pub struct Study {
 
 /// Runs the study `args` describe: the reference (read or rendered), then every run, each
 /// rendered `--runs` times.
-pub fn run(args: &ConvergeArgs) -> Result<Study> {
+pub fn run(args: &ConvergeSettings) -> Result<Study> {
     let scene = Scene::load(&args.scene, &args.set)?;
     let (width, height, seed) = (scene.render.width, scene.render.height, scene.render.seed);
     let reference_image = reference(args, width, height, seed)?;

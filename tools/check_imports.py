@@ -6,11 +6,15 @@ that defines the module, as a graph; a circle is a strongly connected set of two
 Dependencies should point one way, down the data flow (docs/architecture.md): a circle means
 two files each need the other, and neither can be read, tested or moved alone.
 
-A module root's `mod child;` lines are not references (declaring a child is not using it); its
-`pub use child::X` re-exports are. Unit-test modules (`#[cfg(test)]` to the end of the file)
+A module root's references to its own children by their bare names (`mod child;`, `pub use
+child::X`, `child::run()`) are not counted: a root that declares its children, dispatches to
+them and offers them shared helpers is one unit with them. `crate::X` where the crate root
+re-exports `X` from a child counts as a reference to that child. Between top-level modules
+(`scene`, `accel`, `gpu`, `bench`, ...) the references must point one way too: a second check
+finds the circles among them. Unit-test modules (`#[cfg(test)]` to the end of the file)
 are left out: a test may reach anywhere. Prints the circles and exits 1 when there is one.
 
-Usage: tools/check_imports.py [SRC_DIR]   (default: src)
+Usage: tools/check_imports.py [SRC_DIR]   (default: src; its bin/NAME/ folders are binaries)
 """
 import os
 import re
@@ -18,16 +22,23 @@ import sys
 from pathlib import Path
 
 USE = re.compile(r"\buse\s+([^;]+);", re.S)
+REEXPORT = re.compile(r"^\s*pub\s+use\s+(\w+)::\{?([\w\s,]+)\}?\s*;", re.M)
 PATH = re.compile(r"\b(crate|super|self)((?:::[A-Za-z_][A-Za-z0-9_]*)+)")
+
+
+def crate_files(root: Path) -> list[Path]:
+    """The files of the crate rooted in `root` (`lib.rs` or `main.rs`): the binaries under
+    `src/bin/` are crates of their own."""
+    return sorted(p for p in root.rglob("*.rs") if "bin" not in p.relative_to(root).parts[:1])
 
 
 def module_files(src: Path) -> dict[tuple[str, ...], Path]:
     """Module path (as a tuple of names) -> the file that defines it."""
     modules = {}
-    for path in src.rglob("*.rs"):
+    for path in crate_files(src):
         parts = list(path.relative_to(src).with_suffix("").parts)
         if parts in (["lib"], ["main"]):
-            modules[()] = src / "lib.rs"
+            modules[()] = path
             continue
         if parts[-1] == "mod":
             parts = parts[:-1]
@@ -99,10 +110,35 @@ def resolve(names: list[str], here: tuple[str, ...], modules):
     return path
 
 
+def root_reexports(src: Path) -> dict[str, tuple[str, ...]]:
+    """The crate root's `pub use child::{A, B}`: each name and the module that defines it, so
+    `crate::A` is a reference to that module, not to the root."""
+    root = src / "lib.rs" if (src / "lib.rs").exists() else src / "main.rs"
+    found = {}
+    for module, names in REEXPORT.findall(strip(root.read_text())):
+        for name in names.split(","):
+            if name.strip():
+                found[name.strip()] = (module,)
+    return found
+
+
+def through_reexport(module, names, here, reexports):
+    """`crate::Name` where the root re-exports `Name` from a child: that child."""
+    if module != ():
+        return module
+    rest = names[1:] if names[0] == "crate" else None
+    if here == () and names[0] == "self":
+        rest = names[1:]
+    if rest and rest[0] in reexports:
+        return reexports[rest[0]]
+    return module
+
+
 def edges(src: Path) -> dict[Path, set[Path]]:
     modules = module_files(src)
     graph = {}
-    for path in sorted(src.rglob("*.rs")):
+    reexports = root_reexports(src)
+    for path in crate_files(src):
         here = module_of(path, src)
         text = strip(path.read_text())
         references = []
@@ -117,16 +153,12 @@ def edges(src: Path) -> dict[Path, set[Path]]:
             module = resolve(names, here, modules)
             if module is None:
                 continue
+            module = through_reexport(module, names, here, reexports)
             target = modules[module]
-            if target != path and not is_ancestor_declaration(path, target):
+            if target != path:
                 targets.add(target)
         graph[path] = targets
     return graph
-
-
-def is_ancestor_declaration(path: Path, target: Path) -> bool:
-    """Whether `path` is `main.rs` and `target` the library root (the binary uses the crate)."""
-    return path.name == "main.rs" and target.name == "lib.rs"
 
 
 def circles(graph: dict[Path, set[Path]]) -> list[list[Path]]:
@@ -163,9 +195,31 @@ def circles(graph: dict[Path, set[Path]]) -> list[list[Path]]:
     return found
 
 
+def top_level_circles(graph, src: Path) -> list[list[str]]:
+    """Circles between the library's top-level modules (a file's first path component)."""
+    def top(path: Path) -> str:
+        parts = path.relative_to(src).with_suffix("").parts
+        return parts[0] if len(parts) > 1 else path.stem
+
+    modules = {}
+    for path, targets in graph.items():
+        if "bin" in path.relative_to(src).parts[:1]:
+            continue
+        for target in targets:
+            a, b = top(path), top(target)
+            if a != b and b != "lib":
+                modules.setdefault(a, set()).add(b)
+    return circles(modules)
+
+
 def main() -> int:
     src = Path(sys.argv[1] if len(sys.argv) > 1 else "src")
-    graph = edges(src)
+    # The library, then each binary (src/bin/NAME/ with its main.rs): references from a
+    # binary to the library (`chambre::`) cross crates and point one way by construction.
+    roots = [src] + sorted(d for d in (src / "bin").glob("*") if d.is_dir())
+    graph = {}
+    for root in roots:
+        graph.update(edges(root))
     found = circles(graph)
     for component in found:
         members = set(component)
@@ -173,9 +227,12 @@ def main() -> int:
         for f in component:
             inside = sorted(str(t) for t in graph[f] if t in members)
             print(f"  {f} -> {', '.join(inside)}")
-    if found:
+    module_circles = top_level_circles(graph, src)
+    for component in module_circles:
+        print(f"import circle of {len(component)} top-level modules: {', '.join(component)}")
+    if found or module_circles:
         return 1
-    print(f"no import circle among {len(graph)} files of {src}")
+    print(f"no import circle among {len(graph)} files of {src} (library and binaries)")
     return 0
 
 
