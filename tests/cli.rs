@@ -192,8 +192,9 @@ fn an_interrupted_render_keeps_the_samples_it_finished() {
     );
 }
 
-/// The flags of this session's features, end to end: adaptive sampling reports what it reached
-/// and writes the counts; AgX writes a PNG; `preview` writes its image and its frame time.
+/// Adaptive sampling, tone mapping and the preview from the command line, end to end:
+/// adaptive sampling reports what it reached and writes the counts; AgX writes a PNG;
+/// `preview` writes its image and its frame time.
 #[test]
 fn adaptive_sampling_agx_and_the_preview_from_the_command_line() {
     drop(common::gpu_context());
