@@ -1,6 +1,6 @@
 //! The unbounded planes, which no BVH holds: every traversal (BVH2, wide, compressed) ends by
 //! testing them by brute force. Twin: `closest_plane` and `plane_occludes` in
-//! `wgsl/traverse.wgsl`.
+//! `wgsl/intersect.wgsl`.
 
 use super::intersect::{Hit, RayQuery, intersect_primitive};
 use crate::layout::{FEATURE_PLANES, GpuPrimitive, has};
