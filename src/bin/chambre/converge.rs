@@ -9,6 +9,7 @@ use chambre::converge::ConvergeSettings;
 use chambre::output::{OutputTarget, Protected};
 use chambre::sampler::SamplerName;
 
+use super::args::{at_least_one, positive};
 use super::print;
 
 /// Measure how a scene's error against a reference falls with samples per pixel and with time,
@@ -22,10 +23,10 @@ pub struct ConvergeArgs {
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Samples per pixel of the rendered reference.
-    #[arg(long, value_parser = chambre::bench::positive(), default_value_t = 1024)]
+    #[arg(long, value_parser = positive(), default_value_t = 1024)]
     pub reference_spp: u32,
     /// The largest sample count: runs at 1, 2, 4, … up to it.
-    #[arg(long, value_parser = chambre::bench::positive(), default_value_t = 64)]
+    #[arg(long, value_parser = positive(), default_value_t = 64)]
     pub max_spp: u32,
     /// Sample patterns to compare, each used for the pixel and the lens samples.
     #[arg(long, value_enum, value_delimiter = ',',
@@ -40,7 +41,7 @@ pub struct ConvergeArgs {
     #[arg(long, value_name = "N")]
     pub min_spp: Option<u32>,
     /// Renders of each run: its times are their medians (the images are the same).
-    #[arg(long, value_parser = chambre::bench::at_least_one, default_value_t = 1)]
+    #[arg(long, value_parser = at_least_one, default_value_t = 1)]
     pub runs: usize,
     /// Backends to measure, side by side.
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu])]

@@ -28,6 +28,8 @@ macro_rules! note {
     }};
 }
 
+mod args;
+mod bench;
 mod converge;
 mod export;
 mod preview;
@@ -84,7 +86,7 @@ enum Command {
     Merge(shard::MergeArgs),
     /// Measure: the figures of BENCHMARKS.md, as a table and optionally JSON.
     #[command(subcommand)]
-    Bench(chambre::bench::BenchCommand),
+    Bench(bench::BenchCommand),
     /// The speed–accuracy trade of a scene: error against a reference (RMSE, relative MSE,
     /// FLIP) at 1, 2, 4, … samples per pixel for each sample pattern and backend, as a CSV and a
     /// log-log plot with each curve's convergence slope.
@@ -162,8 +164,8 @@ fn load_and_note(path: &Path, overrides: &[String]) -> Result<Scene> {
     Ok(scene)
 }
 
-fn run_bench(command: &chambre::bench::BenchCommand) -> anyhow::Result<ExitCode> {
-    print(&chambre::bench::run(command)?)?;
+fn run_bench(command: &bench::BenchCommand) -> anyhow::Result<ExitCode> {
+    print(&bench::run(command)?)?;
     Ok(ExitCode::SUCCESS)
 }
 

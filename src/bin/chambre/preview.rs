@@ -8,6 +8,7 @@ use clap::Args;
 use chambre::output::{OutputTarget, Protected};
 use chambre::pack::flatten;
 
+use super::args::{fermat_steps, positive, tolerance_px};
 use super::load_and_note;
 
 /// `chambre preview`'s arguments.
@@ -22,7 +23,7 @@ pub struct PreviewArgs {
     #[arg(long, requires = "output")]
     pub force: bool,
     /// Timed frames after a warm-up; the median is reported.
-    #[arg(long, value_parser = chambre::bench::positive(), default_value_t = 5)]
+    #[arg(long, value_parser = positive(), default_value_t = 5)]
     pub frames: u32,
     /// Open a window to compose the shot: arrows tilt and swing the film, i/k and j/l
     /// shift it, a/d pan and w/x pitch the camera, r resets, s saves the scene, q quits;
@@ -43,15 +44,15 @@ pub struct PreviewArgs {
     pub save: Option<PathBuf>,
     /// Curved mirrors' Fermat reflections: pieces each reflected triangle's edge is cut
     /// into (default: enough that none is longer than 1/16 of the scene's radius).
-    #[arg(long, value_parser = chambre::bench::positive())]
+    #[arg(long, value_parser = positive())]
     pub subdivision: Option<u32>,
     /// Curved mirrors' Fermat reflections: the search's steps at most (1 to 1000).
-    #[arg(long, value_parser = chambre::bench::fermat_steps(), default_value_t = chambre::gpu::preview::PreviewOptions::default().steps)]
+    #[arg(long, value_parser = fermat_steps(), default_value_t = chambre::gpu::preview::PreviewOptions::default().steps)]
     pub fermat_steps: u32,
     /// How far (pixels on the film) the triangles of a curved shape (sphere, torus,
     /// ellipsoid, cylinder, Bézier patch) may stray from it: each is cut as coarsely as
     /// that allows, for the camera that sees it.
-    #[arg(long, value_parser = chambre::bench::tolerance_px, default_value_t = chambre::preview::DEFAULT_TOLERANCE_PX)]
+    #[arg(long, value_parser = tolerance_px, default_value_t = chambre::preview::DEFAULT_TOLERANCE_PX)]
     pub tessellation_tolerance: f64,
     /// Shadows from every light, by shadow maps (1024 texels square, smaller beyond four
     /// lights; drawn once; hard, as from a point: an area light's from its centre).
@@ -64,7 +65,7 @@ pub struct PreviewArgs {
     /// Curved mirrors that can see themselves (a torus, a teapot) reflect their own
     /// triangles, cut for this tolerance (pixels on the film; the flag alone: 2), at the
     /// cost of their Fermat solves (a teapot's 32 patches each solve every vertex).
-    #[arg(long, value_parser = chambre::bench::tolerance_px, num_args = 0..=1, default_missing_value = chambre::preview::SELF_REFLECTION_TOLERANCE_PX)]
+    #[arg(long, value_parser = tolerance_px, num_args = 0..=1, default_missing_value = chambre::preview::SELF_REFLECTION_TOLERANCE_PX)]
     pub self_reflections: Option<f64>,
     /// Override any scene field, e.g. --set camera.film_tilt=10 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
