@@ -24,7 +24,7 @@
 //! | pixel loop           | `cpu.rs`                    | `wgsl/render.wgsl` (the megakernel) |
 //! | a path vertex per stage | `integrator.rs` (`trace_path`, vertex by vertex) | `wgsl/wavefront.wgsl` (the wavefront render; `docs/gpu.md`) |
 //! | status and loop caps | `render.rs`                 | `wgsl/status.wgsl`     |
-//! | adaptive sampling    | `adaptive.rs` (decisions on the host, for both paths) | `wgsl/render.wgsl` (pixel lists, halves) |
+//! | adaptive sampling    | `adaptive.rs` (decisions on the host, for both paths) | `wgsl/render.wgsl` (pixel lists), `sampler.wgsl` (progressive patterns) |
 //! | ray queries (bench)  | `bench/rays.rs`             | `wgsl/trace.wgsl`      |
 //! | bindings             | `gpu/kernels.rs` (table)    | `wgsl/bindings.wgsl`   |
 //! | raster preview       | `preview.rs`, `gpu/preview.rs` (render pipeline) | `wgsl/preview.wgsl` |
