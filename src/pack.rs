@@ -380,6 +380,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         lens_sampler,
         camera.aperture_blades,
         camera.aperture_rotation_deg,
+        render.adaptive.is_some(),
     );
     let frame = GpuFrame {
         width: render.width,
@@ -406,6 +407,8 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             .sum(),
         ambient: render.ambient.to_array(),
         motion_base: geometry.motion_base,
+        progressive: render.adaptive.is_some() as u32,
+        ..Default::default()
     };
     FlatScene {
         bvh: geometry.bvh,

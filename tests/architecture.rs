@@ -10,8 +10,12 @@ const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 /// each, backticks removed.
 fn twin_rows() -> Vec<Vec<String>> {
     let text = std::fs::read_to_string(Path::new(ROOT).join("docs/architecture.md")).unwrap();
-    let start = text.find("<!-- twins -->").expect("the twin table's start marker");
-    let end = text.find("<!-- /twins -->").expect("the twin table's end marker");
+    let start = text
+        .find("<!-- twins -->")
+        .expect("the twin table's start marker");
+    let end = text
+        .find("<!-- /twins -->")
+        .expect("the twin table's end marker");
     text[start..end]
         .lines()
         .filter(|l| l.starts_with("| `"))
@@ -36,7 +40,10 @@ fn files_with_extension(dir: &Path, extension: &str, found: &mut Vec<PathBuf>) {
 }
 
 fn relative(path: &Path) -> String {
-    path.strip_prefix(ROOT).unwrap().to_string_lossy().into_owned()
+    path.strip_prefix(ROOT)
+        .unwrap()
+        .to_string_lossy()
+        .into_owned()
 }
 
 #[test]
@@ -59,7 +66,10 @@ fn the_twin_table_lists_every_wgsl_file_once_with_an_existing_twin() {
     let present: BTreeSet<String> = wgsl.iter().map(|p| relative(p)).collect();
     let missing: Vec<_> = present.difference(&listed).collect();
     let stale: Vec<_> = listed.difference(&present).collect();
-    assert!(missing.is_empty(), "WGSL files not in the table: {missing:?}");
+    assert!(
+        missing.is_empty(),
+        "WGSL files not in the table: {missing:?}"
+    );
     assert!(stale.is_empty(), "rows naming no WGSL file: {stale:?}");
 }
 
@@ -71,7 +81,11 @@ fn every_traversal_has_its_role() {
         .iter()
         .filter(|r| r[0].contains("traverse"))
         .collect::<Vec<_>>();
-    assert_eq!(traversals.len(), 2, "the GPU's two traversals: {traversals:?}");
+    assert_eq!(
+        traversals.len(),
+        2,
+        "the GPU's two traversals: {traversals:?}"
+    );
     for row in traversals {
         assert!(
             ROLES.iter().any(|role| row[2].contains(role)),
@@ -81,7 +95,11 @@ fn every_traversal_has_its_role() {
         );
     }
     let text = std::fs::read_to_string(Path::new(ROOT).join("docs/architecture.md")).unwrap();
-    for cpu in ["src/accel/wide.rs", "src/accel/wide/packet.rs", "src/accel/octet.rs"] {
+    for cpu in [
+        "src/accel/wide.rs",
+        "src/accel/wide/packet.rs",
+        "src/accel/octet.rs",
+    ] {
         let row = text
             .lines()
             .find(|l| l.starts_with(&format!("| `{cpu}`")))

@@ -402,7 +402,11 @@ fn shared_structs_have_identical_layouts() {
             background,
             light_samples_per_vertex,
             ambient,
-            motion_base
+            motion_base,
+            progressive,
+            _pad1,
+            _pad2,
+            _pad3
         }
     );
     layout!(
@@ -419,11 +423,11 @@ fn shared_structs_have_identical_layouts() {
             commit,
             loop_check,
             listed_pixels,
-            accumulation_offset,
             scratch_offset,
             aov_offset,
             _pad1,
-            _pad2
+            _pad2,
+            _pad3
         }
     );
 }

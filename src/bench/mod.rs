@@ -11,10 +11,13 @@
 //! - [`scale`]: the same rays on meshes from a thousand to ten million triangles.
 //! - [`precision`]: f32 hits and pixels of both paths against an f64 oracle.
 //! - [`motion`]: motion blur's BVH, swept over the shutter or per time slice.
+//! - [`adaptive`]: adaptive sampling against uniform sampling at equal samples and equal time,
+//!   on scene files and held-out scenes generated from a seed.
 //!
 //! Timings are medians (with min and max) of several runs after a warm-up, measured side by side
 //! in one process: machines here are noisy, so only ratios within one run are compared.
 
+pub mod adaptive;
 pub mod build;
 pub mod fermat;
 pub mod frame;

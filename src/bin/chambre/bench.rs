@@ -6,12 +6,13 @@ use std::path::PathBuf;
 use chambre::Error;
 use chambre::bench::rays::{Backend, Bvh, Pinhole, RaysConfig};
 use chambre::bench::{
-    Machine, build, fermat, finish, frame, motion, precision, preview, rays, samplers, scale,
-    usable,
+    Machine, adaptive, build, fermat, finish, frame, motion, precision, preview, rays, samplers,
+    scale, usable,
 };
 use chambre::gpu::GpuContext;
 use chambre::gpu::kernels::ShaderChecks;
 use chambre::gpu::render::PathKernels;
+use chambre::sampler::SamplerName;
 
 use super::args::{at_least_one, at_least_one_width, fermat_steps, positive, tolerance_px};
 
@@ -43,6 +44,54 @@ pub enum BenchCommand {
     /// The raster preview without and with shadows: frame times, the shadow maps' drawing and
     /// FLIP against the ray tracer.
     Preview(PreviewArgs),
+    /// Adaptive sampling (`--noise-target`) against uniform sampling of the same pattern at
+    /// equal samples and at equal wall time (relative MSE against a converged reference), CPU
+    /// path, on scene files and held-out scenes generated from a seed.
+    Adaptive(AdaptiveArgs),
+}
+
+/// Arguments of `chambre bench adaptive`.
+#[derive(Debug, clap::Args)]
+pub struct AdaptiveArgs {
+    /// Scene files to measure.
+    #[arg(long, value_delimiter = ',')]
+    pub scenes: Vec<PathBuf>,
+    /// Held-out scenes generated from a seed, as KIND:SEED (kinds: soft_shadows, defocus,
+    /// mirror), e.g. soft_shadows:1,defocus:1.
+    #[arg(long, value_delimiter = ',', value_parser = adaptive::parse_held_out)]
+    pub generated: Vec<adaptive::HeldOut>,
+    /// Width and height of the held-out scenes (pixels).
+    #[arg(long, value_parser = positive(), default_value_t = 96)]
+    pub size: u32,
+    /// Pixel and lens sample patterns to measure.
+    #[arg(long, value_enum, value_delimiter = ',',
+          default_values_t = [SamplerName::Stratified, SamplerName::Sobol])]
+    pub samplers: Vec<SamplerName>,
+    /// Noise targets.
+    #[arg(long, value_delimiter = ',', default_values_t = [0.05, 0.02, 0.01])]
+    pub targets: Vec<f64>,
+    /// The adaptive renders' most samples per pixel (`render.spp`).
+    #[arg(long, value_parser = positive(), default_value_t = 16384)]
+    pub spp: u32,
+    /// The adaptive renders' `render.min_spp` (default: the scene's, or 16).
+    #[arg(long)]
+    pub min_spp: Option<u32>,
+    /// Samples per pixel of each scene's reference (Sobol, another seed).
+    #[arg(long, value_parser = positive(), default_value_t = 16384)]
+    pub reference_spp: u32,
+    /// Renders of each timed run: their median time is kept (the images are the same).
+    #[arg(long, value_parser = at_least_one, default_value_t = 3)]
+    pub runs: usize,
+    /// Samples per pixel of the overhead measurement: adaptive sampling with a target no pixel
+    /// meets against uniform sampling of the same samples (0: none).
+    #[arg(long, default_value_t = 256)]
+    pub overhead_spp: u32,
+    /// Override any scene field, e.g. --set render.width=128 (also -D).
+    #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Where the report goes.
+    #[command(flatten)]
+    pub output: Output,
 }
 
 /// Arguments of `chambre bench preview`.
@@ -365,6 +414,7 @@ pub fn run(command: &BenchCommand) -> chambre::Result<String> {
         BenchCommand::Fermat(args) => bench_fermat(args, &run),
         BenchCommand::Preview(args) => bench_preview(args, &run),
         BenchCommand::Samplers(args) => bench_samplers(args, &run),
+        BenchCommand::Adaptive(args) => bench_adaptive(args, &run),
     }
 }
 
@@ -586,4 +636,36 @@ fn bench_samplers(args: &SamplersArgs, run: &Run) -> chambre::Result<String> {
 
 fn vec3(v: &[f32]) -> [f32; 3] {
     [v[0], v[1], v[2]]
+}
+
+/// `chambre bench adaptive`.
+fn bench_adaptive(args: &AdaptiveArgs, run: &Run) -> chambre::Result<String> {
+    let mut scenes: Vec<adaptive::SceneSource> = args
+        .scenes
+        .iter()
+        .map(|p| adaptive::SceneSource::File(p.clone()))
+        .collect();
+    scenes.extend(
+        args.generated
+            .iter()
+            .map(|&g| adaptive::SceneSource::HeldOut(g, args.size)),
+    );
+    let report = adaptive::run(&adaptive::Study {
+        scenes: &scenes,
+        samplers: &args.samplers,
+        targets: &args.targets,
+        spp: args.spp,
+        min_spp: args.min_spp,
+        reference_spp: args.reference_spp,
+        runs: args.runs,
+        overhead_spp: args.overhead_spp,
+        set: &args.set,
+    })?;
+    finish(
+        &run.command,
+        &run.machine,
+        report.to_markdown(),
+        &report,
+        args.output.json.as_deref(),
+    )
 }

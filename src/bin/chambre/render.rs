@@ -107,10 +107,10 @@ pub struct RenderArgs {
     /// most taken).
     #[arg(long, value_name = "SECONDS")]
     pub time_budget: Option<f64>,
-    /// Adaptive sampling: keep sampling only the pixels whose estimated error (the difference of
-    /// two half-images over the root of the intensity, as Cycles' noise threshold) is above X,
-    /// until all meet it or --spp (then the maximum) is reached (overrides render.noise_target;
-    /// e.g. 0.01).
+    /// Adaptive sampling: put the samples where they reduce the image's error most, until its
+    /// estimated relative error (the root of its relative MSE, from two halves of each pixel's
+    /// samples) is below X or --spp (then the most a pixel takes) is reached (overrides
+    /// render.noise_target; e.g. 0.02).
     #[arg(long, value_name = "X")]
     pub noise_target: Option<f64>,
     /// Samples every pixel receives before adaptive sampling's first decision (overrides
