@@ -212,7 +212,11 @@ fn adaptive_sampling_agx_and_the_preview_from_the_command_line() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{stderr}");
-    assert!(stderr.contains("adaptive sampling:") && stderr.contains("below the noise target 0.1"));
+    assert!(
+        stderr.contains("adaptive sampling: estimated relative error")
+            && stderr.contains("against the noise target 0.1 (met"),
+        "{stderr}"
+    );
     assert!(image.exists() && counts.exists());
     let agx = dir.join("agx.png");
     let output = chambre()
