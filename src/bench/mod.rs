@@ -104,7 +104,7 @@ pub struct FermatArgs {
     #[arg(long, value_parser = positive(), value_delimiter = ',', default_values_t = [1, 2, 4, 8, 16, 32])]
     pub subdivisions: Vec<u32>,
     /// The Fermat search's steps at most (1 to 1000).
-    #[arg(long, value_parser = fermat_steps(), default_value_t = crate::gpu::preview::PreviewOptions::default().steps)]
+    #[arg(long, value_parser = fermat_steps(), default_value_t = crate::preview::PreviewOptions::default().steps)]
     pub steps: u32,
     /// Rounds timed after a warm-up: per subdivision, a GPU ray-traced frame then --frames
     /// preview frames (the speed-up is the median of the rounds' ratios); and as many CPU
@@ -211,9 +211,10 @@ pub fn positive() -> clap::builder::RangedI64ValueParser<u32> {
 }
 
 /// The parser of `--fermat-steps` and `bench fermat --steps`: 1 to
-/// [`crate::gpu::fermat::MAX_FERMAT_STEPS`].
+/// [`crate::preview::reflections::kernel::MAX_FERMAT_STEPS`].
 pub fn fermat_steps() -> clap::builder::RangedI64ValueParser<u32> {
-    clap::value_parser!(u32).range(1..=i64::from(crate::gpu::fermat::MAX_FERMAT_STEPS))
+    clap::value_parser!(u32)
+        .range(1..=i64::from(crate::preview::reflections::kernel::MAX_FERMAT_STEPS))
 }
 
 /// A spacing of copies in mesh widths: at least 1, so that they do not overlap.

@@ -235,7 +235,10 @@ pub const MODULES: [(&str, &str); 16] = [
     ("render.wgsl", include_str!("../../wgsl/render.wgsl")),
     ("wavefront.wgsl", include_str!("../../wgsl/wavefront.wgsl")),
     ("trace.wgsl", include_str!("../../wgsl/trace.wgsl")),
-    ("fermat.wgsl", include_str!("../../wgsl/fermat.wgsl")),
+    (
+        "preview/fermat.wgsl",
+        include_str!("../../wgsl/preview/fermat.wgsl"),
+    ),
 ];
 
 /// A compute kernel: what it is made of and what it reads.
@@ -462,7 +465,7 @@ pub const TRACE_ANY_CW: Kernel = Kernel {
 /// vertex, one pipeline per kind of mirror (`gpu::fermat`; CPU twin `fermat::Solver`).
 pub const FERMAT: Kernel = Kernel {
     name: "fermat",
-    modules: &["types.wgsl", "bindings.wgsl", "fermat.wgsl"],
+    modules: &["types.wgsl", "bindings.wgsl", "preview/fermat.wgsl"],
     entry_point: "fermat",
     bindings: FERMAT_BINDINGS,
 };

@@ -18,10 +18,6 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DMat4, DQuat, DVec3, DVec4, Vec3};
 
 use crate::camera::{CameraSpec, Projection};
-use crate::fermat::{
-    BezierPatch, Cylinder, Ellipsoid, Reflector as _, TorusHalf, TorusSearch, anchored_on_patch,
-    anchored_on_torus_half,
-};
 use crate::layout::{
     GpuReflector, PRIM_SPHERE, REFLECTOR_CYLINDER, REFLECTOR_ELLIPSOID, REFLECTOR_PATCH,
     REFLECTOR_SPHERE, REFLECTOR_TORUS,
@@ -29,10 +25,21 @@ use crate::layout::{
 use crate::pack::FlatScene;
 use crate::scene::Scene;
 use crate::scene::surface::Surface;
+use reflections::fermat::{
+    BezierPatch, Cylinder, Ellipsoid, Reflector as _, TorusHalf, TorusSearch, anchored_on_patch,
+    anchored_on_torus_half,
+};
 
+pub mod reflections;
+pub mod renderer;
 mod shadows;
 mod tessellate;
+pub mod window;
 
+pub use renderer::{
+    PreviewFrame, PreviewOptions, PreviewRenderer, SHADOW_SHADER, StageTimes, draw, draw_with,
+    extent_and_far, eye_of, shader_source,
+};
 pub use shadows::{
     CUBE_FACES, SHADOW_MAP_SIZE, SHADOW_MEMORY, SHADOW_NORMAL_OFFSET, SMALLEST_SHADOW_MAP,
     ShadowLight, ShadowPlan, cube_face, shadow_map_size,

@@ -9,9 +9,9 @@
 use glam::{DMat4, DVec2, DVec3, DVec4, Vec3};
 
 use super::{PreviewVertex, reflector_tags, reflectors};
-use crate::fermat::Reflector as _;
 use crate::layout::{GpuPrimitive, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
 use crate::pack::FlatScene;
+use crate::preview::reflections::fermat::Reflector as _;
 use crate::scene::surface::{Surface, grids_cut_alike, patches_mesh_cut};
 
 /// How far (pixels on the film) the preview's triangles may stray from a curved surface unless
@@ -432,7 +432,10 @@ fn samples(at: SurfaceAt<'_>, span: [DVec2; 2]) -> impl Iterator<Item = DVec3> +
 /// direction as finely as any other it must match ([`grids_cut_alike`]): neighbours meet without
 /// cracks, and a patch far from the finest (most of the teapot, beside its spout) is not cut
 /// as finely.
-fn patches_cut(patches: &[crate::fermat::BezierPatch], detail: &Detail) -> Cut {
+fn patches_cut(
+    patches: &[crate::preview::reflections::fermat::BezierPatch],
+    detail: &Detail,
+) -> Cut {
     let unit_square = [DVec2::ZERO, DVec2::ONE];
     let [least, most] = PATCH_QUADS.map(|n| [n; 2]);
     let surface = |k: usize| {

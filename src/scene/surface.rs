@@ -8,7 +8,7 @@ use std::path::Path;
 use glam::{DVec2, DVec3};
 
 use super::{CurvedPrimitive, Shape, TriangleMesh};
-use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Reflector, Torus};
+use crate::preview::reflections::fermat::{BezierPatch, Cylinder, Ellipsoid, Reflector, Torus};
 
 /// Quads along each side of a Bézier patch: a quarter circle cut 32 times (the teapot's body
 /// patches) lies within 1 − cos(π/128) ≈ 3.0e-4 of its radius of the mesh.

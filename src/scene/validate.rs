@@ -23,8 +23,8 @@ use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
 use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, FocusSurface, Movements, Projection};
 use crate::error::{Error, Result};
-use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use crate::layout;
+use crate::preview::reflections::fermat::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use crate::sampler::{MAX_BLADES, MAX_TABLE_SPP};
 
 /// Largest coordinate or length accepted, in scene units.

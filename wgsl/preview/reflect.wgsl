@@ -8,8 +8,8 @@
 // discarded). Lit as if the eye were at P. A fragment replaces the main pass's colour of the
 // pixel (the mirror reflecting the background) with the mirror's own shading plus
 // its mirror reflectance times the reflected radiance; the depth test leaves the nearest.
-// Composed after wgsl/preview.wgsl. Mirrors: src/gpu/preview.rs (Reflections),
-// src/preview/mod.rs (reflected_triangles), src/fermat.rs (the solver and its validity tests).
+// Composed after wgsl/preview/shading.wgsl. Mirrors: src/preview/renderer/mod.rs (Reflections),
+// src/preview/mod.rs (reflected_triangles), src/preview/reflections/fermat.rs (the solver and its validity tests).
 
 // A reflected fragment whose P lies farther from the eye than the reflector's visible point by
 // more than this fraction of its distance is on a hidden part of the reflector.

@@ -19,11 +19,11 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
-use super::GpuContext;
-use super::preview::{PreviewOptions, PreviewRenderer};
 use crate::error::{Error, Result};
+use crate::gpu::GpuContext;
 use crate::output::OutputTarget;
 use crate::pack::FlatScene;
+use crate::preview::renderer::{PreviewOptions, PreviewRenderer};
 use crate::preview::{ComposeAction, ComposeKey, Composer, Drag};
 use crate::scene::{Scene, merged_scene_text};
 
@@ -457,7 +457,7 @@ fn present_pipeline(
     let device = &context.device;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("present"),
-        source: wgpu::ShaderSource::Wgsl(include_str!("../../wgsl/preview_present.wgsl").into()),
+        source: wgpu::ShaderSource::Wgsl(include_str!("../../../wgsl/preview/present.wgsl").into()),
     });
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("present"),

@@ -20,12 +20,12 @@ use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
 
-use super::fermat::{FermatCull, FermatPass, FermatSolve};
-use super::{GpuContext, wgpu_error_text};
 use crate::camera::CameraSpec;
 use crate::error::{Error, Result};
+use crate::gpu::{GpuContext, wgpu_error_text};
 use crate::layout::{GpuDrawArgs, GpuReflector, wgsl_prelude};
 use crate::pack::FlatScene;
+use crate::preview::reflections::kernel::{FermatCull, FermatPass, FermatSolve};
 use crate::preview::{
     CurvedShapes, Cut, DEFAULT_TOLERANCE_PX, Detail, MirrorSurface, PreviewUniforms, PreviewVertex,
     ReflectedSet, Reflector, ReflectorPass, SHADOW_MEMORY, SHADOW_NORMAL_OFFSET,
@@ -113,12 +113,12 @@ pub struct PreviewFrame {
 }
 
 /// The shadow maps' shader (`wgsl/preview_shadow.wgsl`): positions through a light's view.
-pub const SHADOW_SHADER: &str = include_str!("../../wgsl/preview_shadow.wgsl");
+pub const SHADOW_SHADER: &str = include_str!("../../../wgsl/preview/shadow.wgsl");
 
 /// The shader's source: constants, the shared types, the preview's stages and its reflection
 /// stages.
 pub fn shader_source() -> String {
-    let types = super::kernels::MODULES
+    let types = crate::gpu::kernels::MODULES
         .iter()
         .find(|(name, _)| *name == "types.wgsl")
         .expect("types.wgsl is a module")
@@ -126,8 +126,8 @@ pub fn shader_source() -> String {
     format!(
         "{}\nconst SHADOW_NORMAL_OFFSET: f32 = {SHADOW_NORMAL_OFFSET:?};\n{types}\n{}\n{}",
         wgsl_prelude(),
-        include_str!("../../wgsl/preview.wgsl"),
-        include_str!("../../wgsl/preview_reflect.wgsl")
+        include_str!("../../../wgsl/preview/shading.wgsl"),
+        include_str!("../../../wgsl/preview/reflect.wgsl")
     )
 }
 
@@ -996,7 +996,8 @@ impl Reflections {
         for (&solve, v) in vertex_solves.iter().zip(&distinct) {
             mirrors[solve as usize] = mirrors[solve as usize].max(v.reflector);
         }
-        let fermat_vertices = super::fermat::vertex_buffer(context, &positions, &mirrors)?;
+        let fermat_vertices =
+            crate::preview::reflections::kernel::vertex_buffer(context, &positions, &mirrors)?;
         let solve_buffer =
             context.storage_buffer("vertex solves", bytemuck::cast_slice(&vertex_solves))?;
         let vertices =
@@ -1011,8 +1012,11 @@ impl Reflections {
             bytemuck::cast_slice(&table),
         )?;
         let triangle_count = triangles.len() as u32 / 3;
-        let fitting =
-            super::fermat::searches_per_solve(context, positions.len() as u32, triangle_count);
+        let fitting = crate::preview::reflections::kernel::searches_per_solve(
+            context,
+            positions.len() as u32,
+            triangle_count,
+        );
         let per_batch = self
             .searches_per_dispatch
             .map_or(fitting, |n| n.clamp(1, fitting));

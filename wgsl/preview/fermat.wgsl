@@ -1,8 +1,8 @@
 // Reflections on a sphere, torus, Bézier patch, ellipsoid or cylinder by Fermat's principle:
 // one invocation finds, for one scene vertex V and the eye E, the point P of the reflector where E -> P -> V has extremal length, by
-// the seed's search on a triangle in the (u, v) plane (see src/fermat.rs for the method), in
+// the seed's search on a triangle in the (u, v) plane (see src/preview/reflections/fermat.rs for the method), in
 // f32, step for step as its twin; the search's constants come from src/layout.rs.
-// Mirrors: src/fermat.rs (Sphere, Sphere::facing, Torus, TorusSearch, BezierPatch, on_patch,
+// Mirrors: src/preview/reflections/fermat.rs (Sphere, Sphere::facing, Torus, TorusSearch, BezierPatch, on_patch,
 // Ellipsoid, Cylinder, on_cylinder, initial_triangle, replaced_corner, Solver::solve,
 // sampled_start, solve_on_patch, anchored_on_patch, anchored_on_torus_half).
 
@@ -66,7 +66,7 @@ fn frame_for(eye: vec3<f32>, vertex: vec3<f32>) -> Frame {
 }
 
 // f(u, v) and its tangents f_u, f_v: `Sphere`, `Torus`, `Ellipsoid`, `Cylinder` and
-// `BezierPatch` in src/fermat.rs, in the frame f (u around y).
+// `BezierPatch` in src/preview/reflections/fermat.rs, in the frame f (u around y).
 struct SurfacePoint {
     p: vec3<f32>,
     fu: vec3<f32>,
@@ -210,7 +210,7 @@ fn normal_at(f: Frame, uv: vec2<f32>, s: SurfacePoint) -> vec3<f32> {
 }
 
 // Where the segment from `outside` (|outside| > 1) to `inside` (|inside| < 1) crosses the unit
-// sphere about the origin (`unit_sphere_crossing` in src/fermat.rs).
+// sphere about the origin (`unit_sphere_crossing` in src/preview/reflections/fermat.rs).
 fn unit_sphere_crossing(outside: vec3<f32>, inside: vec3<f32>) -> vec3<f32> {
     let w = inside - outside;
     let a = dot(w, w);
@@ -285,7 +285,7 @@ fn flat_with(corners: Triangle, k: u32, p: vec2<f32>) -> bool {
 }
 
 // The corner p replaces: the farthest from it, or the next farthest where that would leave a
-// flat triangle (src/fermat.rs `replaced_corner`; ties go to the later corner on both sides).
+// flat triangle (src/preview/reflections/fermat.rs `replaced_corner`; ties go to the later corner on both sides).
 fn replaced_corner(corners: Triangle, p: vec2<f32>) -> u32 {
     let d = vec3<f32>(length(corners.a - p), length(corners.b - p), length(corners.c - p));
     var first = 0u;

@@ -11,9 +11,9 @@
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
-use super::GpuContext;
-use super::kernels::{self, FERMAT, FERMAT_CULL, FERMAT_START, slot};
 use crate::error::{Error, Result};
+use crate::gpu::GpuContext;
+use crate::gpu::kernels::{self, FERMAT, FERMAT_CULL, FERMAT_START, slot};
 use crate::layout::{GpuDrawArgs, GpuReflection, GpuReflector, REFLECTOR_PATCH};
 use crate::preview::MirrorSurface;
 
@@ -213,7 +213,7 @@ impl FermatPass {
     ) -> Result<wgpu::Buffer> {
         let limit = context.device.limits().max_storage_buffer_binding_size;
         if bytes > limit {
-            return Err(super::over_binding_limit(what, bytes, limit));
+            return Err(crate::gpu::over_binding_limit(what, bytes, limit));
         }
         Ok(context.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(what),
@@ -434,7 +434,7 @@ fn solve_and_cull(
     if let Some(e) = pollster::block_on(scope.pop()) {
         return Err(Error::Gpu(format!(
             "the fermat kernels: {}",
-            super::wgpu_error_text(&e)
+            crate::gpu::wgpu_error_text(&e)
         )));
     }
     context.wait(context.queue.submit([encoder.finish()]))?;
