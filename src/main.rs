@@ -920,7 +920,7 @@ fn run_window(
     let keys = keys
         .iter()
         .map(|k| {
-            chambre::preview::ComposeKey::parse(k).ok_or_else(|| {
+            chambre::preview::window::ComposeKey::parse(k).ok_or_else(|| {
                 anyhow::anyhow!(
                     "--keys: `{k}` is not a key (up, down, left, right, escape, or one character)"
                 )

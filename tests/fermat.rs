@@ -8,9 +8,12 @@ use chambre::bench::fermat::{FermatConfig, FermatReport};
 use chambre::math::rng::Rng;
 use chambre::preview::MirrorSurface;
 use chambre::preview::reflections::fermat::{
-    BezierPatch, Cylinder, Ellipsoid, Reflector, Solver, Sphere, StartedFrom, Torus, TorusHalf,
-    TorusSearch, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, on_torus_half,
-    reflection_error, seen_from_outside, self_reflection_clear, solve_on_patch,
+    Reflector, Solver, StartedFrom, TorusHalf, TorusSearch, alhazen_sphere, drawn_in_preview,
+    on_cylinder, on_patch, on_torus_half, reflection_error, seen_from_outside,
+    self_reflection_clear, solve_on_patch,
+};
+use chambre::scene::parametric::{
+    BezierPatch, Cylinder, Ellipsoid, ParametricSurface, Sphere, Torus,
 };
 use chambre::scene::surface::Surface;
 use glam::{DQuat, DVec3};

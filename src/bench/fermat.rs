@@ -30,7 +30,7 @@ use crate::gpu::render::PathKernels;
 use crate::layout::{FEATURES_ALL, NONE, T_FAR};
 use crate::pack::{FlatScene, flatten};
 use crate::preview::reflections::fermat::{
-    Solver, Sphere, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, on_torus_half,
+    Solver, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, on_torus_half,
     reflection_error, seen_from_outside,
 };
 use crate::preview::{
@@ -39,6 +39,7 @@ use crate::preview::{
 use crate::preview::{PreviewOptions, PreviewRenderer, StageTimes, extent_and_far};
 use crate::render::Image;
 use crate::scene::Scene;
+use crate::scene::parametric::Sphere;
 
 /// Points along each edge of the reflected triangles, besides its corner.
 const POINTS_PER_EDGE: u32 = 8;

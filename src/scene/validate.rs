@@ -17,6 +17,7 @@ use super::mesh::{
     TriangleMesh, compute_vertex_normals, orientation_of, rotation_of, transform_mesh,
 };
 use super::mesh_file::load_mesh;
+use super::parametric::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use super::surface::{CurvedSurface, Surface, load_bezier_patches, orient_outward};
 use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
@@ -24,7 +25,6 @@ use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, FocusSurface, Movements, Projection};
 use crate::error::{Error, Result};
 use crate::layout;
-use crate::preview::reflections::fermat::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use crate::sampler::{MAX_BLADES, MAX_TABLE_SPP};
 
 /// Largest coordinate or length accepted, in scene units.

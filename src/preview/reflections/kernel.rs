@@ -11,11 +11,11 @@
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
+use super::MirrorSurface;
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
 use crate::gpu::kernels::{self, FERMAT, FERMAT_CULL, FERMAT_START, slot};
 use crate::layout::{GpuDrawArgs, GpuReflection, GpuReflector, REFLECTOR_PATCH};
-use crate::preview::MirrorSurface;
 
 /// The seed's step count ("4–5 steps"), the kernel's default.
 pub const SEED_STEPS: u32 = 5;

@@ -27,10 +27,10 @@ use crate::layout::{GpuDrawArgs, GpuReflector, wgsl_prelude};
 use crate::pack::FlatScene;
 use crate::preview::reflections::kernel::{FermatCull, FermatPass, FermatSolve};
 use crate::preview::{
-    CurvedShapes, Cut, DEFAULT_TOLERANCE_PX, Detail, MirrorSurface, PreviewUniforms, PreviewVertex,
+    CurvedShapes, Cut, Detail, MirrorSurface, PreviewOptions, PreviewUniforms, PreviewVertex,
     ReflectedSet, Reflector, ReflectorPass, SHADOW_MEMORY, SHADOW_NORMAL_OFFSET,
-    SMALLEST_SHADOW_MAP, ShadowPlan, bounded_radius, bounded_sphere, clip_matrix, flat_triangles,
-    reflectors, shadow_map_size,
+    SMALLEST_SHADOW_MAP, ShadowPlan, bounded_sphere, clip_matrix, extent_and_far, eye_of,
+    flat_triangles, reflectors, shadow_map_size,
 };
 use crate::render::Image;
 use crate::scene::Scene;
@@ -41,49 +41,6 @@ const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Which reflector each pixel sees (1 + its index; 0 for none), and the f32 bits of the distance
 /// from the eye it sees it at.
 const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
-
-/// How the preview draws: how finely it cuts curved shapes, and the reflections of curved
-/// mirrors.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PreviewOptions {
-    /// How far (pixels on the film) the triangles of a curved shape may stray from it
-    /// (`preview::Detail`).
-    pub tolerance_px: f64,
-    /// Pieces each edge of a reflected triangle is cut into; `None`: as many as keep every
-    /// piece under 1/16 of the scene's radius (`preview::ReflectedSet`).
-    pub subdivision: Option<u32>,
-    /// The Fermat search's steps at most (the seed: 4–5).
-    pub steps: u32,
-    /// Searches (surfaces of mirrors: a teapot has 32) solved, and culled, in one dispatch at
-    /// most; `None`: as many as the bindings hold (`gpu::fermat::searches_per_solve`). One a
-    /// dispatch is how the preview ran before it batched them (BENCHMARKS.md measures both).
-    pub searches_per_dispatch: Option<usize>,
-    /// Shadows from every light, by shadow maps (`preview::ShadowPlan`).
-    pub shadows: bool,
-    /// With shadows: an area light's cubes of shadow maps along each side of it (n² cubes).
-    pub area_shadow_samples: u32,
-    /// Where a mirror can see itself (a torus's inner ring, a teapot's spout in its body), it
-    /// reflects its own triangles, cut for this tolerance (pixels on the film, as
-    /// `tolerance_px`); `None`: mirrors do not reflect themselves.
-    pub self_reflections: Option<f64>,
-}
-
-impl Default for PreviewOptions {
-    /// Curved shapes within half a pixel; automatic subdivision; 12 steps, where the seed's 5
-    /// leave 13% of a fine floor's vertices unconverged (holes in the reflection) and 12 leave
-    /// 0.5% (docs/fermat.md).
-    fn default() -> PreviewOptions {
-        PreviewOptions {
-            tolerance_px: DEFAULT_TOLERANCE_PX,
-            subdivision: None,
-            steps: 12,
-            searches_per_dispatch: None,
-            shadows: false,
-            area_shadow_samples: 1,
-            self_reflections: None,
-        }
-    }
-}
 
 /// A preview frame and how long drawing it took.
 pub struct PreviewFrame {
@@ -1238,24 +1195,6 @@ fn reflected_triangles(
     let mut out = flat_triangles.to_vec();
     out.extend(others.chain(mirrors).flatten());
     out
-}
-
-/// How far the preview's planes reach from their point (`tessellate`'s `extent`) and its far
-/// plane: planes reach 100 scene radii, and the far plane lies beyond them from anywhere near.
-pub fn extent_and_far(scene: &Scene, flat: &FlatScene) -> (f32, f64) {
-    let extent = 100.0 * (bounded_radius(flat) + eye_of(&scene.camera).length());
-    (extent, 3.0 * extent as f64)
-}
-
-/// The camera's centre of projection (the lens centre), in scene units.
-pub fn eye_of(camera: &CameraSpec) -> glam::Vec3 {
-    camera
-        .raster_projection(1.0)
-        .view
-        .inverse()
-        .w_axis
-        .truncate()
-        .as_vec3()
 }
 
 /// The colour target's pixels, rows padded to wgpu's 256-byte copy alignment on the way.

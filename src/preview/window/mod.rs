@@ -8,6 +8,12 @@
 //! with `--screenshot` the last frame shown is written out. That is how it runs headless and is
 //! tested (under Xvfb, `tests/window.rs`). Shader: `wgsl/preview_present.wgsl`.
 
+mod compose;
+
+pub use compose::{
+    ComposeAction, ComposeKey, Composer, DRAG_DEG_PER_PX, Drag, SHIFT_STEP_MM, TURN_STEP_DEG,
+};
+
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
@@ -23,8 +29,7 @@ use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
 use crate::output::OutputTarget;
 use crate::pack::FlatScene;
-use crate::preview::renderer::{PreviewOptions, PreviewRenderer};
-use crate::preview::{ComposeAction, ComposeKey, Composer, Drag};
+use crate::preview::{PreviewOptions, PreviewRenderer};
 use crate::scene::{Scene, merged_scene_text};
 
 /// What the window is asked to do beside showing the scene.
