@@ -44,12 +44,10 @@ pub use reflections::{
     AUTO_PIECE, MAX_AUTO_PIECES, MirrorSurface, ReflectedSet, Reflector, ReflectorPass,
     SELF_REFLECTION_TOLERANCE_PX, grid_point, reflectors, self_reflections_note, sub_triangle,
 };
-pub use renderer::{
-    PreviewFrame, PreviewRenderer, SHADOW_SHADER, StageTimes, draw, draw_with, shader_source,
-};
+pub use renderer::{PreviewFrame, PreviewRenderer, StageTimes, draw, draw_with, shader_source};
 pub use shadows::{
-    CUBE_FACES, SHADOW_MAP_SIZE, SHADOW_MEMORY, SHADOW_NORMAL_OFFSET, SMALLEST_SHADOW_MAP,
-    ShadowLight, ShadowPlan, cube_face, shadow_map_size,
+    CUBE_FACES, SHADOW_MAP_SIZE, SHADOW_MEMORY, SHADOW_NORMAL_OFFSET, SHADOW_SHADER,
+    SMALLEST_SHADOW_MAP, ShadowLight, ShadowPlan, cube_face, shadow_map_size,
 };
 pub use tessellate::{
     CurvedShapes, Cut, DEFAULT_TOLERANCE_PX, Detail, Grid, PATCH_QUADS, ROUND_QUADS, Seen,

@@ -19,6 +19,7 @@ use fermat::{Reflector as _, TorusHalf, TorusSearch, anchored_on_patch, anchored
 
 pub mod fermat;
 pub mod kernel;
+pub(crate) mod passes;
 
 /// What the reflection pass needs of one search (`ReflectorPass` in
 /// wgsl/preview_reflect.wgsl; one per search of a batch, in a storage array).

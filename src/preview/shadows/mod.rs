@@ -26,6 +26,10 @@ use glam::{Mat4, Vec3, Vec4};
 
 use crate::layout::{GpuLight, LIGHT_AREA, LIGHT_DIRECTIONAL, LIGHT_TRIANGLE};
 
+pub(crate) mod maps;
+
+pub use maps::SHADOW_SHADER;
+
 /// Texels along each side of a shadow map, at most.
 pub const SHADOW_MAP_SIZE: u32 = 1024;
 /// Texels along each side of a shadow map, at least.
