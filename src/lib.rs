@@ -27,7 +27,11 @@
 //! | adaptive sampling    | `adaptive.rs` (decisions on the host, for both paths) | `wgsl/render.wgsl` (pixel lists, halves) |
 //! | ray queries (bench)  | `bench/rays.rs`             | `wgsl/trace.wgsl`      |
 //! | bindings             | `gpu/kernels.rs` (table)    | `wgsl/bindings.wgsl`   |
-//! | raster preview       | `preview.rs`, `gpu/preview.rs` (render pipeline) | `wgsl/preview.wgsl` |
+//! | raster preview (main pass) | `preview/tessellate.rs`, `preview/mod.rs` (clip matrix), `preview/renderer/` (render pipeline) | `wgsl/preview/shading.wgsl` |
+//! | preview: Fermat search | `preview/reflections/fermat.rs` (on `scene/parametric.rs`'s surfaces) | `wgsl/preview/fermat.wgsl` (`fermat`, `fermat_cull` kernels) |
+//! | preview: reflection pass | `preview/reflections/passes.rs`, `preview/reflections/mod.rs` | `wgsl/preview/reflect.wgsl` |
+//! | preview: shadow maps | `preview/shadows/` | `wgsl/preview/shadow.wgsl` |
+//! | preview: window      | `preview/window/mod.rs`     | `wgsl/preview/present.wgsl` |
 //!
 //! Kernels are listed in `gpu/kernels.rs` (modules, entry point, bindings) and built by its one
 //! pipeline builder, specialised to the scene's features (`layout::FEATURES`).

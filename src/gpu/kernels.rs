@@ -462,7 +462,7 @@ pub const TRACE_ANY_CW: Kernel = Kernel {
 };
 
 /// Reflection points of vertices on a curved mirror by Fermat's principle, one invocation per
-/// vertex, one pipeline per kind of mirror (`gpu::fermat`; CPU twin `fermat::Solver`).
+/// vertex, one pipeline per kind of mirror (`preview::reflections::kernel`; CPU twin `fermat::Solver`).
 pub const FERMAT: Kernel = Kernel {
     name: "fermat",
     modules: &["types.wgsl", "bindings.wgsl", "preview/fermat.wgsl"],
@@ -473,7 +473,7 @@ pub const FERMAT: Kernel = Kernel {
 /// A Bézier patch's corner B for each vertex, where the segment from the vertex to the patch's
 /// inside point O crosses it (`fermat::BezierPatch::crossing`): Newton's steps that depend on
 /// the vertex and the patch, not on the eye, so run once for a set of vertices rather than in
-/// every frame's `fermat` (`gpu::fermat::FermatPass::solve`).
+/// every frame's `fermat` (`preview::reflections::kernel::FermatPass::solve`).
 pub const FERMAT_START: Kernel = Kernel {
     name: "fermat_start",
     modules: FERMAT.modules,

@@ -1,5 +1,7 @@
-//! The GPU path: wgpu device set-up and the helpers every GPU stage shares; the kernels'
-//! registry (`kernels`), the render backend (`render`) and the ray queries (`trace`).
+//! The ray tracer's GPU side: wgpu device set-up and the helpers every GPU stage shares; the
+//! kernels' registry (`kernels`, which lists the preview's compute kernels too), the render
+//! backend (`render`) and the ray queries (`trace`). The raster preview's GPU side is
+//! `preview`'s.
 //!
 //! Errors never panic: wgpu's default uncaptured-error handler panics, so a handler of ours
 //! records them, and every wait on the device has a timeout (lavapipe has no watchdog).

@@ -16,7 +16,7 @@ pub struct PreviewOptions {
     /// The Fermat search's steps at most (the seed: 4–5).
     pub steps: u32,
     /// Searches (surfaces of mirrors: a teapot has 32) solved, and culled, in one dispatch at
-    /// most; `None`: as many as the bindings hold (`gpu::fermat::searches_per_solve`). One a
+    /// most; `None`: as many as the bindings hold (`preview::reflections::kernel::searches_per_solve`). One a
     /// dispatch is how the preview ran before it batched them (BENCHMARKS.md measures both).
     pub searches_per_dispatch: Option<usize>,
     /// Shadows from every light, by shadow maps (`preview::ShadowPlan`).

@@ -1,18 +1,20 @@
 // Reflections on a sphere, torus, Bézier patch, ellipsoid or cylinder by Fermat's principle:
-// one invocation finds, for one scene vertex V and the eye E, the point P of the reflector where E -> P -> V has extremal length, by
-// the seed's search on a triangle in the (u, v) plane (see src/preview/reflections/fermat.rs for the method), in
-// f32, step for step as its twin; the search's constants come from src/layout.rs.
-// Mirrors: src/preview/reflections/fermat.rs (Sphere, Sphere::facing, Torus, TorusSearch, BezierPatch, on_patch,
-// Ellipsoid, Cylinder, on_cylinder, initial_triangle, replaced_corner, Solver::solve,
-// sampled_start, solve_on_patch, anchored_on_patch, anchored_on_torus_half).
+// one invocation finds, for one scene vertex V and the eye E, the point P of the reflector
+// where E -> P -> V has extremal length, by the search on a triangle in the (u, v) plane (see
+// src/preview/reflections/fermat.rs for the method), in f32, step for step as its twin; the
+// search's constants come from src/layout.rs.
+// Mirrors: src/preview/reflections/fermat.rs (the Reflector impls, TorusSearch, on_patch,
+// on_cylinder, initial_triangle, replaced_corner, Solver::solve, sampled_start, solve_on_patch,
+// anchored_on_patch, anchored_on_torus_half), src/scene/parametric.rs (Sphere, Sphere::facing,
+// Torus, BezierPatch, Ellipsoid, Cylinder: the surfaces' points, tangents and normals).
 
-// Steps at most: the seed's 5 unless the pipeline overrides it (`gpu::fermat::FermatPass`).
+// Steps at most: the seed's 5 unless the pipeline overrides it (`preview::reflections::kernel::FermatPass`).
 override FERMAT_STEPS: u32 = 5u;
 // The reflector's kind (`REFLECTOR_SPHERE`, ...): a pipeline per kind, so that each carries
-// only its own surface's code (`gpu::fermat::FermatPass`).
+// only its own surface's code (`preview::reflections::kernel::FermatPass`).
 override REFLECTOR_KIND: u32 = 0u;
 // Whether a patch's own points are searched again where the seed's corners find nothing (with
-// self-reflections: `gpu::fermat::FermatPass`).
+// self-reflections: `preview::reflections::kernel::FermatPass`).
 override OWN_POINTS_SEARCHED_AGAIN: bool = false;
 // The search stops when its triangle's longest side in (u, v), or its last step, is below this.
 // In f32 the gradients' rounding keeps a converged search jittering about 1e-7 (u, v near 0.5
@@ -493,7 +495,7 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // A patch's corner B for one vertex of one search (x the vertex, y the search): where the
 // segment from the vertex to O crosses the patch. Neither depends on the eye, so the preview
-// runs this once for a set of vertices (`gpu::fermat::FermatPass::solve`) and `fermat` reads
+// runs this once for a set of vertices (`preview::reflections::kernel::FermatPass::solve`) and `fermat` reads
 // the starts every frame: these Newton steps were the larger part of a teapot's solve
 // (docs/fermat.md). The rows of other kinds are left alone; `fermat` computes their B itself
 // (a sphere's and an ellipsoid's from the eye's frame; a torus's or cylinder's closed form).

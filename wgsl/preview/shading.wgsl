@@ -6,7 +6,7 @@
 // Curved mirrors show Fermat reflections: this pass writes each pixel's reflector id, and
 // wgsl/preview/reflect.wgsl draws the reflected triangles where their reflector is seen.
 // Mirrors: src/preview/tessellate.rs (the triangles), src/preview/mod.rs (the clip matrix),
-// src/preview/renderer/mod.rs (the pipeline).
+// src/preview/renderer/mod.rs (the pipeline), src/preview/renderer/shading.rs (its variant).
 
 struct PreviewUniforms {
     clip: mat4x4<f32>,
@@ -85,7 +85,7 @@ fn preview_vertex(v: VertexIn) -> VertexOut {
 }
 
 // Whether the scene has area lights, and whether the preview draws shadows: code not needed is
-// left out of the pipeline (`gpu::preview::ShadingVariant`).
+// left out of the pipeline (`preview::renderer::shading::ShadingVariant`).
 override PREVIEW_AREA_LIGHTS: bool = true;
 override PREVIEW_SHADOWS: bool = true;
 

@@ -1,4 +1,4 @@
-//! Reflections on smooth curved reflectors by Fermat's principle (the seed `004`): for an eye E
+//! The search for reflections on smooth curved mirrors by Fermat's principle: for an eye E
 //! and a scene vertex V, the point P = f(u, v) of a parametric reflector where the path E → P → V
 //! has extremal length d(u, v) = |E − f| + |V − f|. The search runs in the (u, v) plane on a
 //! triangle A, B, C: the gradients of d at its corners,
@@ -15,11 +15,14 @@
 //! triangle that is not flat (a quarter of AB off its middle). A sphere is parametrised with its
 //! poles on the normal of the plane through E, V and its centre (`Sphere::facing`): the
 //! reflection lies on that plane's great circle, the equator, where the parametrisation is
-//! regular. This is the CPU version (f64); `wgsl/fermat.wgsl` is the GPU's (the `fermat`
-//! kernel, `gpu::fermat`), which searches on the sphere, ellipsoid, cylinder, torus and
-//! bicubic Bézier patch alike. The ellipsoid, cylinder and torus are given in their own frame
-//! turned by an orientation: their parameters are the own frame's, so a search on a turned
-//! shape takes the steps it takes on the unturned one (docs/fermat.md).
+//! regular. This is the CPU version (f64); `wgsl/preview/fermat.wgsl` is the GPU's (the `fermat`
+//! kernel, `preview::reflections::kernel`), which searches on the sphere, ellipsoid, cylinder,
+//! torus and bicubic Bézier patch alike. The surfaces and their evaluation are the scene's
+//! (`scene::parametric`); this module adds what the search needs of each ([`Reflector`]: its
+//! inside point, where a segment crosses it, where the search starts and gives up). The
+//! ellipsoid, cylinder and torus are given in their own frame turned by an orientation: their
+//! parameters are the own frame's, so a search on a turned shape takes the steps it takes on
+//! the unturned one (docs/fermat.md).
 
 use glam::{DVec2, DVec3};
 
@@ -444,7 +447,7 @@ pub fn seen_from_outside(p: DVec3, n: DVec3, eye: DVec3, vertex: DVec3) -> bool 
 
 /// Whether the raster preview draws a reflection found at `p` (outward unit normal `n`):
 /// seen from outside, with the law of reflection holding to `layout::REFLECTION_TOLERANCE`
-/// (the CPU twin of `reflection_shows` in wgsl/fermat.wgsl).
+/// (the CPU twin of `reflection_shows` in wgsl/preview/fermat.wgsl).
 pub fn drawn_in_preview(p: DVec3, n: DVec3, eye: DVec3, vertex: DVec3) -> bool {
     seen_from_outside(p, n, eye, vertex)
         && reflection_error(p, n, eye, vertex) < f64::from(crate::layout::REFLECTION_TOLERANCE)
@@ -537,7 +540,7 @@ impl<R: Reflector> Reflector for StartedFrom<R> {
 
 /// Whether a point of the searched mirror itself, reflected at `p`, stands clear enough of `p`
 /// to be drawn there (`layout::SELF_REFLECTION_CLEARANCE`; the CPU twin of `fermat_cull`'s
-/// test in wgsl/fermat.wgsl): a vertex on the surface is its own "reflection" at P = V.
+/// test in wgsl/preview/fermat.wgsl): a vertex on the surface is its own "reflection" at P = V.
 pub fn self_reflection_clear(p: DVec3, eye: DVec3, vertex: DVec3) -> bool {
     p.distance(vertex) > f64::from(crate::layout::SELF_REFLECTION_CLEARANCE) * p.distance(eye)
 }

@@ -1,12 +1,11 @@
-//! Reflection points on curved mirrors (sphere, torus, ellipsoid, cylinder, Bézier patch) by
-//! Fermat's principle on the GPU: the `fermat` kernel of the registry solves one scene vertex
-//! of one search (a surface of a mirror) per invocation; `fermat::Solver` is its CPU twin
-//! (f64), and `tests/fermat.rs` checks that they agree. The raster preview encodes it before its
-//! draws (`gpu::preview`): every search in one dispatch per kind of surface, then the
-//! `fermat_cull` kernel, which lists the reflected triangles whose reflection shows on each
-//! search's surface, for one indirect draw of them all. A teapot's 32 patches took 64
-//! dispatches a frame before, whose fixed cost on lavapipe outweighed their work, and 32 draws
-//! (docs/fermat.md).
+//! The Fermat search's GPU side: reflection points on curved mirrors (sphere, torus, ellipsoid,
+//! cylinder, Bézier patch) found by the `fermat` kernel of the registry (`gpu::kernels`), one
+//! scene vertex of one search (a surface of a mirror) per invocation; `fermat::Solver` is its
+//! CPU twin (f64), and `tests/fermat.rs` checks that they agree. The reflection passes
+//! (`passes`) encode it before their draws: every search in one dispatch per kind of surface,
+//! then the `fermat_cull` kernel, which lists the reflected triangles whose reflection shows on
+//! each search's surface, for one indirect draw of them all (one dispatch per search costs
+//! more in fixed costs on lavapipe than its work: docs/fermat.md).
 
 use glam::Vec3;
 use wgpu::util::DeviceExt;

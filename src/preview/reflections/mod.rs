@@ -22,7 +22,7 @@ pub mod kernel;
 pub(crate) mod passes;
 
 /// What the reflection pass needs of one search (`ReflectorPass` in
-/// wgsl/preview_reflect.wgsl; one per search of a batch, in a storage array).
+/// wgsl/preview/reflect.wgsl; one per search of a batch, in a storage array).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ReflectorPass {
@@ -57,7 +57,7 @@ impl Reflector {
     }
 }
 
-/// The surfaces the Fermat kernel solves on (`wgsl/fermat.wgsl`).
+/// The surfaces the Fermat kernel solves on (`wgsl/preview/fermat.wgsl`).
 // A scene has a handful (a teapot 32): copies of a patch's 384 bytes cost nothing, and Copy
 // keeps the searches plain values.
 #[allow(clippy::large_enum_variant)]

@@ -43,7 +43,7 @@ impl ShadingVariant {
         }
     }
 
-    /// The pipeline-overridable constants of `wgsl/preview.wgsl`.
+    /// The pipeline-overridable constants of `wgsl/preview/shading.wgsl`.
     pub(crate) fn constants(&self) -> [(&'static str, f64); 2] {
         let flag = |on: bool| f64::from(u8::from(on));
         [

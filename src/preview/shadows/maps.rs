@@ -14,7 +14,7 @@ use crate::preview::renderer::pipeline::{
 };
 use crate::preview::{PreviewVertex, bounded_sphere};
 
-/// The shadow maps' shader (`wgsl/preview_shadow.wgsl`): positions through a light's view.
+/// The shadow maps' shader (`wgsl/preview/shadow.wgsl`): positions through a light's view.
 pub const SHADOW_SHADER: &str = include_str!("../../../wgsl/preview/shadow.wgsl");
 
 /// The shadow maps of `flat`'s lights, `area_samples`² cubes for an area light, as large as

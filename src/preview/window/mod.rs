@@ -1,12 +1,12 @@
 //! The interactive preview (`chambre preview --window`): the raster preview
-//! (`gpu::preview::PreviewRenderer`) drawn into a window through winit, redrawn as keys or the
-//! mouse move the film and turn the camera (`preview::Composer`), the figures in the window's
+//! (`preview::PreviewRenderer`) drawn into a window through winit, redrawn as keys or the
+//! mouse move the film and turn the camera ([`Composer`], `compose`), the figures in the window's
 //! title and on the terminal; `s` saves the scene with the composition, to be rendered by the
 //! ray tracer.
 //!
 //! A `--keys` script replays keys after the first frame, as if typed, then closes the window;
 //! with `--screenshot` the last frame shown is written out. That is how it runs headless and is
-//! tested (under Xvfb, `tests/window.rs`). Shader: `wgsl/preview_present.wgsl`.
+//! tested (under Xvfb, `tests/window.rs`). Shader: `wgsl/preview/present.wgsl`.
 
 mod compose;
 
@@ -60,7 +60,7 @@ pub struct WindowReport {
 /// in notches and a touchpad's in pixels).
 const SCROLL_PX_PER_NOTCH: f64 = 40.0;
 
-/// The presentation shader's uniforms (`wgsl/preview_present.wgsl`'s `Present`).
+/// The presentation shader's uniforms (`wgsl/preview/present.wgsl`'s `Present`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct PresentUniforms {
