@@ -701,7 +701,7 @@ pub struct GpuWaveArgs {
     pub shadows: [u32; 4],
 }
 
-/// A Fermat solve's reflector and eye (`wgsl/fermat.wgsl`): a sphere, a torus (around the
+/// A Fermat solve's reflector and eye (`wgsl/preview/fermat.wgsl`): a sphere, a torus (around the
 /// vertical axis through its centre), a bicubic Bézier patch, an ellipsoid or a cylinder, and how many vertices the `fermat_vertices` buffer holds.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -762,7 +762,7 @@ pub struct GpuReflection {
     /// 1 where the preview draws this reflection (E and V see P from outside and the law of
     /// reflection holds to `REFLECTION_TOLERANCE`; CPU twin `fermat::drawn_in_preview`), else 0.
     pub shown: u32,
-    /// P's parameters (u, v) in the vertex's facing frame (`fermat::Sphere::facing`); a
+    /// P's parameters (u, v) in the vertex's facing frame (`scene::parametric::Sphere::facing`); a
     /// patch's own (u, v), which the cull reads to tell a corner on the patch from one in its
     /// seam band.
     pub uv: [f32; 2],

@@ -26,7 +26,6 @@ pub mod converge;
 pub mod cpu;
 pub mod error;
 pub mod export;
-pub mod fermat;
 pub mod gpu;
 pub mod integrator;
 pub mod layout;

@@ -461,7 +461,6 @@ fn pack_lights(
             }
         });
     }
-    }
     lights
 }
 

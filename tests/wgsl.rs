@@ -484,7 +484,7 @@ fn each_kernel_lists_exactly_the_bindings_it_uses() {
 #[test]
 fn preview_structs_have_identical_layouts() {
     use chambre::preview::{PreviewUniforms, PreviewVertex, ReflectorPass, ShadowLight};
-    let module = parse_and_validate(&chambre::gpu::preview::shader_source());
+    let module = parse_and_validate(&chambre::preview::shader_source());
     layout!(
         module,
         PreviewVertex {
@@ -524,5 +524,5 @@ fn preview_structs_have_identical_layouts() {
         ("origins", offset_of!(ShadowLight, origins)),
     ];
     check_struct(&module, "ShadowLight", size_of::<ShadowLight>(), &shadow);
-    parse_and_validate(chambre::gpu::preview::SHADOW_SHADER);
+    parse_and_validate(chambre::preview::SHADOW_SHADER);
 }

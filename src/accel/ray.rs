@@ -1,10 +1,13 @@
 //! A ray as the intersection tests take it, and what they return: the per-ray constants of the
 //! watertight triangle test and the slab test ([`RayQuery`]), a hit ([`Hit`]), a shading point
 //! with its error bound ([`SurfacePoint`]), and the rounding-error bound [`gamma`] every test
-//! uses. The tests themselves are in `intersect` (flat primitives) and `curved`.
+//! uses; rays in bulk ([`RaySet`]) and what is asked of them ([`Query`]), as the ray benchmark
+//! traces them on either path. The tests themselves are in `intersect` (flat primitives) and
+//! `curved`.
 //! Twin: `wgsl/intersect.wgsl` (its `Ray`, `Hit` and `gamma`).
 
 use glam::{Vec3, Vec3A};
+use serde::Serialize;
 
 use crate::layout::T_FAR;
 
@@ -141,6 +144,40 @@ pub struct SurfacePoint {
     pub position: Vec3,
     /// Per-component bound on `position`'s distance from the exact point.
     pub error: Vec3,
+}
+
+/// Rays as structure of arrays.
+#[derive(Clone, Debug, Default)]
+pub struct RaySet {
+    /// Ray origins (scene units).
+    pub origins: Vec<Vec3>,
+    /// Unit ray directions, one per origin.
+    pub directions: Vec<Vec3>,
+    /// The camera's rays: each frame's rays are its pixels, in rows of this width (0: the
+    /// rays are no image's).
+    pub image_width: u32,
+}
+
+impl RaySet {
+    /// Number of rays.
+    pub fn len(&self) -> usize {
+        self.origins.len()
+    }
+
+    /// Whether there are no rays.
+    pub fn is_empty(&self) -> bool {
+        self.origins.is_empty()
+    }
+}
+
+/// Closest hit or any hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Query {
+    /// The nearest hit along each ray, with its distance.
+    ClosestHit,
+    /// Whether anything lies along each ray (shadow rays).
+    AnyHit,
 }
 
 #[cfg(test)]

@@ -24,21 +24,22 @@ use super::frame::{Way, render_once};
 use crate::accel::intersect::RayQuery;
 use crate::accel::traverse::closest_hit;
 use crate::error::{Error, Location, Result};
-use crate::fermat::{
-    Solver, Sphere, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, on_torus_half,
-    reflection_error, seen_from_outside,
-};
 use crate::gpu::GpuContext;
 use crate::gpu::kernels::ShaderChecks;
-use crate::gpu::preview::{PreviewOptions, PreviewRenderer, StageTimes, extent_and_far};
 use crate::gpu::render::PathKernels;
 use crate::layout::{FEATURES_ALL, NONE, T_FAR};
 use crate::pack::{FlatScene, flatten};
+use crate::preview::reflections::fermat::{
+    Solver, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, on_torus_half,
+    reflection_error, seen_from_outside,
+};
 use crate::preview::{
     Detail, MirrorSurface, Reflector, clip_matrix, grid_point, reflectors, sub_triangle, tessellate,
 };
+use crate::preview::{PreviewOptions, PreviewRenderer, StageTimes, extent_and_far};
 use crate::render::Image;
 use crate::scene::Scene;
+use crate::scene::parametric::Sphere;
 
 /// Points along each edge of the reflected triangles, besides its corner.
 const POINTS_PER_EDGE: u32 = 8;
@@ -323,7 +324,7 @@ fn displacements(
     options: PreviewOptions,
 ) -> Result<Vec<(bool, Option<f64>)>> {
     let (width, height) = (flat.frame.width, flat.frame.height);
-    let eye = crate::gpu::preview::eye_of(&scene.camera);
+    let eye = crate::preview::eye_of(&scene.camera);
     let n = options.subdivision.unwrap_or(1).max(1);
     // Each feature: its position and its sub-triangle's corners with the weights mixing them.
     let mut features = Vec::new();
@@ -355,8 +356,13 @@ fn displacements(
     let eye64 = eye.as_dvec3();
     let mut out = Vec::new();
     for &surface in &reflector.searches {
-        let found =
-            crate::gpu::fermat::reflections(context, surface, eye, &corners, options.steps)?;
+        let found = crate::preview::reflections::kernel::reflections(
+            context,
+            surface,
+            eye,
+            &corners,
+            options.steps,
+        )?;
         for (k, (x, weights, corner)) in features.iter().enumerate() {
             let x = x.as_dvec3();
             let Some(truth) = true_reflection(&surface, eye64, x)
@@ -457,7 +463,7 @@ fn true_reflection(surface: &MirrorSurface, eye: DVec3, x: DVec3) -> Option<DVec
 /// The point, normal and parameters where the f64 search on `surface` converges (the law of
 /// reflection to 1e-9 rad), if it does.
 fn converged(
-    surface: &impl crate::fermat::Reflector,
+    surface: &impl crate::preview::reflections::fermat::Reflector,
     eye: DVec3,
     x: DVec3,
 ) -> Option<(DVec3, DVec3, DVec2)> {

@@ -10,6 +10,7 @@ pub mod gltf;
 mod load;
 pub mod mesh;
 pub mod mesh_file;
+pub mod parametric;
 pub mod surface;
 mod validate;
 

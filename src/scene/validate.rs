@@ -17,13 +17,13 @@ use super::mesh::{
     TriangleMesh, compute_vertex_normals, orientation_of, rotation_of, transform_mesh,
 };
 use super::mesh_file::load_mesh;
+use super::parametric::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use super::surface::{CurvedSurface, Surface, load_bezier_patches, orient_outward};
 use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
 use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, FocusSurface, Movements, Projection};
 use crate::error::{Error, Result};
-use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use crate::layout;
 use crate::sampler::{MAX_BLADES, MAX_TABLE_SPP};
 

@@ -8,9 +8,10 @@ pub fn positive() -> clap::builder::RangedI64ValueParser<u32> {
 }
 
 /// The parser of `--fermat-steps` and `bench fermat --steps`: 1 to
-/// `chambre::gpu::fermat::MAX_FERMAT_STEPS`.
+/// `chambre::preview::reflections::kernel::MAX_FERMAT_STEPS`.
 pub fn fermat_steps() -> clap::builder::RangedI64ValueParser<u32> {
-    clap::value_parser!(u32).range(1..=i64::from(chambre::gpu::fermat::MAX_FERMAT_STEPS))
+    clap::value_parser!(u32)
+        .range(1..=i64::from(chambre::preview::reflections::kernel::MAX_FERMAT_STEPS))
 }
 
 /// A spacing of copies in mesh widths: at least 1, so that they do not overlap.

@@ -129,7 +129,7 @@ pub struct FermatArgs {
     #[arg(long, value_parser = positive(), value_delimiter = ',', default_values_t = [1, 2, 4, 8, 16, 32])]
     pub subdivisions: Vec<u32>,
     /// The Fermat search's steps at most (1 to 1000).
-    #[arg(long, value_parser = fermat_steps(), default_value_t = chambre::gpu::preview::PreviewOptions::default().steps)]
+    #[arg(long, value_parser = fermat_steps(), default_value_t = chambre::preview::PreviewOptions::default().steps)]
     pub steps: u32,
     /// Rounds timed after a warm-up: per subdivision, a GPU ray-traced frame then --frames
     /// preview frames (the speed-up is the median of the rounds' ratios); and as many CPU

@@ -47,7 +47,7 @@ pub struct PreviewArgs {
     #[arg(long, value_parser = positive())]
     pub subdivision: Option<u32>,
     /// Curved mirrors' Fermat reflections: the search's steps at most (1 to 1000).
-    #[arg(long, value_parser = fermat_steps(), default_value_t = chambre::gpu::preview::PreviewOptions::default().steps)]
+    #[arg(long, value_parser = fermat_steps(), default_value_t = chambre::preview::PreviewOptions::default().steps)]
     pub fermat_steps: u32,
     /// How far (pixels on the film) the triangles of a curved shape (sphere, torus,
     /// ellipsoid, cylinder, Bézier patch) may stray from it: each is cut as coarsely as
@@ -74,7 +74,7 @@ pub struct PreviewArgs {
 
 /// `chambre preview`: a frame written, or the window with `--window`.
 pub fn run(args: &PreviewArgs) -> anyhow::Result<ExitCode> {
-    let options = chambre::gpu::preview::PreviewOptions {
+    let options = chambre::preview::PreviewOptions {
         tolerance_px: args.tessellation_tolerance,
         subdivision: args.subdivision,
         steps: args.fermat_steps,
@@ -104,7 +104,7 @@ pub fn run(args: &PreviewArgs) -> anyhow::Result<ExitCode> {
 fn note_what_the_preview_leaves_out(
     scene: &chambre::scene::Scene,
     flat: &chambre::pack::FlatScene,
-    options: &chambre::gpu::preview::PreviewOptions,
+    options: &chambre::preview::PreviewOptions,
 ) {
     let shadows = options.shadows.then_some(options.area_shadow_samples);
     for omission in chambre::preview::omissions(scene, shadows) {
@@ -123,14 +123,14 @@ fn run_preview(
     (output, protected): (&Path, Protected),
     frames: u32,
     overrides: &[String],
-    options: chambre::gpu::preview::PreviewOptions,
+    options: chambre::preview::PreviewOptions,
 ) -> anyhow::Result<ExitCode> {
     let target = OutputTarget::prepare_with(output, protected)?;
     let scene = load_and_note(path, overrides)?;
     let flat = flatten(&scene);
     note_what_the_preview_leaves_out(&scene, &flat, &options);
     let context = chambre::gpu::GpuContext::new()?;
-    let frame = chambre::gpu::preview::draw_with(&context, &scene, &flat, frames, options)?;
+    let frame = chambre::preview::draw_with(&context, &scene, &flat, frames, options)?;
     target.write(&frame.image)?;
     if frame.coarse_shapes > 0 {
         let note = chambre::preview::coarse_note(frame.coarse_shapes, options.tolerance_px);
@@ -174,12 +174,12 @@ fn run_window(
     keys: &[String],
     screenshot: Option<PathBuf>,
     save: Option<PathBuf>,
-    drawing: chambre::gpu::preview::PreviewOptions,
+    drawing: chambre::preview::PreviewOptions,
 ) -> anyhow::Result<ExitCode> {
     let keys = keys
         .iter()
         .map(|k| {
-            chambre::preview::ComposeKey::parse(k).ok_or_else(|| {
+            chambre::preview::window::ComposeKey::parse(k).ok_or_else(|| {
                 anyhow::anyhow!(
                     "--keys: `{k}` is not a key (up, down, left, right, escape, or one character)"
                 )
@@ -200,13 +200,13 @@ fn run_window(
     let scene = load_and_note(path, overrides)?;
     let flat = flatten(&scene);
     note_what_the_preview_leaves_out(&scene, &flat, &drawing);
-    let options = chambre::gpu::window::WindowOptions {
+    let options = chambre::preview::window::WindowOptions {
         keys,
         screenshot: screenshot.clone(),
         save,
         drawing,
     };
-    let report = chambre::gpu::window::run(path, overrides, &scene, &flat, options)?;
+    let report = chambre::preview::window::run(path, overrides, &scene, &flat, options)?;
     note!(
         "{} frames shown; composition: {}",
         report.frames,
