@@ -1,5 +1,5 @@
 //! The Fermat comparison: the raster preview's reflections on a curved mirror (a sphere, a
-//! torus or Bézier patches; seed 004) against the ray tracer's, by the subdivision of the
+//! torus or Bézier patches; `docs/fermat.md`) against the ray tracer's, by the subdivision of the
 //! reflected triangles. For each subdivision: the preview's frame time; how far reflected
 //! features land from where the ray tracer puts them, in pixels; and FLIP over the mirror's
 //! pixels against a ray-traced reference. Once: the ray-traced frame time at 1 sample per

@@ -1,4 +1,4 @@
-// Fermat reflections in the raster preview (seed 004): the reflected triangles of a batch of
+// Fermat reflections in the raster preview (`docs/fermat.md`): the reflected triangles of a batch of
 // searches (the surfaces of the curved mirrors: a sphere, a torus's half, a teapot's patch) in
 // one draw, each vertex V drawn at its reflection point P (the `fermat`
 // kernel's output) with the depth |P - V|, so the nearest reflected surface along each
