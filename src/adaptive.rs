@@ -329,15 +329,18 @@ pub struct AdaptiveReport {
     pub mean_spp: f64,
     /// Decisions made (each reads the accumulation back).
     pub decisions: u32,
+    /// Pixels that stopped short of the most samples a pixel takes (`render.spp`).
+    pub pixels_short: usize,
 }
 
 impl AdaptiveReport {
     /// The report of the crop window's pixels of `estimates` (`v`), with `samples` the crop
-    /// window's sample counts.
+    /// window's sample counts and `most` the samples a pixel takes at most.
     pub fn new(
         settings: &AdaptiveSettings,
         estimates: &[f32],
         samples: &[u32],
+        most: u32,
         decisions: u32,
     ) -> AdaptiveReport {
         // f32::max would pass over a NaN estimate (a pixel whose radiance is NaN).
@@ -355,6 +358,7 @@ impl AdaptiveReport {
             max_pixel_error: largest.sqrt(),
             mean_spp: samples.iter().map(|&n| n as f64).sum::<f64>() / samples.len().max(1) as f64,
             decisions,
+            pixels_short: samples.iter().filter(|&&n| n < most).count(),
         }
     }
 
@@ -367,9 +371,17 @@ impl AdaptiveReport {
             self.image_error,
             self.noise_target,
             if self.image_error <= self.noise_target {
-                "met"
+                "met".to_string()
+            } else if self.pixels_short > 0 {
+                // A stopped pixel never restarts (its samples stay the first indices of its
+                // pattern), so an allocation from early, noisy estimates can fall short.
+                format!(
+                    "not met: {} pixels stopped short of render.spp on the estimates of their \
+                     first samples; a larger render.min_spp estimates better",
+                    self.pixels_short
+                )
             } else {
-                "not met within render.spp"
+                "not met within render.spp".to_string()
             },
             self.max_pixel_error,
             self.mean_spp,
@@ -569,12 +581,24 @@ mod tests {
             noise_target: 0.1,
             min_spp: 4,
         };
-        let report = AdaptiveReport::new(&settings, &[0.01, 0.03, 0.0, 0.0], &[4, 16, 4, 8], 3);
+        let report = AdaptiveReport::new(&settings, &[0.01, 0.03, 0.0, 0.0], &[4, 16, 4, 8], 16, 3);
         assert!((report.image_error - 0.1).abs() < 1e-6);
         assert!((report.max_pixel_error - 0.03f32.sqrt()).abs() < 1e-6);
         assert_eq!(report.mean_spp, 8.0);
-        assert!(report.summary().contains("met"));
-        let nan = AdaptiveReport::new(&settings, &[0.01, f32::NAN], &[4, 4], 1);
+        assert_eq!(report.pixels_short, 3);
+        assert!(report.summary().contains("(met;"));
+        // Above the target with pixels short of render.spp: said so, with the way out.
+        let short = AdaptiveReport::new(&settings, &[0.02, 0.03, 0.0, 0.0], &[4, 16, 4, 8], 16, 3);
+        assert!(
+            short
+                .summary()
+                .contains("not met: 3 pixels stopped short of render.spp"),
+            "{}",
+            short.summary()
+        );
+        let spent = AdaptiveReport::new(&settings, &[0.02, 0.03, 0.0, 0.0], &[16; 4], 16, 3);
+        assert!(spent.summary().contains("not met within render.spp"));
+        let nan = AdaptiveReport::new(&settings, &[0.01, f32::NAN], &[4, 4], 4, 1);
         assert_eq!(
             (nan.image_error, nan.max_pixel_error),
             (f32::INFINITY, f32::INFINITY)

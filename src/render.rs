@@ -678,7 +678,13 @@ fn drive(
         (&scene.adaptive, errors, adaptive)
     {
         let counts = &output.sample_counts;
-        output.adaptive = Some(AdaptiveReport::new(settings, &errors, counts, decisions));
+        output.adaptive = Some(AdaptiveReport::new(
+            settings,
+            &errors,
+            counts,
+            scene.frame.spp,
+            decisions,
+        ));
     }
     let stopped = output.stopped.is_some() || output.deadline_reached;
     if stopped || scene.adaptive.is_some() {

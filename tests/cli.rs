@@ -203,7 +203,13 @@ fn adaptive_sampling_agx_and_the_preview_from_the_command_line() {
     let (image, counts) = (dir.join("adaptive.exr"), dir.join("counts.pfm"));
     let output = chambre()
         .args(["render", "--backend", "cpu", "--spp", "32", "--width", "48"])
-        .args(["--noise-target", "0.1", "--min-spp", "4", "--sample-counts"])
+        .args([
+            "--noise-target",
+            "0.1",
+            "--min-spp",
+            "16",
+            "--sample-counts",
+        ])
         .arg(&counts)
         .arg("-o")
         .arg(&image)
