@@ -221,43 +221,7 @@ pub fn held_out_scene(kind: HeldOutKind, seed: u32, size: u32) -> String {
     text += &quad([x1, 0.0, z0], [0.0, 0.0, d], [0.0, h, 0.0], "right");
     text += &shapes;
     if kind == HeldOutKind::Mirror {
-        let reflectance = draw.between(0.7, 0.95);
-        text += &format!(
-            "[[materials]]\nname = \"mirror\"\nmodel = \"mirror\"\nmirror = {}\n\n",
-            v3([reflectance; 3])
-        );
-        text += &match draw.below(3) {
-            // A panel on a side wall or on the back wall, just in front of it.
-            0 => {
-                let (y, z) = (draw.between(0.1, 0.4) * h, draw.between(0.1, 0.4) * d);
-                quad(
-                    [x0 + 0.01, y, z0 + z],
-                    [0.0, draw.between(0.4, 0.55) * h, 0.0],
-                    [0.0, 0.0, draw.between(0.4, 0.55) * d],
-                    "mirror",
-                )
-            }
-            1 => {
-                let (x, y) = (draw.between(0.1, 0.4) * w, draw.between(0.1, 0.4) * h);
-                quad(
-                    [x0 + x, y, z0 + 0.01],
-                    [draw.between(0.4, 0.55) * w, 0.0, 0.0],
-                    [0.0, draw.between(0.4, 0.55) * h, 0.0],
-                    "mirror",
-                )
-            }
-            _ => {
-                let radius = draw.between(0.2, 0.35);
-                format!(
-                    "[[shapes]]\ntype = \"sphere\"\ncenter = {}\nradius = {radius:.4}\nmaterial = \"mirror\"\n\n",
-                    v3([
-                        draw.between(-0.5 * w + 0.4, 0.5 * w - 0.4),
-                        draw.between(radius, 0.6 * h),
-                        draw.between(-0.5 * d + 0.4, 0.0),
-                    ])
-                )
-            }
-        };
+        text += &mirror(&mut draw, [w, h, d]);
     }
     let (lw, ld) = (draw.between(0.15, 0.5) * w, draw.between(0.15, 0.5) * d);
     let (cx, cz) = (
@@ -274,6 +238,50 @@ pub fn held_out_scene(kind: HeldOutKind, seed: u32, size: u32) -> String {
         v3([0.0, 0.0, ld]),
         v3(tint.map(|t| t * power))
     );
+    text
+}
+
+/// A held-out scene's mirror in a box of `w x h x d`: its material, and a panel just in front
+/// of a side wall or the back wall, or a mirror sphere.
+fn mirror(draw: &mut Draw, [w, h, d]: [f32; 3]) -> String {
+    let (x0, z0) = (-0.5 * w, -0.5 * d);
+    let reflectance = draw.between(0.7, 0.95);
+    let mut text = format!(
+        "[[materials]]\nname = \"mirror\"\nmodel = \"mirror\"\nmirror = {}\n\n",
+        v3([reflectance; 3])
+    );
+    text += &match draw.below(3) {
+        // A panel on a side wall or on the back wall, just in front of it.
+        0 => {
+            let (y, z) = (draw.between(0.1, 0.4) * h, draw.between(0.1, 0.4) * d);
+            quad(
+                [x0 + 0.01, y, z0 + z],
+                [0.0, draw.between(0.4, 0.55) * h, 0.0],
+                [0.0, 0.0, draw.between(0.4, 0.55) * d],
+                "mirror",
+            )
+        }
+        1 => {
+            let (x, y) = (draw.between(0.1, 0.4) * w, draw.between(0.1, 0.4) * h);
+            quad(
+                [x0 + x, y, z0 + 0.01],
+                [draw.between(0.4, 0.55) * w, 0.0, 0.0],
+                [0.0, draw.between(0.4, 0.55) * h, 0.0],
+                "mirror",
+            )
+        }
+        _ => {
+            let radius = draw.between(0.2, 0.35);
+            format!(
+                "[[shapes]]\ntype = \"sphere\"\ncenter = {}\nradius = {radius:.4}\nmaterial = \"mirror\"\n\n",
+                v3([
+                    draw.between(-0.5 * w + 0.4, 0.5 * w - 0.4),
+                    draw.between(radius, 0.6 * h),
+                    draw.between(-0.5 * d + 0.4, 0.0),
+                ])
+            )
+        }
+    };
     text
 }
 

@@ -157,20 +157,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
     };
     let scene = load(None)?;
     let flat = flatten(&scene);
-    let reflector = reflectors(&flat)
-        .into_iter()
-        .next()
-        .ok_or_else(|| Error::Scene {
-            location: Location {
-                file: config.scene.to_path_buf(),
-                line: 0,
-                column: 0,
-                field: "shapes".into(),
-            },
-            message: "the Fermat comparison needs a sphere, torus, ellipsoid, cylinder or Bezier \
-                      shape with a mirror material"
-                .into(),
-        })?;
+    let reflector = first_mirror(config.scene, &flat)?;
     let (width, height) = (flat.frame.width, flat.frame.height);
     let one_spp = load(Some("render.spp=1".into()))?;
     let one_spp = flatten(&one_spp);
@@ -238,17 +225,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
         let frame = renderer.frame(&times)?;
         let stages = renderer.stage_times(config.frames)?;
         let placed = displacements(context, &scene, &flat, &reflector, &clip, options)?;
-        let corner_max_px = placed
-            .iter()
-            .filter(|(corner, _)| *corner)
-            .filter_map(|(_, d)| *d)
-            .max_by(f64::total_cmp);
-        let mut drawn: Vec<f64> = placed.iter().filter_map(|(_, d)| *d).collect();
-        drawn.sort_by(f64::total_cmp);
-        let quantile = |q: f64| {
-            let last = drawn.len().checked_sub(1)?;
-            drawn.get((last as f64 * q).round() as usize).copied()
-        };
+        let placement = Placement::of(&placed);
         rows.push(FermatRow {
             subdivision,
             triangles: frame.triangles,
@@ -258,11 +235,11 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             preview_ms: Spread::of(&frame.frame_times_ms),
             speedup: Spread::of(&ratios),
             features: placed.len(),
-            drawn: drawn.len(),
-            corner_max_px,
-            displacement_median_px: quantile(0.5),
-            displacement_p99_px: quantile(0.99),
-            displacement_max_px: quantile(1.0),
+            drawn: placement.drawn.len(),
+            corner_max_px: placement.corner_max_px,
+            displacement_median_px: placement.quantile(0.5),
+            displacement_p99_px: placement.quantile(0.99),
+            displacement_max_px: placement.quantile(1.0),
             flip_reflector: masked_flip(&frame.image, &reference, &mask),
             stages,
         });
@@ -289,6 +266,54 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
         reference_spp: config.reference_spp,
         rows,
     })
+}
+
+/// The scene's first curved mirror, or an error naming the scene's shapes.
+fn first_mirror(scene: &std::path::Path, flat: &FlatScene) -> Result<Reflector> {
+    reflectors(flat)
+        .into_iter()
+        .next()
+        .ok_or_else(|| Error::Scene {
+            location: Location {
+                file: scene.to_path_buf(),
+                line: 0,
+                column: 0,
+                field: "shapes".into(),
+            },
+            message: "the Fermat comparison needs a sphere, torus, ellipsoid, cylinder or Bezier \
+                      shape with a mirror material"
+                .into(),
+        })
+}
+
+/// Where the preview put the reflected features against the ray tracer: each drawn one's
+/// displacement in pixels, sorted, and the largest at a corner of the mirror's triangles.
+struct Placement {
+    drawn: Vec<f64>,
+    corner_max_px: Option<f64>,
+}
+
+impl Placement {
+    /// From `(at a corner, displacement if drawn)` per feature.
+    fn of(placed: &[(bool, Option<f64>)]) -> Placement {
+        let corner_max_px = placed
+            .iter()
+            .filter(|(corner, _)| *corner)
+            .filter_map(|(_, d)| *d)
+            .max_by(f64::total_cmp);
+        let mut drawn: Vec<f64> = placed.iter().filter_map(|(_, d)| *d).collect();
+        drawn.sort_by(f64::total_cmp);
+        Placement {
+            drawn,
+            corner_max_px,
+        }
+    }
+
+    /// The displacement below which a fraction `q` of the drawn features lie.
+    fn quantile(&self, q: f64) -> Option<f64> {
+        let last = self.drawn.len().checked_sub(1)?;
+        self.drawn.get((last as f64 * q).round() as usize).copied()
+    }
 }
 
 /// A ray-traced frame's times, milliseconds (`FermatReport`).
