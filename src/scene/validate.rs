@@ -1357,11 +1357,14 @@ fn parallelogram(
     Ok((corner.as_vec3(), u.as_vec3(), v.as_vec3()))
 }
 
+/// A light's validator, by its type.
+type LightValidator = fn(&Checker, &str, &LightEntry) -> Result<Light>;
+
 fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
     let mut lights = Vec::new();
     for (i, l) in file.lights.iter().enumerate() {
         let prefix = format!("lights[{i}]");
-        let (kind, validate): (_, fn(&Checker, &str, &LightEntry) -> Result<Light>) = match l.kind {
+        let (kind, validate): (_, LightValidator) = match l.kind {
             LightType::Point => ("point light", point_light),
             LightType::Directional => ("directional light", directional_light),
             LightType::Spot => ("spot light", spot_light),
