@@ -16,7 +16,7 @@ use crate::bench::rays::Backend;
 use crate::cpu::CpuRenderer;
 use crate::error::{Error, Result};
 use crate::gpu::{GpuContext, GpuRenderer};
-use crate::output::srgb_encode;
+use crate::metrics::{flip, log_log_slope, rel_mse, rmse};
 use crate::pack::flatten;
 use crate::plot::{Figure, Series, log_log_panel};
 use crate::render::{Image, RenderOutput, render};
@@ -25,75 +25,31 @@ use crate::scene::Scene;
 
 /// Measure how a scene's error against a reference falls with samples per pixel and with time,
 /// for each sample pattern and backend.
-#[derive(Debug, clap::Args)]
-pub struct ConvergeArgs {
+#[derive(Clone, Debug)]
+pub struct ConvergeSettings {
     /// Scene file (TOML; see docs/scene-format.md).
     pub scene: PathBuf,
     /// Reference image: a linear EXR of the scene's size (default: rendered on the CPU path at
-    /// --reference-spp with Sobol patterns and another seed).
-    #[arg(long)]
+    /// `reference_spp` with Sobol patterns and another seed).
     pub reference: Option<PathBuf>,
     /// Samples per pixel of the rendered reference.
-    #[arg(long, value_parser = crate::bench::positive(), default_value_t = 1024)]
     pub reference_spp: u32,
     /// The largest sample count: runs at 1, 2, 4, … up to it.
-    #[arg(long, value_parser = crate::bench::positive(), default_value_t = 64)]
     pub max_spp: u32,
     /// Sample patterns to compare, each used for the pixel and the lens samples.
-    #[arg(long, value_enum, value_delimiter = ',',
-          default_values_t = [SamplerName::Random, SamplerName::Stratified, SamplerName::Sobol])]
     pub samplers: Vec<SamplerName>,
-    /// Also render adaptively (`--noise-target`) at each of these targets, with --max-spp as
+    /// Also render adaptively (`render.noise_target`) at each of these targets, with `max_spp` as
     /// the most samples a pixel takes: one more curve per pattern and backend, and a table of
     /// the time uniform sampling needs for the same RMSE.
-    #[arg(long, value_delimiter = ',', value_name = "X,Y,...")]
     pub noise_targets: Vec<f64>,
     /// The adaptive renders' `render.min_spp` (default: the scene's, or 16).
-    #[arg(long, value_name = "N")]
     pub min_spp: Option<u32>,
     /// Renders of each run: its times are their medians (the images are the same).
-    #[arg(long, value_parser = crate::bench::at_least_one, default_value_t = 1)]
     pub runs: usize,
     /// Backends to measure, side by side.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu])]
     pub backends: Vec<Backend>,
-    /// The CSV to write: one row per run, the command and machine in `#` comments.
-    #[arg(long, default_value = "converge.csv")]
-    pub csv: PathBuf,
-    /// Where to write the log-log plot: SVG, or PNG for a `.png` (repeat for both). Default:
-    /// beside the CSV, its name with `.svg`.
-    #[arg(long, value_name = "F.svg|F.png", conflicts_with = "no_plot")]
-    pub plot: Vec<PathBuf>,
-    /// Write the CSV alone, no plot.
-    #[arg(long)]
-    pub no_plot: bool,
-    /// Replace the CSV and the plots even where they are write-protected files (refused
-    /// otherwise, before the first render).
-    #[arg(long)]
-    pub force: bool,
     /// Override any scene field, e.g. --set render.width=200 (also -D).
-    #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,
-}
-
-impl ConvergeArgs {
-    /// The plots to write: those `--plot` names, else one beside the CSV (its name with `.svg`,
-    /// or `.svg` added when the CSV's own name ends so), none with `--no-plot`.
-    pub fn plots(&self) -> Vec<PathBuf> {
-        if self.no_plot {
-            return Vec::new();
-        }
-        if !self.plot.is_empty() {
-            return self.plot.clone();
-        }
-        let beside = self.csv.with_extension("svg");
-        if beside != self.csv {
-            return vec![beside];
-        }
-        let mut name = self.csv.clone().into_os_string();
-        name.push(".svg");
-        vec![PathBuf::from(name)]
-    }
 }
 
 /// One render and its error against the reference.
@@ -121,74 +77,6 @@ pub struct Run {
     pub rel_mse: f64,
     /// Mean FLIP error against the reference ([`flip`]).
     pub flip: f64,
-}
-
-/// Root mean square error of linear radiance over pixels and channels.
-pub fn rmse(image: &Image, reference: &Image) -> f64 {
-    let sum: f64 = image
-        .pixels
-        .iter()
-        .zip(&reference.pixels)
-        .map(|(p, q)| (*p - *q).length_squared() as f64)
-        .sum();
-    (sum / (3 * image.pixels.len()) as f64).sqrt()
-}
-
-/// Relative MSE, mean of (x - r)^2 / (r^2 + 0.01) over pixels and channels (the 0.01 keeps dark
-/// pixels from dominating; Rousselle et al.'s definition, which Mitsuba's tools use).
-pub fn rel_mse(image: &Image, reference: &Image) -> f64 {
-    let sum: f64 = image
-        .pixels
-        .iter()
-        .zip(&reference.pixels)
-        .map(|(p, q)| {
-            let (p, q) = (p.as_dvec3(), q.as_dvec3());
-            ((p - q) * (p - q) / (q * q + 0.01)).element_sum()
-        })
-        .sum();
-    sum / (3 * image.pixels.len()) as f64
-}
-
-/// Mean FLIP error of the two images shown as sRGB 8-bit (clamped), at FLIP's default viewing
-/// distance (67 pixels per degree): 0 for identical images, 1 at most.
-pub fn flip(image: &Image, reference: &Image) -> f64 {
-    let map = flip_map(image, reference);
-    map.iter().map(|&v| v as f64).sum::<f64>() / map.len().max(1) as f64
-}
-
-/// FLIP's per-pixel error map (row-major, row 0 at the top) of the two images shown as sRGB
-/// 8-bit, at FLIP's default viewing distance.
-pub fn flip_map(image: &Image, reference: &Image) -> Vec<f32> {
-    let rgb8 = |i: &Image| {
-        let bytes: Vec<u8> = i
-            .pixels
-            .iter()
-            .flat_map(|p| p.to_array().map(srgb_encode))
-            .collect();
-        nv_flip::FlipImageRgb8::with_data(i.width, i.height, &bytes)
-    };
-    let map = nv_flip::flip(
-        rgb8(reference),
-        rgb8(image),
-        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
-    );
-    map.to_vec()
-}
-
-/// Least-squares slope of log(error) against log(x): -0.5 for error falling as 1/sqrt(x).
-pub fn log_log_slope(points: &[(f64, f64)]) -> f64 {
-    let logs: Vec<(f64, f64)> = points
-        .iter()
-        .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-        .map(|(x, y)| (x.ln(), y.ln()))
-        .collect();
-    let n = logs.len() as f64;
-    let (mx, my) = logs
-        .iter()
-        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x / n, b + y / n));
-    let sxy: f64 = logs.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
-    let sxx: f64 = logs.iter().map(|(x, _)| (x - mx) * (x - mx)).sum();
-    sxy / sxx
 }
 
 fn median(values: impl Iterator<Item = f64>) -> f64 {
@@ -221,7 +109,7 @@ fn render_once(
 }
 
 /// The reference: read from `path` (a linear EXR of the scene's size), or rendered.
-fn reference(args: &ConvergeArgs, width: u32, height: u32, seed: u32) -> Result<Image> {
+fn reference(args: &ConvergeSettings, width: u32, height: u32, seed: u32) -> Result<Image> {
     if let Some(path) = &args.reference {
         let read = image::open(path)
             .map_err(|e| Error::File {
@@ -270,7 +158,7 @@ pub struct Study {
 
 /// Runs the study `args` describe: the reference (read or rendered), then every run, each
 /// rendered `--runs` times.
-pub fn run(args: &ConvergeArgs) -> Result<Study> {
+pub fn run(args: &ConvergeSettings) -> Result<Study> {
     let scene = Scene::load(&args.scene, &args.set)?;
     let (width, height, seed) = (scene.render.width, scene.render.height, scene.render.seed);
     let reference_image = reference(args, width, height, seed)?;

@@ -18,9 +18,9 @@ use crate::render::{AccumulationLayout, Backend, DispatchStatus, RayBudgets};
 /// with the same integrator, sample patterns and accumulation layout as the GPU kernel.
 pub struct CpuRenderer<'a> {
     scene: &'a FlatScene,
-    /// Laid out as the GPU's (`render::AccumulationLayout`): the image's sums (two halves in an
-    /// adaptive render), then the scratch sums of a pass split into light windows, which grow
-    /// the buffer on first use.
+    /// Laid out as the GPU's (`render::AccumulationLayout`): the image's sums, then the AOV
+    /// layers when asked for, then the scratch sums of a pass split into light windows, which
+    /// grow the buffer on first use.
     accumulation: Vec<[f32; 4]>,
     /// The pixels a listed dispatch samples (`Backend::set_pixel_list`).
     pixel_list: Vec<u32>,
@@ -192,7 +192,7 @@ impl<'a> CpuRenderer<'a> {
             } else {
                 0
             };
-        let needed = pass.accumulation_offset.max(last).max(aovs) as usize + pixels;
+        let needed = last.max(aovs) as usize + pixels;
         if self.accumulation.len() < needed {
             self.accumulation.resize(needed, [0.0; 4]);
         }
@@ -215,7 +215,7 @@ impl<'a> CpuRenderer<'a> {
                     radiance += Vec3::from_slice(&self.accumulation[scratch][..3]);
                 }
                 if pass.commit != 0 {
-                    let slot = (pass.accumulation_offset + pixel) as usize;
+                    let slot = pixel as usize;
                     let samples = pass.sample_count as f32;
                     add(
                         &mut self.accumulation[slot],

@@ -1,4 +1,5 @@
-//! The one error type of the library. `main.rs` alone turns it into a message and an exit code.
+//! The one error type of the library. The binary (`src/bin/chambre/`) alone turns it into a
+//! message and an exit code.
 
 use std::path::PathBuf;
 

@@ -495,6 +495,15 @@ pub struct GpuFrame {
     /// 0 for a static scene; else where the velocity records start in the primitive array:
     /// primitive `i` moves with velocity `prims[motion_base + i].p0` (scene units a second).
     pub motion_base: u32,
+    /// 1 in an adaptive render: every prefix of a pixel's samples must be stratified, so the
+    /// stratified pattern and the light samples take progressive orders (`sampler.rs`).
+    pub progressive: u32,
+    /// Padding to the WGSL layout.
+    pub _pad1: u32,
+    /// Padding to the WGSL layout.
+    pub _pad2: u32,
+    /// Padding to the WGSL layout.
+    pub _pad3: u32,
 }
 
 /// What one dispatch renders: a rectangle of pixels (whole rows: a band), a range of sample
@@ -530,9 +539,6 @@ pub struct GpuPass {
     /// 0: the invocations cover the band's pixels. Otherwise the band's rows (`tile_width`
     /// entries each) index a list of this many pixels (adaptive sampling's unconverged ones).
     pub listed_pixels: u32,
-    /// Where in the accumulation buffer (in pixels) the committed sums go: the first or the
-    /// second half of an adaptive render (`render::AccumulationLayout`).
-    pub accumulation_offset: u32,
     /// Where (in pixels) the scratch sums of a pass split into light windows live.
     pub scratch_offset: u32,
     /// Where (in pixels) the AOV layers start (`render::AccumulationLayout`); 0: no AOVs.
@@ -541,6 +547,8 @@ pub struct GpuPass {
     pub _pad1: u32,
     /// Padding to the WGSL layout.
     pub _pad2: u32,
+    /// Padding to the WGSL layout.
+    pub _pad3: u32,
 }
 
 impl GpuPass {
@@ -693,7 +701,7 @@ pub struct GpuWaveArgs {
     pub shadows: [u32; 4],
 }
 
-/// A Fermat solve's reflector and eye (`wgsl/fermat.wgsl`): a sphere, a torus (around the
+/// A Fermat solve's reflector and eye (`wgsl/preview/fermat.wgsl`): a sphere, a torus (around the
 /// vertical axis through its centre), a bicubic Bézier patch, an ellipsoid or a cylinder, and how many vertices the `fermat_vertices` buffer holds.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -754,7 +762,7 @@ pub struct GpuReflection {
     /// 1 where the preview draws this reflection (E and V see P from outside and the law of
     /// reflection holds to `REFLECTION_TOLERANCE`; CPU twin `fermat::drawn_in_preview`), else 0.
     pub shown: u32,
-    /// P's parameters (u, v) in the vertex's facing frame (`fermat::Sphere::facing`); a
+    /// P's parameters (u, v) in the vertex's facing frame (`scene::parametric::Sphere::facing`); a
     /// patch's own (u, v), which the cull reads to tell a corner on the patch from one in its
     /// seam band.
     pub uv: [f32; 2],
@@ -799,7 +807,7 @@ const _: () = assert!(size_of::<GpuNormals>() == 36);
 const _: () = assert!(size_of::<GpuMaterial>() == 64);
 const _: () = assert!(size_of::<GpuLight>() == 64);
 const _: () = assert!(size_of::<GpuCamera>() == 144);
-const _: () = assert!(size_of::<GpuFrame>() == 96);
+const _: () = assert!(size_of::<GpuFrame>() == 112);
 const _: () = assert!(size_of::<GpuPass>() == 64);
 
 /// The raster preview draws a vertex's Fermat reflection only where the law of reflection holds

@@ -7,27 +7,13 @@
 //! ```text
 //! scene.toml --scene::load--> Scene --pack::flatten--> FlatScene (accel: obvhs BVH; layout::Gpu*)
 //!     |-- gpu::GpuRenderer  (wgsl/*.wgsl, wgpu compute) --|
-//!     |-- cpu::CpuRenderer  (integrator.rs, camera.rs...) --+--> render::Image --> output
+//!     |-- cpu::CpuRenderer  (integrator, accel) ------------+--> render::Image --> output
 //! Scene --export::mitsuba--> Mitsuba 3 XML (+ PLY meshes), to render the same scene with a peer
 //! ```
 //!
-//! | stage                | Rust (CPU reference)        | WGSL (GPU)             |
-//! |----------------------|-----------------------------|------------------------|
-//! | random numbers       | `math/rng.rs`               | `wgsl/rng.wgsl`        |
-//! | sample warping       | `math/sampling.rs`          | `wgsl/sampling.wgsl`   |
-//! | pixel & lens samples | `sampler.rs`                | `wgsl/sampler.wgsl`    |
-//! | primary rays         | `camera/mod.rs`             | `wgsl/camera.wgsl`     |
-//! | intersection         | `accel/intersect.rs`        | `wgsl/intersect.wgsl`  |
-//! | BVH traversal        | `accel/traverse.rs` (obvhs BVH2) | `wgsl/traverse.wgsl` (ray queries) |
-//! | CWBVH traversal      | `accel/cwbvh.rs`            | `wgsl/traverse_cwbvh.wgsl` (the render kernel's) |
-//! | shading, shadows, mirrors | `integrator.rs`        | `wgsl/integrator.wgsl` |
-//! | pixel loop           | `cpu.rs`                    | `wgsl/render.wgsl` (the megakernel) |
-//! | a path vertex per stage | `integrator.rs` (`trace_path`, vertex by vertex) | `wgsl/wavefront.wgsl` (the wavefront render; `docs/gpu.md`) |
-//! | status and loop caps | `render.rs`                 | `wgsl/status.wgsl`     |
-//! | adaptive sampling    | `adaptive.rs` (decisions on the host, for both paths) | `wgsl/render.wgsl` (pixel lists, halves) |
-//! | ray queries (bench)  | `bench/rays.rs`             | `wgsl/trace.wgsl`      |
-//! | bindings             | `gpu/kernels.rs` (table)    | `wgsl/bindings.wgsl`   |
-//! | raster preview       | `preview.rs`, `gpu/preview.rs` (render pipeline) | `wgsl/preview.wgsl` |
+//! Every WGSL file's Rust twin, each traversal's role (renders, reference, fallback,
+//! benchmark), the modules in the order the data flows through them and where a new shape,
+//! light, material, kernel or benchmark goes: `docs/architecture.md` (its tables are tested).
 //!
 //! Kernels are listed in `gpu/kernels.rs` (modules, entry point, bindings) and built by its one
 //! pipeline builder, specialised to the scene's features (`layout::FEATURES`).
@@ -40,11 +26,11 @@ pub mod converge;
 pub mod cpu;
 pub mod error;
 pub mod export;
-pub mod fermat;
 pub mod gpu;
 pub mod integrator;
 pub mod layout;
 pub mod math;
+pub mod metrics;
 pub mod output;
 pub mod pack;
 pub mod plot;

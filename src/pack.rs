@@ -10,10 +10,11 @@ use obvhs::bvh2::Bvh2;
 use crate::accel::cwbvh::{self, CwGeometry};
 use crate::accel::traverse::Tracer;
 use crate::accel::wide::WideBvh;
-use crate::accel::{Motion, Primitives, build_geometry, intersect};
+use crate::accel::{Geometry, Motion, Primitives, build_geometry, intersect};
 use crate::layout::*;
 use crate::math::sampling::strata_columns;
 use crate::sampler::SampleTable;
+use crate::scene::mesh::TriangleMesh;
 use crate::scene::{CurvedPrimitive, Light, Scene, Shape};
 
 /// Everything the kernels (and the CPU reference) read, ready to upload.
@@ -159,7 +160,84 @@ impl FlatScene {
 /// emitting mesh triangles into lights, and precomputes the sample table. No AOVs
 /// (`FlatScene::aovs` false) and no CWBVH until first asked for.
 pub fn flatten(scene: &Scene) -> FlatScene {
-    let mut materials: Vec<GpuMaterial> = scene
+    let mut materials = pack_materials(scene);
+    let PackedShapes {
+        mut bounded,
+        planes,
+        triangle_lights,
+        mut velocities,
+        shape_prims,
+        triangle_count,
+    } = pack_shapes(scene);
+    let mut lights = pack_lights(scene, &mut materials, &mut bounded);
+    lights.extend(triangle_lights);
+    // Area lights' quads stand still.
+    velocities.resize(bounded.len(), Vec3::ZERO);
+    let camera = &scene.camera;
+    let motion = Motion {
+        velocities: if scene.velocities.is_empty() {
+            Vec::new()
+        } else {
+            velocities
+        },
+        shutter: camera.shutter.map(|t| t as f32),
+    };
+    let geometry = build_geometry(bounded, planes, &motion);
+    let surfaces = scene
+        .surfaces
+        .iter()
+        .map(|s| FlatSurface {
+            surface: s.surface.clone(),
+            prims: shape_prims[s.shape]
+                .clone()
+                .map(|i| geometry.new_index[i])
+                .collect(),
+        })
+        .collect();
+    // The area lights' quads and emitting triangles, now in BVH order.
+    for light in &mut lights {
+        if light.prim != NONE {
+            light.prim = geometry.new_index[light.prim as usize];
+        }
+    }
+    let render = &scene.render;
+    let lens_sampler = (!camera.is_pinhole()).then_some(camera.lens_sampler);
+    let table = SampleTable::build(
+        render.spp,
+        render.seed,
+        render.pixel_sampler,
+        lens_sampler,
+        camera.aperture_blades,
+        camera.aperture_rotation_deg,
+        render.adaptive.is_some(),
+    );
+    FlatScene {
+        frame: frame_constants(scene, &lights, &geometry, &table),
+        bvh: geometry.bvh,
+        nodes: geometry.nodes,
+        prims: geometry.prims,
+        normals: geometry.normals,
+        materials,
+        lights,
+        camera: camera.to_gpu(table.aperture_offset),
+        sample_table: table.points,
+        bvh_depth: geometry.bvh_depth,
+        traversal_iterations: geometry.traversal_iterations,
+        triangle_count,
+        build_time: geometry.build_time,
+        crop: render.crop,
+        adaptive: render.adaptive,
+        surfaces,
+        aovs: false,
+        cwbvh: std::sync::OnceLock::new(),
+        wide: std::sync::OnceLock::new(),
+    }
+}
+
+/// The scene's materials as the kernels read them (area lights add theirs after,
+/// [`pack_lights`]).
+fn pack_materials(scene: &Scene) -> Vec<GpuMaterial> {
+    scene
         .materials
         .iter()
         .map(|m| GpuMaterial {
@@ -176,26 +254,50 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             emission: m.emission.to_array(),
             ..Default::default()
         })
-        .collect();
-    // Emitting triangles, each a light of one shadow-ray sample per hit.
-    let mut triangle_lights = Vec::new();
-    let mut bounded: Vec<(GpuPrimitive, Option<GpuNormals>)> = Vec::new();
-    let mut planes = Vec::new();
-    let mut triangle_count = 0;
-    // Each bounded primitive's velocity, in `bounded` order (filled as they are added).
-    let mut velocities: Vec<Vec3> = Vec::new();
-    let velocity_of = |shape: usize| scene.velocities.get(shape).copied().unwrap_or(Vec3::ZERO);
-    // Each shape's primitives in `bounded`.
-    let mut shape_prims = Vec::with_capacity(scene.shapes.len());
+        .collect()
+}
+
+/// The shapes' primitives, before the BVH orders them.
+struct PackedShapes {
+    /// The bounded primitives (and a triangle's vertex normals), shape by shape.
+    bounded: Vec<(GpuPrimitive, Option<GpuNormals>)>,
+    /// The unbounded planes.
+    planes: Vec<GpuPrimitive>,
+    /// Emitting triangles, each a light of one shadow-ray sample per hit (`prim`: its index in
+    /// `bounded`).
+    triangle_lights: Vec<GpuLight>,
+    /// Each bounded primitive's velocity, in `bounded` order.
+    velocities: Vec<Vec3>,
+    /// Each shape's primitives in `bounded`.
+    shape_prims: Vec<std::ops::Range<usize>>,
+    /// Triangles of every mesh.
+    triangle_count: usize,
+}
+
+/// Every shape's primitives, in the scene's order: spheres, quads and curved shapes as one
+/// bounded primitive each, a mesh as its triangles, planes apart.
+fn pack_shapes(scene: &Scene) -> PackedShapes {
+    let mut packed = PackedShapes {
+        bounded: Vec::new(),
+        planes: Vec::new(),
+        triangle_lights: Vec::new(),
+        velocities: Vec::new(),
+        shape_prims: Vec::with_capacity(scene.shapes.len()),
+        triangle_count: 0,
+    };
     for (shape_index, shape) in scene.shapes.iter().enumerate() {
-        let velocity = velocity_of(shape_index);
-        let first = bounded.len();
+        let velocity = scene
+            .velocities
+            .get(shape_index)
+            .copied()
+            .unwrap_or(Vec3::ZERO);
+        let first = packed.bounded.len();
         match shape {
             Shape::Sphere {
                 center,
                 radius,
                 material,
-            } => bounded.push((
+            } => packed.bounded.push((
                 prim(
                     PRIM_SPHERE,
                     *material,
@@ -214,60 +316,79 @@ pub fn flatten(scene: &Scene) -> FlatScene {
                 edge_u,
                 edge_v,
                 material,
-            } => bounded.push((prim(PRIM_QUAD, *material, *corner, *edge_u, *edge_v), None)),
+            } => packed
+                .bounded
+                .push((prim(PRIM_QUAD, *material, *corner, *edge_u, *edge_v), None)),
             Shape::Curved {
                 primitive,
                 orientation,
                 material,
-            } => bounded.push((curved_primitive(primitive, *orientation, *material), None)),
+            } => packed
+                .bounded
+                .push((curved_primitive(primitive, *orientation, *material), None)),
             Shape::Plane {
                 point,
                 normal,
                 material,
-            } => planes.push(prim(PRIM_PLANE, *material, *point, *normal, Vec3::ZERO)),
-            Shape::Mesh { mesh, material } => {
-                triangle_count += mesh.triangles.len();
-                for (f, t) in mesh.triangles.iter().enumerate() {
-                    let material = mesh.face_materials.get(f).copied().unwrap_or(*material);
-                    let emission = scene.materials[material as usize].emission;
-                    let emitting = emission.max_element() > 0.0;
-                    // Vertices in the order the watertight test relies on; an emitter keeps
-                    // its winding, which says which side it shines from.
-                    let order = match emitting {
-                        true => [0, 1, 2],
-                        false => {
-                            intersect::lexicographic_order(t.map(|i| mesh.positions[i as usize]))
-                        }
-                    };
-                    let t = order.map(|k| t[k]);
-                    let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-                    let normals = mesh.normals.as_ref().map(|n| {
-                        let [na, nb, nc] = t.map(|i| n[i as usize]);
-                        GpuNormals {
-                            n: [na.x, na.y, na.z, nb.x, nb.y, nb.z, nc.x, nc.y, nc.z],
-                        }
-                    });
-                    bounded.push((prim(PRIM_TRIANGLE, material, a, b, c), normals));
-                    if emitting {
-                        triangle_lights.push(GpuLight {
-                            p0: a.to_array(),
-                            kind: LIGHT_TRIANGLE,
-                            p1: (b - a).to_array(),
-                            samples: 1,
-                            p2: (c - a).to_array(),
-                            // Pre-reorder index for now; remapped after the BVH build below.
-                            prim: bounded.len() as u32 - 1,
-                            color: emission.to_array(),
-                            strata_columns: 1,
-                        });
-                    }
-                }
-            }
+            } => packed
+                .planes
+                .push(prim(PRIM_PLANE, *material, *point, *normal, Vec3::ZERO)),
+            Shape::Mesh { mesh, material } => pack_mesh(scene, mesh, *material, &mut packed),
         }
-        velocities.resize(bounded.len(), velocity);
-        shape_prims.push(first..bounded.len());
+        packed.velocities.resize(packed.bounded.len(), velocity);
+        packed.shape_prims.push(first..packed.bounded.len());
     }
-    // Area lights are surfaces too: a one-sided emitting quad with a material of its own.
+    packed
+}
+
+/// A mesh's triangles (with their vertex normals), each emitting one also a light.
+fn pack_mesh(scene: &Scene, mesh: &TriangleMesh, material: u32, packed: &mut PackedShapes) {
+    packed.triangle_count += mesh.triangles.len();
+    for (f, t) in mesh.triangles.iter().enumerate() {
+        let material = mesh.face_materials.get(f).copied().unwrap_or(material);
+        let emission = scene.materials[material as usize].emission;
+        let emitting = emission.max_element() > 0.0;
+        // Vertices in the order the watertight test relies on; an emitter keeps its winding,
+        // which says which side it shines from.
+        let order = match emitting {
+            true => [0, 1, 2],
+            false => intersect::lexicographic_order(t.map(|i| mesh.positions[i as usize])),
+        };
+        let t = order.map(|k| t[k]);
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+        let normals = mesh.normals.as_ref().map(|n| {
+            let [na, nb, nc] = t.map(|i| n[i as usize]);
+            GpuNormals {
+                n: [na.x, na.y, na.z, nb.x, nb.y, nb.z, nc.x, nc.y, nc.z],
+            }
+        });
+        packed
+            .bounded
+            .push((prim(PRIM_TRIANGLE, material, a, b, c), normals));
+        if emitting {
+            packed.triangle_lights.push(GpuLight {
+                p0: a.to_array(),
+                kind: LIGHT_TRIANGLE,
+                p1: (b - a).to_array(),
+                samples: 1,
+                p2: (c - a).to_array(),
+                // Its index in `bounded`, remapped after the BVH build (`flatten`).
+                prim: packed.bounded.len() as u32 - 1,
+                color: emission.to_array(),
+                strata_columns: 1,
+            });
+        }
+    }
+}
+
+/// The lights as the kernels read them, in the scene's order. Area lights are surfaces too: a
+/// one-sided emitting quad each, with a material of its own, added to `bounded` and
+/// `materials`.
+fn pack_lights(
+    scene: &Scene,
+    materials: &mut Vec<GpuMaterial>,
+    bounded: &mut Vec<(GpuPrimitive, Option<GpuNormals>)>,
+) -> Vec<GpuLight> {
     let mut lights = Vec::new();
     for light in &scene.lights {
         lights.push(match *light {
@@ -332,7 +453,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
                     p1: edge_u.to_array(),
                     samples,
                     p2: edge_v.to_array(),
-                    // Pre-reorder index for now; remapped after the BVH build below.
+                    // Its index in `bounded`, remapped after the BVH build (`flatten`).
                     prim: bounded.len() as u32 - 1,
                     color: radiance.to_array(),
                     strata_columns: strata_columns(samples),
@@ -340,48 +461,18 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             }
         });
     }
+    lights
+}
 
-    lights.extend(triangle_lights);
-    // Area lights' quads stand still.
-    velocities.resize(bounded.len(), Vec3::ZERO);
-    let camera = &scene.camera;
-    let motion = Motion {
-        velocities: if scene.velocities.is_empty() {
-            Vec::new()
-        } else {
-            velocities
-        },
-        shutter: camera.shutter.map(|t| t as f32),
-    };
-    let geometry = build_geometry(bounded, planes, &motion);
-    let surfaces = scene
-        .surfaces
-        .iter()
-        .map(|s| FlatSurface {
-            surface: s.surface.clone(),
-            prims: shape_prims[s.shape]
-                .clone()
-                .map(|i| geometry.new_index[i])
-                .collect(),
-        })
-        .collect();
-    // The area lights' quads, now in BVH order.
-    for light in &mut lights {
-        if light.prim != NONE {
-            light.prim = geometry.new_index[light.prim as usize];
-        }
-    }
-    let render = &scene.render;
-    let lens_sampler = (!camera.is_pinhole()).then_some(camera.lens_sampler);
-    let table = SampleTable::build(
-        render.spp,
-        render.seed,
-        render.pixel_sampler,
-        lens_sampler,
-        camera.aperture_blades,
-        camera.aperture_rotation_deg,
-    );
-    let frame = GpuFrame {
+/// The frame's constants: image, samples, lights, the BVH's extent and sample tables.
+fn frame_constants(
+    scene: &Scene,
+    lights: &[GpuLight],
+    geometry: &Geometry,
+    table: &SampleTable,
+) -> GpuFrame {
+    let (render, camera) = (&scene.render, &scene.camera);
+    GpuFrame {
         width: render.width,
         height: render.height,
         spp: render.spp,
@@ -406,27 +497,8 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             .sum(),
         ambient: render.ambient.to_array(),
         motion_base: geometry.motion_base,
-    };
-    FlatScene {
-        bvh: geometry.bvh,
-        nodes: geometry.nodes,
-        prims: geometry.prims,
-        normals: geometry.normals,
-        materials,
-        lights,
-        camera: camera.to_gpu(table.aperture_offset),
-        frame,
-        sample_table: table.points,
-        bvh_depth: geometry.bvh_depth,
-        traversal_iterations: geometry.traversal_iterations,
-        triangle_count,
-        build_time: geometry.build_time,
-        crop: render.crop,
-        adaptive: render.adaptive,
-        surfaces,
-        aovs: false,
-        cwbvh: std::sync::OnceLock::new(),
-        wide: std::sync::OnceLock::new(),
+        progressive: render.adaptive.is_some() as u32,
+        ..Default::default()
     }
 }
 

@@ -141,17 +141,14 @@ pub trait Backend {
 }
 
 /// How a backend's accumulation buffer is laid out, in pixel slots of `[f32; 4]`: the image's
-/// running sums (radiance, samples) as one layer, or, in an adaptive render, as two halves that
-/// take alternate passes (their difference estimates each pixel's error, `adaptive.rs`); then,
-/// when AOVs are asked for, two layers of first-hit sums, (normal, depth) and (albedo, 0); then,
-/// when passes are split into light windows, the scratch sums of the pass in progress. Both
-/// backends use it, so the CPU path twins the kernel's indices.
+/// running sums (radiance, samples); then, when AOVs are asked for, two layers of first-hit
+/// sums, (normal, depth) and (albedo, 0); then, when passes are split into light windows, the
+/// scratch sums of the pass in progress. Both backends use it, so the CPU path twins the
+/// kernel's indices.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct AccumulationLayout {
     /// Pixels of the image (a layer's slots).
     pub pixels: usize,
-    /// 1, or 2 in an adaptive render.
-    pub halves: usize,
     /// The AOV layers are there.
     pub aovs: bool,
     /// The scratch layer is there.
@@ -163,15 +160,14 @@ impl AccumulationLayout {
     pub fn of(scene: &FlatScene, scratch: bool) -> AccumulationLayout {
         AccumulationLayout {
             pixels: scene.frame.width as usize * scene.frame.height as usize,
-            halves: if scene.adaptive.is_some() { 2 } else { 1 },
             aovs: scene.aovs,
             scratch,
         }
     }
 
-    /// Slots of the image's sums (both halves).
+    /// Slots of the image's sums.
     pub fn image_len(&self) -> usize {
-        self.pixels * self.halves
+        self.pixels
     }
 
     /// Where the AOV layers start; 0 (the image's place) when there are none.
@@ -198,28 +194,14 @@ impl AccumulationLayout {
         self.len() == 0
     }
 
-    /// Where half `half` (0 or 1) starts.
-    pub fn half_offset(&self, half: u32) -> u32 {
-        (half as usize * self.pixels) as u32
-    }
-
     /// Where the scratch sums start.
     pub fn scratch_offset(&self) -> u32 {
         (self.image_len() + self.aov_len()) as u32
     }
 
-    /// The image's sums from a buffer of this layout (or its first `image_len` slots): the
-    /// halves added.
+    /// The image's sums from a buffer of this layout (or its first `image_len` slots).
     pub fn image_sums(&self, mut buffer: Vec<[f32; 4]>) -> Vec<[f32; 4]> {
-        if self.halves == 2 {
-            let (first, second) = buffer.split_at_mut(self.pixels);
-            for (a, b) in first.iter_mut().zip(&second[..self.pixels]) {
-                for c in 0..4 {
-                    a[c] += b[c];
-                }
-            }
-        }
-        buffer.truncate(self.pixels);
+        buffer.truncate(self.image_len());
         buffer
     }
 }
@@ -410,19 +392,13 @@ impl RenderPlan {
     /// The dispatches of pass `pass`, in order: each band in every light window.
     pub fn dispatches(&self, pass: usize) -> Vec<GpuPass> {
         let (sample_start, sample_count) = self.passes[pass];
-        self.dispatches_of(sample_start, sample_count, 0, 0)
+        self.dispatches_of(sample_start, sample_count, 0)
     }
 
-    /// The dispatches of samples `sample_start .. sample_start + sample_count` into half `half`
-    /// of the accumulation: over the bands of the image when `listed` is 0, else over bands of
-    /// rows of the pixel list (`width` entries a row) of `listed` pixels.
-    pub fn dispatches_of(
-        &self,
-        sample_start: u32,
-        sample_count: u32,
-        half: u32,
-        listed: u32,
-    ) -> Vec<GpuPass> {
+    /// The dispatches of samples `sample_start .. sample_start + sample_count`: over the bands
+    /// of the image when `listed` is 0, else over bands of rows of the pixel list (`width`
+    /// entries a row) of `listed` pixels.
+    pub fn dispatches_of(&self, sample_start: u32, sample_count: u32, listed: u32) -> Vec<GpuPass> {
         let list_bands;
         let (bands, first_column) = if listed == 0 {
             (&self.bands, self.first_column)
@@ -450,7 +426,6 @@ impl RenderPlan {
                     commit: (i + 1 == windows.len()) as u32,
                     loop_check: LOOP_CHECK_ITERATIONS,
                     listed_pixels: listed,
-                    accumulation_offset: self.layout.half_offset(half),
                     scratch_offset: self.layout.scratch_offset(),
                     aov_offset: self.layout.aov_offset(),
                     ..Default::default()
@@ -656,7 +631,7 @@ fn drive(
             aovs: None,
         },
     };
-    let decisions = match scene.adaptive {
+    let adaptive = match scene.adaptive {
         None => {
             // Passes are made one by one as they are submitted: a 2^20-spp render has millions.
             for pass in 0..plan.passes.len() {
@@ -664,9 +639,9 @@ fn drive(
                     break;
                 }
             }
-            0
+            None
         }
-        Some(settings) => sample_adaptively(&mut run, backend, &plan, &settings),
+        Some(settings) => Some(sample_adaptively(&mut run, backend, &plan, &settings)),
     };
     run.drain(backend);
     let traced = run.start.elapsed();
@@ -677,14 +652,6 @@ fn drive(
     let crop = |layer: Vec<[f32; 4]>| crop_rows(layer, frame.width, scene.crop);
     // What needs the layers beyond the image's sums reads them before `accumulation`, which
     // may move the buffer out (the CPU path's does).
-    let errors = match scene.adaptive {
-        Some(_) => {
-            let halves = backend.read_slots(0..layout.image_len())?;
-            let errors = crate::adaptive::pixel_errors(layout, &halves);
-            Some(crop_rows(errors, frame.width, scene.crop))
-        }
-        None => None,
-    };
     let aov_sums = match scene.aovs {
         true => {
             let offset = layout.aov_offset() as usize;
@@ -692,8 +659,14 @@ fn drive(
         }
         false => None,
     };
+    let sums = backend.accumulation()?;
+    let errors = adaptive.as_ref().map(|(_, split)| {
+        let estimates =
+            crate::adaptive::squared_error_estimates(&sums, split, frame.width, scene.crop);
+        crop_rows(estimates, frame.width, scene.crop)
+    });
     // The crop window's pixels alone (the whole image unless `render.crop` narrows it).
-    let accumulation = crop(backend.accumulation()?);
+    let accumulation = crop(sums);
     output.image = Image::from_accumulation(x1 - x0, y1 - y0, &accumulation);
     output.sample_counts = sample_counts(&accumulation);
     if let Some(sums) = aov_sums {
@@ -701,9 +674,17 @@ fn drive(
         let (normal_depth, albedo) = (crop(normal_depth.to_vec()), crop(albedo.to_vec()));
         output.aovs = Some(Aovs::from_sums(&normal_depth, &albedo, &accumulation));
     }
-    if let (Some(settings), Some(errors)) = (&scene.adaptive, errors) {
+    if let (Some(settings), Some(errors), Some((decisions, _))) =
+        (&scene.adaptive, errors, adaptive)
+    {
         let counts = &output.sample_counts;
-        output.adaptive = Some(AdaptiveReport::new(settings, &errors, counts, decisions));
+        output.adaptive = Some(AdaptiveReport::new(
+            settings,
+            &errors,
+            counts,
+            scene.frame.spp,
+            decisions,
+        ));
     }
     let stopped = output.stopped.is_some() || output.deadline_reached;
     if stopped || scene.adaptive.is_some() {
@@ -722,76 +703,98 @@ fn drive(
     Ok(output)
 }
 
-/// Adaptive sampling (`adaptive.rs`): steps of samples alternate between the accumulation's
-/// halves, each step in passes of at most the plan's samples. Once every pixel has `min_spp`
-/// samples (in steps of `min_spp / 2`), the finished passes are read back and the pixels that
-/// met the target stop; then rounds of two steps, each an eighth of the samples so far (a
-/// multiple of `min_spp / 2`), sample a list of the rest, a decision after each round. The
-/// steps and decisions depend on sample counts alone, not on a backend's budgets, so the GPU
-/// and the CPU path decide alike. Returns the decisions made.
+/// Adaptive sampling (`adaptive.rs`): the samples run in segments between splits at powers of
+/// two, `[0, m/2)`, `[m/2, m)`, `[m, 2m)`, … (`m` the first decision,
+/// `AdaptiveSettings::first_decision`), each in passes of at most the plan's samples. At each
+/// split the finished passes are read back and kept as the next halves' first; from `m` on,
+/// each split is a decision, and the next segment runs in steps (`adaptive::step_after`, a
+/// quarter) over a list of the pixels whose goal is beyond the step's start. The segments, quarters and decisions depend on
+/// sample counts alone, not on a backend's budgets, so the GPU and the CPU path decide alike.
+/// Returns the decisions made and every pixel's sums at its last split (the first of the halves
+/// its error estimate compares).
 fn sample_adaptively(
     run: &mut Run<'_, '_>,
     backend: &mut dyn Backend,
     plan: &RenderPlan,
     settings: &AdaptiveSettings,
-) -> u32 {
+) -> (u32, Vec<[f32; 4]>) {
     let scene = run.scene;
     let frame = &scene.frame;
     let spp = frame.spp;
-    let first_step = (settings.min_spp / 2).max(1);
-    let mut step = first_step;
+    let first = settings.first_decision();
     let per_pass = plan.passes[0].1;
     let batches_per_pass = plan.batch_count() as u64 / plan.passes.len() as u64;
-    // The uniform render's batches: an upper bound on an adaptive one's, near for small steps.
-    run.total = spp.div_ceil(per_pass.min(step)) as u64 * batches_per_pass;
-    let mut active = ActivePixels::new(frame.width, frame.height, scene.crop);
-    let (mut done, mut half, mut listed, mut decisions) = (0, 0, 0, 0);
-    let mut next_decision = settings.min_spp;
-    'steps: while done < spp {
-        let count = step.min(spp - done);
-        for start in (done..done + count).step_by(per_pass.min(step) as usize) {
-            let samples = per_pass.min(step).min(done + count - start);
-            let dispatches = plan.dispatches_of(start, samples, half, listed);
-            if !run.submit_pass(backend, &dispatches, samples) {
-                break 'steps;
+    // The uniform render's batches in quarters of segments: an upper bound on an adaptive one's.
+    run.total = spp.div_ceil(per_pass.min((first / 8).max(1))) as u64 * batches_per_pass;
+    let mut active = ActivePixels::new(frame.width, frame.height, scene.crop, spp.min(first));
+    let mut split = vec![[0.0f32; 4]; plan.layout.image_len()];
+    let (mut start, mut end, mut listed, mut decisions) = (0, (first / 2).max(1), 0, 0);
+    'segments: while start < spp {
+        let end_here = end.min(spp);
+        // Before the first decision every pixel takes the whole segment; after, the list
+        // shrinks by quarters as pixels reach their goals.
+        let quarter = if decisions == 0 {
+            end_here - start
+        } else {
+            crate::adaptive::step_after(start)
+        };
+        for from in (start..end_here).step_by(quarter as usize) {
+            if decisions > 0 {
+                let list = active.list_beyond(from);
+                if list.is_empty() {
+                    break 'segments;
+                }
+                if list.len() as u32 != listed {
+                    if let Err(e) = backend.set_pixel_list(&list) {
+                        run.output.stopped = Some(e);
+                        break 'segments;
+                    }
+                    listed = list.len() as u32;
+                }
+            }
+            let count = quarter.min(end_here - from);
+            for pass in (from..from + count).step_by(per_pass as usize) {
+                let samples = per_pass.min(from + count - pass);
+                let dispatches = plan.dispatches_of(pass, samples, listed);
+                if !run.submit_pass(backend, &dispatches, samples) {
+                    break 'segments;
+                }
             }
         }
-        done += count;
-        half ^= 1;
-        if half != 0 || done < next_decision || done >= spp {
-            continue;
+        start = end_here;
+        if start >= spp {
+            break;
         }
         run.drain(backend);
         if run.output.stopped.is_some() {
             break;
         }
-        let halves = match backend.read_slots(0..plan.layout.image_len()) {
-            Ok(halves) => halves,
+        let sums = match backend.read_slots(0..plan.layout.image_len()) {
+            Ok(sums) => sums,
             Err(e) => {
                 run.output.stopped = Some(e);
                 break;
             }
         };
-        let errors = crate::adaptive::pixel_errors(&plan.layout, &halves);
-        let remaining = active.decide(&errors, settings.noise_target);
-        decisions += 1;
-        if remaining == 0 {
-            break;
+        if start >= first {
+            let estimates =
+                crate::adaptive::squared_error_estimates(&sums, &split, frame.width, scene.crop);
+            decisions += 1;
+            if active.decide(&estimates, settings.noise_target, start, spp) == 0 {
+                break;
+            }
         }
-        let list = active.list();
-        if let Err(e) = backend.set_pixel_list(&list) {
-            run.output.stopped = Some(e);
-            break;
+        // The pixels that go on compare their next segment with everything before it.
+        for pixel in active.list_beyond(start) {
+            split[pixel as usize] = sums[pixel as usize];
         }
-        listed = list.len() as u32;
-        step = (done / 8).div_ceil(first_step).max(1) * first_step;
-        next_decision = done + 2 * step;
+        end = 2 * start;
     }
     if run.output.stopped.is_none() && !run.output.deadline_reached {
         run.finished = run.total;
         run.progress.advance(run.total, run.total);
     }
-    decisions
+    (decisions, split)
 }
 
 /// A render in progress: what the batches in flight will complete, and the output so far.

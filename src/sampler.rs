@@ -22,6 +22,14 @@
 //!
 //! Every pattern consumes the same two random dimensions per 2-D sample, so switching the camera
 //! sampler leaves the light samples untouched and comparisons isolate the camera.
+//!
+//! Under adaptive sampling (`GpuFrame::progressive`) a pixel stops after any number of samples,
+//! so every prefix of its samples must be stratified, not only the whole `spp`: `stratified`
+//! then visits its strata in the order of an Owen-scrambled (0,2)-sequence
+//! ([`progressive_stratified`]), and the light samples of the stratified, Poisson and
+//! interleaved patterns follow that pattern over the pixel's `spp x light_samples` points. The
+//! precomputed Poisson and interleaved sets are always stored in a progressive order
+//! ([`progressive_order`]); `random` and `sobol` are progressive as they are.
 
 use std::f64::consts::TAU;
 
@@ -97,6 +105,8 @@ pub struct SampleTable {
 impl SampleTable {
     /// Patterns for `spp` samples of the pixel and lens samplers (`lens: None` for a pinhole,
     /// which draws no lens points), and the unit-circle vertices of a polygonal aperture.
+    /// `progressive` (adaptive sampling, `GpuFrame::progressive`) stores the Poisson and
+    /// interleaved sets in a progressive order ([`progressive_order`]) instead of a shuffle.
     pub fn build(
         spp: u32,
         seed: u32,
@@ -104,11 +114,12 @@ impl SampleTable {
         lens: Option<SamplerName>,
         blades: u32,
         rotation_deg: f64,
+        progressive: bool,
     ) -> SampleTable {
         let mut table = SampleTable::default();
-        table.pixel_offset = table.append_patterns(spp, seed, pixel, PIXEL_DIMENSION);
+        table.pixel_offset = table.append_patterns(spp, seed, pixel, PIXEL_DIMENSION, progressive);
         if let Some(lens) = lens {
-            table.lens_offset = table.append_patterns(spp, seed, lens, LENS_DIMENSION);
+            table.lens_offset = table.append_patterns(spp, seed, lens, LENS_DIMENSION, progressive);
         }
         if blades >= 3 {
             table.aperture_offset = table.points.len() as u32;
@@ -121,25 +132,46 @@ impl SampleTable {
         table
     }
 
-    fn append_patterns(&mut self, spp: u32, seed: u32, sampler: SamplerName, dim: u32) -> u32 {
+    fn append_patterns(
+        &mut self,
+        spp: u32,
+        seed: u32,
+        sampler: SamplerName,
+        dim: u32,
+        progressive: bool,
+    ) -> u32 {
         let offset = self.points.len() as u32;
         let salt = pcg_hash(seed ^ pcg_hash(dim));
         match sampler {
             SamplerName::Poisson => {
                 for set in 0..POISSON_SETS {
                     let key = pcg_hash(salt ^ set);
-                    self.points.extend(poisson_disk_set(spp, key).points);
+                    let points = poisson_disk_set(spp, key).points;
+                    self.points
+                        .extend(ordered(points, key, progressive, dim == LENS_DIMENSION));
                 }
             }
             SamplerName::Interleaved => {
                 for pattern in 0..INTERLEAVED_TILE * INTERLEAVED_TILE {
+                    let key = pcg_hash(salt ^ pattern);
+                    let points = jittered_pattern(spp, key);
                     self.points
-                        .extend(jittered_pattern(spp, pcg_hash(salt ^ pattern)));
+                        .extend(ordered(points, key, progressive, dim == LENS_DIMENSION));
                 }
             }
             _ => {}
         }
         offset
+    }
+}
+
+/// A table's set (made with `key`) as stored: shuffled as made, or in a progressive order
+/// under adaptive sampling, scrambled by the set's own key so that the pixel's and the lens's
+/// sets are not ordered alike.
+fn ordered(points: Vec<[f32; 2]>, key: u32, progressive: bool, lens: bool) -> Vec<[f32; 2]> {
+    match progressive {
+        true => progressive_order(&points, pcg_hash(key ^ 0x0bde_2e55), lens),
+        false => points,
     }
 }
 
@@ -273,6 +305,68 @@ fn jittered_pattern(n: u32, key: u32) -> Vec<[f32; 2]> {
         points.swap(i, j);
     }
     points
+}
+
+/// `points` reordered so that every prefix is spread over the unit square: along a Hilbert
+/// curve through them, position `r_k` is taken `k`-th, `r_k` the bits of `k` reversed over the
+/// power of two `2^m` at or above `n` (van der Corput's order) and Owen-scrambled by `seed`,
+/// skipping positions past `n`. A prefix of `2^j` points then has one point in each run of
+/// `2^(m-j)` consecutive positions along the curve, a compact region of about `2^-j` of the
+/// square, at a random place in it; for `4^j` points of a jittered grid of a power of four that
+/// is one point in each cell of every coarser `2^i x 2^i` grid, exactly. The scramble differs
+/// between tables. A lens table (`lens`) takes Sobol's second dimension instead of van der
+/// Corput's: the pixel's and the lens's positions of sample `k` are then one point of a (0,2)-
+/// sequence, jointly stratified, where two scrambles of van der Corput's order would pair their
+/// points in correlated places (the first half of one curve with one half of the other: a
+/// bias no halves can see, measured at 2.6x uniform sampling's error on a defocused scene with
+/// interleaved patterns). The set itself is unchanged.
+pub fn progressive_order(points: &[[f32; 2]], seed: u32, lens: bool) -> Vec<[f32; 2]> {
+    let n = points.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    let mut along: Vec<(u64, [f32; 2])> = points.iter().map(|&p| (hilbert_index(p), p)).collect();
+    along.sort_by_key(|&(d, _)| d);
+    let bits = n.next_power_of_two().trailing_zeros();
+    (0..n.next_power_of_two() as u32)
+        .map(|k| match bits {
+            0 => 0,
+            // The top `bits` bits of the scrambled 32-bit coordinate (given reversed).
+            _ => {
+                let reversed = match lens {
+                    false => k,
+                    true => sobol_dimension_reversed(k, &SOBOL_TABLES_1),
+                };
+                (scramble_reversed(reversed, seed) >> (32 - bits)) as usize
+            }
+        })
+        .filter(|&r| r < n)
+        .map(|r| along[r].1)
+        .collect()
+}
+
+/// The position of `p` (in [0, 1)^2) along the Hilbert curve of a 2^16 x 2^16 grid.
+fn hilbert_index(p: [f32; 2]) -> u64 {
+    const SIDE: u32 = 1 << 16;
+    let cell = |v: f32| ((v.clamp(0.0, 1.0) * SIDE as f32) as u32).min(SIDE - 1);
+    let (mut x, mut y) = (cell(p[0]), cell(p[1]));
+    let mut d = 0u64;
+    let mut s = SIDE / 2;
+    while s > 0 {
+        let rx = u32::from(x & s != 0);
+        let ry = u32::from(y & s != 0);
+        d += s as u64 * s as u64 * ((3 * rx) ^ ry) as u64;
+        // Rotate the quadrant so the curve's pieces join.
+        if ry == 0 {
+            if rx == 1 {
+                x = SIDE - 1 - x;
+                y = SIDE - 1 - y;
+            }
+            std::mem::swap(&mut x, &mut y);
+        }
+        s /= 2;
+    }
+    d
 }
 
 /// Unit-circle vertices of a regular `blades`-gon, the first repeated at the end. With
@@ -435,6 +529,24 @@ pub fn sobol_owen_2d(index: u32, seed: u32) -> [f32; 2] {
     [unit_float(x), unit_float(y)]
 }
 
+/// Point `index` of the progressive stratified pattern of `n` points keyed by `key`: the
+/// stratum of point `index` of the Owen-scrambled (0,2)-sequence [`sobol_owen_2d`] in the grid
+/// of the power of two `2^m` at or above `n` (`2^floor(m/2)` columns by `2^ceil(m/2)` rows),
+/// jittered inside it by `u`. Every prefix of `2^k` points of a (0,2)-sequence has one point in
+/// each cell of every `2^a x 2^b` grid with `a + b = k`, and the jitter keeps each point in its
+/// stratum, so a pixel that stops after any number of samples is as stratified as a uniform
+/// render of that many (the progressive jittered sequences of Christensen, Kensler and
+/// Kilpatrick, "Progressive Multi-Jittered Sample Sequences", 2018, made from Sobol's (0,2)
+/// digits); the first `2^m` points are one per stratum of the grid.
+pub fn progressive_stratified(index: u32, n: u32, key: u32, u: [f32; 2]) -> [f32; 2] {
+    let [x, y] = sobol_owen_2d(index, key);
+    let bits = 32 - (n.max(1) - 1).leading_zeros();
+    let (columns, rows) = (1u32 << (bits / 2), 1u32 << (bits - bits / 2));
+    // Exact: the coordinates have 24 bits and the counts are powers of two.
+    let cell = (y * rows as f32) as u32 * columns + (x * columns as f32) as u32;
+    stratified_2d(cell, columns * rows, columns, u)
+}
+
 /// Where a pixel's sample comes from: the sampler, its strata and its patterns.
 #[derive(Clone, Copy, Debug)]
 pub struct PatternSource {
@@ -489,6 +601,9 @@ pub fn sample_2d(
     }
     let key = pixel_hash(frame.seed, y * frame.width + x, source.dim);
     match source.sampler {
+        SAMPLER_STRATIFIED if frame.progressive != 0 => {
+            progressive_stratified(sample, frame.spp, key, u)
+        }
         SAMPLER_STRATIFIED => {
             let stratum = permute(sample, frame.spp, key).unwrap_or_else(|| {
                 *flags |= STATUS_PERMUTE_CAP;
@@ -527,7 +642,9 @@ pub fn sample_2d(
 /// other's light points: Sobol takes point `sample * light_samples + k` of an Owen-scrambled
 /// sequence; stratified, Poisson and interleaved patterns (whose tables hold `spp` points, not
 /// `spp x light_samples`) a permuted stratum of the product grid (the pixel pattern's strata
-/// times the light's). Random patterns, and pixels with more than
+/// times the light's), or under adaptive sampling (`frame.progressive`) point `sample *
+/// light_samples + k` of the progressive stratified pattern ([`progressive_stratified`]) of
+/// those points, whose every prefix is stratified. Random patterns, and pixels with more than
 /// `MAX_LIGHT_PATTERN_POINTS` light points, stratify each camera sample's light samples alone.
 #[allow(clippy::too_many_arguments)]
 pub fn light_sample_2d(
@@ -550,6 +667,9 @@ pub fn light_sample_2d(
         return sobol_owen_2d(index, key);
     }
     let n = frame.spp * light_samples;
+    if frame.progressive != 0 {
+        return progressive_stratified(index, n, key, u);
+    }
     let stratum = permute(index, n, key).unwrap_or_else(|| {
         *flags |= STATUS_PERMUTE_CAP;
         index

@@ -111,8 +111,8 @@ fn assert_close(a: &Aovs, b: &Aovs, tolerance: f32, what: &str) {
 #[test]
 fn both_paths_and_split_passes_give_the_same_layers() {
     // An area light with 8 samples a hit, split into light windows by small budgets, and
-    // adaptive sampling (pixel lists, two halves): the AOV layers sit between the halves and
-    // the scratch sums.
+    // adaptive sampling (pixel lists): the AOV layers sit between the image's sums and the
+    // scratch sums.
     let overrides = [
         "lights[0]={type=\"area\", corner=[-1.0,-1.0,4.0], edge_u=[2.0,0.0,0.0], \
          edge_v=[0.0,2.0,0.0], radiance=[5.0,5.0,5.0], samples=8}",

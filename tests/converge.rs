@@ -27,7 +27,7 @@ fn converge_measures_the_error_of_each_pattern_and_backend() {
             "--max-spp",
             "32",
             "--noise-targets",
-            "0.2",
+            "0.05",
         ])
         .args([
             "--samplers",
@@ -85,18 +85,19 @@ fn converge_measures_the_error_of_each_pattern_and_backend() {
             assert!(rmse[4] < 0.4 * rmse[0], "{backend} {sampler}: {rmse:?}");
             assert!(flip[4] < flip[0], "{backend} {sampler}: {flip:?}");
             let points: Vec<(f64, f64)> = spp.iter().copied().zip(rmse.iter().copied()).collect();
-            let slope = chambre::converge::log_log_slope(&points);
+            let slope = chambre::metrics::log_log_slope(&points);
             if sampler == "random" {
                 assert!((-0.7..=-0.35).contains(&slope), "random slope {slope}");
             } else {
                 assert!(slope < -0.6, "sobol slope {slope}");
             }
             // The adaptive run: from 16 (its first decision) to 32 samples a pixel, and less
-            // error than uniform sampling's at 16.
+            // error than uniform sampling's at 16 (the target, an image error of 5%, is beyond
+            // what 16 samples reach, so pixels go on).
             let adaptive = curve(backend, sampler, "adaptive");
             assert_eq!(adaptive.len(), 1);
             let run = adaptive[0];
-            assert_eq!((value(run, spp_column), value(run, 5)), (32.0, 0.2));
+            assert_eq!((value(run, spp_column), value(run, 5)), (32.0, 0.05));
             assert!((16.0..=32.0).contains(&value(run, mean_spp)), "{run:?}");
             assert!(
                 value(run, rmse_column) < rmse[4],

@@ -5,13 +5,16 @@
 //! with where they are, and the rate per band of the angle of incidence); the test asserts 99%.
 
 use chambre::bench::fermat::{FermatConfig, FermatReport};
-use chambre::fermat::{
-    BezierPatch, Cylinder, Ellipsoid, Reflector, Solver, Sphere, StartedFrom, Torus, TorusHalf,
-    TorusSearch, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, on_torus_half,
-    reflection_error, seen_from_outside, self_reflection_clear, solve_on_patch,
-};
 use chambre::math::rng::Rng;
 use chambre::preview::MirrorSurface;
+use chambre::preview::reflections::fermat::{
+    Reflector, Solver, StartedFrom, TorusHalf, TorusSearch, alhazen_sphere, drawn_in_preview,
+    on_cylinder, on_patch, on_torus_half, reflection_error, seen_from_outside,
+    self_reflection_clear, solve_on_patch,
+};
+use chambre::scene::parametric::{
+    BezierPatch, Cylinder, Ellipsoid, ParametricSurface, Sphere, Torus,
+};
 use chambre::scene::surface::Surface;
 use glam::{DQuat, DVec3};
 
@@ -142,7 +145,7 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points() {
                 < 150.0
         })
         .collect();
-    let on_gpu = chambre::gpu::fermat::reflections(
+    let on_gpu = chambre::preview::reflections::kernel::reflections(
         &context,
         MirrorSurface::Sphere {
             center: sphere.center.as_vec3(),
@@ -150,7 +153,7 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points() {
         },
         eye.as_vec3(),
         &vertices.iter().map(|v| v.as_vec3()).collect::<Vec<_>>(),
-        chambre::gpu::fermat::SEED_STEPS,
+        chambre::preview::reflections::kernel::SEED_STEPS,
     )
     .unwrap();
     let solver = Solver::default();
@@ -253,13 +256,13 @@ fn the_cull_lists_the_triangles_whose_reflections_show() {
     }
     let tolerance = f64::from(chambre::layout::REFLECTION_TOLERANCE);
     for (name, surface, eye, sees_itself) in cases {
-        let (points, shown) = chambre::gpu::fermat::shown_triangles(
+        let (points, shown) = chambre::preview::reflections::kernel::shown_triangles(
             &context,
             surface,
             (eye.as_vec3(), 1, sees_itself),
             &vertices,
             &triangles,
-            chambre::gpu::preview::PreviewOptions::default().steps,
+            chambre::preview::PreviewOptions::default().steps,
         )
         .unwrap();
         // Per vertex: drawn by the twin's judgement, or too close to call.
@@ -368,13 +371,13 @@ fn batching_the_searches_changes_no_pixel() {
             .map(|o| o.to_string())
             .collect();
         let scene = chambre::scene::Scene::load(&path, &overrides).unwrap();
-        let options = chambre::gpu::preview::PreviewOptions {
+        let options = chambre::preview::PreviewOptions {
             subdivision: Some(2),
             searches_per_dispatch,
             ..Default::default()
         };
         let flat = chambre::pack::flatten(&scene);
-        chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options).unwrap()
+        chambre::preview::draw_with(&context, &scene, &flat, 1, options).unwrap()
     };
     let all = draw(&[], None);
     let no_mirror = draw(&["materials[0].mirror=[0.0,0.0,0.0]"], None);
@@ -469,7 +472,7 @@ fn compare_small_with(
         scene: &scene,
         overrides: &overrides,
         subdivisions: &[1, 4],
-        steps: chambre::gpu::preview::PreviewOptions::default().steps,
+        steps: chambre::preview::PreviewOptions::default().steps,
         runs: 1,
         frames: 2,
         reference_spp: 32,
@@ -695,12 +698,12 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points_on_a_torus_an_ellipsoid_and_a_cyl
         MirrorSurface::Cylinder { cylinder, height },
     ];
     for surface in surfaces {
-        let on_gpu = chambre::gpu::fermat::reflections(
+        let on_gpu = chambre::preview::reflections::kernel::reflections(
             &context,
             surface,
             eye.as_vec3(),
             &vertices.iter().map(|v| v.as_vec3()).collect::<Vec<_>>(),
-            chambre::gpu::fermat::SEED_STEPS,
+            chambre::preview::reflections::kernel::SEED_STEPS,
         )
         .unwrap();
         let (mut compared, mut agree, mut own_agree) = (0, 0, 0);
@@ -923,12 +926,12 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points_on_bezier_patches() {
     let solver = Solver::default();
     let (mut compared, mut agree, mut off, mut off_agree) = (0, 0, 0, 0);
     for patch in &patches {
-        let on_gpu = chambre::gpu::fermat::reflections(
+        let on_gpu = chambre::preview::reflections::kernel::reflections(
             &context,
             MirrorSurface::Patch(*patch),
             eye.as_vec3(),
             &vertices.iter().map(|v| v.as_vec3()).collect::<Vec<_>>(),
-            chambre::gpu::fermat::SEED_STEPS,
+            chambre::preview::reflections::kernel::SEED_STEPS,
         )
         .unwrap();
         for (v, gpu) in vertices.iter().zip(&on_gpu) {
@@ -1037,7 +1040,7 @@ fn the_gpu_kernel_searches_a_teapots_own_points_again_as_the_cpu_does() {
     };
     let (_, patches) = teapot();
     let eye = DVec3::new(0.0, 1.6, 3.2);
-    let steps = chambre::gpu::preview::PreviewOptions::default().steps;
+    let steps = chambre::preview::PreviewOptions::default().steps;
     let solver = preview_solver();
     let (mut compared, mut agree) = (0, 0);
     for (j, patch) in patches.iter().enumerate() {
@@ -1051,7 +1054,7 @@ fn the_gpu_kernel_searches_a_teapots_own_points_again_as_the_cpu_does() {
                 })
             })
             .collect();
-        let on_gpu = chambre::gpu::fermat::own_reflections(
+        let on_gpu = chambre::preview::reflections::kernel::own_reflections(
             &context,
             MirrorSurface::Patch(*patch),
             eye.as_vec3(),
@@ -1113,8 +1116,8 @@ fn mirrors_reflect_each_other_in_the_preview() {
     };
     let preview = |scene: &chambre::scene::Scene| {
         let flat = chambre::pack::flatten(scene);
-        let options = chambre::gpu::preview::PreviewOptions::default();
-        chambre::gpu::preview::draw_with(&context, scene, &flat, 1, options)
+        let options = chambre::preview::PreviewOptions::default();
+        chambre::preview::draw_with(&context, scene, &flat, 1, options)
             .unwrap()
             .image
     };
@@ -1160,8 +1163,8 @@ fn a_mirror_seen_in_a_mirror_ends_the_path_at_max_depth_1() {
     let scene = chambre::scene::Scene::from_str(&path, &text, &[]).unwrap();
     assert_eq!(scene.render.max_depth, 1);
     let flat = chambre::pack::flatten(&scene);
-    let options = chambre::gpu::preview::PreviewOptions::default();
-    let preview = chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options)
+    let options = chambre::preview::PreviewOptions::default();
+    let preview = chambre::preview::draw_with(&context, &scene, &flat, 1, options)
         .unwrap()
         .image;
     let traced = common::render_cpu(&flat);
@@ -1199,8 +1202,8 @@ fn a_scene_whose_paths_do_not_bounce_shows_no_reflection_in_the_preview() {
         .collect();
         let scene = common::load("scenes/fermat_sphere.toml", &overrides);
         let flat = chambre::pack::flatten(&scene);
-        let options = chambre::gpu::preview::PreviewOptions::default();
-        let image = chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options)
+        let options = chambre::preview::PreviewOptions::default();
+        let image = chambre::preview::draw_with(&context, &scene, &flat, 1, options)
             .unwrap()
             .image;
         (chambre::preview::reflectors(&flat).len(), image)
@@ -1249,11 +1252,11 @@ fn reflects_itself_where_the_ray_tracer_sees_it(scene: &str, (found, right): (f6
     let flat = chambre::pack::flatten(&scene);
     let traced = common::render_cpu(&flat);
     let draw = |self_reflections| {
-        let options = chambre::gpu::preview::PreviewOptions {
+        let options = chambre::preview::PreviewOptions {
             self_reflections,
             ..Default::default()
         };
-        chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options)
+        chambre::preview::draw_with(&context, &scene, &flat, 1, options)
             .unwrap()
             .image
     };
@@ -1327,7 +1330,7 @@ fn own_points(torus: &Torus) -> Vec<DVec3> {
 /// The search as the preview runs it: its steps, and the kernel's smallest triangle.
 fn preview_solver() -> Solver {
     Solver {
-        max_steps: chambre::gpu::preview::PreviewOptions::default().steps,
+        max_steps: chambre::preview::PreviewOptions::default().steps,
         min_size: 1e-7,
     }
 }
@@ -1453,7 +1456,7 @@ fn a_thin_torus_far_from_the_origin_finds_its_own_points_as_the_cpu_does() {
         torus,
         half: TorusHalf::Inner,
     };
-    let on_gpu = chambre::gpu::fermat::reflections(
+    let on_gpu = chambre::preview::reflections::kernel::reflections(
         &context,
         MirrorSurface::Torus(inner),
         eye.as_vec3(),
@@ -1522,13 +1525,13 @@ fn a_mirrors_own_points_are_drawn_only_clear_of_their_reflection() {
         out
     };
     let listed = |off: f64, tag: u32| {
-        let (_, shown) = chambre::gpu::fermat::shown_triangles(
+        let (_, shown) = chambre::preview::reflections::kernel::shown_triangles(
             &context,
             MirrorSurface::Patch(patch),
             (eye.as_vec3(), 1, true),
             &grid(off),
             &triangles(tag),
-            chambre::gpu::preview::PreviewOptions::default().steps,
+            chambre::preview::PreviewOptions::default().steps,
         )
         .unwrap();
         shown.len()

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use chambre::pack::flatten;
 use chambre::scene::Scene;
-use chambre::scene::mesh::load_mesh;
+use chambre::scene::mesh_file::load_mesh;
 use glam::Vec3;
 
 mod common;

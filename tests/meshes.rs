@@ -5,7 +5,7 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use chambre::scene::mesh::load_mesh;
+use chambre::scene::mesh_file::load_mesh;
 
 /// Square pyramid: base (0..4) as one quad, apex 4, four sides.
 const POSITIONS: [[f32; 3]; 5] = [

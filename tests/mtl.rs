@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use chambre::layout::{FEATURE_AREA_LIGHTS, LIGHT_TRIANGLE};
 use chambre::pack::flatten;
-use chambre::scene::mesh::load_mesh;
+use chambre::scene::mesh_file::load_mesh;
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("chambre-mtl-{}", std::process::id()));

@@ -88,11 +88,11 @@ fn silhouettes_land_where_the_ray_traced_pinhole_puts_them() {
         // Spheres cut finely enough that their facets do not count (0.02 px), and as the
         // preview cuts them unless told (0.5 px): their silhouettes then shrink by at most that.
         let draw = |tolerance_px| {
-            let options = chambre::gpu::preview::PreviewOptions {
+            let options = chambre::preview::PreviewOptions {
                 tolerance_px,
                 ..Default::default()
             };
-            chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options).unwrap()
+            chambre::preview::draw_with(&context, &scene, &flat, 1, options).unwrap()
         };
         let (preview, coarse) = (draw(0.02), draw(chambre::preview::DEFAULT_TOLERANCE_PX));
         assert_eq!((preview.image.width, preview.image.height), (96, 64));
@@ -164,7 +164,7 @@ fn an_empty_scene_previews_as_its_background() {
                 [camera]\nposition = [0.0, 0.0, 1.0]\nlook_at = [0.0, 0.0, 0.0]\n";
     let scene =
         Scene::from_str(Path::new("empty.toml"), text, &[]).unwrap_or_else(|e| panic!("{e}"));
-    let frame = chambre::gpu::preview::draw(&context, &scene, &flatten(&scene), 1).unwrap();
+    let frame = chambre::preview::draw(&context, &scene, &flatten(&scene), 1).unwrap();
     assert_eq!(frame.triangles, 0);
     for y in 0..frame.image.height {
         for x in 0..frame.image.width {
@@ -207,11 +207,11 @@ fn reflections_beyond_the_adapters_limits_are_refused_with_the_previews_remedy()
     };
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/fermat_sphere.toml");
     let scene = Scene::load(&path, &[]).unwrap();
-    let options = chambre::gpu::preview::PreviewOptions {
+    let options = chambre::preview::PreviewOptions {
         subdivision: Some(360),
         ..Default::default()
     };
-    let result = chambre::gpu::preview::draw_with(&context, &scene, &flatten(&scene), 1, options);
+    let result = chambre::preview::draw_with(&context, &scene, &flatten(&scene), 1, options);
     let message = result.err().expect("refused").to_string();
     assert!(
         message.contains("4406400 reflected triangles to cull")
@@ -225,8 +225,8 @@ fn reflections_beyond_the_adapters_limits_are_refused_with_the_previews_remedy()
 /// A renderer made for `from` whose camera then moves to `to`'s, and one made for `to`, each
 /// having drawn a frame (with `options`), and `from`'s triangles and reflected triangles.
 struct Moved {
-    moved: chambre::gpu::preview::PreviewRenderer,
-    made: chambre::gpu::preview::PreviewRenderer,
+    moved: chambre::preview::PreviewRenderer,
+    made: chambre::preview::PreviewRenderer,
     triangles_before: usize,
     reflected_before: usize,
 }
@@ -235,9 +235,9 @@ impl Moved {
     fn new(
         context: &chambre::gpu::GpuContext,
         (from, to): (&Scene, &Scene),
-        options: chambre::gpu::preview::PreviewOptions,
+        options: chambre::preview::PreviewOptions,
     ) -> Moved {
-        use chambre::gpu::preview::PreviewRenderer;
+        use chambre::preview::PreviewRenderer;
         let mut moved = PreviewRenderer::new(context, from, &flatten(from), options).unwrap();
         let (triangles_before, reflected_before) = (moved.triangles(), moved.reflected_triangles());
         moved.set_camera(&to.camera).unwrap();
@@ -349,7 +349,7 @@ fn a_mirror_reflecting_itself_is_cut_anew_with_the_camera() {
         scene.camera.position = DVec3::new(0.0, 0.5 + 0.35 * z, z);
         scene
     };
-    let options = chambre::gpu::preview::PreviewOptions {
+    let options = chambre::preview::PreviewOptions {
         subdivision: Some(1),
         self_reflections: Some(1.0),
         ..Default::default()
@@ -455,11 +455,11 @@ fn shadows_fall_where_the_ray_tracer_puts_them() {
         let scene = shadowed_scene(light);
         let flat = flatten(&scene);
         let draw = |scene: &Scene, shadows| {
-            let options = chambre::gpu::preview::PreviewOptions {
+            let options = chambre::preview::PreviewOptions {
                 shadows,
                 ..Default::default()
             };
-            chambre::gpu::preview::draw_with(&context, scene, &flatten(scene), 1, options)
+            chambre::preview::draw_with(&context, scene, &flatten(scene), 1, options)
                 .unwrap()
                 .image
         };
@@ -533,11 +533,11 @@ fn shadows_for_more_lights_than_maps_fit_are_refused() {
         })
         .collect();
     let scene = shadowed_scene(&lights);
-    let options = chambre::gpu::preview::PreviewOptions {
+    let options = chambre::preview::PreviewOptions {
         shadows: true,
         ..Default::default()
     };
-    let result = chambre::gpu::preview::draw_with(&context, &scene, &flatten(&scene), 1, options);
+    let result = chambre::preview::draw_with(&context, &scene, &flatten(&scene), 1, options);
     let message = result.err().expect("refused").to_string();
     assert!(
         message.contains("257 lights need 1542 shadow maps")
@@ -563,12 +563,12 @@ fn an_area_lights_shadow_maps_over_its_surface_soften_its_shadows() {
     traced.render.spp = 16;
     let traced = common::render_cpu(&flatten(&traced));
     let draw = |shadows, area_shadow_samples| {
-        let options = chambre::gpu::preview::PreviewOptions {
+        let options = chambre::preview::PreviewOptions {
             shadows,
             area_shadow_samples,
             ..Default::default()
         };
-        chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, options)
+        chambre::preview::draw_with(&context, &scene, &flat, 1, options)
             .unwrap()
             .image
     };
@@ -620,7 +620,7 @@ fn shadows_are_drawn_anew_with_the_shapes_cut_anew() {
     let mut near = shadowed_scene(light);
     near.camera.position = DVec3::new(-1.2, 1.5, 1.0);
     near.camera.look_at = DVec3::new(-0.9, 0.5, 0.3);
-    let options = chambre::gpu::preview::PreviewOptions {
+    let options = chambre::preview::PreviewOptions {
         shadows: true,
         ..Default::default()
     };
@@ -693,10 +693,9 @@ material = "white"
             Scene::from_str(Path::new("area.toml"), &text, &[]).unwrap_or_else(|e| panic!("{e}"));
         let flat = flatten(&scene);
         let traced = common::render_cpu(&flat);
-        let preview =
-            chambre::gpu::preview::draw_with(&context, &scene, &flat, 1, Default::default())
-                .unwrap()
-                .image;
+        let preview = chambre::preview::draw_with(&context, &scene, &flat, 1, Default::default())
+            .unwrap()
+            .image;
         // Relative differences over the pixels of one surface (the preview's 3x3 neighbourhood
         // within 20% of the pixel: a silhouette's pixel, the wall's edge or the light's, mixes
         // two surfaces in the ray tracer's samples) that the light brightens well (dimmer ones,

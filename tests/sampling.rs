@@ -105,7 +105,7 @@ mod patterns {
     }
 
     fn samples_of(sampler: SamplerName, spp: u32, pixels: &[(u32, u32)]) -> Vec<[f32; 2]> {
-        let table = SampleTable::build(spp, 9, sampler, None, 0, 0.0);
+        let table = SampleTable::build(spp, 9, sampler, None, 0, 0.0, false);
         let frame = frame(spp, sampler, &table);
         let source = PatternSource::pixel(&frame);
         let mut out = Vec::new();
@@ -165,6 +165,120 @@ mod patterns {
         }
     }
 
+    /// Cells of a `columns x rows` grid that none of `points` falls in.
+    fn empty_cells(points: &[[f32; 2]], columns: u32, rows: u32) -> usize {
+        let mut hits = vec![0u32; (columns * rows) as usize];
+        for [x, y] in points {
+            assert!((0.0..1.0).contains(x) && (0.0..1.0).contains(y), "{x} {y}");
+            hits[((y * rows as f32) as u32 * columns + (x * columns as f32) as u32) as usize] += 1;
+        }
+        hits.iter().filter(|&&h| h == 0).count()
+    }
+
+    #[test]
+    fn the_progressive_stratified_pattern_is_stratified_at_every_power_of_two() {
+        use chambre::sampler::progressive_stratified;
+        let mut rng = Rng::new(5, 6, 7);
+        for key in [0u32, 1, 0xdead_beef, 0x1234_5678] {
+            for n in [16u32, 1000, 4096] {
+                // Jittered inside the strata of the power of two at or above n.
+                let bits = n.next_power_of_two().ilog2();
+                let (columns, rows) = (bits / 2, bits - bits / 2);
+                let points: Vec<[f32; 2]> = (0..n)
+                    .map(|i| progressive_stratified(i, n, key, rng.next_2d()))
+                    .collect();
+                // Every prefix of 2^k points has one point in each cell of every 2^a x 2^b
+                // grid, a + b = k, whose cells are unions of strata (the (0,2)-sequence's net
+                // property down to the strata the jitter fills).
+                for k in 0..=n.ilog2() {
+                    for a in k.saturating_sub(rows)..=k.min(columns) {
+                        let prefix = &points[..1 << k];
+                        assert_eq!(
+                            empty_cells(prefix, 1 << a, 1 << (k - a)),
+                            0,
+                            "key {key:#x}, n {n}: prefix 2^{k} in 2^{a} x 2^{} cells",
+                            k - a
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn every_pattern_is_progressive_under_adaptive_sampling() {
+        // A pixel may stop after any number of samples: its first 4^j samples must cover the
+        // 2^j x 2^j grid, where a random prefix of a stratified set leaves a third of the
+        // cells empty. (A Poisson pixel's points are its table set moved by a toroidal shift,
+        // which moves the grid too: its order is tested on the table below.)
+        let spp = 256;
+        for sampler in [
+            SamplerName::Stratified,
+            SamplerName::Interleaved,
+            SamplerName::Sobol,
+        ] {
+            let table = SampleTable::build(spp, 9, sampler, None, 0, 0.0, true);
+            let frame = GpuFrame {
+                progressive: 1,
+                ..frame(spp, sampler, &table)
+            };
+            let source = PatternSource::pixel(&frame);
+            for (x, y) in [(0, 0), (5, 3), (17, 40), (63, 63)] {
+                let points: Vec<[f32; 2]> = (0..spp)
+                    .map(|s| {
+                        let mut rng = Rng::new(9, y * 64 + x, s);
+                        let mut flags = 0;
+                        sample_2d(&frame, &table.points, source, x, y, s, &mut rng, &mut flags)
+                    })
+                    .collect();
+                for j in 1..=4 {
+                    let empty = empty_cells(&points[..1 << (2 * j)], 1 << j, 1 << j);
+                    assert_eq!(empty, 0, "{sampler:?} pixel ({x}, {y}): 4^{j} samples");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn table_patterns_are_stored_in_a_progressive_order() {
+        use chambre::sampler::progressive_order;
+        // A jittered 16 x 16 grid: every prefix of 4^j points is one per cell of the 2^j grid,
+        // whatever the scramble.
+        let mut rng = Rng::new(1, 2, 3);
+        let grid: Vec<[f32; 2]> = (0..256)
+            .map(|i| chambre::math::sampling::stratified_2d(i, 256, 16, rng.next_2d()))
+            .collect();
+        let mut firsts = Vec::new();
+        for seed in [0u32, 1, 77, 255, 1000] {
+            let ordered = progressive_order(&grid, seed, seed % 2 == 1);
+            firsts.push(ordered[0]);
+            let mut sorted = ordered.clone();
+            sorted.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            let mut original = grid.clone();
+            original.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            assert_eq!(sorted, original, "the same points");
+            for j in 0..=4 {
+                assert_eq!(empty_cells(&ordered[..1 << (2 * j)], 1 << j, 1 << j), 0);
+            }
+        }
+        // Scrambles order alike tables differently.
+        firsts.dedup();
+        assert!(firsts.len() >= 4, "{firsts:?}");
+        // A Poisson set, not a grid: its prefixes leave few cells empty (at most a fifth, 13%
+        // at worst here; a random order leaves 1/e, 37%), in either order.
+        for key in [1u32, 2, 3] {
+            for lens in [false, true] {
+                let set = progressive_order(&poisson_disk_set(1024, key).points, key, lens);
+                for j in 1..=4 {
+                    let empty = empty_cells(&set[..1 << (2 * j)], 1 << j, 1 << j);
+                    assert!(empty <= (1 << (2 * j)) / 5, "key {key}: {empty} of 4^{j}");
+                }
+            }
+        }
+        assert!(progressive_order(&[], 3, false).is_empty());
+        assert_eq!(progressive_order(&[[0.5, 0.5]], 3, true), vec![[0.5, 0.5]]);
+    }
+
     #[test]
     fn poisson_sets_have_exactly_n_points_and_respect_their_radius() {
         for n in [1u32, 2, 5, 16, 64, 256, 1024] {
@@ -201,7 +315,7 @@ mod patterns {
     fn shifted_poisson_pixels_keep_the_minimum_distance() {
         let spp = 32;
         // The closest pair of any uploaded set, before the per-pixel shifts.
-        let table = SampleTable::build(spp, 9, SamplerName::Poisson, None, 0, 0.0);
+        let table = SampleTable::build(spp, 9, SamplerName::Poisson, None, 0, 0.0, false);
         let closest_pair = |points: &[[f32; 2]]| {
             let mut closest = f64::INFINITY;
             for i in 0..points.len() {
@@ -268,7 +382,7 @@ mod patterns {
         // Cells of a 12 x 12 grid that lie wholly inside the polygon all get the same expected
         // count; the rest of the polygon is one more bin.
         for blades in [3u32, 5, 6, 9] {
-            let table = SampleTable::build(1, 1, SamplerName::Random, None, blades, 17.0);
+            let table = SampleTable::build(1, 1, SamplerName::Random, None, blades, 17.0, false);
             let camera = GpuCamera {
                 lens_radius_mm: 1.0,
                 aperture_blades: blades,
@@ -345,9 +459,12 @@ fn light_samples_are_stratified_over_the_whole_pixel() {
         ..Default::default()
     };
     let (light_samples, pixel, dim) = (4, 1234, 77);
-    let empty_cells = |frame: &chambre::layout::GpuFrame| {
-        let mut counts = [0u32; 64];
-        for sample in 0..16 {
+    // The cells of the 8x8 grid (4x4 for fewer than 16 camera samples) that the light points
+    // of the pixel's first `samples` camera samples leave empty.
+    let empty_cells = |frame: &chambre::layout::GpuFrame, samples: u32| {
+        let side = if samples < 16 { 4 } else { 8 };
+        let mut counts = vec![0u32; side * side];
+        for sample in 0..samples {
             let mut rng = Rng::new(frame.seed, pixel, sample);
             for k in 0..light_samples {
                 let mut flags = 0;
@@ -358,18 +475,33 @@ fn light_samples_are_stratified_over_the_whole_pixel() {
                     light_sample_2d(frame, light_samples, columns, sample, k, key, u, &mut flags);
                 assert_eq!(flags, 0);
                 assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
-                counts[(y * 8.0) as usize * 8 + (x * 8.0) as usize] += 1;
+                counts[(y * side as f32) as usize * side + (x * side as f32) as usize] += 1;
             }
         }
         counts.iter().filter(|&&c| c == 0).count()
     };
     for sampler in [SAMPLER_STRATIFIED, SAMPLER_SOBOL] {
         frame.pixel_sampler = sampler;
-        assert_eq!(empty_cells(&frame), 0, "sampler {sampler}");
+        assert_eq!(empty_cells(&frame, 16), 0, "sampler {sampler}");
     }
+    // Under adaptive sampling a pixel stops after any number of samples: the light points of
+    // its first samples are stratified too (the first 4 camera samples' 16 points fill the
+    // 4x4 grid), for every pattern but random.
+    frame.progressive = 1;
+    for sampler in [
+        SAMPLER_STRATIFIED,
+        SAMPLER_SOBOL,
+        chambre::layout::SAMPLER_POISSON,
+        chambre::layout::SAMPLER_INTERLEAVED,
+    ] {
+        frame.pixel_sampler = sampler;
+        assert_eq!(empty_cells(&frame, 16), 0, "sampler {sampler}, progressive");
+        assert_eq!(empty_cells(&frame, 4), 0, "sampler {sampler}, 4 samples");
+    }
+    frame.progressive = 0;
     frame.pixel_sampler = SAMPLER_RANDOM;
     assert!(
-        empty_cells(&frame) > 10,
+        empty_cells(&frame, 16) > 10,
         "random light points leave cells empty"
     );
 }

@@ -393,7 +393,7 @@ fn preview_shadows_do_not_depend_on_the_scene_scale() {
     let Some(context) = common::gpu_context() else {
         return;
     };
-    let options = chambre::gpu::preview::PreviewOptions {
+    let options = chambre::preview::PreviewOptions {
         shadows: true,
         ..Default::default()
     };
@@ -403,7 +403,7 @@ fn preview_shadows_do_not_depend_on_the_scene_scale() {
             .join("scenes")
             .join("in_memory");
         let scene = Scene::from_str(&path, text, &[]).unwrap_or_else(|e| panic!("{e}"));
-        chambre::gpu::preview::draw_with(&context, &scene, &flatten(&scene), 1, options)
+        chambre::preview::draw_with(&context, &scene, &flatten(&scene), 1, options)
             .unwrap()
             .image
     };
@@ -464,7 +464,7 @@ fn fermat_reflections_do_not_depend_on_the_scene_scale() {
     let Some(context) = common::gpu_context() else {
         return;
     };
-    let options = chambre::gpu::preview::PreviewOptions {
+    let options = chambre::preview::PreviewOptions {
         subdivision: Some(4),
         self_reflections: Some(1.0),
         ..Default::default()
@@ -475,7 +475,7 @@ fn fermat_reflections_do_not_depend_on_the_scene_scale() {
             .join("in_memory");
         let scene =
             Scene::from_str(&path, &torus_scene(scale), &[]).unwrap_or_else(|e| panic!("{e}"));
-        chambre::gpu::preview::draw_with(&context, &scene, &flatten(&scene), 1, options).unwrap()
+        chambre::preview::draw_with(&context, &scene, &flatten(&scene), 1, options).unwrap()
     };
     let reference = preview(1.0);
     assert!(reference.reflected_drawn > 0);

@@ -402,7 +402,11 @@ fn shared_structs_have_identical_layouts() {
             background,
             light_samples_per_vertex,
             ambient,
-            motion_base
+            motion_base,
+            progressive,
+            _pad1,
+            _pad2,
+            _pad3
         }
     );
     layout!(
@@ -419,11 +423,11 @@ fn shared_structs_have_identical_layouts() {
             commit,
             loop_check,
             listed_pixels,
-            accumulation_offset,
             scratch_offset,
             aov_offset,
             _pad1,
-            _pad2
+            _pad2,
+            _pad3
         }
     );
 }
@@ -480,7 +484,7 @@ fn each_kernel_lists_exactly_the_bindings_it_uses() {
 #[test]
 fn preview_structs_have_identical_layouts() {
     use chambre::preview::{PreviewUniforms, PreviewVertex, ReflectorPass, ShadowLight};
-    let module = parse_and_validate(&chambre::gpu::preview::shader_source());
+    let module = parse_and_validate(&chambre::preview::shader_source());
     layout!(
         module,
         PreviewVertex {
@@ -520,5 +524,5 @@ fn preview_structs_have_identical_layouts() {
         ("origins", offset_of!(ShadowLight, origins)),
     ];
     check_struct(&module, "ShadowLight", size_of::<ShadowLight>(), &shadow);
-    parse_and_validate(chambre::gpu::preview::SHADOW_SHADER);
+    parse_and_validate(chambre::preview::SHADOW_SHADER);
 }

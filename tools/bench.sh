@@ -12,6 +12,9 @@ if [ -z "${CHAMBRE_BIN:-}" ]; then
     cargo build --release --bin chambre
 fi
 mkdir -p bench
+# What tools/bench_tables.py prints above each table besides the reports' own fields.
+git rev-parse --short HEAD > bench/commit.txt 2>/dev/null || echo unknown > bench/commit.txt
+lscpu 2>/dev/null | sed -n 's/^Model name: *//p' > bench/cpu.txt || true
 {
     echo "# chambre bench, $(date -u +%Y-%m-%d), $(nproc) cores, $(uname -m)"
     echo
@@ -84,3 +87,5 @@ cp bench/scale.svg docs/images/scale.svg
 cp bench/converge_bokeh.svg docs/images/converge_bokeh.svg
 cp bench/converge_adaptive_defocus_tilt.svg docs/images/converge_adaptive_defocus_tilt.svg
 cp bench/converge_lens_defocus_tilt.svg docs/images/converge_lens_defocus_tilt.svg
+# The tables of BENCHMARKS.md made anew from the reports (the others are left as they are).
+python3 tools/bench_tables.py bench --update BENCHMARKS.md

@@ -26,6 +26,7 @@ stamp() { echo "== $1 ($(($(date +%s) - started)) s)"; }
 stamp "adapter"
 "$chambre" info | tee "$out/adapter.txt"
 git rev-parse --short HEAD > "$out/commit.txt" 2>/dev/null || echo unknown > "$out/commit.txt"
+lscpu 2>/dev/null | sed -n 's/^Model name: *//p' > "$out/cpu.txt" || true
 
 # A scene's film must have its image's aspect (within 0.1%): these 36 mm films keep the
 # scenes' horizontal field of view at 1:1 and 16:9.

@@ -44,7 +44,11 @@ def gpu_rays(report, set_name, query):
 def rays_table(folder):
     chambre = load(folder, "rays_1080p.json")
     peers = {s: load(folder, f"mitsuba_rays_{s}.json") for s in ("coherent", "incoherent")}
-    out = ["## Ray queries: the dragon, 1920x1080 x 8 frames (Mrays/s, medians)", "",
+    size = "1920x1080 x 8 frames"
+    if chambre is not None:
+        config = chambre["report"]["config"]
+        size = f"{config['camera']['width']}x{config['camera']['height']} x {config['frames']} frames"
+    out = [f"## Ray queries: the dragon, {size} (Mrays/s, medians)", "",
            "| rays | query | chambre CWBVH | Mitsuba 3 | chambre / Mitsuba |", "|---|---|---|---|---|"]
     for set_name in ("coherent", "incoherent"):
         for query in ("closest", "any"):
@@ -90,7 +94,8 @@ def dragon_rate(folder):
     result, runs = frame_runs(report)
     camera_rays = result["width"] * result["height"] * result["spp"]
     query = gpu_rays(rays, "coherent", "closest")
-    out = ["## The dragon frame's camera rays against the ray-query kernel (1024x1024 x 8)", "",
+    out = [f"## The dragon frame's camera rays against the ray-query kernel ({result['width']}x"
+           f"{result['height']} x {result['spp']})", "",
            "| measure | Mrays/s | of the ray-query kernel's |", "|---|---|---|",
            f"| ray-query kernel, coherent closest hit | {fmt(query)} | 100% |"]
     for backend in ("gpu-mega", "gpu-wave"):

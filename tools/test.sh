@@ -41,10 +41,13 @@ export CHAMBRE_REQUIRE_GPU=1
 # The loader's complaint about a missing XDG_RUNTIME_DIR on headless machines is noise.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 
+# Dependencies point one way (docs/architecture.md): no import circle between files or modules.
+python3 tools/check_imports.py
 cargo build --release --bins
 echo "== GPU adapters"
 ./target/release/chambre info
 # docs/shards.md's Slurm array on a real slurmctld and slurmd (installs slurm-wlm and munge).
 echo "== Slurm"
 tools/test_slurm.sh
+python3 tools/test_bench_tables.py   # BENCHMARKS.md's tables from the bench reports
 cargo test --release

@@ -25,13 +25,13 @@
 @group(0) @binding(14) var<storage, read> pixel_list: array<u32>;
 // The Fermat kernel's searches, one surface and eye each (a dispatch's y picks one), the
 // vertices each solves (xyz, and in w the mirror each lies on: 1 + its index, 0 for none) and
-// their reflection points, search after search (wgsl/fermat.wgsl).
+// their reflection points, search after search (wgsl/preview/fermat.wgsl).
 @group(0) @binding(15) var<storage, read> reflectors: array<GpuReflector>;
 @group(0) @binding(16) var<storage, read> fermat_vertices: array<vec4<f32>>;
 @group(0) @binding(17) var<storage, read_write> reflections: array<GpuReflection>;
 // The wavefront render's closest hit of each path's current ray (wgsl/wavefront.wgsl).
 @group(0) @binding(18) var<storage, read_write> wf_hits: array<GpuHit>;
-// The preview's reflected triangles for `fermat_cull` (wgsl/fermat.wgsl): per triangle its three
+// The preview's reflected triangles for `fermat_cull` (wgsl/preview/fermat.wgsl): per triangle its three
 // vertices (indices into the distinct reflected vertices, whose solves `vertex_solves` gives:
 // indices into `fermat_vertices`) and, in w, 1 + the index of the mirror it lies on (0: on
 // none); the triangles whose reflection shows on a search's surface, as the index triples of

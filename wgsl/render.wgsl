@@ -2,9 +2,8 @@
 // list of pixels an adaptive pass samples), a range of samples and a window of light samples
 // per dispatch. A pass's sum goes to the pixel's scratch slot (which exists only when passes are
 // split) until the pass's last light window commits it, with the sample count, to the running
-// accumulation (one of its two halves in an adaptive render): the accumulation is a valid
-// per-pixel mean after every dispatch; the AOV layers, when asked for, sum the first hits' depth,
-// normal and albedo. Layout: src/render.rs (AccumulationLayout). Bindings: wgsl/bindings.wgsl.
+// accumulation: the accumulation is a valid per-pixel mean after every dispatch; the AOV
+// layers, when asked for, sum the first hits' depth, normal and albedo. Layout: src/render.rs (AccumulationLayout). Bindings: wgsl/bindings.wgsl.
 // Mirrors: src/cpu.rs (CpuRenderer::run_dispatch).
 // The wavefront render (wgsl/wavefront.wgsl) commits its pixels' sums with the same functions.
 
@@ -50,7 +49,7 @@ fn commit_pixel(pixel: u32, sums: PixelSums, counters: PathCounters) {
         sum += accumulation[scratch].xyz;
     }
     if (pass_info.commit != 0u) {
-        accumulation[pass_info.accumulation_offset + pixel] +=
+        accumulation[pixel] +=
             vec4<f32>(sum, f32(pass_info.sample_count));
         // Every light window retraces the same camera paths: the committing one adds the AOVs.
         if (pass_info.aov_offset != 0u) {

@@ -139,6 +139,18 @@ fn sobol_owen_2d(index: u32, seed: u32) -> vec2<f32> {
     return vec2<f32>(unit_float(x), unit_float(y));
 }
 
+// Point `index` of the progressive stratified pattern of `n` points (Rust twin:
+// progressive_stratified): the stratum of Sobol (0,2) point `index` in the grid of the power of
+// two at or above n, jittered by u.
+fn progressive_stratified(index: u32, n: u32, key: u32, u: vec2<f32>) -> vec2<f32> {
+    let p = sobol_owen_2d(index, key);
+    let bits = 32u - countLeadingZeros(max(n, 1u) - 1u);
+    let columns = 1u << (bits / 2u);
+    let rows = 1u << (bits - bits / 2u);
+    let cell = u32(p.y * f32(rows)) * columns + u32(p.x * f32(columns));
+    return stratified_2d(cell, columns * rows, columns, u);
+}
+
 fn wrap_unit(x: f32) -> f32 {
     var w = x;
     if (x >= 1.0) {
@@ -155,6 +167,9 @@ fn sample_2d(source: PatternSource, x: u32, y: u32, sample: u32, rng: ptr<functi
     let key = pixel_hash(frame.seed, y * frame.width + x, source.dim);
     switch source.sampler {
         case SAMPLER_STRATIFIED: {
+            if (frame.progressive != 0u) {
+                return progressive_stratified(sample, frame.spp, key, u);
+            }
             let stratum = permute(sample, frame.spp, key);
             return stratified_2d(stratum, frame.spp, source.strata_columns, u);
         }
@@ -194,6 +209,9 @@ fn light_sample_2d(light_samples: u32, light_columns: u32, sample: u32, k: u32, 
         return sobol_owen_2d(index, key);
     }
     let n = frame.spp * light_samples;
+    if (frame.progressive != 0u) {
+        return progressive_stratified(index, n, key, u);
+    }
     return stratified_2d(permute(index, n, key), n, frame.pixel_strata_columns * light_columns, u);
 }
 

@@ -102,6 +102,10 @@ struct GpuFrame {
     light_samples_per_vertex: u32,
     ambient: vec3<f32>,
     motion_base: u32,
+    progressive: u32,
+    _pad1: u32,
+    _pad2: u32,
+    _pad3: u32,
 }
 
 struct GpuPass {
@@ -116,11 +120,11 @@ struct GpuPass {
     commit: u32,
     loop_check: u32,
     listed_pixels: u32,
-    accumulation_offset: u32,
     scratch_offset: u32,
     aov_offset: u32,
     _pad1: u32,
     _pad2: u32,
+    _pad3: u32,
 }
 
 struct GpuRay {

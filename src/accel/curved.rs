@@ -25,7 +25,7 @@
 
 use glam::{Quat, Vec3};
 
-use super::intersect::{Hit, MISS, RayQuery, SurfacePoint, gamma};
+use super::ray::{Hit, MISS, RayQuery, SurfacePoint, gamma};
 use crate::layout::{
     GpuPrimitive, PRIM_CYLINDER, PRIM_ELLIPSOID, TORUS_MARGIN, TORUS_POLISH_REACH,
     TORUS_POLISH_STEPS, TORUS_ROOT_STEPS,

@@ -14,7 +14,7 @@ use obvhs::bvh2::Bvh2;
 use obvhs::bvh2::node::Bvh2Node;
 
 use super::intersect::{Hit, RayQuery, intersect_box, intersect_primitive};
-use super::traverse::{closest_plane, plane_occludes};
+use super::planes::{closest_plane, plane_occludes};
 use super::{Primitives, swept_bounds, widen};
 use crate::layout::{CWBVH_STACK_SIZE, FEATURES_ALL, GpuCwNode, GpuPrimitive, NONE, T_FAR};
 

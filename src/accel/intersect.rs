@@ -19,7 +19,10 @@
 //!   rounded away from it. The offset scales with the error actually made, so it holds at any
 //!   scene scale and for spheres whose radius dwarfs the scene around them.
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
+
+pub(crate) use super::ray::MISS;
+pub use super::ray::{Hit, RayQuery, SLAB_FAR_SCALE, SurfacePoint, gamma};
 
 use super::curved::{
     intersect_cylinder, intersect_ellipsoid, intersect_torus, orientation, ray_in_frame,
@@ -27,124 +30,6 @@ use super::curved::{
 use crate::layout::{
     FEATURE_CURVED, FEATURE_TRIANGLES, GpuPrimitive, PRIM_CYLINDER, PRIM_ELLIPSOID, PRIM_PLANE,
     PRIM_QUAD, PRIM_SPHERE, PRIM_TORUS, PRIM_TRIANGLE, T_FAR, has,
-};
-
-/// Smallest direction magnitude used for the slab reciprocals: with coordinates below 1e9
-/// (validated), products stay far below f32::MAX.
-const MIN_DIRECTION: f32 = 1.0e-20;
-/// pbrt-v4's 1 + 2*gamma(3), widened 2x for WGSL's 2.5-ULP division.
-pub const SLAB_FAR_SCALE: f32 = 1.0 + 4.0 * 3.0 * f32::EPSILON * 0.5;
-
-/// Per-ray constants of the watertight triangle test and the slab test.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct RayQuery {
-    /// Ray origin (scene units).
-    pub origin: Vec3,
-    /// Ray direction; hit distances `t` are multiples of its length.
-    pub direction: Vec3,
-    /// Per-component reciprocals of `direction`, kept finite (at most 1e20 in magnitude).
-    pub inv_direction: Vec3,
-    /// The watertight test's first sheared axis: the one after `kz` (swapped with `ky` when the
-    /// direction's `kz` component is negative, to keep the winding).
-    pub kx: usize,
-    /// The watertight test's second sheared axis.
-    pub ky: usize,
-    /// The axis of the direction's largest component.
-    pub kz: usize,
-    /// Shear constants (-d_kx / d_kz, -d_ky / d_kz, 1 / d_kz) that make the direction +z.
-    pub shear: Vec3,
-    /// The time (seconds) the ray is traced at: moving primitives are where they are then.
-    pub time: f32,
-}
-
-/// 1 / d per component, a component below `MIN_DIRECTION` in magnitude taken as
-/// ±`MIN_DIRECTION` (+ for a zero of either sign), so the slab test never meets an infinity;
-/// one vector division. Twin: `safe_reciprocal` in wgsl/intersect.wgsl, per component.
-fn safe_reciprocals(d: Vec3) -> Vec3 {
-    let d = Vec3A::from(d);
-    let least = Vec3A::select(
-        d.cmplt(Vec3A::ZERO),
-        Vec3A::splat(-MIN_DIRECTION),
-        Vec3A::splat(MIN_DIRECTION),
-    );
-    let safe = Vec3A::select(d.abs().cmplt(Vec3A::splat(MIN_DIRECTION)), least, d);
-    (Vec3A::ONE / safe).into()
-}
-
-impl RayQuery {
-    /// The per-ray constants of the ray from `origin` along `direction`.
-    pub fn new(origin: Vec3, direction: Vec3) -> Self {
-        let abs = direction.abs();
-        let kz = if abs.x > abs.y {
-            if abs.x > abs.z { 0 } else { 2 }
-        } else if abs.y > abs.z {
-            1
-        } else {
-            2
-        };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if direction[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
-        let dz = direction[kz];
-        // Each as one vector division: the same correctly rounded quotients as one by one.
-        let shear = Vec3A::new(-direction[kx], -direction[ky], 1.0) / Vec3A::splat(dz);
-        RayQuery {
-            origin,
-            direction,
-            inv_direction: safe_reciprocals(direction),
-            kx,
-            ky,
-            kz,
-            shear: shear.into(),
-            time: 0.0,
-        }
-    }
-
-    /// The ray traced at `time`.
-    pub fn at_time(self, time: f32) -> Self {
-        RayQuery { time, ..self }
-    }
-
-    /// The ray in the frame of a primitive that has moved by `offset`: its origin moved by
-    /// `-offset`, so testing the primitive where it was built tests it where it is.
-    pub fn relative_to(&self, offset: Vec3) -> Self {
-        RayQuery {
-            origin: self.origin - offset,
-            ..*self
-        }
-    }
-
-    /// The same ray as obvhs expects it, with our finite reciprocals.
-    pub fn to_obvhs(&self, t_max: f32) -> obvhs::ray::Ray {
-        obvhs::ray::Ray {
-            origin: Vec3A::from(self.origin),
-            direction: Vec3A::from(self.direction),
-            inv_direction: Vec3A::from(self.inv_direction),
-            tmin: 0.0,
-            tmax: t_max,
-        }
-    }
-}
-
-/// A hit: distance and, for triangles and quads, surface coordinates (b1, b2). For spheres,
-/// `b1` is instead a bound on the relative error of `t` (see `intersect_sphere`).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    /// Distance along the ray, in units of its direction's length; `T_FAR` for a miss.
-    pub t: f32,
-    /// Triangle: barycentric of the second vertex; quad: position along `edge_u` in [0, 1]; sphere:
-    /// relative error bound of `t`.
-    pub b1: f32,
-    /// Triangle: barycentric of the third vertex; quad: position along `edge_v` in [0, 1].
-    pub b2: f32,
-}
-
-pub(crate) const MISS: Hit = Hit {
-    t: T_FAR,
-    b1: 0.0,
-    b2: 0.0,
 };
 
 /// The order of a triangle's vertices that `intersect_triangle` needs for watertightness:
@@ -223,14 +108,6 @@ fn triangle_t_error(p: [[f32; 2]; 3], z: [f32; 3], e: [f32; 3], inv_det: f32) ->
     let delta_z = gamma(3) * max_z;
     let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
     3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs()
-}
-
-/// Rounding-error bound for `n` operations in arithmetic whose rounding direction is
-/// unspecified (WGSL): pbrt-v4's gamma(n) with a whole ULP per operation, not half. The CPU path
-/// uses the same bounds so both paths offset rays identically.
-pub const fn gamma(n: u32) -> f32 {
-    let n_eps = n as f32 * f32::EPSILON;
-    n_eps / (1.0 - n_eps)
 }
 
 /// `|c|^2 - r^2`, the power of the world origin with respect to a sphere, computed in f64 from
@@ -399,15 +276,6 @@ pub fn shadow_ray_length(distance: f32) -> f32 {
     distance * (1.0 - SHADOW_EPSILON)
 }
 
-/// A shading point and the per-component bound on its distance from the true surface point.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SurfacePoint {
-    /// The computed point (scene units).
-    pub position: Vec3,
-    /// Per-component bound on `position`'s distance from the exact point.
-    pub error: Vec3,
-}
-
 /// v0 + b1 (v1 - v0) + b2 (v2 - v0): on the triangle's plane whatever the barycentrics'
 /// rounding, and, unlike pbrt-v4's b0 v0 + b1 v1 + b2 v2 (error gamma(7) sum |b_i v_i|), only
 /// the final sum is rounded at the scale of the coordinates, which matters far from the origin.
@@ -513,60 +381,5 @@ fn next_float_up(v: f32) -> f32 {
         f32::from_bits(v.to_bits() + 1)
     } else {
         f32::from_bits(v.to_bits() - 1)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The rule of `safe_reciprocal` in wgsl/intersect.wgsl, one component at a time.
-    fn safe_reciprocal(d: f32) -> f32 {
-        if (0.0..MIN_DIRECTION).contains(&d) {
-            1.0 / MIN_DIRECTION
-        } else if d < 0.0 && d > -MIN_DIRECTION {
-            -1.0 / MIN_DIRECTION
-        } else {
-            1.0 / d
-        }
-    }
-
-    /// The vector reciprocals are the WGSL rule's, bit for bit, at the extremes too: zeros of
-    /// both signs, the smallest subnormal, values either side of `MIN_DIRECTION`, the largest
-    /// floats, infinities and NaN.
-    #[test]
-    fn safe_reciprocals_follow_the_kernels_rule() {
-        let mut values = vec![
-            0.0,
-            f32::from_bits(1),
-            1e-30,
-            MIN_DIRECTION,
-            f32::from_bits(MIN_DIRECTION.to_bits() - 1),
-            f32::from_bits(MIN_DIRECTION.to_bits() + 1),
-            1e-7,
-            0.5,
-            1.0,
-            3.0,
-            f32::MAX,
-            f32::INFINITY,
-        ];
-        values.extend(values.clone().iter().map(|v| -v));
-        values.push(f32::NAN);
-        for &x in &values {
-            for &y in &values {
-                let d = Vec3::new(x, y, 1.0);
-                let got = safe_reciprocals(d);
-                for axis in 0..3 {
-                    let want = safe_reciprocal(d[axis]);
-                    assert!(
-                        got[axis].to_bits() == want.to_bits()
-                            || (got[axis].is_nan() && want.is_nan()),
-                        "1/{} gave {}, the rule {want}",
-                        d[axis],
-                        got[axis]
-                    );
-                }
-            }
-        }
     }
 }

@@ -12,6 +12,8 @@ pub mod curved;
 pub mod cwbvh;
 pub mod intersect;
 pub mod octet;
+pub mod planes;
+pub mod ray;
 pub mod traverse;
 pub mod wide;
 

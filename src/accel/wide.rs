@@ -20,7 +20,7 @@ use glam::Vec3;
 use super::cwbvh::CwGeometry;
 use super::intersect::{Hit, RayQuery, SLAB_FAR_SCALE, intersect_primitive};
 use super::octet::{Octet, QuadOctet, Rows, TriangleOctet};
-use super::traverse::{closest_plane, plane_occludes};
+use super::planes::{closest_plane, plane_occludes};
 use crate::layout::{
     CWBVH_STACK_SIZE, FEATURE_TRIANGLES, GpuCwNode, GpuPrimitive, NONE, PRIM_QUAD, PRIM_TRIANGLE,
     has,

@@ -10,7 +10,7 @@ use super::Spread;
 use crate::accel::build::{PRESETS, build_bvh_with, expected_traversal_iterations, tree_depth};
 use crate::error::{Error, Result};
 use crate::layout::{BVH_STACK_SIZE, GpuBvhNode};
-use crate::scene::mesh::load_mesh;
+use crate::scene::mesh_file::load_mesh;
 
 /// One preset's figures.
 #[derive(Clone, Debug, Serialize)]

@@ -1,5 +1,5 @@
 //! The Fermat comparison: the raster preview's reflections on a curved mirror (a sphere, a
-//! torus or Bézier patches; seed 004) against the ray tracer's, by the subdivision of the
+//! torus or Bézier patches; `docs/fermat.md`) against the ray tracer's, by the subdivision of the
 //! reflected triangles. For each subdivision: the preview's frame time; how far reflected
 //! features land from where the ray tracer puts them, in pixels; and FLIP over the mirror's
 //! pixels against a ray-traced reference. Once: the ray-traced frame time at 1 sample per
@@ -24,21 +24,22 @@ use super::frame::{Way, render_once};
 use crate::accel::intersect::RayQuery;
 use crate::accel::traverse::closest_hit;
 use crate::error::{Error, Location, Result};
-use crate::fermat::{
-    Solver, Sphere, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, on_torus_half,
-    reflection_error, seen_from_outside,
-};
 use crate::gpu::GpuContext;
 use crate::gpu::kernels::ShaderChecks;
-use crate::gpu::preview::{PreviewOptions, PreviewRenderer, StageTimes, extent_and_far};
 use crate::gpu::render::PathKernels;
 use crate::layout::{FEATURES_ALL, NONE, T_FAR};
 use crate::pack::{FlatScene, flatten};
+use crate::preview::reflections::fermat::{
+    Solver, alhazen_sphere, drawn_in_preview, on_cylinder, on_patch, on_torus_half,
+    reflection_error, seen_from_outside,
+};
 use crate::preview::{
     Detail, MirrorSurface, Reflector, clip_matrix, grid_point, reflectors, sub_triangle, tessellate,
 };
+use crate::preview::{PreviewOptions, PreviewRenderer, StageTimes, extent_and_far};
 use crate::render::Image;
 use crate::scene::Scene;
+use crate::scene::parametric::Sphere;
 
 /// Points along each edge of the reflected triangles, besides its corner.
 const POINTS_PER_EDGE: u32 = 8;
@@ -156,20 +157,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
     };
     let scene = load(None)?;
     let flat = flatten(&scene);
-    let reflector = reflectors(&flat)
-        .into_iter()
-        .next()
-        .ok_or_else(|| Error::Scene {
-            location: Location {
-                file: config.scene.to_path_buf(),
-                line: 0,
-                column: 0,
-                field: "shapes".into(),
-            },
-            message: "the Fermat comparison needs a sphere, torus, ellipsoid, cylinder or Bezier \
-                      shape with a mirror material"
-                .into(),
-        })?;
+    let reflector = first_mirror(config.scene, &flat)?;
     let (width, height) = (flat.frame.width, flat.frame.height);
     let one_spp = load(Some("render.spp=1".into()))?;
     let one_spp = flatten(&one_spp);
@@ -237,17 +225,7 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
         let frame = renderer.frame(&times)?;
         let stages = renderer.stage_times(config.frames)?;
         let placed = displacements(context, &scene, &flat, &reflector, &clip, options)?;
-        let corner_max_px = placed
-            .iter()
-            .filter(|(corner, _)| *corner)
-            .filter_map(|(_, d)| *d)
-            .max_by(f64::total_cmp);
-        let mut drawn: Vec<f64> = placed.iter().filter_map(|(_, d)| *d).collect();
-        drawn.sort_by(f64::total_cmp);
-        let quantile = |q: f64| {
-            let last = drawn.len().checked_sub(1)?;
-            drawn.get((last as f64 * q).round() as usize).copied()
-        };
+        let placement = Placement::of(&placed);
         rows.push(FermatRow {
             subdivision,
             triangles: frame.triangles,
@@ -257,11 +235,11 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
             preview_ms: Spread::of(&frame.frame_times_ms),
             speedup: Spread::of(&ratios),
             features: placed.len(),
-            drawn: drawn.len(),
-            corner_max_px,
-            displacement_median_px: quantile(0.5),
-            displacement_p99_px: quantile(0.99),
-            displacement_max_px: quantile(1.0),
+            drawn: placement.drawn.len(),
+            corner_max_px: placement.corner_max_px,
+            displacement_median_px: placement.quantile(0.5),
+            displacement_p99_px: placement.quantile(0.99),
+            displacement_max_px: placement.quantile(1.0),
             flip_reflector: masked_flip(&frame.image, &reference, &mask),
             stages,
         });
@@ -288,6 +266,54 @@ pub fn run(config: &FermatConfig, context: &GpuContext) -> Result<FermatReport> 
         reference_spp: config.reference_spp,
         rows,
     })
+}
+
+/// The scene's first curved mirror, or an error naming the scene's shapes.
+fn first_mirror(scene: &std::path::Path, flat: &FlatScene) -> Result<Reflector> {
+    reflectors(flat)
+        .into_iter()
+        .next()
+        .ok_or_else(|| Error::Scene {
+            location: Location {
+                file: scene.to_path_buf(),
+                line: 0,
+                column: 0,
+                field: "shapes".into(),
+            },
+            message: "the Fermat comparison needs a sphere, torus, ellipsoid, cylinder or Bezier \
+                      shape with a mirror material"
+                .into(),
+        })
+}
+
+/// Where the preview put the reflected features against the ray tracer: each drawn one's
+/// displacement in pixels, sorted, and the largest at a corner of the mirror's triangles.
+struct Placement {
+    drawn: Vec<f64>,
+    corner_max_px: Option<f64>,
+}
+
+impl Placement {
+    /// From `(at a corner, displacement if drawn)` per feature.
+    fn of(placed: &[(bool, Option<f64>)]) -> Placement {
+        let corner_max_px = placed
+            .iter()
+            .filter(|(corner, _)| *corner)
+            .filter_map(|(_, d)| *d)
+            .max_by(f64::total_cmp);
+        let mut drawn: Vec<f64> = placed.iter().filter_map(|(_, d)| *d).collect();
+        drawn.sort_by(f64::total_cmp);
+        Placement {
+            drawn,
+            corner_max_px,
+        }
+    }
+
+    /// The displacement below which a fraction `q` of the drawn features lie.
+    fn quantile(&self, q: f64) -> Option<f64> {
+        let last = self.drawn.len().checked_sub(1)?;
+        self.drawn.get((last as f64 * q).round() as usize).copied()
+    }
 }
 
 /// A ray-traced frame's times, milliseconds (`FermatReport`).
@@ -323,7 +349,7 @@ fn displacements(
     options: PreviewOptions,
 ) -> Result<Vec<(bool, Option<f64>)>> {
     let (width, height) = (flat.frame.width, flat.frame.height);
-    let eye = crate::gpu::preview::eye_of(&scene.camera);
+    let eye = crate::preview::eye_of(&scene.camera);
     let n = options.subdivision.unwrap_or(1).max(1);
     // Each feature: its position and its sub-triangle's corners with the weights mixing them.
     let mut features = Vec::new();
@@ -355,8 +381,13 @@ fn displacements(
     let eye64 = eye.as_dvec3();
     let mut out = Vec::new();
     for &surface in &reflector.searches {
-        let found =
-            crate::gpu::fermat::reflections(context, surface, eye, &corners, options.steps)?;
+        let found = crate::preview::reflections::kernel::reflections(
+            context,
+            surface,
+            eye,
+            &corners,
+            options.steps,
+        )?;
         for (k, (x, weights, corner)) in features.iter().enumerate() {
             let x = x.as_dvec3();
             let Some(truth) = true_reflection(&surface, eye64, x)
@@ -457,7 +488,7 @@ fn true_reflection(surface: &MirrorSurface, eye: DVec3, x: DVec3) -> Option<DVec
 /// The point, normal and parameters where the f64 search on `surface` converges (the law of
 /// reflection to 1e-9 rad), if it does.
 fn converged(
-    surface: &impl crate::fermat::Reflector,
+    surface: &impl crate::preview::reflections::fermat::Reflector,
     eye: DVec3,
     x: DVec3,
 ) -> Option<(DVec3, DVec3, DVec2)> {
@@ -502,7 +533,7 @@ fn reflector_mask(flat: &FlatScene, clip: &DMat4, reflector: &Reflector) -> Vec<
 /// Mean FLIP of `image` against `reference` over the pixels of `mask`; `None` where the mask
 /// is empty (the mirror out of the frame).
 fn masked_flip(image: &Image, reference: &Image, mask: &[bool]) -> Option<f64> {
-    let map = crate::converge::flip_map(image, reference);
+    let map = crate::metrics::flip_map(image, reference);
     let (sum, count) = map
         .iter()
         .zip(mask)

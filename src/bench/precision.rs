@@ -23,7 +23,7 @@ use crate::math::rng::Rng;
 use crate::pack::{FlatScene, flatten};
 use crate::sampler::{PatternSource, sample_2d};
 use crate::scene::Scene;
-use crate::scene::mesh::load_mesh;
+use crate::scene::mesh_file::load_mesh;
 
 /// One placement of the mesh: `world = scale * file + offset` (the offset along (1, 1, 1)).
 #[derive(Clone, Copy, Debug, Serialize)]

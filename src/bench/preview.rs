@@ -10,12 +10,12 @@ use serde::Serialize;
 
 use super::Spread;
 use super::frame::{Way, render_once};
-use crate::converge::flip;
 use crate::error::Result;
 use crate::gpu::GpuContext;
-use crate::gpu::preview::{PreviewOptions, PreviewRenderer};
 use crate::layout::{LIGHT_AREA, LIGHT_TRIANGLE};
+use crate::metrics::flip;
 use crate::pack::flatten;
+use crate::preview::{PreviewOptions, PreviewRenderer};
 use crate::scene::Scene;
 
 /// One scene previewed one way.

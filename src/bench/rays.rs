@@ -17,6 +17,7 @@ use serde::Serialize;
 use super::Spread;
 use crate::accel::cwbvh::{self, CwGeometry};
 use crate::accel::intersect::RayQuery;
+pub use crate::accel::ray::{Query, RaySet};
 use crate::accel::traverse::{closest_hit, occluded};
 use crate::accel::wide::{PACKET, WideBvh};
 use crate::error::{Error, Result};
@@ -115,30 +116,6 @@ impl Bvh {
     }
 }
 
-/// Rays as structure of arrays.
-#[derive(Clone, Debug, Default)]
-pub struct RaySet {
-    /// Ray origins (scene units).
-    pub origins: Vec<Vec3>,
-    /// Unit ray directions, one per origin.
-    pub directions: Vec<Vec3>,
-    /// The camera's rays: each frame's rays are its pixels, in rows of this width (0: the
-    /// rays are no image's).
-    pub image_width: u32,
-}
-
-impl RaySet {
-    /// Number of rays.
-    pub fn len(&self) -> usize {
-        self.origins.len()
-    }
-
-    /// Whether there are no rays.
-    pub fn is_empty(&self) -> bool {
-        self.origins.is_empty()
-    }
-}
-
 /// One ray per pixel per frame through the pixel at a jittered point (random dimensions 0-1 of
 /// `Rng::new(seed, pixel, frame)`).
 pub fn coherent_rays(camera: &Pinhole, frames: u32, seed: u32) -> RaySet {
@@ -211,16 +188,6 @@ pub fn packet_order(rays: &RaySet) -> Vec<u32> {
         }
     }
     order
-}
-
-/// Closest hit or any hit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Query {
-    /// The nearest hit along each ray, with its distance.
-    ClosestHit,
-    /// Whether anything lies along each ray (shadow rays).
-    AnyHit,
 }
 
 /// What the rays found: the checksum another tracer can compare.

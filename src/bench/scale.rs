@@ -23,7 +23,8 @@ use crate::gpu::trace::GpuTracer;
 use crate::layout::{GpuBvhNode, GpuCwNode, GpuNormals, GpuPrimitive};
 use crate::pack::{FlatScene, flatten};
 use crate::plot::{Figure, log_log_panel};
-use crate::scene::mesh::{TriangleMesh, load_mesh};
+use crate::scene::mesh::TriangleMesh;
+use crate::scene::mesh_file::load_mesh;
 use crate::scene::{Scene, Shape};
 
 /// Triangle counts measured by default: prefixes of the mesh, then 4 and 12 copies of it.

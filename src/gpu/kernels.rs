@@ -235,7 +235,10 @@ pub const MODULES: [(&str, &str); 16] = [
     ("render.wgsl", include_str!("../../wgsl/render.wgsl")),
     ("wavefront.wgsl", include_str!("../../wgsl/wavefront.wgsl")),
     ("trace.wgsl", include_str!("../../wgsl/trace.wgsl")),
-    ("fermat.wgsl", include_str!("../../wgsl/fermat.wgsl")),
+    (
+        "preview/fermat.wgsl",
+        include_str!("../../wgsl/preview/fermat.wgsl"),
+    ),
 ];
 
 /// A compute kernel: what it is made of and what it reads.
@@ -459,10 +462,10 @@ pub const TRACE_ANY_CW: Kernel = Kernel {
 };
 
 /// Reflection points of vertices on a curved mirror by Fermat's principle, one invocation per
-/// vertex, one pipeline per kind of mirror (`gpu::fermat`; CPU twin `fermat::Solver`).
+/// vertex, one pipeline per kind of mirror (`preview::reflections::kernel`; CPU twin `fermat::Solver`).
 pub const FERMAT: Kernel = Kernel {
     name: "fermat",
-    modules: &["types.wgsl", "bindings.wgsl", "fermat.wgsl"],
+    modules: &["types.wgsl", "bindings.wgsl", "preview/fermat.wgsl"],
     entry_point: "fermat",
     bindings: FERMAT_BINDINGS,
 };
@@ -470,7 +473,7 @@ pub const FERMAT: Kernel = Kernel {
 /// A Bézier patch's corner B for each vertex, where the segment from the vertex to the patch's
 /// inside point O crosses it (`fermat::BezierPatch::crossing`): Newton's steps that depend on
 /// the vertex and the patch, not on the eye, so run once for a set of vertices rather than in
-/// every frame's `fermat` (`gpu::fermat::FermatPass::solve`).
+/// every frame's `fermat` (`preview::reflections::kernel::FermatPass::solve`).
 pub const FERMAT_START: Kernel = Kernel {
     name: "fermat_start",
     modules: FERMAT.modules,

@@ -1,15 +1,14 @@
-//! The GPU path: wgpu device set-up and the helpers every GPU stage shares; the kernels'
-//! registry (`kernels`), the render backend (`render`) and the ray queries (`trace`).
+//! The ray tracer's GPU side: wgpu device set-up and the helpers every GPU stage shares; the
+//! kernels' registry (`kernels`, which lists the preview's compute kernels too), the render
+//! backend (`render`) and the ray queries (`trace`). The raster preview's GPU side is
+//! `preview`'s.
 //!
 //! Errors never panic: wgpu's default uncaptured-error handler panics, so a handler of ours
 //! records them, and every wait on the device has a timeout (lavapipe has no watchdog).
 
-pub mod fermat;
 pub mod kernels;
-pub mod preview;
 pub mod render;
 pub mod trace;
-pub mod window;
 
 pub use render::GpuRenderer;
 
@@ -58,7 +57,7 @@ pub fn describe_adapter(adapter: &wgpu::Adapter) -> String {
 
 /// The refusal of an array larger than one storage binding may hold on this adapter: what,
 /// how large, the limit, and what to do.
-fn over_binding_limit(what: &str, bytes: u64, limit: u64) -> Error {
+pub(crate) fn over_binding_limit(what: &str, bytes: u64, limit: u64) -> Error {
     Error::BindingLimit {
         what: what.to_string(),
         bytes,
@@ -71,7 +70,7 @@ fn over_binding_limit(what: &str, bytes: u64, limit: u64) -> Error {
 
 /// wgpu's own Display of a validation error is only "Validation Error"; the description
 /// holds the cause.
-fn wgpu_error_text(e: &wgpu::Error) -> String {
+pub(crate) fn wgpu_error_text(e: &wgpu::Error) -> String {
     match e {
         wgpu::Error::Validation { description, .. } | wgpu::Error::Internal { description, .. } => {
             description.trim().replace('\n', " ")

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 use super::GpuContext;
 use super::kernels::{self, Pipeline, ShaderChecks, slot};
 use crate::accel::cwbvh::CwGeometry;
-use crate::bench::rays::{Query, RaySet};
+use crate::accel::ray::{Query, RaySet};
 use crate::error::{Error, Result};
 use crate::layout::{GpuPass, GpuRay, LOOP_CHECK_ITERATIONS, T_FAR, TRACE_WORKGROUP_SIZE};
 use crate::pack::FlatScene;

@@ -1,6 +1,7 @@
 //! A pixel's camera samples eight at a time, for the common cameras: a perspective one with an
-//! instant shutter, a plane of focus, and random or stratified pixel and lens points with a power-of-two sample
-//! count (the aperture's shape is drawn lane by lane with the scalar function). Each step of [`camera_sample`](super::camera_sample) (the random stream's keys and
+//! instant shutter, a plane of focus, and random or stratified pixel and lens points with a
+//! power-of-two sample count (any count under adaptive sampling's progressive stratification)
+//! (the aperture's shape is drawn lane by lane with the scalar function). Each step of [`camera_sample`](super::camera_sample) (the random stream's keys and
 //! draws, the strata's permutation, the film position, the thin lens, the ray) runs as a loop over the eight
 //! lanes with the scalar code's operations in its order, which the compiler turns into 8-wide
 //! vector instructions (AVX2 where the CPU has it); so each lane's ray is `camera_sample`'s, bit
@@ -18,7 +19,9 @@ use crate::layout::{
 };
 use crate::math::rng::{Rng, draw_bits, stream_key};
 use crate::pack::FlatScene;
-use crate::sampler::{permute_round, pixel_hash, sample_aperture, unit_float};
+use crate::sampler::{
+    permute_round, pixel_hash, progressive_stratified, sample_aperture, unit_float,
+};
 
 /// Whether [`camera_samples`] takes the scene's camera samples eight at a time (else they are
 /// drawn one by one).
@@ -27,7 +30,9 @@ pub fn batches<const F: u32>(scene: &FlatScene) -> bool {
     let lens = has(F, FEATURE_LENS) && camera.lens_radius_mm > 0.0;
     let pattern = |sampler: u32, columns: u32| match sampler {
         SAMPLER_RANDOM => true,
-        SAMPLER_STRATIFIED => frame.spp.is_power_of_two() && columns.is_power_of_two(),
+        SAMPLER_STRATIFIED => {
+            frame.progressive != 0 || (frame.spp.is_power_of_two() && columns.is_power_of_two())
+        }
         _ => false,
     };
     pattern(frame.pixel_sampler, frame.pixel_strata_columns)
@@ -81,7 +86,8 @@ fn camera_samples_avx2<const LENS: bool>(
 
 /// `sample_2d`'s random or stratified point for each lane from dimensions `dim` and `dim + 1`
 /// of its stream (`keys`), the pattern's columns `columns`: with a power-of-two sample count
-/// the permutation's walk ends at its first round and the strata's divisions are shifts.
+/// the permutation's walk ends at its first round and the strata's divisions are shifts; the
+/// progressive stratified pattern of an adaptive render takes any count.
 #[inline(always)]
 fn pattern_lanes(
     scene: &FlatScene,
@@ -98,7 +104,12 @@ fn pattern_lanes(
             unit_float(draw_bits(keys[k], dim + 1)),
         ];
     }
-    if sampler == SAMPLER_STRATIFIED {
+    if sampler == SAMPLER_STRATIFIED && frame.progressive != 0 {
+        let key = pixel_hash(frame.seed, pixel, dim);
+        for k in 0..PACKET {
+            u[k] = progressive_stratified(samples[k], frame.spp, key, u[k]);
+        }
+    } else if sampler == SAMPLER_STRATIFIED {
         let key = pixel_hash(frame.seed, pixel, dim);
         let w = frame.spp - 1;
         let shift = columns.trailing_zeros();
@@ -223,11 +234,17 @@ mod tests {
     use crate::scene::sample_scene;
 
     /// Every lane's ray, time and stream equal `camera_sample`'s bit for bit, through both
-    /// builds, for the scenes' cameras (film tilt, swing, shift) and both patterns.
+    /// builds, for the scenes' cameras (film tilt, swing, shift) and both patterns (and the
+    /// progressive stratified one of adaptive sampling).
     #[test]
     fn eight_camera_samples_are_the_scalar_ones() {
-        let cases: [(&str, &[&str]); 7] = [
+        let cases: [(&str, &[&str]); 8] = [
             ("cornell_direct.toml", &[]),
+            // Adaptive sampling's progressive stratification, at a count no power of two.
+            (
+                "thin_lens.toml",
+                &["render.noise_target=0.05", "render.spp=24"],
+            ),
             // A pinhole with film and lens movements.
             ("miniature.toml", &["camera.f_number=0"]),
             (
@@ -314,7 +331,7 @@ mod tests {
                 }
             }
         }
-        assert_eq!(batched, 7, "every case's camera is one the batch takes");
+        assert_eq!(batched, 8, "every case's camera is one the batch takes");
     }
 
     /// An orthographic camera's parallel rays are drawn one by one, by `generate_ray`.

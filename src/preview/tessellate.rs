@@ -8,10 +8,11 @@
 
 use glam::{DMat4, DVec2, DVec3, DVec4, Vec3};
 
-use super::{PreviewVertex, reflector_tags, reflectors};
-use crate::fermat::Reflector as _;
+use super::PreviewVertex;
+use super::reflections::{reflector_tags, reflectors};
 use crate::layout::{GpuPrimitive, PRIM_PLANE, PRIM_QUAD, PRIM_SPHERE, PRIM_TRIANGLE};
 use crate::pack::FlatScene;
+use crate::scene::parametric::ParametricSurface as _;
 use crate::scene::surface::{Surface, grids_cut_alike, patches_mesh_cut};
 
 /// How far (pixels on the film) the preview's triangles may stray from a curved surface unless
@@ -352,7 +353,7 @@ impl CurvedShapes {
                     let normals = mesh.normals.as_deref().unwrap_or_default();
                     for &k in mesh.triangles.iter().flatten() {
                         let (p, n) = (mesh.positions[k as usize], normals[k as usize]);
-                        out.push(vertex(p, n, shape.material));
+                        out.push(PreviewVertex::new(p, n, shape.material));
                     }
                 }
             }
@@ -432,7 +433,7 @@ fn samples(at: SurfaceAt<'_>, span: [DVec2; 2]) -> impl Iterator<Item = DVec3> +
 /// direction as finely as any other it must match ([`grids_cut_alike`]): neighbours meet without
 /// cracks, and a patch far from the finest (most of the teapot, beside its spout) is not cut
 /// as finely.
-fn patches_cut(patches: &[crate::fermat::BezierPatch], detail: &Detail) -> Cut {
+fn patches_cut(patches: &[crate::scene::parametric::BezierPatch], detail: &Detail) -> Cut {
     let unit_square = [DVec2::ZERO, DVec2::ONE];
     let [least, most] = PATCH_QUADS.map(|n| [n; 2]);
     let surface = |k: usize| {
@@ -492,18 +493,9 @@ fn sphere(
             for k in [0, 1, 2, 0, 2, 3] {
                 let normal = sphere_point(DVec3::ZERO, 1.0, corners[k]);
                 let p = sphere_point(center, radius, corners[k]);
-                out.push(vertex(p.as_vec3(), normal.as_vec3(), material));
+                out.push(PreviewVertex::new(p.as_vec3(), normal.as_vec3(), material));
             }
         }
-    }
-}
-
-pub(super) fn vertex(position: Vec3, normal: Vec3, material: u32) -> PreviewVertex {
-    PreviewVertex {
-        position: position.to_array(),
-        material,
-        normal: normal.to_array(),
-        reflector: 0,
     }
 }
 
@@ -512,7 +504,7 @@ fn triangle(out: &mut Vec<PreviewVertex>, p: &GpuPrimitive, normals: Option<[f32
     let face = (b - a).cross(c - a).normalize_or_zero();
     for (k, v) in [a, b, c].into_iter().enumerate() {
         let n = normals.map_or(face, |n| Vec3::from_slice(&n[3 * k..3 * k + 3]));
-        out.push(vertex(v, n, p.material));
+        out.push(PreviewVertex::new(v, n, p.material));
     }
 }
 
@@ -527,7 +519,7 @@ fn quad(out: &mut Vec<PreviewVertex>, p: &GpuPrimitive) {
         corner + u + v,
         corner + v,
     ] {
-        out.push(vertex(point, n, p.material));
+        out.push(PreviewVertex::new(point, n, p.material));
     }
 }
 
@@ -545,7 +537,7 @@ fn plane(out: &mut Vec<PreviewVertex>, p: &GpuPrimitive, extent: f32) {
         corner + u2 + v2,
         corner + v2,
     ] {
-        out.push(vertex(q, n, p.material));
+        out.push(PreviewVertex::new(q, n, p.material));
     }
 }
 

@@ -116,57 +116,11 @@ impl MeshMaterial {
     }
 }
 
-/// Reads a mesh; the error is a sentence that starts with the file's path.
-pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
-    read_mesh(path).map_err(|e| format!("{}: {e}", path.display()))
-}
-
-fn read_mesh(path: &Path) -> Result<TriangleMesh, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot open mesh file: {e}"))?;
-    let name = path.to_string_lossy().to_ascii_lowercase();
-    if name.ends_with(".gltf") || name.ends_with(".glb") {
-        // The gltf crate reads the file (and its buffers) whole: bound it first.
-        let size = file.metadata().map(|m| m.len()).unwrap_or(0);
-        if size > MAX_MESH_BYTES {
-            return Err(format!(
-                "{size} bytes, more than the {MAX_MESH_BYTES} a mesh may have"
-            ));
-        }
-        let scene = super::gltf::read_gltf(path)?;
-        let mut mesh = scene.mesh;
-        mesh.notes = scene.notes;
-        return check_mesh(mesh);
-    }
-    let compressed = name.ends_with(".gz");
-    let inner_name = name.strip_suffix(".gz").unwrap_or(&name);
-    // Only an uncompressed regular file tells its size; otherwise the read limit bounds it.
-    let available = match file.metadata() {
-        Ok(m) if m.is_file() && !compressed => m.len().min(MAX_MESH_BYTES),
-        _ => MAX_MESH_BYTES,
-    };
-    let source: Box<dyn Read> = if compressed {
-        Box::new(flate2::read::MultiGzDecoder::new(file))
-    } else {
-        Box::new(file)
-    };
-    let mut reader = GuardedReader::new(source, MAX_MESH_BYTES, MAX_LINE_BYTES);
-    let mesh = if inner_name.ends_with(".obj") {
-        read_obj(&mut reader, path)?
-    } else if inner_name.ends_with(".ply") {
-        read_ply(&mut reader, available)?
-    } else {
-        return Err(
-            "unknown mesh format (expected .obj, .ply, .obj.gz, .ply.gz, .gltf or .glb)".into(),
-        );
-    };
-    check_mesh(mesh)
-}
-
 /// A buffered reader with limits: at most `max_bytes` in all, and (while `line_limit` is set)
 /// at most that many bytes without a line break. It counts the lines its reader has consumed,
 /// so a parser's error can be placed, and keeps the reason of the first failure, because the
 /// parsers replace a read error by a generic one (tobj: "read error").
-struct GuardedReader {
+pub(super) struct GuardedReader {
     inner: BufReader<Box<dyn Read>>,
     max_bytes: u64,
     line_limit: Option<usize>,
@@ -198,7 +152,7 @@ impl Position {
 }
 
 impl GuardedReader {
-    fn new(source: Box<dyn Read>, max_bytes: u64, line_limit: usize) -> Self {
+    pub(super) fn new(source: Box<dyn Read>, max_bytes: u64, line_limit: usize) -> Self {
         GuardedReader {
             inner: BufReader::new(source),
             max_bytes,
@@ -284,7 +238,7 @@ impl BufRead for GuardedReader {
     }
 }
 
-fn read_obj(reader: &mut GuardedReader, obj: &Path) -> Result<TriangleMesh, String> {
+pub(super) fn read_obj(reader: &mut GuardedReader, obj: &Path) -> Result<TriangleMesh, String> {
     let directory = obj.parent().unwrap_or(Path::new("."));
     let options = tobj::LoadOptions {
         single_index: true,
@@ -379,7 +333,7 @@ fn obj_error_message(e: tobj::LoadError, line: usize) -> String {
     }
 }
 
-fn read_ply(reader: &mut GuardedReader, available: u64) -> Result<TriangleMesh, String> {
+pub(super) fn read_ply(reader: &mut GuardedReader, available: u64) -> Result<TriangleMesh, String> {
     let parser = Parser::<DefaultElement>::new();
     let header = parser
         .read_header(&mut Reader::new(&mut *reader))
@@ -524,7 +478,7 @@ fn smallest_encoding(encoding: &Encoding, property: &PropertyType) -> u64 {
 }
 
 /// Rejects meshes that cannot be rendered and drops triangles that can never be hit.
-fn check_mesh(mut mesh: TriangleMesh) -> Result<TriangleMesh, String> {
+pub(super) fn check_mesh(mut mesh: TriangleMesh) -> Result<TriangleMesh, String> {
     if let Some((i, p)) = mesh
         .positions
         .iter()

@@ -9,6 +9,8 @@ pub mod format;
 pub mod gltf;
 mod load;
 pub mod mesh;
+pub mod mesh_file;
+pub mod parametric;
 pub mod surface;
 mod validate;
 

@@ -1,14 +1,15 @@
 //! Smooth parametric surfaces a scene declares (`type = "torus"`, `"ellipsoid"`, `"cylinder"`,
 //! `"bezier"`): the ray tracers intersect the first three exactly and trace Bézier patches as a
 //! fine mesh with the patches' own normals at its vertices; the raster preview draws a mesh
-//! of each cut for its camera and reflects in them by Fermat's principle (`crate::fermat`).
+//! of each cut for its camera and reflects in them by Fermat's principle (`preview::reflections`). Their geometry is
+//! `scene::parametric`'s.
 
 use std::path::Path;
 
 use glam::{DVec2, DVec3};
 
+use super::parametric::{BezierPatch, Cylinder, Ellipsoid, ParametricSurface, Torus};
 use super::{CurvedPrimitive, Shape, TriangleMesh};
-use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Reflector, Torus};
 
 /// Quads along each side of a Bézier patch: a quarter circle cut 32 times (the teapot's body
 /// patches) lies within 1 − cos(π/128) ≈ 3.0e-4 of its radius of the mesh.
@@ -103,7 +104,7 @@ impl Surface {
     /// patches, each gridded over its own unit square.
     pub fn round_grid(&self) -> Option<RoundGrid<'_>> {
         use std::f64::consts::{PI, TAU};
-        let (surface, across, inward): (&dyn Reflector, _, _) = match self {
+        let (surface, across, inward): (&dyn ParametricSurface, _, _) = match self {
             Surface::Patches(_) => return None,
             Surface::Torus(torus) => (torus, Across::Around(TAU), true),
             Surface::Ellipsoid(e) => (e, Across::Span(0.0, PI), false),
@@ -122,7 +123,7 @@ impl Surface {
 #[derive(Clone, Copy)]
 pub struct RoundGrid<'a> {
     /// The surface's point and normal functions.
-    pub surface: &'a dyn Reflector,
+    pub surface: &'a dyn ParametricSurface,
     across: Across,
     inward: bool,
 }
@@ -149,7 +150,12 @@ enum Across {
 /// outward normals at the vertices; triangles that collapse (an ellipsoid's poles) are left
 /// out. `inward` says that f_u × f_v points into the surface: the triangles are then wound the
 /// other way, so that their geometric normals point out as the vertex normals do.
-fn grid_mesh(surface: &dyn Reflector, quads: [u32; 2], v: Across, inward: bool) -> TriangleMesh {
+fn grid_mesh(
+    surface: &dyn ParametricSurface,
+    quads: [u32; 2],
+    v: Across,
+    inward: bool,
+) -> TriangleMesh {
     let [nu, nv] = quads;
     let rows = match v {
         Across::Around(_) => nv,

@@ -4,21 +4,26 @@
 //! inside f32, and coordinates within +-1e9 scene units (past that, f32 products in the
 //! intersection routines could overflow; see `docs/scene-format.md`).
 
+use std::path::Path;
+
 use glam::{DVec3, Vec3};
 
 use super::format::{
-    CameraSection, DEFAULT_FILM, Exact, LightType, MaterialModel, Pair, RenderSection, SamplerName,
-    Scale, SceneFile, ShapeEntry, ShapeType, Vec3 as F3,
+    CameraSection, DEFAULT_FILM, Exact, LightEntry, LightType, MaterialModel, Pair, RenderSection,
+    SamplerName, Scale, SceneFile, ShapeEntry, ShapeType, Vec3 as F3,
 };
 use super::load::ParsedScene;
-use super::mesh::{compute_vertex_normals, load_mesh, orientation_of, rotation_of, transform_mesh};
+use super::mesh::{
+    TriangleMesh, compute_vertex_normals, orientation_of, rotation_of, transform_mesh,
+};
+use super::mesh_file::load_mesh;
+use super::parametric::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use super::surface::{CurvedSurface, Surface, load_bezier_patches, orient_outward};
 use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
 use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, FocusSurface, Movements, Projection};
 use crate::error::{Error, Result};
-use crate::fermat::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use crate::layout;
 use crate::sampler::{MAX_BLADES, MAX_TABLE_SPP};
 
@@ -410,80 +415,12 @@ fn validate_camera(
         check.positive("camera.film[1]", h)?,
     ];
     check_aspect(check, "camera.film", film, "mm", render)?;
-    let focal_length_mm = match (c.focal_length, c.vertical_fov) {
-        (Some(_), Some(_)) => {
-            return Err(check.err(
-                "camera.vertical_fov",
-                "give either focal_length or vertical_fov, not both",
-            ));
-        }
-        (Some(f), None) => check.positive("camera.focal_length", f)?,
-        (None, Some(fov)) => {
-            let fov = check.finite("camera.vertical_fov", fov)?;
-            if fov <= 0.0 || fov >= 180.0 {
-                return Err(check.err(
-                    "camera.vertical_fov",
-                    format!("must lie in (0, 180) degrees, got {}", num(fov)),
-                ));
-            }
-            0.5 * film[1] / (0.5 * fov.to_radians()).tan()
-        }
-        (None, None) => 50.0,
-    };
-    let f_number = match c.f_number {
-        Some(n) => {
-            let n = check.finite("camera.f_number", n)?;
-            if n < 0.0 {
-                return Err(check.err(
-                    "camera.f_number",
-                    format!("must be 0 (pinhole) or positive, got {}", num(n)),
-                ));
-            }
-            n
-        }
-        None => 0.0,
-    };
+    let focal_length_mm = focal_length(check, c, film)?;
+    let f_number = f_number(check, c)?;
     let units_per_mm = 0.001 / meters_per_unit;
-    let focus_distance = match c.focus_distance {
-        Some(d) if d == f64::INFINITY => None,
-        Some(d) => {
-            let d = check.positive("camera.focus_distance", d)?;
-            if f_number > 0.0 && d / units_per_mm <= focal_length_mm {
-                return Err(check.err(
-                    "camera.focus_distance",
-                    format!(
-                        "{} scene units ({} mm) is not beyond the focal length {} mm: \
-                         no real image forms",
-                        num(d),
-                        num(d / units_per_mm),
-                        num(focal_length_mm)
-                    ),
-                ));
-            }
-            Some(d)
-        }
-        None => None,
-    };
-    let angle = |field: &str, v: Option<f64>| movement_angle(check, field, v);
-    let shift = |field: &str, v: Option<Pair>| movement_shift(check, field, v);
-    let movements = Movements {
-        film_tilt: angle("camera.film_tilt", c.film_tilt)?,
-        film_swing: angle("camera.film_swing", c.film_swing)?,
-        film_shift: shift("camera.film_shift", c.film_shift)?,
-        lens_tilt: angle("camera.lens_tilt", c.lens_tilt)?,
-        lens_swing: angle("camera.lens_swing", c.lens_swing)?,
-        lens_shift: shift("camera.lens_shift", c.lens_shift)?,
-    };
-    let aperture_blades = match c.aperture_blades {
-        None | Some(0) => 0,
-        Some(n) if (1..3).contains(&n) => {
-            return Err(check.err(
-                "camera.aperture_blades",
-                format!("{n} blades make no aperture: use 0 (circle) or 3..={MAX_BLADES}"),
-            ));
-        }
-        Some(n) => check.integer("camera.aperture_blades", n, 3, MAX_BLADES as i64)?,
-    };
+    let focus_distance = focus_distance(check, c, f_number, focal_length_mm, units_per_mm)?;
+    let movements = movements(check, c)?;
+    let aperture_blades = aperture_blades(check, c)?;
     let mut camera = CameraSpec {
         projection: Projection::Perspective,
         position,
@@ -513,6 +450,124 @@ fn validate_camera(
             file.render.spp,
         )?;
     }
+    place_focus(check, c, &mut camera, focus_distance)?;
+    check_film_behind_lens(check, &camera)?;
+    check_focus_surface(check, &camera)?;
+    Ok(camera)
+}
+
+/// The focal length (mm): `focal_length`, or the one that gives `vertical_fov` on the film's
+/// height, or 50 mm.
+fn focal_length(check: &Checker, c: &CameraSection, film: [f64; 2]) -> Result<f64> {
+    Ok(match (c.focal_length, c.vertical_fov) {
+        (Some(_), Some(_)) => {
+            return Err(check.err(
+                "camera.vertical_fov",
+                "give either focal_length or vertical_fov, not both",
+            ));
+        }
+        (Some(f), None) => check.positive("camera.focal_length", f)?,
+        (None, Some(fov)) => {
+            let fov = check.finite("camera.vertical_fov", fov)?;
+            if fov <= 0.0 || fov >= 180.0 {
+                return Err(check.err(
+                    "camera.vertical_fov",
+                    format!("must lie in (0, 180) degrees, got {}", num(fov)),
+                ));
+            }
+            0.5 * film[1] / (0.5 * fov.to_radians()).tan()
+        }
+        (None, None) => 50.0,
+    })
+}
+
+/// `f_number`: 0 (a pinhole, the default) or positive.
+fn f_number(check: &Checker, c: &CameraSection) -> Result<f64> {
+    Ok(match c.f_number {
+        Some(n) => {
+            let n = check.finite("camera.f_number", n)?;
+            if n < 0.0 {
+                return Err(check.err(
+                    "camera.f_number",
+                    format!("must be 0 (pinhole) or positive, got {}", num(n)),
+                ));
+            }
+            n
+        }
+        None => 0.0,
+    })
+}
+
+/// `focus_distance` in scene units (`None`: infinity or not given), beyond the focal length
+/// when there is a lens.
+fn focus_distance(
+    check: &Checker,
+    c: &CameraSection,
+    f_number: f64,
+    focal_length_mm: f64,
+    units_per_mm: f64,
+) -> Result<Option<f64>> {
+    Ok(match c.focus_distance {
+        Some(d) if d == f64::INFINITY => None,
+        Some(d) => {
+            let d = check.positive("camera.focus_distance", d)?;
+            if f_number > 0.0 && d / units_per_mm <= focal_length_mm {
+                return Err(check.err(
+                    "camera.focus_distance",
+                    format!(
+                        "{} scene units ({} mm) is not beyond the focal length {} mm: \
+                         no real image forms",
+                        num(d),
+                        num(d / units_per_mm),
+                        num(focal_length_mm)
+                    ),
+                ));
+            }
+            Some(d)
+        }
+        None => None,
+    })
+}
+
+/// The film's and the lens's tilt, swing and shift.
+fn movements(check: &Checker, c: &CameraSection) -> Result<Movements> {
+    let angle = |field: &str, v: Option<f64>| movement_angle(check, field, v);
+    let shift = |field: &str, v: Option<Pair>| movement_shift(check, field, v);
+    Ok(Movements {
+        film_tilt: angle("camera.film_tilt", c.film_tilt)?,
+        film_swing: angle("camera.film_swing", c.film_swing)?,
+        film_shift: shift("camera.film_shift", c.film_shift)?,
+        lens_tilt: angle("camera.lens_tilt", c.lens_tilt)?,
+        lens_swing: angle("camera.lens_swing", c.lens_swing)?,
+        lens_shift: shift("camera.lens_shift", c.lens_shift)?,
+    })
+}
+
+/// `aperture_blades`: 0 (a circle) or 3 to `MAX_BLADES`.
+fn aperture_blades(check: &Checker, c: &CameraSection) -> Result<u32> {
+    Ok(match c.aperture_blades {
+        None | Some(0) => 0,
+        Some(n) if (1..3).contains(&n) => {
+            return Err(check.err(
+                "camera.aperture_blades",
+                format!("{n} blades make no aperture: use 0 (circle) or 3..={MAX_BLADES}"),
+            ));
+        }
+        Some(n) => check.integer("camera.aperture_blades", n, 3, MAX_BLADES as i64)?,
+    })
+}
+
+/// Where the camera focuses: one of `film_distance`, `focus_points` (the lens tilt and swing
+/// solved from them) or `focus_distance` (infinity when none is given); a pinhole keeps its
+/// film at the focal length.
+fn place_focus(
+    check: &Checker,
+    c: &CameraSection,
+    camera: &mut CameraSpec,
+    focus_distance: Option<f64>,
+) -> Result<()> {
+    let (f_number, focal_length_mm, units_per_mm) =
+        (camera.f_number, camera.focal_length_mm, camera.units_per_mm);
     let focus_fields = [
         ("focus_distance", c.focus_distance.is_some()),
         ("film_distance", c.film_distance.is_some()),
@@ -567,7 +622,7 @@ fn validate_camera(
         for (i, p) in points.0.iter().enumerate() {
             world[i] = check.point(&format!("{field}[{i}]"), *p)?;
         }
-        let solution = solve_focus_points(&camera, world).map_err(|e| check.err(field, e))?;
+        let solution = solve_focus_points(camera, world).map_err(|e| check.err(field, e))?;
         camera.movements.lens_tilt = solution.lens_tilt;
         camera.movements.lens_swing = solution.lens_swing;
         camera.film_distance_mm = solution.film_distance_mm;
@@ -579,9 +634,7 @@ fn validate_camera(
         };
         camera.focus = Focus::Distance(focus_distance);
     }
-    check_film_behind_lens(check, &camera)?;
-    check_focus_surface(check, &camera)?;
-    Ok(camera)
+    Ok(())
 }
 
 /// `camera.position`, `look_at` and `up`: a viewing direction, and an up not along it.
@@ -858,163 +911,27 @@ fn validate_shapes(
                 )? as u32),
                 None => None,
             };
-        let required = |kind: &str| {
+        let kind = shape_kind_name(s.kind);
+        check.forbid(&prefix, kind, &foreign_fields(s))?;
+        let required = || {
             material.ok_or_else(|| check.err(&at("material"), format!("is required for a {kind}")))
         };
-        let center_field = [("center", s.center.is_some())];
-        let radius_field = [("radius", s.radius.is_some())];
-        let sphere_fields = [&center_field[..], &radius_field].concat();
-        let torus_fields = [
-            ("major_radius", s.major_radius.is_some()),
-            ("minor_radius", s.minor_radius.is_some()),
-            ("radii", s.radii.is_some()),
-            ("height", s.height.is_some()),
-        ];
-        let quad_fields = [
-            ("corner", s.corner.is_some()),
-            ("edge_u", s.edge_u.is_some()),
-            ("edge_v", s.edge_v.is_some()),
-        ];
-        let plane_fields = [("point", s.point.is_some()), ("normal", s.normal.is_some())];
-        let mesh_fields = [
-            ("file", s.file.is_some()),
-            ("translate", s.translate.is_some()),
-            ("rotate", s.rotate.is_some()),
-            ("scale", s.scale.is_some()),
-            ("smooth", s.smooth.is_some()),
-            ("crease_angle", s.crease_angle.is_some()),
-        ];
         let shape = match s.kind {
-            ShapeType::Sphere => {
-                check.forbid(
-                    &prefix,
-                    "sphere",
-                    &[&quad_fields[..], &plane_fields, &mesh_fields, &torus_fields].concat(),
-                )?;
-                let center = check.point(
-                    &at("center"),
-                    check.require(&at("center"), s.center, "sphere")?,
-                )?;
-                let radius = check.positive(
-                    &at("radius"),
-                    check.require(&at("radius"), s.radius, "sphere")?,
-                )?;
-                if radius > MAX_COORDINATE {
-                    return Err(check.err(&at("radius"), format!("exceeds {MAX_COORDINATE:e}")));
-                }
-                Shape::Sphere {
-                    center: center.as_vec3(),
-                    radius: radius as f32,
-                    material: required("sphere")?,
-                }
-            }
+            ShapeType::Sphere => sphere(check, &prefix, s, required()?)?,
             ShapeType::Quad => {
-                check.forbid(
-                    &prefix,
-                    "quad",
-                    &[
-                        &sphere_fields[..],
-                        &plane_fields,
-                        &mesh_fields,
-                        &torus_fields,
-                    ]
-                    .concat(),
-                )?;
                 let (corner, edge_u, edge_v) =
                     parallelogram(check, &prefix, s.corner, s.edge_u, s.edge_v, "quad")?;
                 Shape::Quad {
                     corner,
                     edge_u,
                     edge_v,
-                    material: required("quad")?,
+                    material: required()?,
                 }
             }
-            ShapeType::Plane => {
-                check.forbid(
-                    &prefix,
-                    "plane",
-                    &[
-                        &sphere_fields[..],
-                        &quad_fields,
-                        &mesh_fields,
-                        &torus_fields,
-                    ]
-                    .concat(),
-                )?;
-                let point =
-                    check.point(&at("point"), check.require(&at("point"), s.point, "plane")?)?;
-                let normal = check.nonzero(
-                    &at("normal"),
-                    check.require(&at("normal"), s.normal, "plane")?,
-                )?;
-                Shape::Plane {
-                    point: point.as_vec3(),
-                    normal: normal.normalize().as_vec3(),
-                    material: required("plane")?,
-                }
-            }
+            ShapeType::Plane => plane(check, &prefix, s, required()?)?,
             ShapeType::Mesh => {
-                check.forbid(
-                    &prefix,
-                    "mesh",
-                    &[
-                        &sphere_fields[..],
-                        &quad_fields,
-                        &plane_fields,
-                        &torus_fields,
-                    ]
-                    .concat(),
-                )?;
-                let name = check.require(&at("file"), s.file.as_ref(), "mesh")?;
-                let path = scene_dir.join(name);
-                let mut mesh = load_mesh(&path).map_err(|e| check.err(&at("file"), e))?;
-                let scale = match s.scale.unwrap_or(Scale::Uniform(1.0)) {
-                    Scale::Uniform(k) => DVec3::splat(check.finite(&at("scale"), k)?),
-                    Scale::PerAxis(v) => check.vector(&at("scale"), v)?,
-                };
-                if scale.min_element() == 0.0 || scale.abs().min_element() == 0.0 {
-                    return Err(check.err(&at("scale"), "a zero scale flattens the mesh"));
-                }
-                let rotate = check.vector(&at("rotate"), s.rotate.unwrap_or_default())?;
-                let translate = check.point(&at("translate"), s.translate.unwrap_or_default())?;
-                if !s.smooth.unwrap_or(true) {
-                    mesh.normals = None;
-                }
-                transform_mesh(
-                    &mut mesh,
-                    scale.as_vec3(),
-                    rotate.as_vec3(),
-                    translate.as_vec3(),
-                );
-                let crease = check.finite(
-                    &at("crease_angle"),
-                    s.crease_angle.unwrap_or(DEFAULT_CREASE_ANGLE_DEG),
-                )?;
-                if !(0.0..=180.0).contains(&crease) {
-                    return Err(check.err(
-                        &at("crease_angle"),
-                        format!("must lie in [0, 180] degrees, got {}", num(crease)),
-                    ));
-                }
-                if s.smooth.unwrap_or(true) && mesh.normals.is_none() {
-                    compute_vertex_normals(&mut mesh, crease as f32);
-                }
-                if let Some((v, p)) = mesh
-                    .positions
-                    .iter()
-                    .enumerate()
-                    .find(|(_, p)| !within_coordinate_limit(**p))
-                {
-                    return Err(check.err(
-                        &at("file"),
-                        format!(
-                            "{}: vertex {v} lies at {} after transformation, beyond \
-                             +-{MAX_COORDINATE:e} scene units",
-                            path.display(),
-                            nums(&p.as_dvec3().to_array())
-                        ),
-                    ));
-                }
+                let path = scene_dir.join(check.require(&at("file"), s.file.as_ref(), "mesh")?);
+                let mut mesh = mesh(check, &prefix, s, &path)?;
                 let material = match material {
                     // A scene material overrides the file's.
                     Some(m) => {
@@ -1028,72 +945,174 @@ fn validate_shapes(
                 Shape::Mesh { mesh, material }
             }
             ShapeType::Torus => {
-                // A torus may be turned (`rotate`); the other mesh fields are foreign to it.
-                let mesh_but_rotate: Vec<_> = mesh_fields
-                    .into_iter()
-                    .filter(|f| f.0 != "rotate")
-                    .collect();
-                check.forbid(
-                    &prefix,
-                    "torus",
-                    &[
-                        &radius_field[..],
-                        &quad_fields,
-                        &plane_fields,
-                        &mesh_but_rotate,
-                    ]
-                    .concat(),
-                )?;
-                check.forbid(
-                    &prefix,
-                    "torus",
-                    &[("radii", s.radii.is_some()), ("height", s.height.is_some())],
-                )?;
                 let surface = Surface::Torus(torus(check, &prefix, s)?);
-                curved_shape(i, surface, required("torus")?, &mut surfaces)
+                curved_shape(i, surface, required()?, &mut surfaces)
             }
             ShapeType::Ellipsoid | ShapeType::Cylinder => {
-                let (kind, own) = match s.kind {
-                    ShapeType::Ellipsoid => ("ellipsoid", ["radii", "rotate"].as_slice()),
-                    _ => ("cylinder", ["radius", "height", "rotate"].as_slice()),
-                };
-                let present = [
-                    &sphere_fields[..],
-                    &quad_fields,
-                    &plane_fields,
-                    &mesh_fields,
-                    &torus_fields,
-                ]
-                .concat();
-                let foreign: Vec<_> = present
-                    .into_iter()
-                    .filter(|(name, _)| *name != "center" && !own.contains(name))
-                    .collect();
-                check.forbid(&prefix, kind, &foreign)?;
                 let surface = round_surface(check, &prefix, s)?;
-                curved_shape(i, surface, required(kind)?, &mut surfaces)
+                curved_shape(i, surface, required()?, &mut surfaces)
             }
             ShapeType::Bezier => {
-                let smooth_fields = &mesh_fields[4..];
-                check.forbid(
-                    &prefix,
-                    "bezier",
-                    &[
-                        &sphere_fields[..],
-                        &quad_fields,
-                        &plane_fields,
-                        &torus_fields,
-                        smooth_fields,
-                    ]
-                    .concat(),
-                )?;
                 let surface = Surface::Patches(bezier_patches(check, &prefix, s, scene_dir)?);
-                curved_shape(i, surface, required("bezier")?, &mut surfaces)
+                curved_shape(i, surface, required()?, &mut surfaces)
             }
         };
         shapes.push(shape);
     }
     Ok((shapes, surfaces))
+}
+
+/// A shape type as the scene file spells it.
+fn shape_kind_name(kind: ShapeType) -> &'static str {
+    match kind {
+        ShapeType::Sphere => "sphere",
+        ShapeType::Quad => "quad",
+        ShapeType::Plane => "plane",
+        ShapeType::Mesh => "mesh",
+        ShapeType::Torus => "torus",
+        ShapeType::Ellipsoid => "ellipsoid",
+        ShapeType::Cylinder => "cylinder",
+        ShapeType::Bezier => "bezier",
+    }
+}
+
+/// The geometric fields a shape of `kind` takes; every other one is refused.
+fn own_fields(kind: ShapeType) -> &'static [&'static str] {
+    match kind {
+        ShapeType::Sphere => &["center", "radius"],
+        ShapeType::Quad => &["corner", "edge_u", "edge_v"],
+        ShapeType::Plane => &["point", "normal"],
+        ShapeType::Mesh => &[
+            "file",
+            "translate",
+            "rotate",
+            "scale",
+            "smooth",
+            "crease_angle",
+        ],
+        ShapeType::Torus => &["center", "major_radius", "minor_radius", "rotate"],
+        ShapeType::Ellipsoid => &["center", "radii", "rotate"],
+        ShapeType::Cylinder => &["center", "radius", "height", "rotate"],
+        ShapeType::Bezier => &["file", "translate", "rotate", "scale"],
+    }
+}
+
+/// The geometric fields `s` gives that its type does not take, in the order a refusal names
+/// the first of them.
+fn foreign_fields(s: &ShapeEntry) -> Vec<(&'static str, bool)> {
+    let given = [
+        ("center", s.center.is_some()),
+        ("radius", s.radius.is_some()),
+        ("corner", s.corner.is_some()),
+        ("edge_u", s.edge_u.is_some()),
+        ("edge_v", s.edge_v.is_some()),
+        ("point", s.point.is_some()),
+        ("normal", s.normal.is_some()),
+        ("file", s.file.is_some()),
+        ("translate", s.translate.is_some()),
+        ("rotate", s.rotate.is_some()),
+        ("scale", s.scale.is_some()),
+        ("smooth", s.smooth.is_some()),
+        ("crease_angle", s.crease_angle.is_some()),
+        ("major_radius", s.major_radius.is_some()),
+        ("minor_radius", s.minor_radius.is_some()),
+        ("radii", s.radii.is_some()),
+        ("height", s.height.is_some()),
+    ];
+    let own = own_fields(s.kind);
+    given
+        .into_iter()
+        .filter(|(name, _)| !own.contains(name))
+        .collect()
+}
+
+fn sphere(check: &Checker, prefix: &str, s: &ShapeEntry, material: u32) -> Result<Shape> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let center = check.point(
+        &at("center"),
+        check.require(&at("center"), s.center, "sphere")?,
+    )?;
+    let radius = check.positive(
+        &at("radius"),
+        check.require(&at("radius"), s.radius, "sphere")?,
+    )?;
+    if radius > MAX_COORDINATE {
+        return Err(check.err(&at("radius"), format!("exceeds {MAX_COORDINATE:e}")));
+    }
+    Ok(Shape::Sphere {
+        center: center.as_vec3(),
+        radius: radius as f32,
+        material,
+    })
+}
+
+fn plane(check: &Checker, prefix: &str, s: &ShapeEntry, material: u32) -> Result<Shape> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let point = check.point(&at("point"), check.require(&at("point"), s.point, "plane")?)?;
+    let normal = check.nonzero(
+        &at("normal"),
+        check.require(&at("normal"), s.normal, "plane")?,
+    )?;
+    Ok(Shape::Plane {
+        point: point.as_vec3(),
+        normal: normal.normalize().as_vec3(),
+        material,
+    })
+}
+
+/// A mesh shape's file read, transformed (scale, then rotation, then translation) and given
+/// vertex normals where it is smooth and has none; every vertex within the coordinate limit.
+fn mesh(check: &Checker, prefix: &str, s: &ShapeEntry, path: &Path) -> Result<TriangleMesh> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let mut mesh = load_mesh(path).map_err(|e| check.err(&at("file"), e))?;
+    let scale = match s.scale.unwrap_or(Scale::Uniform(1.0)) {
+        Scale::Uniform(k) => DVec3::splat(check.finite(&at("scale"), k)?),
+        Scale::PerAxis(v) => check.vector(&at("scale"), v)?,
+    };
+    if scale.min_element() == 0.0 || scale.abs().min_element() == 0.0 {
+        return Err(check.err(&at("scale"), "a zero scale flattens the mesh"));
+    }
+    let rotate = check.vector(&at("rotate"), s.rotate.unwrap_or_default())?;
+    let translate = check.point(&at("translate"), s.translate.unwrap_or_default())?;
+    if !s.smooth.unwrap_or(true) {
+        mesh.normals = None;
+    }
+    transform_mesh(
+        &mut mesh,
+        scale.as_vec3(),
+        rotate.as_vec3(),
+        translate.as_vec3(),
+    );
+    let crease = check.finite(
+        &at("crease_angle"),
+        s.crease_angle.unwrap_or(DEFAULT_CREASE_ANGLE_DEG),
+    )?;
+    if !(0.0..=180.0).contains(&crease) {
+        return Err(check.err(
+            &at("crease_angle"),
+            format!("must lie in [0, 180] degrees, got {}", num(crease)),
+        ));
+    }
+    if s.smooth.unwrap_or(true) && mesh.normals.is_none() {
+        compute_vertex_normals(&mut mesh, crease as f32);
+    }
+    if let Some((v, p)) = mesh
+        .positions
+        .iter()
+        .enumerate()
+        .find(|(_, p)| !within_coordinate_limit(**p))
+    {
+        return Err(check.err(
+            &at("file"),
+            format!(
+                "{}: vertex {v} lies at {} after transformation, beyond \
+                 +-{MAX_COORDINATE:e} scene units",
+                path.display(),
+                nums(&p.as_dvec3().to_array())
+            ),
+        ));
+    }
+    Ok(mesh)
 }
 
 /// Shape `index`, the curved `surface` as the ray tracers trace it, the surface kept in
@@ -1338,134 +1357,146 @@ fn parallelogram(
     Ok((corner.as_vec3(), u.as_vec3(), v.as_vec3()))
 }
 
+/// A light's validator, by its type.
+type LightValidator = fn(&Checker, &str, &LightEntry) -> Result<Light>;
+
 fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
     let mut lights = Vec::new();
     for (i, l) in file.lights.iter().enumerate() {
         let prefix = format!("lights[{i}]");
-        let at = |f: &str| format!("{prefix}.{f}");
-        let point_fields = [
-            ("position", l.position.is_some()),
-            ("intensity", l.intensity.is_some()),
-        ];
-        let directional_fields = [
-            ("direction", l.direction.is_some()),
-            ("irradiance", l.irradiance.is_some()),
-        ];
-        let area_fields = [
-            ("corner", l.corner.is_some()),
-            ("edge_u", l.edge_u.is_some()),
-            ("edge_v", l.edge_v.is_some()),
-            ("radiance", l.radiance.is_some()),
-            ("samples", l.samples.is_some()),
-        ];
-        let cone_fields = [
-            ("outer_angle", l.outer_angle.is_some()),
-            ("inner_angle", l.inner_angle.is_some()),
-        ];
-        let light = match l.kind {
-            LightType::Point => {
-                check.forbid(
-                    &prefix,
-                    "point light",
-                    &[&directional_fields[..], &area_fields, &cone_fields].concat(),
-                )?;
-                Light::Point {
-                    position: check
-                        .point(
-                            &at("position"),
-                            check.require(&at("position"), l.position, "point light")?,
-                        )?
-                        .as_vec3(),
-                    intensity: check.radiometric(
-                        &at("intensity"),
-                        check.require(&at("intensity"), l.intensity, "point light")?,
-                    )?,
-                }
-            }
-            LightType::Directional => {
-                check.forbid(
-                    &prefix,
-                    "directional light",
-                    &[&point_fields[..], &area_fields, &cone_fields].concat(),
-                )?;
-                let direction = check.nonzero(
-                    &at("direction"),
-                    check.require(&at("direction"), l.direction, "directional light")?,
-                )?;
-                Light::Directional {
-                    direction: direction.normalize().as_vec3(),
-                    irradiance: check.radiometric(
-                        &at("irradiance"),
-                        check.require(&at("irradiance"), l.irradiance, "directional light")?,
-                    )?,
-                }
-            }
-            LightType::Spot => {
-                check.forbid(&prefix, "spot light", &area_fields[..])?;
-                let direction = check.nonzero(
-                    &at("direction"),
-                    check.require(&at("direction"), l.direction, "spot light")?,
-                )?;
-                let outer = check.finite(&at("outer_angle"), l.outer_angle.unwrap_or(45.0))?;
-                if !(outer > 0.0 && outer <= 90.0) {
-                    return Err(check.err(
-                        &at("outer_angle"),
-                        format!("lies in (0, 90] degrees, got {}", num(outer)),
-                    ));
-                }
-                let inner = check.finite(&at("inner_angle"), l.inner_angle.unwrap_or(0.0))?;
-                if !(0.0..outer).contains(&inner) {
-                    return Err(check.err(
-                        &at("inner_angle"),
-                        format!(
-                            "lies in [0, outer_angle = {}) degrees, got {}",
-                            num(outer),
-                            num(inner)
-                        ),
-                    ));
-                }
-                Light::Spot {
-                    position: check
-                        .point(
-                            &at("position"),
-                            check.require(&at("position"), l.position, "spot light")?,
-                        )?
-                        .as_vec3(),
-                    direction: direction.normalize().as_vec3(),
-                    intensity: check.radiometric(
-                        &at("intensity"),
-                        check.require(&at("intensity"), l.intensity, "spot light")?,
-                    )?,
-                    inner_deg: inner as f32,
-                    outer_deg: outer as f32,
-                }
-            }
-            LightType::Area => {
-                check.forbid(
-                    &prefix,
-                    "area light",
-                    &[&point_fields[..], &directional_fields, &cone_fields].concat(),
-                )?;
-                let (corner, edge_u, edge_v) =
-                    parallelogram(check, &prefix, l.corner, l.edge_u, l.edge_v, "area light")?;
-                Light::Area {
-                    corner,
-                    edge_u,
-                    edge_v,
-                    radiance: check.radiometric(
-                        &at("radiance"),
-                        check.require(&at("radiance"), l.radiance, "area light")?,
-                    )?,
-                    samples: check.integer(
-                        &at("samples"),
-                        l.samples.unwrap_or(1),
-                        1,
-                        MAX_LIGHT_SAMPLES,
-                    )?,
-                }
-            }
+        let (kind, validate): (_, LightValidator) = match l.kind {
+            LightType::Point => ("point light", point_light),
+            LightType::Directional => ("directional light", directional_light),
+            LightType::Spot => ("spot light", spot_light),
+            LightType::Area => ("area light", area_light),
         };
-        lights.push(light);
+        check.forbid(&prefix, kind, &foreign_light_fields(l))?;
+        lights.push(validate(check, &prefix, l)?);
     }
     Ok(lights)
+}
+
+/// The fields `l` gives that its type does not take, in the order a refusal names the first.
+fn foreign_light_fields(l: &LightEntry) -> Vec<(&'static str, bool)> {
+    let given = [
+        ("position", l.position.is_some()),
+        ("intensity", l.intensity.is_some()),
+        ("direction", l.direction.is_some()),
+        ("irradiance", l.irradiance.is_some()),
+        ("corner", l.corner.is_some()),
+        ("edge_u", l.edge_u.is_some()),
+        ("edge_v", l.edge_v.is_some()),
+        ("radiance", l.radiance.is_some()),
+        ("samples", l.samples.is_some()),
+        ("outer_angle", l.outer_angle.is_some()),
+        ("inner_angle", l.inner_angle.is_some()),
+    ];
+    let own: &[&str] = match l.kind {
+        LightType::Point => &["position", "intensity"],
+        LightType::Directional => &["direction", "irradiance"],
+        LightType::Spot => &[
+            "position",
+            "intensity",
+            "direction",
+            "outer_angle",
+            "inner_angle",
+        ],
+        LightType::Area => &["corner", "edge_u", "edge_v", "radiance", "samples"],
+    };
+    given
+        .into_iter()
+        .filter(|(name, _)| !own.contains(name))
+        .collect()
+}
+
+/// A point light: its position and intensity (W/sr).
+fn point_light(check: &Checker, prefix: &str, l: &LightEntry) -> Result<Light> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    Ok(Light::Point {
+        position: check
+            .point(
+                &at("position"),
+                check.require(&at("position"), l.position, "point light")?,
+            )?
+            .as_vec3(),
+        intensity: check.radiometric(
+            &at("intensity"),
+            check.require(&at("intensity"), l.intensity, "point light")?,
+        )?,
+    })
+}
+
+/// A directional light: the direction it shines along and its irradiance.
+fn directional_light(check: &Checker, prefix: &str, l: &LightEntry) -> Result<Light> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let direction = check.nonzero(
+        &at("direction"),
+        check.require(&at("direction"), l.direction, "directional light")?,
+    )?;
+    Ok(Light::Directional {
+        direction: direction.normalize().as_vec3(),
+        irradiance: check.radiometric(
+            &at("irradiance"),
+            check.require(&at("irradiance"), l.irradiance, "directional light")?,
+        )?,
+    })
+}
+
+/// A spot light: a point light whose intensity falls off between `inner_angle` and `outer_angle` about its direction.
+fn spot_light(check: &Checker, prefix: &str, l: &LightEntry) -> Result<Light> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let direction = check.nonzero(
+        &at("direction"),
+        check.require(&at("direction"), l.direction, "spot light")?,
+    )?;
+    let outer = check.finite(&at("outer_angle"), l.outer_angle.unwrap_or(45.0))?;
+    if !(outer > 0.0 && outer <= 90.0) {
+        return Err(check.err(
+            &at("outer_angle"),
+            format!("lies in (0, 90] degrees, got {}", num(outer)),
+        ));
+    }
+    let inner = check.finite(&at("inner_angle"), l.inner_angle.unwrap_or(0.0))?;
+    if !(0.0..outer).contains(&inner) {
+        return Err(check.err(
+            &at("inner_angle"),
+            format!(
+                "lies in [0, outer_angle = {}) degrees, got {}",
+                num(outer),
+                num(inner)
+            ),
+        ));
+    }
+    Ok(Light::Spot {
+        position: check
+            .point(
+                &at("position"),
+                check.require(&at("position"), l.position, "spot light")?,
+            )?
+            .as_vec3(),
+        direction: direction.normalize().as_vec3(),
+        intensity: check.radiometric(
+            &at("intensity"),
+            check.require(&at("intensity"), l.intensity, "spot light")?,
+        )?,
+        inner_deg: inner as f32,
+        outer_deg: outer as f32,
+    })
+}
+
+/// An area light: a parallelogram of uniform radiance, sampled `samples` times a shading point.
+fn area_light(check: &Checker, prefix: &str, l: &LightEntry) -> Result<Light> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let (corner, edge_u, edge_v) =
+        parallelogram(check, prefix, l.corner, l.edge_u, l.edge_v, "area light")?;
+    Ok(Light::Area {
+        corner,
+        edge_u,
+        edge_v,
+        radiance: check.radiometric(
+            &at("radiance"),
+            check.require(&at("radiance"), l.radiance, "area light")?,
+        )?,
+        samples: check.integer(&at("samples"), l.samples.unwrap_or(1), 1, MAX_LIGHT_SAMPLES)?,
+    })
 }

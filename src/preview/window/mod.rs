@@ -1,12 +1,18 @@
 //! The interactive preview (`chambre preview --window`): the raster preview
-//! (`gpu::preview::PreviewRenderer`) drawn into a window through winit, redrawn as keys or the
-//! mouse move the film and turn the camera (`preview::Composer`), the figures in the window's
+//! (`preview::PreviewRenderer`) drawn into a window through winit, redrawn as keys or the
+//! mouse move the film and turn the camera ([`Composer`], `compose`), the figures in the window's
 //! title and on the terminal; `s` saves the scene with the composition, to be rendered by the
 //! ray tracer.
 //!
 //! A `--keys` script replays keys after the first frame, as if typed, then closes the window;
 //! with `--screenshot` the last frame shown is written out. That is how it runs headless and is
-//! tested (under Xvfb, `tests/window.rs`). Shader: `wgsl/preview_present.wgsl`.
+//! tested (under Xvfb, `tests/window.rs`). Shader: `wgsl/preview/present.wgsl`.
+
+mod compose;
+
+pub use compose::{
+    ComposeAction, ComposeKey, Composer, DRAG_DEG_PER_PX, Drag, SHIFT_STEP_MM, TURN_STEP_DEG,
+};
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -19,12 +25,11 @@ use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
-use super::GpuContext;
-use super::preview::{PreviewOptions, PreviewRenderer};
 use crate::error::{Error, Result};
+use crate::gpu::GpuContext;
 use crate::output::OutputTarget;
 use crate::pack::FlatScene;
-use crate::preview::{ComposeAction, ComposeKey, Composer, Drag};
+use crate::preview::{PreviewOptions, PreviewRenderer};
 use crate::scene::{Scene, merged_scene_text};
 
 /// What the window is asked to do beside showing the scene.
@@ -55,7 +60,7 @@ pub struct WindowReport {
 /// in notches and a touchpad's in pixels).
 const SCROLL_PX_PER_NOTCH: f64 = 40.0;
 
-/// The presentation shader's uniforms (`wgsl/preview_present.wgsl`'s `Present`).
+/// The presentation shader's uniforms (`wgsl/preview/present.wgsl`'s `Present`).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct PresentUniforms {
@@ -457,7 +462,7 @@ fn present_pipeline(
     let device = &context.device;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("present"),
-        source: wgpu::ShaderSource::Wgsl(include_str!("../../wgsl/preview_present.wgsl").into()),
+        source: wgpu::ShaderSource::Wgsl(include_str!("../../../wgsl/preview/present.wgsl").into()),
     });
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("present"),

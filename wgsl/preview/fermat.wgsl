@@ -1,18 +1,20 @@
 // Reflections on a sphere, torus, Bézier patch, ellipsoid or cylinder by Fermat's principle:
-// one invocation finds, for one scene vertex V and the eye E, the point P of the reflector where E -> P -> V has extremal length, by
-// the seed's search on a triangle in the (u, v) plane (see src/fermat.rs for the method), in
-// f32, step for step as its twin; the search's constants come from src/layout.rs.
-// Mirrors: src/fermat.rs (Sphere, Sphere::facing, Torus, TorusSearch, BezierPatch, on_patch,
-// Ellipsoid, Cylinder, on_cylinder, initial_triangle, replaced_corner, Solver::solve,
-// sampled_start, solve_on_patch, anchored_on_patch, anchored_on_torus_half).
+// one invocation finds, for one scene vertex V and the eye E, the point P of the reflector
+// where E -> P -> V has extremal length, by the search on a triangle in the (u, v) plane (see
+// src/preview/reflections/fermat.rs for the method), in f32, step for step as its twin; the
+// search's constants come from src/layout.rs.
+// Mirrors: src/preview/reflections/fermat.rs (the Reflector impls, TorusSearch, on_patch,
+// on_cylinder, initial_triangle, replaced_corner, Solver::solve, sampled_start, solve_on_patch,
+// anchored_on_patch, anchored_on_torus_half), src/scene/parametric.rs (Sphere, Sphere::facing,
+// Torus, BezierPatch, Ellipsoid, Cylinder: the surfaces' points, tangents and normals).
 
-// Steps at most: the seed's 5 unless the pipeline overrides it (`gpu::fermat::FermatPass`).
+// Steps at most: the seed's 5 unless the pipeline overrides it (`preview::reflections::kernel::FermatPass`).
 override FERMAT_STEPS: u32 = 5u;
 // The reflector's kind (`REFLECTOR_SPHERE`, ...): a pipeline per kind, so that each carries
-// only its own surface's code (`gpu::fermat::FermatPass`).
+// only its own surface's code (`preview::reflections::kernel::FermatPass`).
 override REFLECTOR_KIND: u32 = 0u;
 // Whether a patch's own points are searched again where the seed's corners find nothing (with
-// self-reflections: `gpu::fermat::FermatPass`).
+// self-reflections: `preview::reflections::kernel::FermatPass`).
 override OWN_POINTS_SEARCHED_AGAIN: bool = false;
 // The search stops when its triangle's longest side in (u, v), or its last step, is below this.
 // In f32 the gradients' rounding keeps a converged search jittering about 1e-7 (u, v near 0.5
@@ -66,7 +68,7 @@ fn frame_for(eye: vec3<f32>, vertex: vec3<f32>) -> Frame {
 }
 
 // f(u, v) and its tangents f_u, f_v: `Sphere`, `Torus`, `Ellipsoid`, `Cylinder` and
-// `BezierPatch` in src/fermat.rs, in the frame f (u around y).
+// `BezierPatch` in src/preview/reflections/fermat.rs, in the frame f (u around y).
 struct SurfacePoint {
     p: vec3<f32>,
     fu: vec3<f32>,
@@ -210,7 +212,7 @@ fn normal_at(f: Frame, uv: vec2<f32>, s: SurfacePoint) -> vec3<f32> {
 }
 
 // Where the segment from `outside` (|outside| > 1) to `inside` (|inside| < 1) crosses the unit
-// sphere about the origin (`unit_sphere_crossing` in src/fermat.rs).
+// sphere about the origin (`unit_sphere_crossing` in src/preview/reflections/fermat.rs).
 fn unit_sphere_crossing(outside: vec3<f32>, inside: vec3<f32>) -> vec3<f32> {
     let w = inside - outside;
     let a = dot(w, w);
@@ -285,7 +287,7 @@ fn flat_with(corners: Triangle, k: u32, p: vec2<f32>) -> bool {
 }
 
 // The corner p replaces: the farthest from it, or the next farthest where that would leave a
-// flat triangle (src/fermat.rs `replaced_corner`; ties go to the later corner on both sides).
+// flat triangle (src/preview/reflections/fermat.rs `replaced_corner`; ties go to the later corner on both sides).
 fn replaced_corner(corners: Triangle, p: vec2<f32>) -> u32 {
     let d = vec3<f32>(length(corners.a - p), length(corners.b - p), length(corners.c - p));
     var first = 0u;
@@ -493,7 +495,7 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // A patch's corner B for one vertex of one search (x the vertex, y the search): where the
 // segment from the vertex to O crosses the patch. Neither depends on the eye, so the preview
-// runs this once for a set of vertices (`gpu::fermat::FermatPass::solve`) and `fermat` reads
+// runs this once for a set of vertices (`preview::reflections::kernel::FermatPass::solve`) and `fermat` reads
 // the starts every frame: these Newton steps were the larger part of a teapot's solve
 // (docs/fermat.md). The rows of other kinds are left alone; `fermat` computes their B itself
 // (a sphere's and an ellipsoid's from the eye's frame; a torus's or cylinder's closed form).

@@ -1,5 +1,5 @@
-// The interactive preview's presentation (`chambre preview --window`; Rust: src/gpu/window.rs):
-// the preview's linear image, clamped to [0, 1] as the PNG output is, drawn into the window
+// The interactive preview's presentation (`chambre preview --window`; Rust:
+// src/preview/window/mod.rs): the preview's linear image, clamped to [0, 1] as the PNG output is, drawn into the window
 // with one triangle that covers it. An sRGB surface encodes the colour itself; on another
 // surface the shader applies the sRGB curve.
 

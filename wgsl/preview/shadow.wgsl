@@ -1,6 +1,7 @@
 // The preview's shadow maps (`chambre preview --shadows`): the main pass's triangles drawn
 // depth only through one view of one light (a cube face, or a directional light's box), once
-// per layer. Mirrors: src/preview/shadows.rs (the views), src/gpu/preview.rs (`Shadows`).
+// per layer. Mirrors: src/preview/shadows/mod.rs (the views), src/preview/shadows/maps.rs
+// (`Shadows`).
 
 @group(0) @binding(0) var<uniform> light_view: mat4x4<f32>;
 

@@ -1,21 +1,20 @@
-//! Reflection points on curved mirrors (sphere, torus, ellipsoid, cylinder, Bézier patch) by
-//! Fermat's principle on the GPU: the `fermat` kernel of the registry solves one scene vertex
-//! of one search (a surface of a mirror) per invocation; `fermat::Solver` is its CPU twin
-//! (f64), and `tests/fermat.rs` checks that they agree. The raster preview encodes it before its
-//! draws (`gpu::preview`): every search in one dispatch per kind of surface, then the
-//! `fermat_cull` kernel, which lists the reflected triangles whose reflection shows on each
-//! search's surface, for one indirect draw of them all. A teapot's 32 patches took 64
-//! dispatches a frame before, whose fixed cost on lavapipe outweighed their work, and 32 draws
-//! (docs/fermat.md).
+//! The Fermat search's GPU side: reflection points on curved mirrors (sphere, torus, ellipsoid,
+//! cylinder, Bézier patch) found by the `fermat` kernel of the registry (`gpu::kernels`), one
+//! scene vertex of one search (a surface of a mirror) per invocation; `fermat::Solver` is its
+//! CPU twin (f64), and `tests/fermat.rs` checks that they agree. The reflection passes
+//! (`passes`) encode it before their draws: every search in one dispatch per kind of surface,
+//! then the `fermat_cull` kernel, which lists the reflected triangles whose reflection shows on
+//! each search's surface, for one indirect draw of them all (one dispatch per search costs
+//! more in fixed costs on lavapipe than its work: docs/fermat.md).
 
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
-use super::GpuContext;
-use super::kernels::{self, FERMAT, FERMAT_CULL, FERMAT_START, slot};
+use super::MirrorSurface;
 use crate::error::{Error, Result};
+use crate::gpu::GpuContext;
+use crate::gpu::kernels::{self, FERMAT, FERMAT_CULL, FERMAT_START, slot};
 use crate::layout::{GpuDrawArgs, GpuReflection, GpuReflector, REFLECTOR_PATCH};
-use crate::preview::MirrorSurface;
 
 /// The seed's step count ("4–5 steps"), the kernel's default.
 pub const SEED_STEPS: u32 = 5;
@@ -213,7 +212,7 @@ impl FermatPass {
     ) -> Result<wgpu::Buffer> {
         let limit = context.device.limits().max_storage_buffer_binding_size;
         if bytes > limit {
-            return Err(super::over_binding_limit(what, bytes, limit));
+            return Err(crate::gpu::over_binding_limit(what, bytes, limit));
         }
         Ok(context.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(what),
@@ -434,7 +433,7 @@ fn solve_and_cull(
     if let Some(e) = pollster::block_on(scope.pop()) {
         return Err(Error::Gpu(format!(
             "the fermat kernels: {}",
-            super::wgpu_error_text(&e)
+            crate::gpu::wgpu_error_text(&e)
         )));
     }
     context.wait(context.queue.submit([encoder.finish()]))?;

@@ -1,4 +1,4 @@
-//! Reflections on smooth curved reflectors by Fermat's principle (the seed `004`): for an eye E
+//! The search for reflections on smooth curved mirrors by Fermat's principle: for an eye E
 //! and a scene vertex V, the point P = f(u, v) of a parametric reflector where the path E → P → V
 //! has extremal length d(u, v) = |E − f| + |V − f|. The search runs in the (u, v) plane on a
 //! triangle A, B, C: the gradients of d at its corners,
@@ -15,23 +15,27 @@
 //! triangle that is not flat (a quarter of AB off its middle). A sphere is parametrised with its
 //! poles on the normal of the plane through E, V and its centre (`Sphere::facing`): the
 //! reflection lies on that plane's great circle, the equator, where the parametrisation is
-//! regular. This is the CPU version (f64); `wgsl/fermat.wgsl` is the GPU's (the `fermat`
-//! kernel, `gpu::fermat`), which searches on the sphere, ellipsoid, cylinder, torus and
-//! bicubic Bézier patch alike. The ellipsoid, cylinder and torus are given in their own frame
-//! turned by an orientation: their parameters are the own frame's, so a search on a turned
-//! shape takes the steps it takes on the unturned one (docs/fermat.md).
+//! regular. This is the CPU version (f64); `wgsl/preview/fermat.wgsl` is the GPU's (the `fermat`
+//! kernel, `preview::reflections::kernel`), which searches on the sphere, ellipsoid, cylinder,
+//! torus and bicubic Bézier patch alike. The surfaces and their evaluation are the scene's
+//! (`scene::parametric`); this module adds what the search needs of each ([`Reflector`]: its
+//! inside point, where a segment crosses it, where the search starts and gives up). The
+//! ellipsoid, cylinder and torus are given in their own frame turned by an orientation: their
+//! parameters are the own frame's, so a search on a turned shape takes the steps it takes on
+//! the unturned one (docs/fermat.md).
+
+use glam::{DVec2, DVec3};
 
 use crate::layout::{
     FERMAT_C_OFFSET, FERMAT_FLAT, FERMAT_INSIDE, FERMAT_SPREAD, PATCH_CROSSING_DONE,
 };
-use glam::{DQuat, DVec2, DVec3};
+use crate::scene::parametric::{
+    BezierPatch, Cylinder, Ellipsoid, ParametricSurface, Sphere, Torus,
+};
 
-/// A smooth parametric surface a reflection is searched on.
-pub trait Reflector {
-    /// The surface point of parameters (u, v).
-    fn point(&self, uv: DVec2) -> DVec3;
-    /// ∂f/∂u and ∂f/∂v at (u, v).
-    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3);
+/// A parametric surface a reflection is searched on: where the search starts and where it
+/// gives up.
+pub trait Reflector: ParametricSurface {
     /// The point O inside the reflector that the initial corner for `outside` aims at (a
     /// sphere's or ellipsoid's, `FERMAT_INSIDE` of the way from its centre toward the bisector
     /// of E and V; the point of a cylinder's axis or a torus's tube circle nearest to
@@ -40,75 +44,15 @@ pub trait Reflector {
     /// The parameters of the surface point where the segment from `outside` to
     /// `inside(outside)` crosses the surface.
     fn crossing(&self, outside: DVec3) -> DVec2;
-    /// The outward unit normal at (u, v).
-    fn outward_normal(&self, uv: DVec2) -> DVec3;
     /// The initial corners A and B for the reflection of `vertex` seen from `eye`: the seed's
     /// crossings of E → O and V → O, unless the surface knows better.
     fn initial_corners(&self, eye: DVec3, vertex: DVec3) -> (DVec2, DVec2) {
         (self.crossing(eye), self.crossing(vertex))
     }
-    /// The period of u, when u is an angle around the surface.
-    fn u_period(&self) -> Option<f64> {
-        None
-    }
     /// Whether a search that reached `uv` has left the surface for good (a patch's square far
     /// behind it): it stops there, without a reflection on this surface.
     fn beyond_reach(&self, _uv: DVec2) -> bool {
         false
-    }
-}
-
-/// A sphere, f(u, v) = c + r (sin v (cos u x + sin u z) + cos v y) in the orthonormal frame
-/// (x, y, z): u the azimuth around y, v the angle from y; its poles, where f_u vanishes, are on
-/// the y axis. [`Sphere::facing`] turns the poles away from a reflection.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sphere {
-    /// Centre (scene units).
-    pub center: DVec3,
-    /// Radius (scene units), > 0.
-    pub radius: f64,
-    /// The parametrisation's frame: x, y (the poles' axis), z.
-    pub frame: [DVec3; 3],
-}
-
-impl Sphere {
-    /// A sphere parametrised about the world axes.
-    pub fn new(center: DVec3, radius: f64) -> Sphere {
-        Sphere {
-            center,
-            radius,
-            frame: [DVec3::X, DVec3::Y, DVec3::Z],
-        }
-    }
-
-    /// The same sphere with its poles on the normal of the plane through E, V and the centre:
-    /// the reflection lies on that plane's great circle (Alhazen), the equator here, far from
-    /// the poles where the parametrisation degenerates.
-    pub fn facing(&self, eye: DVec3, vertex: DVec3) -> Sphere {
-        let (e, v) = (eye - self.center, vertex - self.center);
-        let x = (e.normalize() + v.normalize()).normalize_or(e.normalize());
-        let normal = e.cross(v);
-        let y = if normal.length() > 1e-12 * e.length() * v.length() {
-            normal.normalize()
-        } else {
-            x.any_orthonormal_vector()
-        };
-        Sphere {
-            frame: [x, y, x.cross(y)],
-            ..*self
-        }
-    }
-
-    /// The parameters of the surface point in direction `d` from the centre.
-    pub fn parameters_of(&self, d: DVec3) -> DVec2 {
-        let d = d.normalize();
-        let [x, y, z] = self.frame;
-        DVec2::new(d.dot(z).atan2(d.dot(x)), d.dot(y).clamp(-1.0, 1.0).acos())
-    }
-
-    /// The outward unit normal at (u, v).
-    pub fn normal(&self, uv: DVec2) -> DVec3 {
-        (self.point(uv) - self.center) / self.radius
     }
 }
 
@@ -123,31 +67,10 @@ fn unit_sphere_crossing(outside: DVec3, inside: DVec3) -> DVec3 {
 }
 
 impl Reflector for Sphere {
-    fn point(&self, uv: DVec2) -> DVec3 {
-        let (su, cu) = uv.x.sin_cos();
-        let (sv, cv) = uv.y.sin_cos();
-        let [x, y, z] = self.frame;
-        self.center + self.radius * (sv * (cu * x + su * z) + cv * y)
-    }
-
-    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
-        let (su, cu) = uv.x.sin_cos();
-        let (sv, cv) = uv.y.sin_cos();
-        let [x, y, z] = self.frame;
-        (
-            self.radius * sv * (-su * x + cu * z),
-            self.radius * (cv * (cu * x + su * z) - sv * y),
-        )
-    }
-
     /// `FERMAT_INSIDE` of the radius from the centre along the frame's x axis: for a sphere
     /// facing E and V ([`Sphere::facing`]), toward their bisector.
     fn inside(&self, _outside: DVec3) -> DVec3 {
         self.center + f64::from(FERMAT_INSIDE) * self.radius * self.frame[0]
-    }
-
-    fn outward_normal(&self, uv: DVec2) -> DVec3 {
-        self.normal(uv)
     }
 
     fn crossing(&self, outside: DVec3) -> DVec2 {
@@ -157,81 +80,9 @@ impl Reflector for Sphere {
             to_unit(self.inside(outside)),
         ))
     }
-
-    fn u_period(&self) -> Option<f64> {
-        Some(std::f64::consts::TAU)
-    }
-}
-
-/// An ellipsoid with semi-axes `radii` along its own axes, the image of the unit sphere s(u,
-/// v) = sin v (cos u x + sin u z) + cos v y under the scaling by `radii`, turned by
-/// `orientation`: f(u, v) = c + Q (radii ⊙ s(u, v)). Its parametrisation's poles are on ±y of
-/// the frame (x, y, z); as for the sphere, [`Ellipsoid::facing`] turns them away from a
-/// reflection.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ellipsoid {
-    /// Centre (scene units).
-    pub center: DVec3,
-    /// Semi-axes along its own x, y and z, > 0.
-    pub radii: DVec3,
-    /// The unit sphere's parametrisation frame: x, y (the poles' axis), z.
-    pub frame: [DVec3; 3],
-    /// The rotation about the centre that turns its own axes into the world's.
-    pub orientation: DQuat,
-}
-
-impl Ellipsoid {
-    /// An ellipsoid with its semi-axes along the world axes, parametrised about them.
-    pub fn new(center: DVec3, radii: DVec3) -> Ellipsoid {
-        Ellipsoid {
-            center,
-            radii,
-            frame: [DVec3::X, DVec3::Y, DVec3::Z],
-            orientation: DQuat::IDENTITY,
-        }
-    }
-
-    /// `x` in the ellipsoid's own frame, its centre at the origin.
-    pub fn to_own(&self, x: DVec3) -> DVec3 {
-        self.orientation.conjugate() * (x - self.center)
-    }
-
-    /// The same ellipsoid with the poles of its unit sphere on the normal of the plane through
-    /// E, V and the centre, mapped to the unit sphere: the reflection lies near that plane, far
-    /// from the poles where f_u vanishes (and a search there stalls without the law holding).
-    pub fn facing(&self, eye: DVec3, vertex: DVec3) -> Ellipsoid {
-        let unit = Sphere::new(DVec3::ZERO, 1.0).facing(
-            self.to_own(eye) / self.radii,
-            self.to_own(vertex) / self.radii,
-        );
-        Ellipsoid {
-            frame: unit.frame,
-            ..*self
-        }
-    }
-
-    fn unit(&self) -> Sphere {
-        Sphere {
-            center: DVec3::ZERO,
-            radius: 1.0,
-            frame: self.frame,
-        }
-    }
 }
 
 impl Reflector for Ellipsoid {
-    fn point(&self, uv: DVec2) -> DVec3 {
-        self.center + self.orientation * (self.radii * self.unit().point(uv))
-    }
-
-    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
-        let (su, sv) = self.unit().tangents(uv);
-        (
-            self.orientation * (self.radii * su),
-            self.orientation * (self.radii * sv),
-        )
-    }
-
     /// As a sphere's, in the unit sphere's coordinates.
     fn inside(&self, _outside: DVec3) -> DVec3 {
         let o = f64::from(FERMAT_INSIDE) * self.frame[0];
@@ -241,66 +92,14 @@ impl Reflector for Ellipsoid {
     fn crossing(&self, outside: DVec3) -> DVec2 {
         // The map to the unit sphere keeps segments and where they cross.
         let to_unit = |x: DVec3| self.to_own(x) / self.radii;
-        self.unit().parameters_of(unit_sphere_crossing(
+        self.unit_sphere().parameters_of(unit_sphere_crossing(
             to_unit(outside),
             to_unit(self.inside(outside)),
         ))
     }
-
-    fn outward_normal(&self, uv: DVec2) -> DVec3 {
-        // The gradient of |(x − c) / r|² in the own frame: (x − c) / r².
-        let p = self.radii * self.unit().point(uv);
-        self.orientation * (p / (self.radii * self.radii)).normalize()
-    }
-
-    fn u_period(&self) -> Option<f64> {
-        Some(std::f64::consts::TAU)
-    }
-}
-
-/// A cylinder of radius `radius` around the line through `center` along its own y, turned by
-/// `orientation`: f(u, v) = c + Q (r cos u, v, r sin u) (unbounded in v: the search does not
-/// know the caps).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Cylinder {
-    /// A point of the axis (scene units).
-    pub center: DVec3,
-    /// Radius, > 0.
-    pub radius: f64,
-    /// The rotation about `center` that turns its own axes (the axis along y) into the world's.
-    pub orientation: DQuat,
-}
-
-impl Cylinder {
-    /// A cylinder around the vertical line through `center`.
-    pub fn new(center: DVec3, radius: f64) -> Cylinder {
-        Cylinder {
-            center,
-            radius,
-            orientation: DQuat::IDENTITY,
-        }
-    }
-
-    /// `x` in the cylinder's own frame, `center` at the origin.
-    pub fn to_own(&self, x: DVec3) -> DVec3 {
-        self.orientation.conjugate() * (x - self.center)
-    }
 }
 
 impl Reflector for Cylinder {
-    fn point(&self, uv: DVec2) -> DVec3 {
-        let (su, cu) = uv.x.sin_cos();
-        self.center + self.orientation * DVec3::new(self.radius * cu, uv.y, self.radius * su)
-    }
-
-    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
-        let (su, cu) = uv.x.sin_cos();
-        (
-            self.orientation * DVec3::new(-self.radius * su, 0.0, self.radius * cu),
-            self.orientation * DVec3::Y,
-        )
-    }
-
     fn inside(&self, outside: DVec3) -> DVec3 {
         self.center + self.orientation * DVec3::new(0.0, self.to_own(outside).y, 0.0)
     }
@@ -309,100 +108,32 @@ impl Reflector for Cylinder {
         let d = self.to_own(outside);
         DVec2::new(d.z.atan2(d.x), d.y)
     }
-
-    fn outward_normal(&self, uv: DVec2) -> DVec3 {
-        let (su, cu) = uv.x.sin_cos();
-        self.orientation * DVec3::new(cu, 0.0, su)
-    }
-
-    fn u_period(&self) -> Option<f64> {
-        Some(std::f64::consts::TAU)
-    }
 }
 
-/// A torus around the line through `center` along its own y, turned by `orientation`:
-/// f(u, v) = c + Q ((R + r cos v)(cos u, 0, sin u) + r sin v y), u around the axis, v around
-/// the tube.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Torus {
-    /// Centre (scene units).
-    pub center: DVec3,
-    /// R: the tube circle's radius.
-    pub major: f64,
-    /// r: the tube's radius, below R.
-    pub minor: f64,
-    /// The rotation about `center` that turns its own axes (the axis along y) into the world's.
-    pub orientation: DQuat,
+/// The direction, in `torus`'s own frame, of the tube circle's point below or above
+/// `outside`'s azimuth.
+fn tube_direction(torus: &Torus, outside: DVec3) -> DVec3 {
+    let d = torus.to_own(outside);
+    DVec3::new(d.x, 0.0, d.z).normalize_or(DVec3::X)
 }
 
-impl Torus {
-    /// A torus around the vertical line through `center`.
-    pub fn new(center: DVec3, major: f64, minor: f64) -> Torus {
-        Torus {
-            center,
-            major,
-            minor,
-            orientation: DQuat::IDENTITY,
-        }
-    }
-
-    /// `x` in the torus's own frame, `center` at the origin.
-    pub fn to_own(&self, x: DVec3) -> DVec3 {
-        self.orientation.conjugate() * (x - self.center)
-    }
-
-    /// The direction, in the own frame, of the tube circle's point below or above `outside`'s
-    /// azimuth.
-    fn radial(&self, outside: DVec3) -> DVec3 {
-        let d = self.to_own(outside);
-        DVec3::new(d.x, 0.0, d.z).normalize_or(DVec3::X)
-    }
-
-    /// The parameters of the inner equator (v = π) across the hole from `x`'s azimuth.
-    fn across_the_hole(&self, x: DVec3) -> DVec2 {
-        let d = self.to_own(x);
-        DVec2::new(d.z.atan2(d.x) + std::f64::consts::PI, std::f64::consts::PI)
-    }
+/// The parameters of `torus`'s inner equator (v = π) across the hole from `x`'s azimuth.
+fn across_the_hole(torus: &Torus, x: DVec3) -> DVec2 {
+    let d = torus.to_own(x);
+    DVec2::new(d.z.atan2(d.x) + std::f64::consts::PI, std::f64::consts::PI)
 }
 
 impl Reflector for Torus {
-    fn point(&self, uv: DVec2) -> DVec3 {
-        let (su, cu) = uv.x.sin_cos();
-        let (sv, cv) = uv.y.sin_cos();
-        let ring = self.major + self.minor * cv;
-        self.center + self.orientation * DVec3::new(ring * cu, self.minor * sv, ring * su)
-    }
-
-    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
-        let (su, cu) = uv.x.sin_cos();
-        let (sv, cv) = uv.y.sin_cos();
-        let ring = self.major + self.minor * cv;
-        (
-            self.orientation * DVec3::new(-ring * su, 0.0, ring * cu),
-            self.orientation * (self.minor * DVec3::new(-sv * cu, cv, -sv * su)),
-        )
-    }
-
     fn inside(&self, outside: DVec3) -> DVec3 {
-        self.center + self.orientation * (self.major * self.radial(outside))
+        self.center + self.orientation * (self.major * tube_direction(self, outside))
     }
 
     fn crossing(&self, outside: DVec3) -> DVec2 {
         let d = self.to_own(outside);
         let u = d.z.atan2(d.x);
-        let w = d - self.major * self.radial(outside);
+        let w = d - self.major * tube_direction(self, outside);
         let radial = DVec3::new(u.cos(), 0.0, u.sin());
         DVec2::new(u, w.y.atan2(w.dot(radial)))
-    }
-
-    fn outward_normal(&self, uv: DVec2) -> DVec3 {
-        let (su, cu) = uv.x.sin_cos();
-        let (sv, cv) = uv.y.sin_cos();
-        self.orientation * DVec3::new(cv * cu, sv, cv * su)
-    }
-
-    fn u_period(&self) -> Option<f64> {
-        Some(std::f64::consts::TAU)
     }
 }
 
@@ -432,7 +163,7 @@ pub struct TorusSearch {
     pub half: TorusHalf,
 }
 
-impl Reflector for TorusSearch {
+impl ParametricSurface for TorusSearch {
     fn point(&self, uv: DVec2) -> DVec3 {
         self.torus.point(uv)
     }
@@ -441,6 +172,16 @@ impl Reflector for TorusSearch {
         self.torus.tangents(uv)
     }
 
+    fn outward_normal(&self, uv: DVec2) -> DVec3 {
+        self.torus.outward_normal(uv)
+    }
+
+    fn u_period(&self) -> Option<f64> {
+        self.torus.u_period()
+    }
+}
+
+impl Reflector for TorusSearch {
     fn inside(&self, outside: DVec3) -> DVec3 {
         self.torus.inside(outside)
     }
@@ -449,22 +190,14 @@ impl Reflector for TorusSearch {
         self.torus.crossing(outside)
     }
 
-    fn outward_normal(&self, uv: DVec2) -> DVec3 {
-        self.torus.outward_normal(uv)
-    }
-
     fn initial_corners(&self, eye: DVec3, vertex: DVec3) -> (DVec2, DVec2) {
         match self.half {
             TorusHalf::Outer => (self.crossing(eye), self.crossing(vertex)),
             TorusHalf::Inner => (
-                self.torus.across_the_hole(eye),
-                self.torus.across_the_hole(vertex),
+                across_the_hole(&self.torus, eye),
+                across_the_hole(&self.torus, vertex),
             ),
         }
-    }
-
-    fn u_period(&self) -> Option<f64> {
-        self.torus.u_period()
     }
 }
 
@@ -480,15 +213,6 @@ pub fn on_torus_half(uv: DVec2, half: TorusHalf) -> bool {
 /// on a half by that half's alone.
 pub fn anchored_on_torus_half(uvs: [DVec2; 3], half: TorusHalf) -> bool {
     uvs.into_iter().any(|uv| on_torus_half(uv, half))
-}
-
-/// A bicubic Bézier patch (as the Newell teapot's): f(u, v) = Σ B_i(u) B_j(v) P_ij over
-/// (u, v) in [0, 1]², with Bernstein polynomials B. Its outward side is the one f_u × f_v
-/// points to.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BezierPatch {
-    /// Control points, `points[i][j]` weighted by B_i(u) B_j(v).
-    pub points: [[DVec3; 4]; 4],
 }
 
 /// Whether parameters `uv` lie on a Bézier patch: in its square, widened by `PATCH_MARGIN`.
@@ -512,43 +236,7 @@ pub fn on_cylinder(v: f64, height: f64) -> bool {
     (-margin..=height + margin).contains(&v)
 }
 
-/// The cubic Bernstein polynomials at t and their derivatives.
-fn bernstein(t: f64) -> ([f64; 4], [f64; 4]) {
-    let s = 1.0 - t;
-    (
-        [s * s * s, 3.0 * t * s * s, 3.0 * t * t * s, t * t * t],
-        [
-            -3.0 * s * s,
-            3.0 * s * s - 6.0 * t * s,
-            6.0 * t * s - 3.0 * t * t,
-            3.0 * t * t,
-        ],
-    )
-}
-
-impl BezierPatch {
-    /// Σ a_i(u) b_j(v) P_ij.
-    fn mix(&self, a: [f64; 4], b: [f64; 4]) -> DVec3 {
-        let mut sum = DVec3::ZERO;
-        for (i, row) in self.points.iter().enumerate() {
-            for (j, p) in row.iter().enumerate() {
-                sum += a[i] * b[j] * *p;
-            }
-        }
-        sum
-    }
-}
-
 impl Reflector for BezierPatch {
-    fn point(&self, uv: DVec2) -> DVec3 {
-        self.mix(bernstein(uv.x).0, bernstein(uv.y).0)
-    }
-
-    fn tangents(&self, uv: DVec2) -> (DVec3, DVec3) {
-        let ((bu, du), (bv, dv)) = (bernstein(uv.x), bernstein(uv.y));
-        (self.mix(du, bv), self.mix(bu, dv))
-    }
-
     /// A patch has no inside: O is taken a patch-size behind its centre, against the normal.
     fn inside(&self, _outside: DVec3) -> DVec3 {
         let centre = DVec2::splat(0.5);
@@ -579,11 +267,6 @@ impl Reflector for BezierPatch {
             }
         }
         uvt.truncate()
-    }
-
-    fn outward_normal(&self, uv: DVec2) -> DVec3 {
-        let (fu, fv) = self.tangents(uv);
-        fu.cross(fv).normalize_or_zero()
     }
 
     /// A patch's reflections lie in its square: a search a square's width beyond it (the
@@ -764,7 +447,7 @@ pub fn seen_from_outside(p: DVec3, n: DVec3, eye: DVec3, vertex: DVec3) -> bool 
 
 /// Whether the raster preview draws a reflection found at `p` (outward unit normal `n`):
 /// seen from outside, with the law of reflection holding to `layout::REFLECTION_TOLERANCE`
-/// (the CPU twin of `reflection_shows` in wgsl/fermat.wgsl).
+/// (the CPU twin of `reflection_shows` in wgsl/preview/fermat.wgsl).
 pub fn drawn_in_preview(p: DVec3, n: DVec3, eye: DVec3, vertex: DVec3) -> bool {
     seen_from_outside(p, n, eye, vertex)
         && reflection_error(p, n, eye, vertex) < f64::from(crate::layout::REFLECTION_TOLERANCE)
@@ -819,7 +502,7 @@ pub fn solve_on_patch(solver: &Solver, patch: &BezierPatch, eye: DVec3, vertex: 
 /// brute-force searches from many starts.
 pub struct StartedFrom<R: Reflector>(pub R, pub DVec2, pub DVec2);
 
-impl<R: Reflector> Reflector for StartedFrom<R> {
+impl<R: Reflector> ParametricSurface for StartedFrom<R> {
     fn point(&self, uv: DVec2) -> DVec3 {
         self.0.point(uv)
     }
@@ -828,6 +511,16 @@ impl<R: Reflector> Reflector for StartedFrom<R> {
         self.0.tangents(uv)
     }
 
+    fn outward_normal(&self, uv: DVec2) -> DVec3 {
+        self.0.outward_normal(uv)
+    }
+
+    fn u_period(&self) -> Option<f64> {
+        self.0.u_period()
+    }
+}
+
+impl<R: Reflector> Reflector for StartedFrom<R> {
     fn inside(&self, outside: DVec3) -> DVec3 {
         self.0.inside(outside)
     }
@@ -836,16 +529,8 @@ impl<R: Reflector> Reflector for StartedFrom<R> {
         self.0.crossing(outside)
     }
 
-    fn outward_normal(&self, uv: DVec2) -> DVec3 {
-        self.0.outward_normal(uv)
-    }
-
     fn initial_corners(&self, _eye: DVec3, _vertex: DVec3) -> (DVec2, DVec2) {
         (self.1, self.2)
-    }
-
-    fn u_period(&self) -> Option<f64> {
-        self.0.u_period()
     }
 
     fn beyond_reach(&self, uv: DVec2) -> bool {
@@ -855,7 +540,7 @@ impl<R: Reflector> Reflector for StartedFrom<R> {
 
 /// Whether a point of the searched mirror itself, reflected at `p`, stands clear enough of `p`
 /// to be drawn there (`layout::SELF_REFLECTION_CLEARANCE`; the CPU twin of `fermat_cull`'s
-/// test in wgsl/fermat.wgsl): a vertex on the surface is its own "reflection" at P = V.
+/// test in wgsl/preview/fermat.wgsl): a vertex on the surface is its own "reflection" at P = V.
 pub fn self_reflection_clear(p: DVec3, eye: DVec3, vertex: DVec3) -> bool {
     p.distance(vertex) > f64::from(crate::layout::SELF_REFLECTION_CLEARANCE) * p.distance(eye)
 }

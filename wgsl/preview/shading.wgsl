@@ -2,11 +2,11 @@
 // matrix (film tilt, swing and shift as the ray tracer defines them), shaded per fragment with
 // Lambert's BRDF, the ambient term, emission, and every light (an area light's exact
 // unoccluded irradiance, by Lambert's formula), shadowed by its shadow maps where the preview
-// draws shadows (`--shadows`; src/preview/shadows.rs makes the maps' views).
+// draws shadows (`--shadows`; src/preview/shadows/mod.rs makes the maps' views).
 // Curved mirrors show Fermat reflections: this pass writes each pixel's reflector id, and
-// wgsl/preview_reflect.wgsl draws the reflected triangles where their reflector is seen.
+// wgsl/preview/reflect.wgsl draws the reflected triangles where their reflector is seen.
 // Mirrors: src/preview/tessellate.rs (the triangles), src/preview/mod.rs (the clip matrix),
-// src/gpu/preview.rs (the pipeline).
+// src/preview/renderer/mod.rs (the pipeline), src/preview/renderer/shading.rs (its variant).
 
 struct PreviewUniforms {
     clip: mat4x4<f32>,
@@ -85,7 +85,7 @@ fn preview_vertex(v: VertexIn) -> VertexOut {
 }
 
 // Whether the scene has area lights, and whether the preview draws shadows: code not needed is
-// left out of the pipeline (`gpu::preview::ShadingVariant`).
+// left out of the pipeline (`preview::renderer::shading::ShadingVariant`).
 override PREVIEW_AREA_LIGHTS: bool = true;
 override PREVIEW_SHADOWS: bool = true;
 

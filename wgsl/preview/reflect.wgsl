@@ -1,4 +1,4 @@
-// Fermat reflections in the raster preview (seed 004): the reflected triangles of a batch of
+// Fermat reflections in the raster preview (`docs/fermat.md`): the reflected triangles of a batch of
 // searches (the surfaces of the curved mirrors: a sphere, a torus's half, a teapot's patch) in
 // one draw, each vertex V drawn at its reflection point P (the `fermat`
 // kernel's output) with the depth |P - V|, so the nearest reflected surface along each
@@ -8,8 +8,9 @@
 // discarded). Lit as if the eye were at P. A fragment replaces the main pass's colour of the
 // pixel (the mirror reflecting the background) with the mirror's own shading plus
 // its mirror reflectance times the reflected radiance; the depth test leaves the nearest.
-// Composed after wgsl/preview.wgsl. Mirrors: src/gpu/preview.rs (Reflections),
-// src/preview/mod.rs (reflected_triangles), src/fermat.rs (the solver and its validity tests).
+// Composed after wgsl/preview/shading.wgsl. Mirrors: src/preview/reflections/passes.rs
+// (Reflections), src/preview/reflections/mod.rs (ReflectedSet), src/preview/reflections/fermat.rs
+// (the solver and its validity tests).
 
 // A reflected fragment whose P lies farther from the eye than the reflector's visible point by
 // more than this fraction of its distance is on a hidden part of the reflector.
@@ -32,7 +33,7 @@ struct ReflectorPass {
 @group(1) @binding(0) var<storage, read> reflected_vertices: array<PreviewVertex>;
 // Every search's reflection points, search after search.
 @group(1) @binding(1) var<storage, read> reflected_points: array<GpuReflection>;
-// Per search of the draw (a batch of them: `gpu::preview::SearchBatch`), its pass.
+// Per search of the draw (a batch of them: `preview::reflections::passes::SearchBatch`), its pass.
 @group(1) @binding(2) var<storage, read> reflector_passes: array<ReflectorPass>;
 @group(1) @binding(3) var reflector_ids: texture_2d<u32>;
 // Per distinct reflected vertex, the index of its Fermat solve (vertices at one position share

@@ -1,6 +1,6 @@
 //! The preview's shadows (`chambre preview --shadows`): a depth map per light, drawn once from
 //! the main pass's triangles (the scene is static; a camera change that cuts curved shapes
-//! anew draws them again), looked up per fragment by `lit_fraction` in `wgsl/preview.wgsl`.
+//! anew draws them again), looked up per fragment by `lit_fraction` in `wgsl/preview/shading.wgsl`.
 //!
 //! - Point and spot lights get a cube of six 90° views (`CUBE_FACES`; the face a direction
 //!   falls in: `cube_face`). Area lights get n² cubes at the centres of n x n strata of their
@@ -25,6 +25,10 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
 use crate::layout::{GpuLight, LIGHT_AREA, LIGHT_DIRECTIONAL, LIGHT_TRIANGLE};
+
+pub(crate) mod maps;
+
+pub use maps::SHADOW_SHADER;
 
 /// Texels along each side of a shadow map, at most.
 pub const SHADOW_MAP_SIZE: u32 = 1024;
@@ -64,7 +68,7 @@ pub const CUBE_FACES: [(Vec3, Vec3); 6] = [
 
 /// The face of a cube (index into `CUBE_FACES`) that direction `d` falls in: its largest
 /// coordinate's axis and sign, x before y before z where they tie (`cube_face` in
-/// wgsl/preview.wgsl).
+/// wgsl/preview/shading.wgsl).
 pub fn cube_face(d: Vec3) -> u32 {
     let a = d.abs();
     if a.x >= a.y && a.x >= a.z {
@@ -77,7 +81,7 @@ pub fn cube_face(d: Vec3) -> u32 {
 }
 
 /// One light's shadow maps as the fragment shader finds them (`ShadowLight` in
-/// wgsl/preview.wgsl).
+/// wgsl/preview/shading.wgsl).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct ShadowLight {
