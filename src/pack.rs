@@ -15,7 +15,7 @@ use crate::layout::*;
 use crate::math::sampling::strata_columns;
 use crate::sampler::SampleTable;
 use crate::scene::mesh::TriangleMesh;
-use crate::scene::{CurvedPrimitive, Light, Scene, Shape};
+use crate::scene::{CurvedPrimitive, Light, Scene, Shape, spot_falloff};
 
 /// Everything the kernels (and the CPU reference) read, ready to upload.
 pub struct FlatScene {
@@ -409,15 +409,12 @@ fn pack_lights(
                 inner_deg,
                 outer_deg,
             } => {
-                // KHR_lights_punctual's falloff: saturate(cos * scale + offset)^2.
-                let (cos_inner, cos_outer) =
-                    (inner_deg.to_radians().cos(), outer_deg.to_radians().cos());
-                let scale = 1.0 / (cos_inner - cos_outer).max(1e-3);
+                let (scale, offset) = spot_falloff(inner_deg, outer_deg);
                 GpuLight {
                     p0: position.to_array(),
                     kind: LIGHT_SPOT,
                     p1: direction.to_array(),
-                    p2: [scale, -cos_outer * scale, 0.0],
+                    p2: [scale, offset, 0.0],
                     color: intensity.to_array(),
                     prim: NONE,
                     ..Default::default()

@@ -22,8 +22,8 @@ use roxmltree::{Document, Node};
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
-/// A scene of `body` (materials, shapes, lights) under a 72x48 pinhole camera, its file in
-/// scenes/ (where its meshes are found).
+/// A scene of `body` (materials, shapes, lights) under a 72x48 pinhole camera, read from a
+/// string as if it stood in scenes/ (where its meshes are found; no such file is written).
 fn scene(header: &str, body: &str) -> Scene {
     let text = format!("{header}\n{body}");
     let path = Path::new(ROOT).join("scenes/export_test.toml");

@@ -905,22 +905,19 @@ fn conductor(reflectance: Vec3, indent: &str) -> String {
     )
 }
 
-/// chambre's spot falloff, saturate(cos * scale + offset)² (`pack::flatten`), as a
+/// chambre's spot falloff, saturate(cos * scale + offset)² (`scene::spot_falloff`), as a
 /// `SPOT_TABLE_SIZE`² table over Mitsuba's projection of the cone: texel (u, v) is the
 /// direction (2u − 1, 2v − 1) tan(outer) in x / z and y / z.
 fn spot_table(inner_deg: f32, outer_deg: f32) -> Vec<u8> {
-    let (cos_inner, cos_outer) = (
-        inner_deg.to_radians().cos() as f64,
-        outer_deg.to_radians().cos() as f64,
-    );
-    let scale = 1.0 / (cos_inner - cos_outer).max(1e-3);
+    let (scale, offset) = crate::scene::spot_falloff(inner_deg, outer_deg);
+    let (scale, offset) = (scale as f64, offset as f64);
     let reach = (outer_deg as f64).to_radians().tan();
     let n = SPOT_TABLE_SIZE;
     files::pfm_gray(n, |column, row| {
         let at = |k: u32| (2.0 * (k as f64 + 0.5) / n as f64 - 1.0) * reach;
         let (x, y) = (at(column), at(row));
         let cos = 1.0 / (1.0 + x * x + y * y).sqrt();
-        let cone = ((cos - cos_outer) * scale).clamp(0.0, 1.0);
+        let cone = (cos * scale + offset).clamp(0.0, 1.0);
         (cone * cone) as f32
     })
 }

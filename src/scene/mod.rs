@@ -225,6 +225,15 @@ pub enum Light {
     },
 }
 
+/// A spot light's falloff as KHR_lights_punctual defines it, saturate(cos θ · scale + offset)²
+/// with θ the angle from its axis: `(scale, offset)` for the cone of `inner_deg` and
+/// `outer_deg`. The kernels, the CPU path and exports all evaluate this one.
+pub fn spot_falloff(inner_deg: f32, outer_deg: f32) -> (f32, f32) {
+    let (cos_inner, cos_outer) = (inner_deg.to_radians().cos(), outer_deg.to_radians().cos());
+    let scale = 1.0 / (cos_inner - cos_outer).max(1e-3);
+    (scale, -cos_outer * scale)
+}
+
 /// The override that names the camera of a glTF file rendered as a scene.
 pub const GLTF_CAMERA_KEY: &str = "gltf.camera";
 

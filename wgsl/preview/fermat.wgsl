@@ -20,7 +20,7 @@ override OWN_POINTS_SEARCHED_AGAIN: bool = false;
 // In f32 the gradients' rounding keeps a converged search jittering about 1e-7 (u, v near 0.5
 // are 6e-8 apart): at 1e-7, 2,215 of a teapot's 10,048 searches ran all 12 steps; at 1e-6 they
 // take 18% fewer steps and their points lie as near f64's (99% within 1.3e-6 of the teapot's
-// 1-unit height, 1e-4 px; BENCHMARKS.md, 2026-11-25, thirteenth session).
+// 1-unit height, 1e-4 px; measured with `chambre bench fermat`, docs/fermat.md).
 const FERMAT_MIN_SIZE: f32 = 1e-6;
 // The invocation's search (its row of the dispatch, `global_invocation_id.y`): the surface
 // functions below read `reflectors[search]`, the same element across a workgroup, rather than

@@ -433,6 +433,24 @@ struct Run<'a> {
     context: &'a chambre::Result<GpuContext>,
 }
 
+impl Run<'_> {
+    /// The report with its header line, written as JSON where `output` asks.
+    fn finish<T: serde::Serialize>(
+        &self,
+        markdown: String,
+        report: &T,
+        output: &Output,
+    ) -> chambre::Result<String> {
+        finish(
+            &self.command,
+            &self.machine,
+            markdown,
+            report,
+            output.json.as_deref(),
+        )
+    }
+}
+
 /// `chambre bench rays`.
 fn bench_rays(args: &RaysArgs, run: &Run) -> chambre::Result<String> {
     let config = RaysConfig {
@@ -460,25 +478,13 @@ fn bench_rays(args: &RaysArgs, run: &Run) -> chambre::Result<String> {
         .then(|| usable(run.context))
         .transpose()?;
     let report = rays::run(&config, &args.backends.backends, gpu)?;
-    finish(
-        &run.command,
-        &run.machine,
-        report.to_markdown(),
-        &report,
-        args.output.json.as_deref(),
-    )
+    run.finish(report.to_markdown(), &report, &args.output)
 }
 
 /// `chambre bench build`.
 fn bench_build(args: &BuildArgs, run: &Run) -> chambre::Result<String> {
     let report = build::run(&args.mesh, args.runs)?;
-    finish(
-        &run.command,
-        &run.machine,
-        report.to_markdown(),
-        &report,
-        args.output.json.as_deref(),
-    )
+    run.finish(report.to_markdown(), &report, &args.output)
 }
 
 /// `chambre bench frame`.
@@ -505,13 +511,7 @@ fn bench_frame(args: &FrameArgs, run: &Run) -> chambre::Result<String> {
         rays_per_invocation: &args.gpu_rays_per_invocation,
         runs: args.runs,
     })?;
-    finish(
-        &run.command,
-        &run.machine,
-        report.to_markdown(),
-        &report,
-        args.output.json.as_deref(),
-    )
+    run.finish(report.to_markdown(), &report, &args.output)
 }
 
 /// `chambre bench scale`.
@@ -543,13 +543,7 @@ fn bench_scale(args: &ScaleArgs, run: &Run) -> chambre::Result<String> {
             })?;
         chambre::output::OutputTarget::write_beside(path, &bytes)?;
     }
-    finish(
-        &run.command,
-        &run.machine,
-        report.to_markdown(),
-        &report,
-        args.output.json.as_deref(),
-    )
+    run.finish(report.to_markdown(), &report, &args.output)
 }
 
 /// `chambre bench precision`.
@@ -566,25 +560,13 @@ fn bench_precision(args: &PrecisionArgs, run: &Run) -> chambre::Result<String> {
         args.camera_height,
         gpu,
     )?;
-    finish(
-        &run.command,
-        &run.machine,
-        report.to_markdown(),
-        &report,
-        args.output.json.as_deref(),
-    )
+    run.finish(report.to_markdown(), &report, &args.output)
 }
 
 /// `chambre bench motion`.
 fn bench_motion(args: &MotionArgs, run: &Run) -> chambre::Result<String> {
     let report = motion::run(&args.mesh, args.travel, &args.slices, args.size, args.runs)?;
-    finish(
-        &run.command,
-        &run.machine,
-        report.to_markdown(),
-        &report,
-        args.output.json.as_deref(),
-    )
+    run.finish(report.to_markdown(), &report, &args.output)
 }
 
 /// `chambre bench fermat`.
@@ -602,13 +584,7 @@ fn bench_fermat(args: &FermatArgs, run: &Run) -> chambre::Result<String> {
         self_reflections: args.self_reflections,
     };
     let report = fermat::run(&config, usable(run.context)?)?;
-    finish(
-        &run.command,
-        &run.machine,
-        report.to_markdown(),
-        &report,
-        args.output.json.as_deref(),
-    )
+    run.finish(report.to_markdown(), &report, &args.output)
 }
 
 /// `chambre bench preview`.
@@ -621,25 +597,13 @@ fn bench_preview(args: &PreviewArgs, run: &Run) -> chambre::Result<String> {
         args.reference_spp,
         args.area_shadow_samples,
     )?;
-    finish(
-        &run.command,
-        &run.machine,
-        report.to_markdown(),
-        &report,
-        args.output.json.as_deref(),
-    )
+    run.finish(report.to_markdown(), &report, &args.output)
 }
 
 /// `chambre bench samplers`.
 fn bench_samplers(args: &SamplersArgs, run: &Run) -> chambre::Result<String> {
     let report = samplers::run(args.reference_spp)?;
-    finish(
-        &run.command,
-        &run.machine,
-        report.to_markdown(),
-        &report,
-        args.output.json.as_deref(),
-    )
+    run.finish(report.to_markdown(), &report, &args.output)
 }
 
 fn vec3(v: &[f32]) -> [f32; 3] {
@@ -669,11 +633,5 @@ fn bench_adaptive(args: &AdaptiveArgs, run: &Run) -> chambre::Result<String> {
         overhead_spp: args.overhead_spp,
         set: &args.set,
     })?;
-    finish(
-        &run.command,
-        &run.machine,
-        report.to_markdown(),
-        &report,
-        args.output.json.as_deref(),
-    )
+    run.finish(report.to_markdown(), &report, &args.output)
 }
