@@ -1,4 +1,5 @@
-//! The Whitted integrator: one camera sample -> radiance. Twin: `wgsl/integrator.wgsl`.
+//! The Whitted integrator: one camera sample -> radiance. Twin: `wgsl/integrator.wgsl`. A
+//! frame with `render.integrator = "path"` goes to the path tracer (`path`, `bsdf`) instead.
 //!
 //! Per hit: emission of a front-facing area light (which then ends the path: it reflects
 //! nothing), ambient term diffuse * L_a, direct light from every light through shadow rays,
@@ -34,6 +35,8 @@ use crate::pack::FlatScene;
 use crate::sampler::{PatternSource, light_sample_2d, pixel_hash, sample_2d, sample_aperture};
 
 mod batch;
+pub mod bsdf;
+mod path;
 
 /// Counters a sample adds to (rays traced, paths cut off at `max_depth`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -224,7 +227,7 @@ impl LightWindow {
 /// among the `layout::LIGHT_DIMENSION` block of path vertex `depth` (wrapping, as in WGSL).
 fn light_dimension(frame: &GpuFrame, depth: u32, offset: u32, k: u32) -> u32 {
     let index = depth
-        .wrapping_mul(frame.light_samples_per_vertex)
+        .wrapping_mul(frame.vertex_dimension_pairs)
         .wrapping_add(offset)
         .wrapping_add(k);
     LIGHT_DIMENSION.wrapping_add(index.wrapping_mul(2))
@@ -261,7 +264,8 @@ fn area_light_of(light: &GpuLight) -> AreaLight {
 }
 
 /// The point `square` of the unit square on an area light (folded onto a triangle light's
-/// triangle), seen from `surface`.
+/// triangle), seen from `surface`; under the path tracer (`mis`), weighted against the BSDF's
+/// sample of the same direction.
 fn area_light_sample(
     light: &GpuLight,
     shape: &AreaLight,
@@ -269,6 +273,7 @@ fn area_light_sample(
     surface: &Surface,
     material: &GpuMaterial,
     wo: Vec3,
+    mis: bool,
 ) -> LightSample {
     let u = if shape.triangle && square[0] + square[1] > 1.0 {
         [1.0 - square[0], 1.0 - square[1]]
@@ -283,10 +288,15 @@ fn area_light_sample(
     let cos_surface = n.dot(wi);
     let cos_light = -shape.normal.dot(wi);
     let traced = cos_surface > 0.0 && cos_light > 0.0 && surface.geometric_normal.dot(wi) > 0.0;
-    let f = match traced {
+    let mut f = match traced {
         true => eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance),
         false => Vec3::ZERO,
     };
+    if mis && traced {
+        let bsdf_pdf = bsdf::bsdf_pdf(material, &bsdf::lobes(material), n, wo, wi);
+        let distance2 = distance * distance;
+        f *= bsdf::light_sample_weight(light.samples, distance2, cos_light, shape.area, bsdf_pdf);
+    }
     LightSample {
         wi,
         t_max: shadow_ray_length(distance),
@@ -367,6 +377,7 @@ fn direct_light<const F: u32>(
         let ray = RayQuery::new(origin, s.wi).at_time(time);
         !scene.tracer().occluded::<F>(&ray, own, s.skip, s.t_max)
     };
+    let mis = path_traced::<F>(&scene.frame);
     let mut total = Vec3::ZERO;
     let mut sample_offset = 0;
     for light in &scene.lights[..scene.frame.light_count as usize] {
@@ -394,7 +405,7 @@ fn direct_light<const F: u32>(
                     rng.next_2d(),
                     &mut stats.flags,
                 );
-                let s = area_light_sample(light, &shape, square, surface, material, wo);
+                let s = area_light_sample(light, &shape, square, surface, material, wo, mis);
                 if s.traced && visible(&s, stats) {
                     sum += s.f;
                 }
@@ -408,6 +419,11 @@ fn direct_light<const F: u32>(
         }
     }
     total
+}
+
+/// Whether the frame is path traced by an integrator compiled with the path tracer.
+fn path_traced<const F: u32>(frame: &GpuFrame) -> bool {
+    has(F, FEATURE_PATH) && frame.integrator == INTEGRATOR_PATH
 }
 
 /// The camera ray's closest hit, as a path starts: traced by the path itself, or already
@@ -436,6 +452,11 @@ pub fn trace_path<const F: u32>(
     stats: &mut SampleStats,
     first_hit: &mut FirstHit,
 ) -> Vec3 {
+    if path_traced::<F>(&scene.frame) {
+        return path::trace_path::<F>(
+            scene, camera_ray, camera_hit, time, window, rng, stats, first_hit,
+        );
+    }
     let first = window.is_first();
     let frame = &scene.frame;
     let mut radiance = Vec3::ZERO;

@@ -183,11 +183,24 @@ pub const LENS_DIMENSION: u32 = 2;
 pub const TIME_DIMENSION: u32 = 4;
 /// First random dimension of the area-light samples. Light sample `k` of the area light whose
 /// samples start at `offset`, at path vertex `depth`, draws dimensions
-/// `LIGHT_DIMENSION + 2 * (depth * frame.light_samples_per_vertex + offset + k)` and the next
-/// one: any window of light samples can then be evaluated on its own (`GpuPass`).
+/// `LIGHT_DIMENSION + 2 * (depth * frame.vertex_dimension_pairs + offset + k)` and the next
+/// one: any window of light samples can then be evaluated on its own (`GpuPass`). The path
+/// tracer's BSDF sample at vertex `depth` takes the two pairs after the vertex's light samples
+/// (`BSDF_PAIR`, `ROULETTE_PAIR`).
 pub const LIGHT_DIMENSION: u32 = 6;
 /// Poisson-disk sets in the sample table; a pixel picks one by hash and shifts it.
 pub const POISSON_SETS: u32 = 16;
+/// The pair of a path vertex's dimensions (after its light samples) its BSDF sample's
+/// direction draws.
+pub const BSDF_PAIR: u32 = 0;
+/// The pair after it: the BSDF's lobe (first) and Russian roulette's draw (second).
+pub const ROULETTE_PAIR: u32 = 1;
+/// Dimension pairs a path tracer's vertex draws besides its light samples.
+pub const PATH_VERTEX_PAIRS: u32 = 2;
+/// `GpuFrame::integrator`: Whitted's integrator.
+pub const INTEGRATOR_WHITTED: u32 = 0;
+/// `GpuFrame::integrator`: the path tracer.
+pub const INTEGRATOR_PATH: u32 = 1;
 /// Interleaved sampling repeats a tile of INTERLEAVED_TILE x INTERLEAVED_TILE basis patterns.
 pub const INTERLEAVED_TILE: u32 = 3;
 
@@ -210,8 +223,10 @@ pub const FEATURE_TRIANGLES: u32 = 16;
 pub const FEATURE_PLANES: u32 = 32;
 /// Ellipsoids, cylinders or tori (`accel::curved`), intersected exactly.
 pub const FEATURE_CURVED: u32 = 64;
+/// The path tracer (`GpuFrame::integrator`): BSDF sampling and multiple importance sampling.
+pub const FEATURE_PATH: u32 = 128;
 /// Every feature: the general kernel.
-pub const FEATURES_ALL: u32 = 127;
+pub const FEATURES_ALL: u32 = 255;
 /// Whether the feature set `features` has `bit` (a `FEATURE_*`); const, for the CPU
 /// integrator's const generic.
 pub const fn has(features: u32, bit: u32) -> bool {
@@ -219,7 +234,7 @@ pub const fn has(features: u32, bit: u32) -> bool {
 }
 
 /// (WGSL override name, bit) of every feature.
-pub const FEATURES: [(&str, u32); 7] = [
+pub const FEATURES: [(&str, u32); 8] = [
     ("FEATURE_LENS", FEATURE_LENS),
     ("FEATURE_MIRRORS", FEATURE_MIRRORS),
     ("FEATURE_AREA_LIGHTS", FEATURE_AREA_LIGHTS),
@@ -227,6 +242,7 @@ pub const FEATURES: [(&str, u32); 7] = [
     ("FEATURE_TRIANGLES", FEATURE_TRIANGLES),
     ("FEATURE_PLANES", FEATURE_PLANES),
     ("FEATURE_CURVED", FEATURE_CURVED),
+    ("FEATURE_PATH", FEATURE_PATH),
 ];
 
 /// Bits of the status word: a kernel loop hit its cap (a traversal took more than
@@ -359,9 +375,11 @@ pub struct GpuMaterial {
     pub shininess: f32,
     /// Perfect-mirror reflectance in [0, 1] per channel; non-zero makes paths bounce.
     pub mirror: [f32; 3],
-    /// Padding to the WGSL layout.
-    pub _pad0: u32,
-    /// Emitted radiance of a `MODEL_EMITTER` surface (from its front side).
+    /// An emitter's samples per vertex as a light (0: no light samples it): the path tracer
+    /// weighs a BSDF ray that hits it against them (multiple importance sampling).
+    pub light_samples: u32,
+    /// Emitted radiance from the front side: a `MODEL_EMITTER` surface's, or under the path
+    /// tracer, an emitting surface's that also reflects by its model.
     pub emission: [f32; 3],
     /// Padding to the WGSL layout.
     pub _pad1: u32,
@@ -498,12 +516,13 @@ pub struct GpuFrame {
     /// 1 in an adaptive render: every prefix of a pixel's samples must be stratified, so the
     /// stratified pattern and the light samples take progressive orders (`sampler.rs`).
     pub progressive: u32,
-    /// Padding to the WGSL layout.
-    pub _pad1: u32,
-    /// Padding to the WGSL layout.
-    pub _pad2: u32,
-    /// Padding to the WGSL layout.
-    pub _pad3: u32,
+    /// `INTEGRATOR_WHITTED` or `INTEGRATOR_PATH`.
+    pub integrator: u32,
+    /// The path tracer's first vertex whose bounce Russian roulette may end.
+    pub rr_depth: u32,
+    /// Random dimension pairs of one path vertex: its light samples
+    /// (`light_samples_per_vertex`), and the path tracer's `PATH_VERTEX_PAIRS`.
+    pub vertex_dimension_pairs: u32,
 }
 
 /// What one dispatch renders: a rectangle of pixels (whole rows: a band), a range of sample
@@ -568,6 +587,7 @@ const _: () = assert!(
             | FEATURE_TRIANGLES
             | FEATURE_PLANES
             | FEATURE_CURVED
+            | FEATURE_PATH
 );
 /// A ray of the ray benchmark's buffer (`wgsl/trace.wgsl`).
 #[repr(C)]
@@ -627,16 +647,19 @@ pub struct GpuPath {
     pub radiance: [f32; 3],
     /// Its camera sample's index.
     pub sample: u32,
-    /// The mirror reflectance its last bounce multiplies the throughput by at the next vertex.
-    pub mirror: [f32; 3],
+    /// What its last bounce multiplies the throughput by at the next vertex (after the
+    /// current vertex's shadow rays are resolved with the throughput they were cast with): a
+    /// mirror's reflectance, or the path tracer's BSDF weight over Russian roulette's odds.
+    pub bounce_weight: [f32; 3],
     /// Rays it traced: camera, mirror and shadow rays (`DispatchStatus::rays`).
     pub rays: u32,
     /// Shadow rays its current vertex emitted (`GpuShadowRay`s from `index * stride`).
     pub shadow_count: u32,
     /// 1 once it was cut off at `max_depth` while it still reflected.
     pub truncated: u32,
-    /// Padding to the WGSL layout.
-    pub _pad0: u32,
+    /// The path tracer: the solid-angle density its last bounce's direction was drawn with
+    /// (0: a camera ray or a mirror's, which no light sample could have drawn).
+    pub bsdf_pdf: f32,
     /// Padding to the WGSL layout.
     pub _pad1: u32,
 }
@@ -913,6 +936,11 @@ pub fn wgsl_prelude() -> String {
         ("MODEL_PHONG", MODEL_PHONG),
         ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),
         ("MODEL_EMITTER", MODEL_EMITTER),
+        ("INTEGRATOR_WHITTED", INTEGRATOR_WHITTED),
+        ("INTEGRATOR_PATH", INTEGRATOR_PATH),
+        ("BSDF_PAIR", BSDF_PAIR),
+        ("ROULETTE_PAIR", ROULETTE_PAIR),
+        ("PATH_VERTEX_PAIRS", PATH_VERTEX_PAIRS),
         ("LIGHT_POINT", LIGHT_POINT),
         ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
         ("LIGHT_SPOT", LIGHT_SPOT),

@@ -15,7 +15,7 @@ use crate::layout::*;
 use crate::math::sampling::strata_columns;
 use crate::sampler::SampleTable;
 use crate::scene::mesh::TriangleMesh;
-use crate::scene::{CurvedPrimitive, Light, Scene, Shape, spot_falloff};
+use crate::scene::{CurvedPrimitive, Integrator, Light, Scene, Shape, spot_falloff};
 
 /// Everything the kernels (and the CPU reference) read, ready to upload.
 pub struct FlatScene {
@@ -152,6 +152,7 @@ impl FlatScene {
             self.prims.iter().any(|p| p.kind >= PRIM_ELLIPSOID),
             FEATURE_CURVED,
         );
+        add(self.frame.integrator == INTEGRATOR_PATH, FEATURE_PATH);
         features
     }
 }
@@ -237,22 +238,30 @@ pub fn flatten(scene: &Scene) -> FlatScene {
 /// The scene's materials as the kernels read them (area lights add theirs after,
 /// [`pack_lights`]).
 fn pack_materials(scene: &Scene) -> Vec<GpuMaterial> {
+    let path = scene.render.integrator == Integrator::Path;
     scene
         .materials
         .iter()
-        .map(|m| GpuMaterial {
-            diffuse: m.diffuse.to_array(),
-            // A material with emission (an OBJ `.mtl`'s `Ke`) is an emitter, lit by nothing.
-            model: if m.emission.max_element() > 0.0 {
-                MODEL_EMITTER
-            } else {
-                m.model
-            },
-            specular: m.specular.to_array(),
-            shininess: m.shininess,
-            mirror: m.mirror.to_array(),
-            emission: m.emission.to_array(),
-            ..Default::default()
+        .map(|m| {
+            // A material with emission (an OBJ `.mtl`'s `Ke`, a glTF `emissiveFactor`) is
+            // carried by triangles only, each one a light of one sample. Whitted's integrator
+            // renders it as an emitter lit by nothing; the path tracer lets it reflect too, as
+            // pbrt's and Mitsuba's area lights on a reflecting surface do.
+            let emits = m.emission.max_element() > 0.0;
+            GpuMaterial {
+                diffuse: m.diffuse.to_array(),
+                model: if emits && !path {
+                    MODEL_EMITTER
+                } else {
+                    m.model
+                },
+                specular: m.specular.to_array(),
+                shininess: m.shininess,
+                mirror: m.mirror.to_array(),
+                light_samples: emits as u32,
+                emission: m.emission.to_array(),
+                ..Default::default()
+            }
         })
         .collect()
 }
@@ -440,6 +449,7 @@ fn pack_lights(
                 materials.push(GpuMaterial {
                     model: MODEL_EMITTER,
                     emission: radiance.to_array(),
+                    light_samples: samples,
                     ..Default::default()
                 });
                 let material = materials.len() as u32 - 1;
@@ -469,6 +479,12 @@ fn frame_constants(
     table: &SampleTable,
 ) -> GpuFrame {
     let (render, camera) = (&scene.render, &scene.camera);
+    let light_samples_per_vertex = lights
+        .iter()
+        .filter(|l| l.is_area())
+        .map(|l| l.samples)
+        .sum();
+    let path = render.integrator == Integrator::Path;
     GpuFrame {
         width: render.width,
         height: render.height,
@@ -487,15 +503,16 @@ fn frame_constants(
         pixel_table_offset: table.pixel_offset,
         lens_table_offset: table.lens_offset,
         background: render.background.to_array(),
-        light_samples_per_vertex: lights
-            .iter()
-            .filter(|l| l.is_area())
-            .map(|l| l.samples)
-            .sum(),
+        light_samples_per_vertex,
         ambient: render.ambient.to_array(),
         motion_base: geometry.motion_base,
         progressive: render.adaptive.is_some() as u32,
-        ..Default::default()
+        integrator: match path {
+            true => INTEGRATOR_PATH,
+            false => INTEGRATOR_WHITTED,
+        },
+        rr_depth: render.rr_depth,
+        vertex_dimension_pairs: light_samples_per_vertex + if path { PATH_VERTEX_PAIRS } else { 0 },
     }
 }
 

@@ -25,8 +25,8 @@ use glam::Vec3;
 use crate::adaptive::{ActivePixels, AdaptiveReport, AdaptiveSettings};
 use crate::error::{Error, Result};
 use crate::layout::{
-    GpuPass, LOOP_CHECK_ITERATIONS, STATUS_FLAGS, STATUS_LOOP_LIMIT, STATUS_PERMUTE_CAP,
-    STATUS_RAYS, STATUS_STACK_OVERFLOW, STATUS_TRAVERSAL_CAP, STATUS_TRUNCATED,
+    GpuPass, INTEGRATOR_PATH, LOOP_CHECK_ITERATIONS, STATUS_FLAGS, STATUS_LOOP_LIMIT,
+    STATUS_PERMUTE_CAP, STATUS_RAYS, STATUS_STACK_OVERFLOW, STATUS_TRAVERSAL_CAP, STATUS_TRUNCATED,
     STATUS_WAVE_OVERFLOW,
 };
 use crate::pack::FlatScene;
@@ -441,7 +441,8 @@ impl RenderPlan {
 /// one per area-light sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RayBound {
-    /// Path vertices a sample may reach: `max_depth + 1` when a material reflects, else 1.
+    /// Path vertices a sample may reach: `max_depth + 1` when a material reflects, else 1;
+    /// under the path tracer, `max_depth + 2` (its last vertex only sees emission).
     pub vertices: u64,
     /// Shadow rays to point and directional lights at each vertex: one per such light.
     pub punctual_per_vertex: u64,
@@ -456,12 +457,14 @@ impl RayBound {
             .materials
             .iter()
             .any(|m| m.mirror.iter().any(|&c| c > 0.0));
+        let max_depth = scene.frame.max_depth as u64;
+        let vertices = match scene.frame.integrator {
+            INTEGRATOR_PATH => max_depth + 2,
+            _ if reflects => max_depth + 1,
+            _ => 1,
+        };
         RayBound {
-            vertices: if reflects {
-                scene.frame.max_depth as u64 + 1
-            } else {
-                1
-            },
+            vertices,
             punctual_per_vertex: scene.lights.iter().filter(|l| !l.is_area()).count() as u64,
             light_samples_per_vertex: scene.frame.light_samples_per_vertex as u64,
         }

@@ -254,11 +254,11 @@ fn shared_structs_have_identical_layouts() {
             pixel,
             radiance,
             sample,
-            mirror,
+            bounce_weight,
             rays,
             shadow_count,
             truncated,
-            _pad0,
+            bsdf_pdf,
             _pad1
         }
     );
@@ -335,7 +335,7 @@ fn shared_structs_have_identical_layouts() {
             specular,
             shininess,
             mirror,
-            _pad0,
+            light_samples,
             emission,
             _pad1
         }
@@ -404,9 +404,9 @@ fn shared_structs_have_identical_layouts() {
             ambient,
             motion_base,
             progressive,
-            _pad1,
-            _pad2,
-            _pad3
+            integrator,
+            rr_depth,
+            vertex_dimension_pairs
         }
     );
     layout!(

@@ -107,7 +107,7 @@ fn window_is_first(window: LightWindow) -> bool {
 }
 
 fn light_dimension(depth: u32, offset: u32, k: u32) -> u32 {
-    return LIGHT_DIMENSION + 2u * (depth * frame.light_samples_per_vertex + offset + k);
+    return LIGHT_DIMENSION + 2u * (depth * frame.vertex_dimension_pairs + offset + k);
 }
 
 // A shadow ray from a path vertex towards a light, and what it adds there where the light is
@@ -139,10 +139,16 @@ fn is_area_light(light: GpuLight) -> bool {
     return light.kind == LIGHT_AREA || light.kind == LIGHT_TRIANGLE;
 }
 
+// Whether the frame is path traced (by a kernel built with the path tracer).
+fn path_traced() -> bool {
+    return FEATURE_PATH && frame.integrator == INTEGRATOR_PATH;
+}
+
 // The point `u` of the unit square on an area light (folded onto a triangle light's triangle),
-// seen from `surface`.
+// seen from `surface`; under the path tracer (`mis`), weighted against the BSDF's sample of the
+// same direction.
 fn area_light_sample(light: GpuLight, shape: AreaLight, square: vec2<f32>, surface: Surface,
-                     material: GpuMaterial, wo: vec3<f32>) -> LightSample {
+                     material: GpuMaterial, wo: vec3<f32>, mis: bool) -> LightSample {
     var u = square;
     if (shape.triangle && u.x + u.y > 1.0) {
         u = vec2<f32>(1.0) - u;
@@ -157,6 +163,10 @@ fn area_light_sample(light: GpuLight, shape: AreaLight, square: vec2<f32>, surfa
     var f = vec3<f32>(0.0);
     if (traced) {
         f = eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance);
+    }
+    if (mis && traced) {
+        let pdf = bsdf_pdf(material, material_lobes(material), n, wo, wi);
+        f *= light_sample_weight(light.samples, distance * distance, cos_light, shape.area, pdf);
     }
     return LightSample(wi, shadow_ray_length(distance), light.prim, f, traced);
 }
@@ -229,7 +239,7 @@ fn direct_light(time: f32, surface: Surface, material: GpuMaterial, own: u32, wo
             for (var k = range.x; k < range.y; k += 1u) {
                 let square = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
                                              rng_next_2d(rng));
-                let s = area_light_sample(light, shape, square, surface, material, wo);
+                let s = area_light_sample(light, shape, square, surface, material, wo, path_traced());
                 if (s.traced) {
                     (*counters).rays += 1u;
                     if (!cw_occluded(ray_at_time(ray_query_new(origin, s.wi), time), own, s.skip, s.t_max)) {

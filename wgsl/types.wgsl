@@ -40,7 +40,7 @@ struct GpuMaterial {
     specular: vec3<f32>,
     shininess: f32,
     mirror: vec3<f32>,
-    _pad0: u32,
+    light_samples: u32,
     emission: vec3<f32>,
     _pad1: u32,
 }
@@ -103,9 +103,9 @@ struct GpuFrame {
     ambient: vec3<f32>,
     motion_base: u32,
     progressive: u32,
-    _pad1: u32,
-    _pad2: u32,
-    _pad3: u32,
+    integrator: u32,
+    rr_depth: u32,
+    vertex_dimension_pairs: u32,
 }
 
 struct GpuPass {
@@ -153,11 +153,11 @@ struct GpuPath {
     pixel: u32,
     radiance: vec3<f32>,
     sample: u32,
-    mirror: vec3<f32>,
+    bounce_weight: vec3<f32>,
     rays: u32,
     shadow_count: u32,
     truncated: u32,
-    _pad0: u32,
+    bsdf_pdf: f32,
     _pad1: u32,
 }
 

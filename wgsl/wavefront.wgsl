@@ -70,7 +70,7 @@ fn wf_camera(@builtin(global_invocation_id) id: vec3<u32>,
         let camera_ray = camera_sample(x, y, sample, &rng);
         wf_rays[p] = GpuPathRay(camera_ray.origin, camera_ray.time, camera_ray.direction, NONE);
         wf_paths[p] = GpuPath(vec3<f32>(1.0), pixel, vec3<f32>(0.0), sample, vec3<f32>(1.0),
-                              0u, 0u, 0u, 0u, 0u);
+                              0u, 0u, 0u, 0.0, 0u);
     }
     check_loop_limit();
 }
@@ -121,7 +121,7 @@ fn emit_shadow_rays(p: u32, time: f32, surface: Surface, material: GpuMaterial, 
             for (var k = range.x; k < range.y; k += 1u) {
                 let square = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
                                              rng_next_2d(rng));
-                let s = area_light_sample(light, shape, square, surface, material, wo);
+                let s = area_light_sample(light, shape, square, surface, material, wo, path_traced());
                 if (s.traced && count < wave.shadow_stride) {
                     store_shadow_ray(base + count, origin, time, own, s, l);
                     count += 1u;
@@ -148,6 +148,14 @@ fn emit_shadow_rays(p: u32, time: f32, surface: Surface, material: GpuMaterial, 
     return count;
 }
 
+// Path `p`'s ray leaving `surface` along `direction` at `time`, queued for the next depth.
+fn queue_ray(p: u32, time: f32, surface: Surface, direction: vec3<f32>, own: u32) {
+    let origin = offset_ray_origin(surface.position, surface.position_error, surface.geometric_normal);
+    wf_rays[p] = GpuPathRay(origin, time, direction, own);
+    let slot = atomicAdd(&wf_counters[WF_PATH_COUNTER], 1u);
+    wf_queue[((wave.depth + 1u) % 2u) * wave.path_capacity + slot] = p;
+}
+
 // Path `p`'s mirror bounce off `surface`, queued for the next depth (false where it leaves no
 // ray: it would go into the surface).
 fn queue_bounce(p: u32, ray: RayQuery, surface: Surface, own: u32) -> bool {
@@ -156,11 +164,30 @@ fn queue_bounce(p: u32, ray: RayQuery, surface: Surface, own: u32) -> bool {
     if (dot(reflected, surface.geometric_normal) <= 0.0) {
         return false;
     }
-    let origin = offset_ray_origin(surface.position, surface.position_error, surface.geometric_normal);
-    wf_rays[p] = GpuPathRay(origin, ray.time, normalize(reflected), own);
-    let slot = atomicAdd(&wf_counters[WF_PATH_COUNTER], 1u);
-    wf_queue[((wave.depth + 1u) % 2u) * wave.path_capacity + slot] = p;
+    queue_ray(p, ray.time, surface, normalize(reflected), own);
     return true;
+}
+
+// The path tracer's emission at path `p`'s hit, weighted against the light samples that could
+// have drawn it (src/integrator/path.rs).
+fn path_emission(path: ptr<function, GpuPath>, prim: GpuPrimitive, material: GpuMaterial,
+                 surface: Surface, ray: RayQuery) {
+    if (surface.front_facing && max3(material.emission) > 0.0) {
+        let weight = emission_weight(prim, material, surface, ray.origin, ray.direction,
+                                     (*path).bsdf_pdf);
+        (*path).radiance += (*path).throughput * material.emission * weight;
+    }
+}
+
+// The path tracer's bounce off path `p`'s vertex, queued for the next depth, or its end.
+fn queue_path_bounce(p: u32, path: ptr<function, GpuPath>, ray: RayQuery, surface: Surface,
+                     material: GpuMaterial, own: u32, rng: ptr<function, Rng>) {
+    let s = path_bounce(material, surface, -ray.direction, wave.depth, (*path).throughput, rng);
+    if (s.valid) {
+        queue_ray(p, ray.time, surface, s.wi, own);
+        (*path).bounce_weight = s.weight;
+        (*path).bsdf_pdf = s.pdf;
+    }
 }
 
 // Shades each path's hit: what it sees that needs no shadow ray (background, emission,
@@ -179,7 +206,7 @@ fn wf_shade(@builtin(global_invocation_id) id: vec3<u32>,
     path.rays += 1u;
     path.shadow_count = 0u;
     if (depth > 0u) {
-        path.throughput *= path.mirror;
+        path.throughput *= path.bounce_weight;
     }
     let stored = wf_hits[p];
     let traced = wf_rays[p];
@@ -201,17 +228,28 @@ fn wf_shade(@builtin(global_invocation_id) id: vec3<u32>,
     if (depth == 0u) {
         store_first_hit(p, first_hit_of(stored.t, surface, material));
     }
+    let path_mode = path_traced();
+    if (path_mode && first) {
+        path_emission(&path, prim, material, surface, ray);
+    }
     // An area light shows its radiance from the front, is black from behind, reflects nothing.
     if (material.model == MODEL_EMITTER) {
-        if (surface.front_facing && first) {
+        if (!path_mode && surface.front_facing && first) {
             path.radiance += path.throughput * material.emission;
         }
         wf_paths[p] = path;
         check_loop_limit();
         return;
     }
+    // The path tracer's vertex after max_depth bounces only sees emission.
+    if (path_mode && depth > frame.max_depth) {
+        path.truncated = select(0u, 1u, first && reflects(material));
+        wf_paths[p] = path;
+        check_loop_limit();
+        return;
+    }
     let wo = -ray.direction;
-    if (first) {
+    if (first && !path_mode) {
         path.radiance += path.throughput * material.diffuse * frame.ambient;
     }
     // Rays leaving a flat primitive skip it; a curved one may shadow or reflect itself.
@@ -220,11 +258,13 @@ fn wf_shade(@builtin(global_invocation_id) id: vec3<u32>,
     path.shadow_count = emit_shadow_rays(p, traced.time, surface, material, own, wo, depth,
                                          pass_window(), &rng);
     path.rays += path.shadow_count;
-    if (FEATURE_MIRRORS && max(max(material.mirror.x, material.mirror.y), material.mirror.z) > 0.0) {
+    if (path_mode) {
+        queue_path_bounce(p, &path, ray, surface, material, own, &rng);
+    } else if (FEATURE_MIRRORS && max(max(material.mirror.x, material.mirror.y), material.mirror.z) > 0.0) {
         if (depth == frame.max_depth) {
             path.truncated = select(0u, 1u, first);
         } else if (queue_bounce(p, ray, surface, own)) {
-            path.mirror = material.mirror;
+            path.bounce_weight = material.mirror;
         }
     }
     wf_paths[p] = path;

@@ -21,7 +21,9 @@ use crate::layout::{MODEL_BLINN_PHONG, MODEL_PHONG};
 use crate::output::OutputTarget;
 use crate::sampler::SamplerName;
 use crate::scene::surface::PATCH_QUADS;
-use crate::scene::{CurvedPrimitive, Light, Scene, Shape, TriangleMesh, field_location};
+use crate::scene::{
+    CurvedPrimitive, Integrator, Light, Scene, Shape, TriangleMesh, field_location,
+};
 
 /// What Mitsuba computes (`chambre export --integrator`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -555,7 +557,12 @@ impl<'a> Exporter<'a> {
             let inside = match emits {
                 true => {
                     self.light_samples += triangles.len() as u64;
-                    area_emitter(emission, triangles.len() as u64)
+                    // The path tracer lets an emitter reflect by its material too.
+                    let surface = match self.scene.render.integrator {
+                        Integrator::Path => self.reflecting_bsdf(m, i),
+                        Integrator::Whitted => black_bsdf(),
+                    };
+                    surface + &area_emitter(emission, triangles.len() as u64)
                 }
                 false => self.bsdf(m, i),
             };
@@ -590,6 +597,13 @@ impl<'a> Exporter<'a> {
             ));
             return String::new();
         }
+        self.reflecting_bsdf(k, shape)
+    }
+
+    /// [`Self::bsdf`] of a material whatever it emits: what it reflects.
+    fn reflecting_bsdf(&mut self, k: u32, shape: usize) -> String {
+        let m = &self.scene.materials[k as usize];
+        let field = format!("shapes[{shape}].material");
         if m.mirror.max_element() > 0.0 {
             self.mirrors = true;
         }
@@ -684,7 +698,7 @@ impl<'a> Exporter<'a> {
                     samples,
                 } => {
                     self.light_samples += samples as u64;
-                    let inside = area_emitter(radiance, samples as u64);
+                    let inside = black_bsdf() + &area_emitter(radiance, samples as u64);
                     self.emitters += &rectangle(corner, edge_u, edge_v, &inside);
                 }
             }
@@ -751,12 +765,21 @@ impl<'a> Exporter<'a> {
         // Mitsuba's depth counts the camera ray's hit as 0 and samples lights at depth d only
         // while d + 1 < max_depth: chambre's last vertex, after max_depth bounces, needs + 2;
         // Russian roulette from that depth on never starts.
-        let path = format!(
-            "  <integrator type=\"path\">\n    <integer name=\"max_depth\" value=\"{0}\"/>\n    <integer name=\"rr_depth\" value=\"{0}\"/>\n  </integrator>\n",
-            max_depth as u64 + 2
-        );
+        let path_with_roulette = |rr_depth: u64| {
+            format!(
+                "  <integrator type=\"path\">\n    <integer name=\"max_depth\" value=\"{}\"/>\n    <integer name=\"rr_depth\" value=\"{rr_depth}\"/>\n  </integrator>\n",
+                max_depth as u64 + 2
+            )
+        };
+        let path = path_with_roulette(max_depth as u64 + 2);
         match self.options.integrator {
             MitsubaIntegrator::Depth => ("depth", "  <integrator type=\"depth\"/>\n".into()),
+            // chambre's path tracer: the same depths, Russian roulette from the same vertex
+            // (Mitsuba's depth d + 1 > rr_depth where chambre's vertex d >= rr_depth).
+            _ if self.scene.render.integrator == Integrator::Path => (
+                "path",
+                path_with_roulette(self.scene.render.rr_depth as u64),
+            ),
             MitsubaIntegrator::Path => ("path", path),
             MitsubaIntegrator::Direct if self.mirrors && max_depth > 0 => {
                 self.notes.push(format!(
@@ -881,12 +904,16 @@ fn rectangle(corner: Vec3, edge_u: Vec3, edge_v: Vec3, inside: &str) -> String {
     )
 }
 
+/// A black surface: Whitted's emitters reflect nothing.
+fn black_bsdf() -> String {
+    "    <bsdf type=\"diffuse\">\n      <rgb name=\"reflectance\" value=\"0, 0, 0\"/>\n    </bsdf>\n".into()
+}
+
 /// A one-sided area emitter of `radiance` (from the shape's front, as chambre's), picked by
-/// light samples in proportion to `weight`, on a black surface (chambre's emitters reflect
-/// nothing).
+/// light samples in proportion to `weight`.
 fn area_emitter(radiance: Vec3, weight: u64) -> String {
     format!(
-        "    <bsdf type=\"diffuse\">\n      <rgb name=\"reflectance\" value=\"0, 0, 0\"/>\n    </bsdf>\n    <emitter type=\"area\">\n      <rgb name=\"radiance\" value=\"{}\"/>\n      <float name=\"sampling_weight\" value=\"{weight}\"/>\n    </emitter>\n",
+        "    <emitter type=\"area\">\n      <rgb name=\"radiance\" value=\"{}\"/>\n      <float name=\"sampling_weight\" value=\"{weight}\"/>\n    </emitter>\n",
         f3(radiance)
     )
 }

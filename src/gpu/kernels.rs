@@ -213,7 +213,7 @@ const FERMAT_CULL_BINDINGS: &[Binding] = &[
 ];
 
 /// (file name, source) of every WGSL module a kernel may compose.
-pub const MODULES: [(&str, &str); 16] = [
+pub const MODULES: [(&str, &str); 18] = [
     ("types.wgsl", include_str!("../../wgsl/types.wgsl")),
     ("bindings.wgsl", include_str!("../../wgsl/bindings.wgsl")),
     ("status.wgsl", include_str!("../../wgsl/status.wgsl")),
@@ -228,6 +228,8 @@ pub const MODULES: [(&str, &str); 16] = [
         include_str!("../../wgsl/traverse_cwbvh.wgsl"),
     ),
     ("sampler.wgsl", include_str!("../../wgsl/sampler.wgsl")),
+    ("bsdf.wgsl", include_str!("../../wgsl/bsdf.wgsl")),
+    ("path.wgsl", include_str!("../../wgsl/path.wgsl")),
     (
         "integrator.wgsl",
         include_str!("../../wgsl/integrator.wgsl"),
@@ -276,6 +278,7 @@ pub const RENDER: Kernel = Kernel {
         "curved.wgsl",
         "traverse_cwbvh.wgsl",
         "sampler.wgsl",
+        "bsdf.wgsl",
         "integrator.wgsl",
         "render.wgsl",
     ],
@@ -295,6 +298,8 @@ const WAVEFRONT_MODULES: &[&str] = &[
     "curved.wgsl",
     "traverse_cwbvh.wgsl",
     "sampler.wgsl",
+    "bsdf.wgsl",
+    "path.wgsl",
     "integrator.wgsl",
     "render.wgsl",
     "wavefront.wgsl",

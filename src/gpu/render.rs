@@ -18,7 +18,8 @@ use super::{GpuContext, wgpu_error_text};
 use crate::error::{Error, Result};
 use crate::layout::{
     GpuHit, GpuLight, GpuPass, GpuPath, GpuPathRay, GpuShadowRay, GpuShadowTerm, GpuWave,
-    GpuWaveArgs, MAX_WORKGROUPS_PER_DIMENSION, TRACE_WORKGROUP_SIZE, WF_COUNTERS, WORKGROUP_SIZE,
+    GpuWaveArgs, INTEGRATOR_PATH, MAX_WORKGROUPS_PER_DIMENSION, TRACE_WORKGROUP_SIZE, WF_COUNTERS,
+    WORKGROUP_SIZE,
 };
 use crate::pack::FlatScene;
 use crate::render::{
@@ -67,6 +68,16 @@ impl PathKernels {
         }
     }
 
+    /// The kernels for `scene` on an adapter: the path tracer's bounces are the wavefront
+    /// render's queue passes (the megakernel renders Whitted's integrator only), else
+    /// [`PathKernels::for_adapter`].
+    pub fn for_scene(scene: &FlatScene, is_cpu_adapter: bool) -> PathKernels {
+        match scene.frame.integrator {
+            INTEGRATOR_PATH => PathKernels::Wavefront,
+            _ => PathKernels::for_adapter(is_cpu_adapter),
+        }
+    }
+
     /// The budgets renders with these kernels are planned with on an adapter whose storage
     /// bindings hold `binding_limit` bytes. The wavefront render traces one ray an invocation, so
     /// no invocation nears a loop limit; a dispatch's paths and shadow rays live in buffers,
@@ -105,7 +116,7 @@ impl RendererOptions {
     pub fn for_scene(scene: &FlatScene, context: &GpuContext) -> RendererOptions {
         RendererOptions {
             features: scene.features(),
-            kernels: PathKernels::for_adapter(context.is_cpu_adapter),
+            kernels: PathKernels::for_scene(scene, context.is_cpu_adapter),
             budgets: None,
             checks: ShaderChecks::default(),
         }
@@ -238,7 +249,7 @@ impl GpuRenderer {
         scene: &FlatScene,
         features: u32,
     ) -> Result<GpuRenderer> {
-        let kernels = PathKernels::for_adapter(context.is_cpu_adapter);
+        let kernels = PathKernels::for_scene(scene, context.is_cpu_adapter);
         GpuRenderer::with_kernels(context, scene, features, kernels)
     }
 
@@ -296,6 +307,13 @@ impl GpuRenderer {
             return Err(Error::Gpu(format!(
                 "a kernel without features {missing:#x} cannot render this scene, which uses them"
             )));
+        }
+        if path_kernels == PathKernels::Megakernel && scene.frame.integrator == INTEGRATOR_PATH {
+            return Err(Error::Gpu(
+                "the megakernel renders Whitted's integrator only: the path tracer runs as the \
+                 wavefront render (--kernels wavefront or auto)"
+                    .into(),
+            ));
         }
         let device = &context.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);

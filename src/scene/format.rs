@@ -104,9 +104,18 @@ pub struct RenderSection {
     /// Samples per pixel, 1..=2^20 (default 16); with `noise_target`, the most a pixel takes.
     #[serde(default = "default_spp")]
     pub spp: i64,
-    /// Mirror bounces, 0..=1024 (default 4).
+    /// "whitted" (default: direct light, shadows, perfect mirrors) or "path" (global
+    /// illumination: `docs/path.md`).
+    #[serde(default)]
+    pub integrator: Integrator,
+    /// Bounces, 0..=1024 (default 4): a Whitted path's mirror bounces, a path tracer's bounces
+    /// of any kind (0: direct light only).
     #[serde(default = "default_max_depth")]
     pub max_depth: i64,
+    /// The path tracer's first vertex (0: the camera ray's hit) whose bounce Russian roulette
+    /// may end, 0..=1024 (default 5, as Mitsuba's `rr_depth`).
+    #[serde(default = "default_rr_depth")]
+    pub rr_depth: i64,
     /// Seed of the random numbers, 0..=2^32-1 (default 0).
     #[serde(default)]
     pub seed: i64,
@@ -133,6 +142,21 @@ fn default_spp() -> i64 {
 }
 fn default_max_depth() -> i64 {
     4
+}
+fn default_rr_depth() -> i64 {
+    5
+}
+
+/// The light transport a render computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Integrator {
+    /// Whitted's: emission, ambient, direct light through shadow rays, perfect-mirror bounces.
+    #[default]
+    Whitted,
+    /// A path tracer: next-event estimation and BSDF sampling combined by multiple importance
+    /// sampling, Russian roulette (`docs/path.md`).
+    Path,
 }
 
 /// The `[camera]` section; the model and conventions are in `docs/camera.md`.

@@ -23,6 +23,7 @@ use crate::adaptive::AdaptiveSettings;
 pub use crate::camera::CameraSpec;
 pub use crate::sampler::SamplerName;
 pub use builder::SceneBuilder;
+pub use format::Integrator;
 pub use load::{merged_scene_text, parse_override};
 pub use mesh::TriangleMesh;
 
@@ -60,8 +61,12 @@ pub struct RenderSettings {
     pub height: u32,
     /// Samples per pixel (under adaptive sampling, the most a pixel takes).
     pub spp: u32,
-    /// Mirror bounces allowed per path.
+    /// Whitted's integrator or the path tracer.
+    pub integrator: Integrator,
+    /// Bounces allowed per path (Whitted: mirror bounces).
     pub max_depth: u32,
+    /// The path tracer's first vertex whose bounce Russian roulette may end.
+    pub rr_depth: u32,
     /// Seed of every random number of the render.
     pub seed: u32,
     /// Pattern of the pixel positions.

@@ -19,7 +19,7 @@ use super::mesh::{
 use super::mesh_file::load_mesh;
 use super::parametric::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use super::surface::{CurvedSurface, Surface, load_bezier_patches, orient_outward};
-use super::{CameraSpec, Light, Material, RenderSettings, Scene, Shape};
+use super::{CameraSpec, Integrator, Light, Material, RenderSettings, Scene, Shape};
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
 use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, FocusSurface, Movements, Projection};
@@ -311,13 +311,28 @@ fn validate_render(check: &Checker, file: &SceneFile) -> Result<RenderSettings> 
         height,
         crop: crop_window(check, r.crop.as_ref().map(|c| c.0), width, height)?,
         spp: check.integer("render.spp", r.spp, 1, MAX_SPP)?,
+        integrator: r.integrator,
         max_depth: check.integer("render.max_depth", r.max_depth, 0, MAX_DEPTH)?,
+        rr_depth: check.integer("render.rr_depth", r.rr_depth, 0, MAX_DEPTH)?,
         seed: check.integer("render.seed", r.seed, 0, u32::MAX as i64)?,
         pixel_sampler: r.pixel_sampler,
         background: check.radiometric("render.background", r.background)?,
-        ambient: check.radiometric("render.ambient", r.ambient)?,
+        ambient: ambient(check, r)?,
         adaptive: adaptive_settings(check, r)?,
     })
+}
+
+/// `render.ambient`: Whitted's stand-in for indirect light, which the path tracer computes.
+fn ambient(check: &Checker, r: &RenderSection) -> Result<Vec3> {
+    let ambient = check.radiometric("render.ambient", r.ambient)?;
+    if r.integrator == Integrator::Path && ambient.max_element() > 0.0 {
+        return Err(check.err(
+            "render.ambient",
+            "the path tracer computes indirect light itself: ambient light is the Whitted \
+             integrator's stand-in for it (set it to 0, or render.integrator = \"whitted\")",
+        ));
+    }
+    Ok(ambient)
 }
 
 /// `render.noise_target` and `render.min_spp`: a positive target, and a first decision after at

@@ -243,9 +243,9 @@ pub enum KernelChoice {
 }
 
 impl KernelChoice {
-    fn for_adapter(self, context: &GpuContext) -> PathKernels {
+    fn for_scene(self, scene: &FlatScene, context: &GpuContext) -> PathKernels {
         match self {
-            KernelChoice::Auto => PathKernels::for_adapter(context.is_cpu_adapter),
+            KernelChoice::Auto => PathKernels::for_scene(scene, context.is_cpu_adapter),
             KernelChoice::Megakernel => PathKernels::Megakernel,
             KernelChoice::Wavefront => PathKernels::Wavefront,
         }
@@ -575,7 +575,7 @@ fn gpu_renderer(
     flat: &FlatScene,
 ) -> Result<Option<GpuRenderer>> {
     let renderer = |context: GpuContext| {
-        let kernels = kernels.for_adapter(&context);
+        let kernels = kernels.for_scene(flat, &context);
         GpuRenderer::with_kernels(context, flat, flat.features(), kernels)
     };
     match choice {
@@ -652,7 +652,7 @@ fn finish(
     }
     if output.truncated_paths > 0 {
         note!(
-            "note: {} mirror paths were cut off at max_depth",
+            "note: {} paths were cut off at max_depth while they still reflected",
             output.truncated_paths
         );
     }

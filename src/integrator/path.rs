@@ -1,0 +1,188 @@
+//! The path tracer: one camera sample -> radiance, with global illumination. Twin: the path
+//! tracer's branch of `wf_shade` in `wgsl/wavefront.wgsl`, with `wgsl/bsdf.wgsl`.
+//!
+//! At each vertex: emission (weighted against the light samples that could have drawn the same
+//! point, multiple importance sampling with the power heuristic), direct light through the same
+//! shadow rays as Whitted's integrator (each light sample weighted against the BSDF), then one
+//! direction drawn from the BSDF (`bsdf`), which Russian roulette may end from vertex
+//! `rr_depth` on. After `max_depth` bounces the path takes one more, as Mitsuba's does, only to
+//! see the emission its BSDF sample hits (the other half of the last vertex's multiple
+//! importance sampling): `max_depth = 0` is direct light. Escaping rays see the background, a
+//! constant environment no light samples. Equations and choices: `docs/path.md`.
+//!
+//! The bounce's throughput factor is kept apart from the throughput until the next vertex, as
+//! the GPU's wavefront render must keep it (its shadow rays are resolved after the bounce is
+//! drawn, with the throughput they were cast with): the same products in the same order.
+
+use glam::Vec3;
+
+use super::bsdf::{BsdfSample, emitter_hit_weight, reflects, sample_bsdf};
+use super::{
+    CameraHit, FirstHit, LightWindow, SampleStats, Surface, direct_light, moved_surface_at,
+};
+use crate::accel::intersect::{RayQuery, offset_ray_origin};
+use crate::camera::Ray;
+use crate::layout::*;
+use crate::math::rng::Rng;
+use crate::pack::FlatScene;
+
+/// The first random dimension of the path tracer's draws at vertex `depth`: the pairs after
+/// its light samples (`layout::BSDF_PAIR`, `ROULETTE_PAIR`).
+pub(super) fn bsdf_dimension(frame: &GpuFrame, depth: u32) -> u32 {
+    let pair = depth
+        .wrapping_mul(frame.vertex_dimension_pairs)
+        .wrapping_add(frame.light_samples_per_vertex)
+        .wrapping_add(BSDF_PAIR);
+    LIGHT_DIMENSION.wrapping_add(pair.wrapping_mul(2))
+}
+
+/// An emitting primitive's area, as its light's samples see it (a triangle light's is half
+/// the parallelogram of its edges).
+pub(super) fn emitter_area(prim: &GpuPrimitive) -> f32 {
+    let (p0, p1, p2) = (
+        Vec3::from(prim.p0),
+        Vec3::from(prim.p1),
+        Vec3::from(prim.p2),
+    );
+    match prim.kind {
+        PRIM_TRIANGLE => 0.5 * (p1 - p0).cross(p2 - p0).length(),
+        _ => p1.cross(p2).length(),
+    }
+}
+
+/// The weight of the emission a ray from `origin` sees at `surface` of primitive `prim`, drawn
+/// with density `bsdf_pdf` (0: a camera or mirror ray).
+pub(super) fn emission_weight(
+    prim: &GpuPrimitive,
+    material: &GpuMaterial,
+    surface: &Surface,
+    origin: Vec3,
+    direction: Vec3,
+    bsdf_pdf: f32,
+) -> f32 {
+    if material.light_samples == 0 || bsdf_pdf <= 0.0 {
+        return 1.0;
+    }
+    let distance2 = (surface.position - origin).length_squared();
+    let cos_light = -surface.geometric_normal.dot(direction);
+    emitter_hit_weight(
+        material.light_samples,
+        distance2,
+        cos_light,
+        emitter_area(prim),
+        bsdf_pdf,
+    )
+}
+
+/// The bounce that leaves vertex `depth` of a path with throughput `throughput`: the BSDF's
+/// direction and the factor the throughput takes at the next vertex, divided by Russian
+/// roulette's odds of going on from vertex `rr_depth`; none where the path ends there.
+pub(super) fn bounce(
+    frame: &GpuFrame,
+    material: &GpuMaterial,
+    surface: &Surface,
+    wo: Vec3,
+    depth: u32,
+    throughput: Vec3,
+    rng: &mut Rng,
+) -> Option<BsdfSample> {
+    rng.seek(bsdf_dimension(frame, depth));
+    let u = rng.next_2d();
+    let [u_lobe, u_roulette] = rng.next_2d();
+    let n = surface.shading_normal;
+    let mut sample = sample_bsdf(material, n, surface.geometric_normal, wo, u, u_lobe)?;
+    if depth >= frame.rr_depth {
+        let survival = (throughput * sample.weight).max_element().min(0.95);
+        if u_roulette >= survival {
+            return None;
+        }
+        sample.weight /= survival;
+    }
+    Some(sample)
+}
+
+/// Radiance along one path that starts with `camera_ray` (whose closest hit `camera_hit` may
+/// already know), as `super::trace_path` but with bounces of every kind.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn trace_path<const F: u32>(
+    scene: &FlatScene,
+    camera_ray: Ray,
+    camera_hit: CameraHit,
+    time: f32,
+    window: LightWindow,
+    rng: &mut Rng,
+    stats: &mut SampleStats,
+    first_hit: &mut FirstHit,
+) -> Vec3 {
+    let first = window.is_first();
+    let frame = &scene.frame;
+    let mut radiance = Vec3::ZERO;
+    let mut throughput = Vec3::ONE;
+    let mut bounce_weight = Vec3::ONE;
+    let mut bsdf_pdf = 0.0;
+    let mut ray = RayQuery::new(camera_ray.origin, camera_ray.direction).at_time(time);
+    let mut skip = NONE;
+    for depth in 0..=frame.max_depth + 1 {
+        throughput *= bounce_weight;
+        stats.rays += 1;
+        let found = match (depth, camera_hit) {
+            (0, CameraHit::Known(found)) => found,
+            _ => scene.tracer().closest_hit::<F>(&ray, skip, T_FAR),
+        };
+        let Some((prim_id, hit)) = found else {
+            if first {
+                radiance += throughput * Vec3::from(frame.background);
+            }
+            break;
+        };
+        let prim = &scene.prims[prim_id as usize];
+        let material = &scene.materials[prim.material as usize];
+        let surface = moved_surface_at(scene, prim_id, &ray, hit);
+        if depth == 0 {
+            *first_hit = FirstHit::of(hit.t, &surface, material);
+        }
+        let emission = Vec3::from(material.emission);
+        if first && surface.front_facing && emission.max_element() > 0.0 {
+            let weight = emission_weight(
+                prim,
+                material,
+                &surface,
+                ray.origin,
+                ray.direction,
+                bsdf_pdf,
+            );
+            radiance += throughput * emission * weight;
+        }
+        if material.model == MODEL_EMITTER {
+            break;
+        }
+        if depth > frame.max_depth {
+            if first && reflects(material) {
+                stats.truncated += 1;
+            }
+            break;
+        }
+        let wo = -ray.direction;
+        let own = match leaving_rays_skip(prim.kind, surface.front_facing) {
+            true => prim_id,
+            false => NONE,
+        };
+        radiance += throughput
+            * direct_light::<F>(
+                scene, time, &surface, material, own, wo, depth, window, rng, stats,
+            );
+        let Some(sample) = bounce(frame, material, &surface, wo, depth, throughput, rng) else {
+            break;
+        };
+        bounce_weight = sample.weight;
+        bsdf_pdf = sample.pdf;
+        let origin = offset_ray_origin(
+            surface.position,
+            surface.position_error,
+            surface.geometric_normal,
+        );
+        ray = RayQuery::new(origin, sample.wi).at_time(time);
+        skip = own;
+    }
+    radiance
+}

@@ -1,0 +1,285 @@
+//! The path tracer (`render.integrator = "path"`) against what is known exactly: furnaces, a
+//! plane under a uniform sky, the geometric series of a closed box whose walls emit and reflect,
+//! the direct light Whitted's integrator computes, and the CPU against the GPU.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use chambre::gpu::GpuRenderer;
+use chambre::gpu::render::PathKernels;
+use chambre::pack::flatten;
+use chambre::render::Image;
+use chambre::scene::{Scene, SceneBuilder};
+
+/// A scene built in code, path traced.
+fn path_traced(builder: SceneBuilder) -> Scene {
+    builder
+        .render_field("integrator", "path".into())
+        .build()
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The scene rendered on the CPU and, where an adapter is, on the GPU.
+fn both(scene: &Scene) -> Vec<(&'static str, Image)> {
+    let flat = flatten(scene);
+    let mut images = vec![("CPU", common::render_cpu(&flat))];
+    if let Some(gpu) = common::render_gpu(&flat) {
+        images.push(("GPU", gpu));
+    }
+    images
+}
+
+fn pixel(image: &Image, x: u32, y: u32) -> [f32; 3] {
+    image.pixels[(y * image.width + x) as usize].to_array()
+}
+
+/// The mean of the image's first channel.
+fn mean(image: &Image) -> f64 {
+    image.pixels.iter().map(|p| p.x as f64).sum::<f64>() / image.pixels.len() as f64
+}
+
+/// A Lambert sphere in a sky of radiance 1 sees only the sky (a convex shape never sees
+/// itself): its radiance is its albedo times 1, exactly, whatever the bounce drawn; with albedo 1
+/// it vanishes into the sky (the white furnace). `max_depth = 0` is direct light, and the sky is
+/// a light: the same image.
+#[test]
+fn a_convex_lambert_sphere_in_a_uniform_sky_reflects_exactly_its_albedo() {
+    for (albedo, max_depth) in [(0.5, 4), (0.5, 0), (1.0, 4), (0.25, 1)] {
+        let scene = path_traced(
+            SceneBuilder::new(32, 32)
+                .spp(4)
+                .max_depth(max_depth)
+                .background([1.0, 1.0, 1.0])
+                .lambert("grey", [albedo; 3])
+                .sphere([0.0, 0.0, -4.0], 1.0, "grey"),
+        );
+        for (path, image) in both(&scene) {
+            // The centre 12 x 12 pixels lie inside the sphere's outline, the corners outside.
+            for y in 10..22 {
+                for x in 10..22 {
+                    for c in pixel(&image, x, y) {
+                        assert!(
+                            (c - albedo as f32).abs() < 2e-6,
+                            "{path}: albedo {albedo}, max_depth {max_depth}: ({x}, {y}) is {c}"
+                        );
+                    }
+                }
+            }
+            for (x, y) in [(0, 0), (31, 0), (0, 31), (31, 31)] {
+                assert_eq!(pixel(&image, x, y), [1.0; 3], "{path}: corner ({x}, {y})");
+            }
+        }
+    }
+}
+
+/// An infinite Lambert plane under a uniform sky of radiance L receives irradiance pi L and so
+/// reflects albedo * L, from every point (it never sees itself).
+#[test]
+fn an_infinite_plane_under_a_uniform_sky_reflects_albedo_times_the_sky() {
+    let sky = 2.0;
+    let albedo = 0.3;
+    let scene = path_traced(
+        SceneBuilder::new(24, 24)
+            .spp(2)
+            .background([sky; 3])
+            .pinhole([0.0, 1.0, 0.0], [0.0, 0.0, -3.0], 40.0)
+            .lambert("ground", [albedo; 3])
+            .plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "ground"),
+    );
+    for (path, image) in both(&scene) {
+        // The lower rows see the plane, the top row the sky.
+        for x in 0..24 {
+            let [ground, ..] = pixel(&image, x, 23);
+            assert!(
+                (ground - (albedo * sky) as f32).abs() < 2e-6,
+                "{path}: ground ({x}, 23) is {ground}"
+            );
+            assert_eq!(pixel(&image, x, 0), [sky as f32; 3], "{path}: sky ({x}, 0)");
+        }
+    }
+}
+
+/// A scratch directory of this test process.
+fn scratch() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("chambre-path-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A cube [-1, 1]^3 of twelve triangles wound to face inwards (emitters shine from the side
+/// their winding faces), all of one material that emits `emission` and reflects `albedo`, and
+/// a scene looking around inside it.
+fn closed_box(dir: &Path, albedo: f64, emission: f64, max_depth: u32, spp: u32) -> Scene {
+    let mut obj = String::from("mtllib box.mtl\nusemtl wall\n");
+    let corner = |axis: usize, side: f64, a: f64, b: f64| {
+        let mut p = [0.0; 3];
+        p[axis] = side;
+        p[(axis + 1) % 3] = a;
+        p[(axis + 2) % 3] = b;
+        p
+    };
+    let mut vertices = 0;
+    for axis in 0..3 {
+        for side in [-1.0, 1.0] {
+            let quad = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+            for (a, b) in quad {
+                let [x, y, z] = corner(axis, side, a, b);
+                obj += &format!("v {x} {y} {z}\n");
+            }
+            // (e1 x e2) along +axis for this order: inwards on the -1 side; flip on the +1 side.
+            let faces = match side < 0.0 {
+                true => [[1, 2, 3], [1, 3, 4]],
+                false => [[1, 3, 2], [1, 4, 3]],
+            };
+            for f in faces {
+                let [i, j, k] = f.map(|v| v + vertices);
+                obj += &format!("f {i} {j} {k}\n");
+            }
+            vertices += 4;
+        }
+    }
+    std::fs::write(dir.join("box.obj"), obj).unwrap();
+    let mtl = format!(
+        "newmtl wall\nKd {albedo} {albedo} {albedo}\nKe {emission} {emission} {emission}\n"
+    );
+    std::fs::write(dir.join("box.mtl"), mtl).unwrap();
+    let toml = format!(
+        "[render]\nwidth = 16\nheight = 16\nspp = {spp}\nmax_depth = {max_depth}\n\
+         integrator = \"path\"\n\n[camera]\nposition = [0.1, -0.2, 0.3]\n\
+         look_at = [1.0, 0.5, -1.0]\nvertical_fov = 100.0\nfilm = [36.0, 36.0]\n\n\
+         [[shapes]]\ntype = \"mesh\"\nfile = \"box.obj\"\n"
+    );
+    let file = dir.join(format!("box_{max_depth}.toml"));
+    std::fs::write(&file, toml).unwrap();
+    Scene::load(&file, &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Inside a closed box whose walls emit L and reflect albedo rho, the radiance is the geometric
+/// series L (1 + rho + rho^2 + ...): the wall's own emission, then one term a bounce. Cut at
+/// `max_depth` bounces, the series ends at rho^(max_depth + 1) (the last vertex's direct
+/// light); with Russian roulette and a deep cut it is L / (1 - rho). The walls are emitting
+/// triangles, so every term mixes light samples and BSDF hits by multiple importance sampling:
+/// the sum is right only if the weights are.
+#[test]
+fn a_closed_emitting_box_sums_the_geometric_series_cut_at_max_depth() {
+    let dir = scratch();
+    let (rho, emission) = (0.5, 1.0);
+    for (max_depth, spp) in [(0, 16), (1, 16), (3, 16), (40, 32)] {
+        let scene = closed_box(&dir, rho, emission, max_depth, spp);
+        let expected: f64 = (0..=max_depth + 1)
+            .map(|k| emission * rho.powi(k as i32))
+            .sum();
+        for (path, image) in both(&scene) {
+            let measured = mean(&image);
+            eprintln!("{path}: max_depth {max_depth}: {measured:.5} (series {expected:.5})");
+            assert!(
+                (measured - expected).abs() < 0.01 * expected,
+                "{path}: max_depth {max_depth}: the box's mean radiance is {measured}, the series \
+                 {expected}"
+            );
+        }
+    }
+}
+
+/// With `max_depth = 0` the path tracer computes the direct light Whitted's integrator does (no
+/// ambient, no mirror), by other means: light samples and BSDF samples weighted by multiple
+/// importance sampling. Both are unbiased, so their images agree to sampling error, block by
+/// block.
+#[test]
+fn direct_light_by_multiple_importance_sampling_matches_light_sampling_alone() {
+    let render = |integrator: &str| {
+        let scene = common::load(
+            "scenes/cornell_direct.toml",
+            &[
+                "render.width=32",
+                "render.height=32",
+                "render.spp=256",
+                "render.max_depth=0",
+                "render.ambient=[0.0,0.0,0.0]",
+                &format!("render.integrator=\"{integrator}\""),
+            ],
+        );
+        common::render_cpu(&flatten(&scene))
+    };
+    let (whitted, path) = (render("whitted"), render("path"));
+    let block_mean = |image: &Image, bx: u32, by: u32| {
+        let mut sum = 0.0f64;
+        for y in by * 8..by * 8 + 8 {
+            for x in bx * 8..bx * 8 + 8 {
+                sum += pixel(image, x, y).iter().map(|&c| c as f64).sum::<f64>();
+            }
+        }
+        sum / 192.0
+    };
+    for by in 0..4 {
+        for bx in 0..4 {
+            let (a, b) = (block_mean(&whitted, bx, by), block_mean(&path, bx, by));
+            assert!(
+                (a - b).abs() <= 0.03 * a.max(b) + 1e-3,
+                "block ({bx}, {by}): Whitted {a:.5}, path tracer {b:.5}"
+            );
+        }
+    }
+}
+
+/// The GPU's wavefront render and the CPU path trace the same paths with the same random
+/// numbers: the images agree pixel for pixel but where rounding sends a path another way.
+#[test]
+fn the_gpu_path_traces_the_cpus_paths() {
+    let scene = common::load(
+        "scenes/cornell_box.toml",
+        &[
+            "render.width=48",
+            "render.height=48",
+            "render.spp=4",
+            "render.max_depth=3",
+            "render.rr_depth=1",
+            "render.integrator=\"path\"",
+        ],
+    );
+    let flat = flatten(&scene);
+    let cpu = common::render_cpu(&flat);
+    let Some(gpu) = common::render_gpu(&flat) else {
+        return;
+    };
+    let (within, mean_abs) = common::agreement(&cpu, &gpu, 1e-3);
+    eprintln!(
+        "{:.3}% of pixels within 1e-3, mean |diff| {mean_abs:.3e}; means {} and {}",
+        within * 100.0,
+        mean(&cpu),
+        mean(&gpu)
+    );
+    assert!(
+        within >= 0.97,
+        "only {:.3}% of pixels agree",
+        within * 100.0
+    );
+    assert!((mean(&cpu) - mean(&gpu)).abs() < 0.01 * mean(&cpu));
+}
+
+/// The megakernel renders Whitted's integrator only, and says so; ambient light is refused
+/// under the path tracer, by field.
+#[test]
+fn what_the_path_tracer_refuses_is_refused_by_name() {
+    let scene = path_traced(SceneBuilder::new(8, 8).lambert("grey", [0.5; 3]).sphere(
+        [0.0, 0.0, -4.0],
+        1.0,
+        "grey",
+    ));
+    let flat = flatten(&scene);
+    if let Some(context) = common::gpu_context() {
+        let refused =
+            GpuRenderer::with_kernels(context, &flat, flat.features(), PathKernels::Megakernel);
+        let message = refused.err().expect("the megakernel refuses").to_string();
+        assert!(message.contains("wavefront"), "{message}");
+    }
+    let ambient = SceneBuilder::new(8, 8)
+        .render_field("integrator", "path".into())
+        .ambient([0.1; 3])
+        .lambert("grey", [0.5; 3])
+        .sphere([0.0, 0.0, -4.0], 1.0, "grey")
+        .build();
+    let message = ambient.expect_err("ambient is refused").to_string();
+    assert!(message.contains("render.ambient"), "{message}");
+}

@@ -1,0 +1,47 @@
+// The path tracer's steps at a path vertex, which wf_shade takes under render.integrator = "path".
+// Mirrors: src/integrator/path.rs (emission weights, the bounce and Russian roulette).
+
+// The first random dimension of the path tracer's draws at vertex `depth`.
+fn bsdf_dimension(depth: u32) -> u32 {
+    return LIGHT_DIMENSION
+        + 2u * (depth * frame.vertex_dimension_pairs + frame.light_samples_per_vertex + BSDF_PAIR);
+}
+
+fn emitter_area(prim: GpuPrimitive) -> f32 {
+    if (prim.kind == PRIM_TRIANGLE) {
+        return 0.5 * length(cross(prim.p1 - prim.p0, prim.p2 - prim.p0));
+    }
+    return length(cross(prim.p1, prim.p2));
+}
+
+// The weight of the emission a ray from `origin` sees at `surface` of `prim`, drawn with
+// density `pdf` (0: a camera or mirror ray).
+fn emission_weight(prim: GpuPrimitive, material: GpuMaterial, surface: Surface, origin: vec3<f32>,
+                   direction: vec3<f32>, pdf: f32) -> f32 {
+    if (material.light_samples == 0u || pdf <= 0.0) {
+        return 1.0;
+    }
+    let to_surface = surface.position - origin;
+    let distance2 = dot(to_surface, to_surface);
+    let cos_light = -dot(surface.geometric_normal, direction);
+    return emitter_hit_weight(material.light_samples, distance2, cos_light, emitter_area(prim), pdf);
+}
+
+// The bounce that leaves vertex `depth`: the BSDF's direction and the throughput's factor at the
+// next vertex over Russian roulette's odds; not valid where the path ends.
+fn path_bounce(material: GpuMaterial, surface: Surface, wo: vec3<f32>, depth: u32,
+               throughput: vec3<f32>, rng: ptr<function, Rng>) -> BsdfSample {
+    rng_seek(rng, bsdf_dimension(depth));
+    let u = rng_next_2d(rng);
+    let lobe_roulette = rng_next_2d(rng);
+    var s = sample_bsdf(material, surface.shading_normal, surface.geometric_normal, wo, u,
+                        lobe_roulette.x);
+    if (s.valid && depth >= frame.rr_depth) {
+        let survival = min(max3(throughput * s.weight), 0.95);
+        if (lobe_roulette.y >= survival) {
+            return no_bsdf_sample();
+        }
+        s.weight = s.weight / survival;
+    }
+    return s;
+}
