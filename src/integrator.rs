@@ -66,6 +66,9 @@ impl FirstHit {
     fn of(t: f32, surface: &Surface, material: &GpuMaterial) -> FirstHit {
         let albedo = if material.model == MODEL_EMITTER {
             Vec3::ZERO
+        } else if material.model == MODEL_DIELECTRIC {
+            // Glass passes all light on: the albedo denoisers expect of it.
+            Vec3::ONE
         } else {
             (Vec3::from(material.diffuse) + Vec3::from(material.mirror)).min(Vec3::ONE)
         };

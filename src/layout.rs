@@ -97,6 +97,9 @@ pub const MODEL_PHONG: u32 = 1;
 pub const MODEL_BLINN_PHONG: u32 = 2;
 /// The one-sided emitting surface of an area light.
 pub const MODEL_EMITTER: u32 = 3;
+/// A smooth dielectric (glass): Fresnel reflection and refraction at `GpuMaterial::ior`, no
+/// other term; the path tracer's only.
+pub const MODEL_DIELECTRIC: u32 = 4;
 
 /// Focal surfaces (`GpuCamera::focus_surface`): the thin lens's plane.
 pub const FOCUS_PLANE: u32 = 0;
@@ -381,8 +384,9 @@ pub struct GpuMaterial {
     /// Emitted radiance from the front side: a `MODEL_EMITTER` surface's, or under the path
     /// tracer, an emitting surface's that also reflects by its model.
     pub emission: [f32; 3],
-    /// Padding to the WGSL layout.
-    pub _pad1: u32,
+    /// A `MODEL_DIELECTRIC`'s index of refraction, inside over outside (the side its outward
+    /// normal leaves from).
+    pub ior: f32,
 }
 
 /// A light. Point: `p0` position, `color` intensity (W/sr). Directional: `p0` unit vector
@@ -936,6 +940,7 @@ pub fn wgsl_prelude() -> String {
         ("MODEL_PHONG", MODEL_PHONG),
         ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),
         ("MODEL_EMITTER", MODEL_EMITTER),
+        ("MODEL_DIELECTRIC", MODEL_DIELECTRIC),
         ("INTEGRATOR_WHITTED", INTEGRATOR_WHITTED),
         ("INTEGRATOR_PATH", INTEGRATOR_PATH),
         ("BSDF_PAIR", BSDF_PAIR),

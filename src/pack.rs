@@ -260,7 +260,7 @@ fn pack_materials(scene: &Scene) -> Vec<GpuMaterial> {
                 mirror: m.mirror.to_array(),
                 light_samples: emits as u32,
                 emission: m.emission.to_array(),
-                ..Default::default()
+                ior: m.ior,
             }
         })
         .collect()
@@ -357,9 +357,10 @@ fn pack_mesh(scene: &Scene, mesh: &TriangleMesh, material: u32, packed: &mut Pac
         let material = mesh.face_materials.get(f).copied().unwrap_or(material);
         let emission = scene.materials[material as usize].emission;
         let emitting = emission.max_element() > 0.0;
+        let refracting = scene.materials[material as usize].model == MODEL_DIELECTRIC;
         // Vertices in the order the watertight test relies on; an emitter keeps its winding,
-        // which says which side it shines from.
-        let order = match emitting {
+        // which says which side it shines from, and glass its, which says which side is inside.
+        let order = match emitting || refracting {
             true => [0, 1, 2],
             false => intersect::lexicographic_order(t.map(|i| mesh.positions[i as usize])),
         };

@@ -100,6 +100,77 @@ fn an_infinite_plane_under_a_uniform_sky_reflects_albedo_times_the_sky() {
     }
 }
 
+/// A glass sphere in a sky of radiance 1 vanishes (the furnace of a dielectric): Fresnel's
+/// choice between reflection and refraction keeps a path's throughput, and the radiance's
+/// eta^2 going in is undone coming out, so every path that leaves sees 1. Without Russian
+/// roulette and with room for the internal reflections, no pixel differs from 1 but by
+/// rounding.
+#[test]
+fn a_glass_sphere_in_a_uniform_sky_vanishes() {
+    let scene = path_traced(
+        SceneBuilder::new(24, 24)
+            .spp(4)
+            .max_depth(64)
+            .render_field("rr_depth", toml::Value::Integer(1024))
+            .background([1.0, 1.0, 1.0])
+            .dielectric("glass", 1.5)
+            .sphere([0.0, 0.0, -4.0], 1.0, "glass"),
+    );
+    for (path, image) in both(&scene) {
+        for y in 0..24 {
+            for x in 0..24 {
+                for c in pixel(&image, x, y) {
+                    assert!((c - 1.0).abs() < 1e-5, "{path}: ({x}, {y}) is {c}");
+                }
+            }
+        }
+    }
+}
+
+/// Through a glass slab at normal incidence a light of radiance L shows L (1 - R) / (1 + R),
+/// R = ((n - 1) / (n + 1))^2: the two interfaces' transmission and every pair of internal
+/// reflections (sum of (1 - R)^2 R^2k). The slab is two quads with outward normals.
+#[test]
+fn a_glass_slab_transmits_what_fresnel_says_at_normal_incidence() {
+    let ior: f64 = 1.5;
+    let r = ((ior - 1.0) / (ior + 1.0)).powi(2);
+    let expected = (1.0 - r) / (1.0 + r);
+    let scene = path_traced(
+        SceneBuilder::new(16, 16)
+            .spp(64)
+            .max_depth(8)
+            .pinhole([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], 4.0)
+            .dielectric("glass", ior)
+            .quad(
+                [-4.0, -4.0, -3.0],
+                [8.0, 0.0, 0.0],
+                [0.0, 8.0, 0.0],
+                "glass",
+            )
+            .quad(
+                [-4.0, -4.0, -3.5],
+                [0.0, 8.0, 0.0],
+                [8.0, 0.0, 0.0],
+                "glass",
+            )
+            .area_light(
+                [-10.0, -10.0, -6.0],
+                [20.0, 0.0, 0.0],
+                [0.0, 20.0, 0.0],
+                [1.0, 1.0, 1.0],
+                1,
+            ),
+    );
+    for (path, image) in both(&scene) {
+        let measured = mean(&image);
+        eprintln!("{path}: {measured:.5} (Fresnel {expected:.5})");
+        assert!(
+            (measured - expected).abs() < 0.01,
+            "{path}: the slab transmits {measured}, Fresnel {expected}"
+        );
+    }
+}
+
 /// A scratch directory of this test process.
 fn scratch() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("chambre-path-{}", std::process::id()));

@@ -337,7 +337,7 @@ fn shared_structs_have_identical_layouts() {
             mirror,
             light_samples,
             emission,
-            _pad1
+            ior
         }
     );
     layout!(

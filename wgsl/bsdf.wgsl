@@ -28,7 +28,24 @@ fn material_lobes(material: GpuMaterial) -> Lobes {
 
 fn reflects(material: GpuMaterial) -> bool {
     let lobes = material_lobes(material);
-    return lobes.diffuse + lobes.glossy + lobes.mirror > 0.0;
+    return material.model == MODEL_DIELECTRIC || lobes.diffuse + lobes.glossy + lobes.mirror > 0.0;
+}
+
+fn has_smooth_lobes(material: GpuMaterial) -> bool {
+    let lobes = material_lobes(material);
+    return lobes.diffuse + lobes.glossy > 0.0;
+}
+
+// Fresnel's reflectance (x) and the refracted direction's cosine (y).
+fn fresnel_dielectric(cos_i: f32, eta: f32) -> vec2<f32> {
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if (sin2_t >= 1.0) {
+        return vec2<f32>(1.0, 0.0);
+    }
+    let cos_t = sqrt(1.0 - sin2_t);
+    let r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return vec2<f32>(0.5 * (r_s * r_s + r_p * r_p), cos_t);
 }
 
 struct Tangents {
@@ -111,18 +128,38 @@ struct BsdfSample {
     weight: vec3<f32>,
     pdf: f32,
     valid: bool,
+    transmitted: bool,
 }
 
 fn no_bsdf_sample() -> BsdfSample {
-    return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
+    return BsdfSample(vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false, false);
 }
 
-fn sample_bsdf(material: GpuMaterial, n: vec3<f32>, ng: vec3<f32>, wo: vec3<f32>, u: vec2<f32>,
-               u_lobe: f32) -> BsdfSample {
+fn sample_dielectric(material: GpuMaterial, n: vec3<f32>, ng: vec3<f32>, wo: vec3<f32>,
+                     entering: bool, u_lobe: f32) -> BsdfSample {
+    var eta = material.ior;
+    if (entering) {
+        eta = 1.0 / material.ior;
+    }
+    let cos_i = max(dot(n, wo), 0.0);
+    let fresnel = fresnel_dielectric(cos_i, eta);
+    if (u_lobe < fresnel.x) {
+        let wi = normalize(reflect_about(wo, n));
+        return BsdfSample(wi, vec3<f32>(1.0), 0.0, dot(wi, ng) > 0.0, false);
+    }
+    let wi = normalize(-eta * wo + (eta * cos_i - fresnel.y) * n);
+    return BsdfSample(wi, vec3<f32>(eta * eta), 0.0, dot(wi, ng) < 0.0, true);
+}
+
+fn sample_bsdf(material: GpuMaterial, n: vec3<f32>, ng: vec3<f32>, wo: vec3<f32>, front: bool,
+               u: vec2<f32>, u_lobe: f32) -> BsdfSample {
+    if (material.model == MODEL_DIELECTRIC) {
+        return sample_dielectric(material, n, ng, wo, front, u_lobe);
+    }
     let lobes = material_lobes(material);
     if (lobes.mirror > 0.0 && u_lobe >= lobes.diffuse + lobes.glossy) {
         let wi = normalize(reflect_about(wo, n));
-        return BsdfSample(wi, material.mirror / lobes.mirror, 0.0, dot(wi, ng) > 0.0);
+        return BsdfSample(wi, material.mirror / lobes.mirror, 0.0, dot(wi, ng) > 0.0, false);
     }
     var wi: vec3<f32>;
     if (lobes.glossy > 0.0 && u_lobe >= lobes.diffuse) {
@@ -144,7 +181,7 @@ fn sample_bsdf(material: GpuMaterial, n: vec3<f32>, ng: vec3<f32>, wo: vec3<f32>
     if (pdf <= 0.0) {
         return no_bsdf_sample();
     }
-    return BsdfSample(wi, eval_brdf(material, n, wo, wi) * (cos_theta / pdf), pdf, true);
+    return BsdfSample(wi, eval_brdf(material, n, wo, wi) * (cos_theta / pdf), pdf, true, false);
 }
 
 fn light_sample_weight(samples: u32, distance2: f32, cos_light: f32, area: f32, pdf: f32) -> f32 {

@@ -270,7 +270,9 @@ struct FirstHit {
 
 fn first_hit_of(t: f32, surface: Surface, material: GpuMaterial) -> FirstHit {
     var albedo = vec3<f32>(0.0);
-    if (material.model != MODEL_EMITTER) {
+    if (material.model == MODEL_DIELECTRIC) {
+        albedo = vec3<f32>(1.0);
+    } else if (material.model != MODEL_EMITTER) {
         albedo = min(material.diffuse + material.mirror, vec3<f32>(1.0));
     }
     return FirstHit(t, surface.shading_normal, albedo);

@@ -27,6 +27,23 @@ fn emission_weight(prim: GpuPrimitive, material: GpuMaterial, surface: Surface, 
     return emitter_hit_weight(material.light_samples, distance2, cos_light, emitter_area(prim), pdf);
 }
 
+// Where a bounce's ray starts and the primitive it skips (see the Rust twin).
+struct Leaving {
+    origin: vec3<f32>,
+    skip: u32,
+}
+
+fn leaving(kind: u32, id: u32, surface: Surface, transmitted: bool) -> Leaving {
+    var normal = surface.geometric_normal;
+    var outside = surface.front_facing;
+    if (transmitted) {
+        normal = -surface.geometric_normal;
+        outside = !surface.front_facing;
+    }
+    let origin = offset_ray_origin(surface.position, surface.position_error, normal);
+    return Leaving(origin, select(NONE, id, leaving_rays_skip(kind, outside)));
+}
+
 // The bounce that leaves vertex `depth`: the BSDF's direction and the throughput's factor at the
 // next vertex over Russian roulette's odds; not valid where the path ends.
 fn path_bounce(material: GpuMaterial, surface: Surface, wo: vec3<f32>, depth: u32,
@@ -34,8 +51,8 @@ fn path_bounce(material: GpuMaterial, surface: Surface, wo: vec3<f32>, depth: u3
     rng_seek(rng, bsdf_dimension(depth));
     let u = rng_next_2d(rng);
     let lobe_roulette = rng_next_2d(rng);
-    var s = sample_bsdf(material, surface.shading_normal, surface.geometric_normal, wo, u,
-                        lobe_roulette.x);
+    var s = sample_bsdf(material, surface.shading_normal, surface.geometric_normal, wo,
+                        surface.front_facing, u, lobe_roulette.x);
     if (s.valid && depth >= frame.rr_depth) {
         let survival = min(max3(throughput * s.weight), 0.95);
         if (lobe_roulette.y >= survival) {

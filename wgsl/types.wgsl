@@ -42,7 +42,7 @@ struct GpuMaterial {
     mirror: vec3<f32>,
     light_samples: u32,
     emission: vec3<f32>,
-    _pad1: u32,
+    ior: f32,
 }
 
 struct GpuLight {

@@ -148,9 +148,9 @@ fn emit_shadow_rays(p: u32, time: f32, surface: Surface, material: GpuMaterial, 
     return count;
 }
 
-// Path `p`'s ray leaving `surface` along `direction` at `time`, queued for the next depth.
-fn queue_ray(p: u32, time: f32, surface: Surface, direction: vec3<f32>, own: u32) {
-    let origin = offset_ray_origin(surface.position, surface.position_error, surface.geometric_normal);
+// Path `p`'s ray from `origin` along `direction` at `time`, skipping `own`, queued for the
+// next depth.
+fn queue_ray(p: u32, time: f32, origin: vec3<f32>, direction: vec3<f32>, own: u32) {
     wf_rays[p] = GpuPathRay(origin, time, direction, own);
     let slot = atomicAdd(&wf_counters[WF_PATH_COUNTER], 1u);
     wf_queue[((wave.depth + 1u) % 2u) * wave.path_capacity + slot] = p;
@@ -164,7 +164,8 @@ fn queue_bounce(p: u32, ray: RayQuery, surface: Surface, own: u32) -> bool {
     if (dot(reflected, surface.geometric_normal) <= 0.0) {
         return false;
     }
-    queue_ray(p, ray.time, surface, normalize(reflected), own);
+    let origin = offset_ray_origin(surface.position, surface.position_error, surface.geometric_normal);
+    queue_ray(p, ray.time, origin, normalize(reflected), own);
     return true;
 }
 
@@ -179,12 +180,14 @@ fn path_emission(path: ptr<function, GpuPath>, prim: GpuPrimitive, material: Gpu
     }
 }
 
-// The path tracer's bounce off path `p`'s vertex, queued for the next depth, or its end.
+// The path tracer's bounce off path `p`'s vertex (primitive `id`), queued for the next depth,
+// or its end.
 fn queue_path_bounce(p: u32, path: ptr<function, GpuPath>, ray: RayQuery, surface: Surface,
-                     material: GpuMaterial, own: u32, rng: ptr<function, Rng>) {
+                     material: GpuMaterial, id: u32, rng: ptr<function, Rng>) {
     let s = path_bounce(material, surface, -ray.direction, wave.depth, (*path).throughput, rng);
     if (s.valid) {
-        queue_ray(p, ray.time, surface, s.wi, own);
+        let leaves = leaving(prims[id].kind, id, surface, s.transmitted);
+        queue_ray(p, ray.time, leaves.origin, s.wi, leaves.skip);
         (*path).bounce_weight = s.weight;
         (*path).bsdf_pdf = s.pdf;
     }
@@ -255,11 +258,14 @@ fn wf_shade(@builtin(global_invocation_id) id: vec3<u32>,
     // Rays leaving a flat primitive skip it; a curved one may shadow or reflect itself.
     let own = select(NONE, stored.prim, leaving_rays_skip(prim.kind, surface.front_facing));
     var rng = rng_new(frame.seed, path.pixel, path.sample);
-    path.shadow_count = emit_shadow_rays(p, traced.time, surface, material, own, wo, depth,
-                                         pass_window(), &rng);
+    // Under the path tracer a material of deltas alone (a mirror, glass) meets no light sample.
+    if (!path_mode || has_smooth_lobes(material)) {
+        path.shadow_count = emit_shadow_rays(p, traced.time, surface, material, own, wo, depth,
+                                             pass_window(), &rng);
+    }
     path.rays += path.shadow_count;
     if (path_mode) {
-        queue_path_bounce(p, &path, ray, surface, material, own, &rng);
+        queue_path_bounce(p, &path, ray, surface, material, stored.prim, &rng);
     } else if (FEATURE_MIRRORS && max(max(material.mirror.x, material.mirror.y), material.mirror.z) > 0.0) {
         if (depth == frame.max_depth) {
             path.truncated = select(0u, 1u, first);

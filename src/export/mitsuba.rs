@@ -17,7 +17,7 @@ use glam::{DVec3, Vec3};
 use super::files;
 use crate::camera::{CameraSpec, Focus, FocusSurface, Movements};
 use crate::error::{Error, Result};
-use crate::layout::{MODEL_BLINN_PHONG, MODEL_PHONG};
+use crate::layout::{MODEL_BLINN_PHONG, MODEL_DIELECTRIC, MODEL_PHONG};
 use crate::output::OutputTarget;
 use crate::sampler::SamplerName;
 use crate::scene::surface::PATCH_QUADS;
@@ -624,6 +624,18 @@ impl<'a> Exporter<'a> {
             );
         }
         let m = &self.scene.materials[k as usize];
+        if m.model == MODEL_DIELECTRIC {
+            // Mitsuba's dielectric tells the sides apart by the normal, as chambre's does.
+            let id = format!("mat{k}");
+            let _ = writeln!(
+                self.bsdfs,
+                "  <!-- materials: `{}` -->\n  <bsdf type=\"dielectric\" id=\"{id}\">\n    <float name=\"int_ior\" value=\"{}\"/>\n    <float name=\"ext_ior\" value=\"1\"/>\n  </bsdf>",
+                comment(&m.name),
+                m.ior
+            );
+            self.bsdf_ids.insert(k, id.clone());
+            return format!("    <ref id=\"{id}\"/>\n");
+        }
         let (d, r) = (m.diffuse, m.mirror);
         let (max_d, max_r) = (d.max_element(), r.max_element());
         let inner = match (max_d > 0.0, max_r > 0.0) {

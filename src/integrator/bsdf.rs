@@ -7,15 +7,16 @@
 //! Phong, about the normal for Blinn-Phong's half vector (pbrt's and Mitsuba's `phong`). The
 //! density of a non-mirror direction is the mixture of the non-mirror lobes' densities, so a
 //! direction that several lobes can draw is weighted by all of them. Directions come from the
-//! concentric disk (`math::sampling`): no `sin` or `cos`, whose WGSL precision is loose. The
-//! equations and what each model conserves are in `docs/path.md`.
+//! concentric disk (`math::sampling`): no `sin` or `cos`, whose WGSL precision is loose. A
+//! smooth dielectric reflects with Fresnel's probability and refracts otherwise. The equations
+//! and what each model conserves are in `docs/path.md`.
 
 use std::f32::consts::PI;
 
 use glam::Vec3;
 
 use super::eval_brdf;
-use crate::layout::{GpuMaterial, MODEL_BLINN_PHONG, MODEL_PHONG};
+use crate::layout::{GpuMaterial, MODEL_BLINN_PHONG, MODEL_DIELECTRIC, MODEL_PHONG};
 use crate::math::sampling::concentric_disk;
 
 /// The probabilities of a material's lobes, summing to 1 (all 0 where nothing reflects).
@@ -52,10 +53,68 @@ pub fn lobes(material: &GpuMaterial) -> Lobes {
     }
 }
 
-/// Whether a material reflects any light (a lobe with a non-zero reflectance).
+/// Whether a material reflects (or refracts) any light.
 pub fn reflects(material: &GpuMaterial) -> bool {
     let lobes = lobes(material);
-    lobes.diffuse + lobes.glossy + lobes.mirror > 0.0
+    material.model == MODEL_DIELECTRIC || lobes.diffuse + lobes.glossy + lobes.mirror > 0.0
+}
+
+/// Whether a material has a lobe that light samples can meet (not only deltas): where it has
+/// none, the path tracer casts no shadow ray.
+pub fn has_smooth_lobes(material: &GpuMaterial) -> bool {
+    let lobes = lobes(material);
+    lobes.diffuse + lobes.glossy > 0.0
+}
+
+/// Fresnel's reflectance of unpolarised light at a smooth interface, for the cosine `cos_i`
+/// (>= 0) of the incident direction and `eta` = n_incident / n_transmitted; with the cosine of
+/// the refracted direction (1 and 0 at total internal reflection).
+pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> (f32, f32) {
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    if sin2_t >= 1.0 {
+        return (1.0, 0.0);
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    let r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    (0.5 * (r_s * r_s + r_p * r_p), cos_t)
+}
+
+/// A smooth dielectric's sample: reflection with Fresnel's probability F (weight F / F = 1),
+/// refraction otherwise, with the radiance's weight eta^2 (its solid angle is compressed going
+/// into the denser side: pbrt's and Mitsuba's radiance transport). `entering`: `wo` is on the
+/// side the outward normal leaves from.
+fn sample_dielectric(
+    material: &GpuMaterial,
+    n: Vec3,
+    ng: Vec3,
+    wo: Vec3,
+    entering: bool,
+    u_lobe: f32,
+) -> Option<BsdfSample> {
+    let eta = if entering {
+        1.0 / material.ior
+    } else {
+        material.ior
+    };
+    let cos_i = n.dot(wo).max(0.0);
+    let (reflectance, cos_t) = fresnel_dielectric(cos_i, eta);
+    if u_lobe < reflectance {
+        let wi = reflect(wo, n).normalize();
+        return (wi.dot(ng) > 0.0).then_some(BsdfSample {
+            wi,
+            weight: Vec3::ONE,
+            pdf: 0.0,
+            transmitted: false,
+        });
+    }
+    let wi = (-eta * wo + (eta * cos_i - cos_t) * n).normalize();
+    (wi.dot(ng) < 0.0).then_some(BsdfSample {
+        wi,
+        weight: Vec3::splat(eta * eta),
+        pdf: 0.0,
+        transmitted: true,
+    })
 }
 
 /// Tangents `(t, b)` completing the unit `n` to an orthonormal basis, without a branch on the
@@ -147,21 +206,28 @@ pub struct BsdfSample {
     pub wi: Vec3,
     /// `f cos / pdf`, or the mirror's reflectance over its lobe's probability.
     pub weight: Vec3,
-    /// Its solid-angle density; 0 for the mirror's (a delta).
+    /// Its solid-angle density; 0 for a delta (a mirror's, a dielectric's).
     pub pdf: f32,
+    /// Whether it goes through the surface (a dielectric's refraction).
+    pub transmitted: bool,
 }
 
 /// A direction from `material` at a surface with shading normal `n` and geometric normal
-/// `ng` (both towards `wo`), drawn with `u` (its direction) and `u_lobe` (its lobe); none
-/// where the material reflects nothing or the direction would leave below the surface.
+/// `ng` (both towards `wo`; `front`: on the side the outward normal leaves from), drawn with
+/// `u` (its direction) and `u_lobe` (its lobe); none where the material reflects nothing or the
+/// direction would leave on the wrong side of the surface.
 pub fn sample_bsdf(
     material: &GpuMaterial,
     n: Vec3,
     ng: Vec3,
     wo: Vec3,
+    front: bool,
     u: [f32; 2],
     u_lobe: f32,
 ) -> Option<BsdfSample> {
+    if material.model == MODEL_DIELECTRIC {
+        return sample_dielectric(material, n, ng, wo, front, u_lobe);
+    }
     let lobes = lobes(material);
     if lobes.mirror > 0.0 && u_lobe >= lobes.diffuse + lobes.glossy {
         let wi = reflect(wo, n).normalize();
@@ -169,6 +235,7 @@ pub fn sample_bsdf(
             wi,
             weight: Vec3::from(material.mirror) / lobes.mirror,
             pdf: 0.0,
+            transmitted: false,
         });
     }
     let wi = if lobes.glossy > 0.0 && u_lobe >= lobes.diffuse {
@@ -193,6 +260,7 @@ pub fn sample_bsdf(
         wi,
         weight: eval_brdf(material, n, wo, wi) * (cos / pdf),
         pdf,
+        transmitted: false,
     })
 }
 
@@ -262,16 +330,16 @@ mod tests {
             material(MODEL_LAMBERT, 0.8, 0.0, 1.0, 0.0),
             material(MODEL_PHONG, 0.3, 0.6, 20.0, 0.0),
             material(MODEL_BLINN_PHONG, 0.2, 0.7, 50.0, 0.0),
-            material(MODEL_PHONG, 0.0, 0.9, 400.0, 0.0),
+            material(MODEL_PHONG, 0.0, 0.9, 60.0, 0.0),
         ];
         for m in cases {
             let lobes = lobes(&m);
             let mut rng = Rng::new(7, 3, 1);
             let (mut sampled, mut uniform) = (0.0f64, 0.0f64);
-            let count = 200_000;
+            let count = 1_000_000;
             for _ in 0..count {
                 let [a, b] = rng.next_2d();
-                if let Some(s) = sample_bsdf(&m, n, n, wo, [a, b], rng.next_f32()) {
+                if let Some(s) = sample_bsdf(&m, n, n, wo, true, [a, b], rng.next_f32()) {
                     let pdf = bsdf_pdf(&m, &lobes, n, wo, s.wi);
                     assert!(
                         (pdf - s.pdf).abs() <= 1e-4 * pdf,
@@ -303,9 +371,52 @@ mod tests {
         let m = material(MODEL_LAMBERT, 0.0, 0.0, 1.0, 0.7);
         let n = Vec3::Z;
         let wo = Vec3::new(0.6, 0.0, 0.8);
-        let s = sample_bsdf(&m, n, n, wo, [0.3, 0.9], 0.5).unwrap();
+        let s = sample_bsdf(&m, n, n, wo, true, [0.3, 0.9], 0.5).unwrap();
         assert!((s.wi - Vec3::new(-0.6, 0.0, 0.8)).length() < 1e-6);
         assert_eq!((s.weight, s.pdf), (Vec3::splat(0.7), 0.0));
+    }
+
+    /// Fresnel's reflectance: ((n - 1) / (n + 1))^2 at normal incidence, 1 at grazing
+    /// incidence and beyond the critical angle, the same from both sides along a refracted
+    /// pair (reciprocity), and Snell's law for the refracted direction.
+    #[test]
+    fn a_dielectric_reflects_by_fresnel_and_refracts_by_snell() {
+        let ior = 1.5f32;
+        let (r0, cos_t) = fresnel_dielectric(1.0, 1.0 / ior);
+        assert!(
+            (r0 - 0.04).abs() < 1e-7 && (cos_t - 1.0).abs() < 1e-7,
+            "{r0} {cos_t}"
+        );
+        assert!((fresnel_dielectric(0.0, 1.0 / ior).0 - 1.0).abs() < 1e-6);
+        let critical = (1.0 - 1.0 / (ior * ior)).sqrt();
+        assert_eq!(fresnel_dielectric(critical * 0.999, ior), (1.0, 0.0));
+        for cos_i in [0.9f32, 0.5, 0.2] {
+            let (outside, cos_t) = fresnel_dielectric(cos_i, 1.0 / ior);
+            let (inside, _) = fresnel_dielectric(cos_t, ior);
+            assert!(
+                (outside - inside).abs() < 1e-6,
+                "{cos_i}: {outside} vs {inside}"
+            );
+        }
+        let m = GpuMaterial {
+            model: MODEL_DIELECTRIC,
+            ior,
+            ..Default::default()
+        };
+        let n = Vec3::Z;
+        let wo = Vec3::new(0.6, 0.0, 0.8);
+        let t = sample_dielectric(&m, n, n, wo, true, 0.99).unwrap();
+        assert!(t.transmitted && t.wi.z < 0.0);
+        let sin_t = (1.0 - t.wi.z * t.wi.z).sqrt();
+        assert!((sin_t * ior - 0.6).abs() < 1e-6, "Snell: {sin_t}");
+        assert!(
+            (t.weight - Vec3::splat(1.0 / (ior * ior)))
+                .abs()
+                .max_element()
+                < 1e-7
+        );
+        let r = sample_dielectric(&m, n, n, wo, true, 0.0).unwrap();
+        assert!(!r.transmitted && (r.wi - Vec3::new(-0.6, 0.0, 0.8)).length() < 1e-6);
     }
 
     /// The basis is orthonormal for normals near both poles and along the axes.

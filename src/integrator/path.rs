@@ -16,7 +16,7 @@
 
 use glam::Vec3;
 
-use super::bsdf::{BsdfSample, emitter_hit_weight, reflects, sample_bsdf};
+use super::bsdf::{BsdfSample, emitter_hit_weight, has_smooth_lobes, reflects, sample_bsdf};
 use super::{
     CameraHit, FirstHit, LightWindow, SampleStats, Surface, direct_light, moved_surface_at,
 };
@@ -74,6 +74,26 @@ pub(super) fn emission_weight(
     )
 }
 
+/// Where a bounce's ray starts (offset to the side it leaves on) and the primitive it skips:
+/// a ray refracted into a sphere or an ellipsoid must meet it again from inside.
+pub(super) fn leaving(
+    prim: &GpuPrimitive,
+    prim_id: u32,
+    surface: &Surface,
+    transmitted: bool,
+) -> (Vec3, u32) {
+    let (normal, outside) = match transmitted {
+        true => (-surface.geometric_normal, !surface.front_facing),
+        false => (surface.geometric_normal, surface.front_facing),
+    };
+    let origin = offset_ray_origin(surface.position, surface.position_error, normal);
+    let skip = match leaving_rays_skip(prim.kind, outside) {
+        true => prim_id,
+        false => NONE,
+    };
+    (origin, skip)
+}
+
 /// The bounce that leaves vertex `depth` of a path with throughput `throughput`: the BSDF's
 /// direction and the factor the throughput takes at the next vertex, divided by Russian
 /// roulette's odds of going on from vertex `rr_depth`; none where the path ends there.
@@ -90,7 +110,8 @@ pub(super) fn bounce(
     let u = rng.next_2d();
     let [u_lobe, u_roulette] = rng.next_2d();
     let n = surface.shading_normal;
-    let mut sample = sample_bsdf(material, n, surface.geometric_normal, wo, u, u_lobe)?;
+    let ng = surface.geometric_normal;
+    let mut sample = sample_bsdf(material, n, ng, wo, surface.front_facing, u, u_lobe)?;
     if depth >= frame.rr_depth {
         let survival = (throughput * sample.weight).max_element().min(0.95);
         if u_roulette >= survival {
@@ -167,22 +188,21 @@ pub(super) fn trace_path<const F: u32>(
             true => prim_id,
             false => NONE,
         };
-        radiance += throughput
-            * direct_light::<F>(
-                scene, time, &surface, material, own, wo, depth, window, rng, stats,
-            );
+        // A material of deltas alone (a mirror, glass) meets no light sample.
+        if has_smooth_lobes(material) {
+            radiance += throughput
+                * direct_light::<F>(
+                    scene, time, &surface, material, own, wo, depth, window, rng, stats,
+                );
+        }
         let Some(sample) = bounce(frame, material, &surface, wo, depth, throughput, rng) else {
             break;
         };
         bounce_weight = sample.weight;
         bsdf_pdf = sample.pdf;
-        let origin = offset_ray_origin(
-            surface.position,
-            surface.position_error,
-            surface.geometric_normal,
-        );
+        let (origin, skipped) = leaving(prim, prim_id, &surface, sample.transmitted);
         ray = RayQuery::new(origin, sample.wi).at_time(time);
-        skip = own;
+        skip = skipped;
     }
     radiance
 }

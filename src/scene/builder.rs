@@ -157,6 +157,15 @@ impl SceneBuilder {
         ])
     }
 
+    /// A smooth dielectric (glass) of index of refraction `ior`; the path tracer's only.
+    pub fn dielectric(self, name: &str, ior: f64) -> Self {
+        self.add_materials(&[
+            ("name", name.into()),
+            ("model", "dielectric".into()),
+            ("ior", Value::Float(ior)),
+        ])
+    }
+
     /// A sphere (scene units) of the material named `material`.
     pub fn sphere(self, center: [f64; 3], radius: f64, material: &str) -> Self {
         self.add_shapes(&[

@@ -235,6 +235,9 @@ pub enum MaterialModel {
     BlinnPhong,
     /// A perfect mirror: `diffuse` defaults to 0 and `mirror` to 1.
     Mirror,
+    /// A smooth dielectric (glass) of index of refraction `ior`: Fresnel reflection and
+    /// refraction, nothing else; the path tracer renders it.
+    Dielectric,
 }
 
 /// One `[[materials]]` table.
@@ -253,6 +256,8 @@ pub struct MaterialEntry {
     pub shininess: Option<f64>,
     /// Perfect-mirror reflectance in [0, 1] per channel (default 0; mirror: 1).
     pub mirror: Option<Vec3>,
+    /// Index of refraction inside over outside, in [0.1, 10] (default 1.5); dielectric only.
+    pub ior: Option<f64>,
 }
 
 /// The `type` of a `[[shapes]]` table.

@@ -99,6 +99,8 @@ pub struct Material {
     pub mirror: Vec3,
     /// Radiance of an emitting surface (an OBJ `.mtl`'s `Ke`); zero for scene materials.
     pub emission: Vec3,
+    /// A dielectric's index of refraction (inside over outside); 1 for the others.
+    pub ior: f32,
 }
 
 /// A shape; `material` indexes [`Scene::materials`].

@@ -858,6 +858,42 @@ fn check_film_behind_lens(check: &Checker, camera: &CameraSpec) -> Result<()> {
     Ok(())
 }
 
+/// A dielectric's fields: the path tracer's alone, Fresnel's equations its only terms, an index
+/// of refraction in [0.1, 10]; 1 for other models, which take no `ior`.
+fn dielectric_ior(check: &Checker, file: &SceneFile, i: usize) -> Result<f32> {
+    let m = &file.materials[i];
+    let at = |f: &str| format!("materials[{i}].{f}");
+    if m.model != MaterialModel::Dielectric {
+        if m.ior.is_some() {
+            return Err(check.err(&at("ior"), "only dielectric materials refract"));
+        }
+        return Ok(1.0);
+    }
+    if file.render.integrator != Integrator::Path {
+        return Err(check.err(
+            &at("model"),
+            "a dielectric (glass) refracts: render it with render.integrator = \"path\"",
+        ));
+    }
+    if let Some(field) = [("diffuse", m.diffuse), ("mirror", m.mirror)]
+        .iter()
+        .find_map(|(name, v)| v.map(|_| *name))
+    {
+        return Err(check.err(
+            &at(field),
+            "a dielectric reflects and refracts by Fresnel's equations alone",
+        ));
+    }
+    let ior = check.finite(&at("ior"), m.ior.unwrap_or(1.5))?;
+    if !(0.1..=10.0).contains(&ior) {
+        return Err(check.err(
+            &at("ior"),
+            format!("must lie in [0.1, 10], got {}", num(ior)),
+        ));
+    }
+    Ok(ior as f32)
+}
+
 fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>> {
     let mut materials: Vec<Material> = Vec::new();
     for (i, m) in file.materials.iter().enumerate() {
@@ -865,8 +901,10 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
         if materials.iter().any(|o| o.name == m.name) {
             return Err(check.err(&at("name"), format!("duplicate material name `{}`", m.name)));
         }
+        let ior = dielectric_ior(check, file, i)?;
         let is_mirror = m.model == MaterialModel::Mirror;
-        let default_diffuse = Exact(if is_mirror { [0.0; 3] } else { [0.8; 3] });
+        let no_diffuse = is_mirror || m.model == MaterialModel::Dielectric;
+        let default_diffuse = Exact(if no_diffuse { [0.0; 3] } else { [0.8; 3] });
         let default_mirror = Exact(if is_mirror { [1.0; 3] } else { [0.0; 3] });
         let specular = check.reflectance(&at("specular"), m.specular.unwrap_or_default())?;
         let uses_lobe = matches!(m.model, MaterialModel::Phong | MaterialModel::BlinnPhong);
@@ -894,12 +932,14 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
                 MaterialModel::Lambert | MaterialModel::Mirror => layout::MODEL_LAMBERT,
                 MaterialModel::Phong => layout::MODEL_PHONG,
                 MaterialModel::BlinnPhong => layout::MODEL_BLINN_PHONG,
+                MaterialModel::Dielectric => layout::MODEL_DIELECTRIC,
             },
             diffuse: check.reflectance(&at("diffuse"), m.diffuse.unwrap_or(default_diffuse))?,
             specular,
             shininess: shininess as f32,
             mirror: check.reflectance(&at("mirror"), m.mirror.unwrap_or(default_mirror))?,
             emission: Vec3::ZERO,
+            ior,
         });
     }
     Ok(materials)
@@ -1342,6 +1382,7 @@ fn adopt_mesh_materials(
             shininess: m.shininess,
             mirror: m.mirror,
             emission: m.emission,
+            ior: 1.0,
         });
     }
     for id in &mut mesh.face_materials {
