@@ -5,6 +5,9 @@
       linear RGB image as PFM.
   python3 tools/mitsuba_render.py load SCENE.xml [SCENE.xml ...]
       loads each scene and prints one JSON line about it: what it holds, as Mitsuba read it.
+  python3 tools/mitsuba_render.py time SCENE.xml RUNS OUT.pfm
+      renders the scene once to compile its kernels, then RUNS times (seeds 1..RUNS, each
+      waited for), prints one JSON line with each run's seconds, and writes the last image.
 
 Variant: MI_VARIANT (default llvm_ad_rgb, which needs DRJIT_LIBLLVM_PATH to name a libLLVM,
 16 or newer, where Dr.Jit does not find one). Mitsuba comes from PYTHONPATH
@@ -31,6 +34,24 @@ def render(args):
         mi.Bitmap(image).write(out)
 
 
+def time_renders(args):
+    import time
+    mi = mitsuba()
+    if len(args) != 3:
+        sys.exit("time takes SCENE.xml RUNS OUT.pfm")
+    xml, runs, out = args[0], int(args[1]), args[2]
+    scene = mi.load_file(xml)
+    mi.render(scene, seed=0).numpy()
+    seconds = []
+    for seed in range(1, runs + 1):
+        start = time.perf_counter()
+        image = mi.render(scene, seed=seed)
+        image.numpy()  # the render is lazy until its values are read
+        seconds.append(time.perf_counter() - start)
+    mi.Bitmap(image).write(out)
+    print(json.dumps({"scene": xml, "seconds": seconds}), flush=True)
+
+
 def kind(obj):
     """The plugin's class as Mitsuba prints it, e.g. PerspectiveCamera."""
     return str(obj).split("[", 1)[0].strip()
@@ -55,9 +76,10 @@ def load(args):
 
 
 def main():
-    if len(sys.argv) < 3 or sys.argv[1] not in ("render", "load"):
+    commands = {"render": render, "load": load, "time": time_renders}
+    if len(sys.argv) < 3 or sys.argv[1] not in commands:
         sys.exit(__doc__)
-    {"render": render, "load": load}[sys.argv[1]](sys.argv[2:])
+    commands[sys.argv[1]](sys.argv[2:])
 
 
 if __name__ == "__main__":
