@@ -10,6 +10,7 @@
 
 use crate::error::{Error, Result};
 use crate::layout::{FEATURES, wgsl_prelude};
+use crate::named::named_enum;
 
 /// How a kernel accesses a binding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -561,31 +562,24 @@ fn layout_entry(b: &Binding) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// Which of the checks wgpu adds to a shader at run time a kernel is built with.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
-pub enum ShaderChecks {
-    /// wgpu's own: every array index bounded (beyond what the driver's robust buffer access
-    /// already bounds), every loop bounded by a counter, every integer division guarded.
-    #[default]
-    All,
-    /// All but the loop counters: every loop of chambre's kernels ends by construction (a
-    /// traversal by `GpuFrame::traversal_cap`, which it reports; a bit loop when its bits run
-    /// out; the others at a count from a uniform), so the counter only costs time.
-    NoLoopBounding,
-    /// None of them: for measuring what the checks cost, not for rendering.
-    None,
+named_enum! {
+    /// Which of the checks wgpu adds to a shader at run time a kernel is built with.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+    pub enum ShaderChecks {
+        /// wgpu's own: every array index bounded (beyond what the driver's robust buffer access
+        /// already bounds), every loop bounded by a counter, every integer division guarded.
+        #[default]
+        All = "all",
+        /// All but the loop counters: every loop of chambre's kernels ends by construction (a
+        /// traversal by `GpuFrame::traversal_cap`, which it reports; a bit loop when its bits run
+        /// out; the others at a count from a uniform), so the counter only costs time.
+        NoLoopBounding = "no-loop-bounding",
+        /// None of them: for measuring what the checks cost, not for rendering.
+        None = "none",
+    }
 }
 
 impl ShaderChecks {
-    /// Its name on the command line and in reports.
-    pub fn label(self) -> &'static str {
-        match self {
-            ShaderChecks::All => "all",
-            ShaderChecks::NoLoopBounding => "no-loop-bounding",
-            ShaderChecks::None => "none",
-        }
-    }
-
     fn runtime_checks(self) -> wgpu::ShaderRuntimeChecks {
         let mut checks = wgpu::ShaderRuntimeChecks::checked();
         match self {
