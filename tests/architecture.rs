@@ -148,3 +148,12 @@ fn the_library_defines_no_command_line_types() {
         "the library uses clap: {using_clap:?}"
     );
 }
+
+/// `main.rs` only dispatches to the commands' files: under 400 lines. (Functions over 120
+/// lines anywhere in `src/`: `tools/check_function_length.py`.)
+#[test]
+fn main_rs_only_dispatches_the_commands() {
+    let main = Path::new(ROOT).join("src/bin/chambre/main.rs");
+    let lines = std::fs::read_to_string(&main).unwrap().lines().count();
+    assert!(lines < 400, "{}: {lines} lines", relative(&main));
+}
