@@ -31,6 +31,7 @@ pub mod integrator;
 pub mod layout;
 pub mod math;
 pub mod metrics;
+pub mod named;
 pub mod output;
 pub mod pack;
 pub mod plot;

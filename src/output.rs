@@ -21,6 +21,7 @@ use image::{ExtendedColorType, ImageEncoder};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::named::named_enum;
 use crate::render::{Image, RenderOutput};
 
 /// What a PNG shows for a pixel that is not a finite number: magenta stands out in any render
@@ -58,21 +59,24 @@ impl ImageFormat {
     }
 }
 
-/// How linear radiance becomes a displayable value in [0, 1] for an 8-bit image, after the
-/// exposure scale `2^EV`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum ToneMap {
-    /// Values above 1 clip to white.
-    #[default]
-    Clamp,
-    /// x / (1 + x) per channel (Reinhard et al. 2002, the simple global operator).
-    Reinhard,
-    /// Narkowicz's fit of the ACES filmic curve: (x (2.51 x + 0.03)) / (x (2.43 x + 0.59) + 0.14).
-    Aces,
-    /// AgX (Sobotka; Blender's default view since 4.0), as three.js has it: in Rec.2020, an
-    /// inset matrix, log2 encoding over [-12.47, 4.03] stops, a sigmoid, the outset matrix;
-    /// bright saturated colours go towards white rather than clip to a hue.
-    Agx,
+named_enum! {
+    /// How linear radiance becomes a displayable value in [0, 1] for an 8-bit image, after the
+    /// exposure scale `2^EV`.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+    pub enum ToneMap {
+        /// Values above 1 clip to white.
+        #[default]
+        Clamp = "clamp",
+        /// x / (1 + x) per channel (Reinhard et al. 2002, the simple global operator).
+        Reinhard = "reinhard",
+        /// Narkowicz's fit of the ACES filmic curve:
+        /// (x (2.51 x + 0.03)) / (x (2.43 x + 0.59) + 0.14).
+        Aces = "aces",
+        /// AgX (Sobotka; Blender's default view since 4.0), as three.js has it: in Rec.2020, an
+        /// inset matrix, log2 encoding over [-12.47, 4.03] stops, a sigmoid, the outset matrix;
+        /// bright saturated colours go towards white rather than clip to a hue.
+        Agx = "agx",
+    }
 }
 
 /// AgX's matrices as three.js has them (after Filament, after Blender; working in Rec.2020),
@@ -444,17 +448,19 @@ fn encode(
     Ok(bytes)
 }
 
-/// An arbitrary output variable an EXR can carry beside the image (`chambre render --aov`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Aov {
-    /// `depth.Z`: distance along the camera ray to the first hit (0 where nothing is hit).
-    Depth,
-    /// `normal.X`, `.Y`, `.Z`: the first hit's shading normal, world space, facing the camera.
-    Normal,
-    /// `albedo.R`, `.G`, `.B`: the first hit's diffuse plus mirror reflectance.
-    Albedo,
-    /// `samples.Y`: the samples the pixel received (adaptive sampling, a stopped render).
-    Samples,
+named_enum! {
+    /// An arbitrary output variable an EXR can carry beside the image (`chambre render --aov`).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub enum Aov {
+        /// `depth.Z`: distance along the camera ray to the first hit (0 where nothing is hit).
+        Depth = "depth",
+        /// `normal.X`, `.Y`, `.Z`: the first hit's shading normal, world space, facing the camera.
+        Normal = "normal",
+        /// `albedo.R`, `.G`, `.B`: the first hit's diffuse plus mirror reflectance.
+        Albedo = "albedo",
+        /// `samples.Y`: the samples the pixel received (adaptive sampling, a stopped render).
+        Samples = "samples",
+    }
 }
 
 impl Aov {

@@ -36,41 +36,33 @@ use std::f64::consts::TAU;
 use crate::layout::*;
 use crate::math::rng::{Rng, pcg_hash};
 use crate::math::sampling::{concentric_disk, div_rem, strata_columns, stratified_2d};
+use crate::named::named_enum;
 
 /// Samples per pixel the table-based samplers (poisson, interleaved) accept.
 pub const MAX_TABLE_SPP: u32 = 4096;
 /// Largest number of aperture blades.
 pub const MAX_BLADES: u32 = 64;
 
-/// A sample pattern, as scene files and flags name it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum SamplerName {
-    /// Independent uniform points.
-    Random,
-    /// One jittered point per cell of a grid, cells in a hashed per-pixel order (the default).
-    #[default]
-    Stratified,
-    /// Precomputed Poisson-disk sets, one picked and shifted per pixel; spp <= `MAX_TABLE_SPP`.
-    Poisson,
-    /// Keller and Heidrich's interleaved jittered patterns; spp <= `MAX_TABLE_SPP`.
-    Interleaved,
-    /// Shuffled, Owen-scrambled 2-D Sobol points.
-    Sobol,
+named_enum! {
+    /// A sample pattern, as scene files and flags name it.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum SamplerName {
+        /// Independent uniform points.
+        Random = "random",
+        /// One jittered point per cell of a grid, cells in a hashed per-pixel order (the default).
+        #[default]
+        Stratified = "stratified",
+        /// Precomputed Poisson-disk sets, one picked and shifted per pixel; spp <= `MAX_TABLE_SPP`.
+        Poisson = "poisson",
+        /// Keller and Heidrich's interleaved jittered patterns; spp <= `MAX_TABLE_SPP`.
+        Interleaved = "interleaved",
+        /// Shuffled, Owen-scrambled 2-D Sobol points.
+        Sobol = "sobol",
+    }
 }
 
 impl SamplerName {
-    /// The name scene files and flags use.
-    pub fn name(self) -> &'static str {
-        match self {
-            SamplerName::Random => "random",
-            SamplerName::Stratified => "stratified",
-            SamplerName::Poisson => "poisson",
-            SamplerName::Interleaved => "interleaved",
-            SamplerName::Sobol => "sobol",
-        }
-    }
-
     /// The `SAMPLER_*` code the kernels switch on.
     pub fn code(self) -> u32 {
         match self {
@@ -703,6 +695,23 @@ pub fn sample_aperture(camera: &GpuCamera, table: &[[f32; 2]], u: [f32; 2]) -> [
         s * (a[0] + u[1] * (b[0] - a[0])),
         s * (a[1] + u[1] * (b[1] - a[1])),
     ]
+}
+
+#[cfg(test)]
+mod name_tests {
+    use super::SamplerName;
+    use crate::named::Named;
+
+    #[test]
+    fn scene_files_and_flags_spell_the_samplers_alike() {
+        for v in SamplerName::VALUES {
+            let quoted = format!("\"{}\"", v.name);
+            assert_eq!(
+                serde_json::from_str::<SamplerName>(&quoted).unwrap(),
+                v.value
+            );
+        }
+    }
 }
 
 #[cfg(test)]

@@ -126,3 +126,34 @@ fn every_source_file_says_what_it_is() {
         );
     }
 }
+
+/// The command line's types live in the binary (`src/bin/chambre/`): the library names its
+/// enums' values (`chambre::named`) and the binary builds clap's parsers from those names.
+#[test]
+fn the_library_defines_no_command_line_types() {
+    let mut sources = Vec::new();
+    files_with_extension(&Path::new(ROOT).join("src"), "rs", &mut sources);
+    let bin = Path::new(ROOT).join("src/bin");
+    let mut using_clap = Vec::new();
+    for path in sources.iter().filter(|p| !p.starts_with(&bin)) {
+        let text = std::fs::read_to_string(path).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            if line.contains("clap::") || line.contains("use clap") {
+                using_clap.push(format!("{}:{}", relative(path), n + 1));
+            }
+        }
+    }
+    assert!(
+        using_clap.is_empty(),
+        "the library uses clap: {using_clap:?}"
+    );
+}
+
+/// `main.rs` only dispatches to the commands' files: under 400 lines. (Functions over 120
+/// lines anywhere in `src/`: `tools/check_function_length.py`.)
+#[test]
+fn main_rs_only_dispatches_the_commands() {
+    let main = Path::new(ROOT).join("src/bin/chambre/main.rs");
+    let lines = std::fs::read_to_string(&main).unwrap().lines().count();
+    assert!(lines < 400, "{}: {lines} lines", relative(&main));
+}

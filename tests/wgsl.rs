@@ -54,6 +54,56 @@ fn every_kernel_validates_in_every_feature_variant() {
     }
 }
 
+/// How the shader accesses the binding `var`, in the registry's terms.
+fn access_of(module: &naga::Module, var: &naga::GlobalVariable) -> Access {
+    use naga::{ImageClass, ImageDimension, ScalarKind, TypeInner};
+    match (var.space, &module.types[var.ty].inner) {
+        (naga::AddressSpace::Uniform, _) => Access::Uniform,
+        (naga::AddressSpace::Storage { access }, _)
+            if access.contains(naga::StorageAccess::STORE) =>
+        {
+            Access::StorageReadWrite
+        }
+        (naga::AddressSpace::Storage { .. }, _) => Access::StorageRead,
+        (naga::AddressSpace::Handle, TypeInner::Sampler { comparison: true }) => {
+            Access::ComparisonSampler
+        }
+        (
+            naga::AddressSpace::Handle,
+            TypeInner::Image {
+                dim,
+                arrayed,
+                class,
+            },
+        ) => match (dim, arrayed, class) {
+            (
+                ImageDimension::D2,
+                false,
+                ImageClass::Sampled {
+                    kind: ScalarKind::Float,
+                    multi: false,
+                },
+            ) => Access::FloatTexture,
+            (
+                ImageDimension::D2,
+                false,
+                ImageClass::Sampled {
+                    kind: ScalarKind::Uint,
+                    multi: false,
+                },
+            ) => Access::UintTexture,
+            (ImageDimension::D2, true, ImageClass::Depth { multi: false }) => {
+                Access::DepthTextureArray
+            }
+            other => panic!(
+                "{:?}: a texture the registry has no name for: {other:?}",
+                var.name
+            ),
+        },
+        (space, ty) => panic!("{:?}: unexpected binding {space:?} {ty:?}", var.name),
+    }
+}
+
 /// The bindings wgsl/bindings.wgsl declares are exactly `BINDINGS`: numbers, names and
 /// access; and each kernel's binding list is a subset of them.
 #[test]
@@ -65,17 +115,11 @@ fn declared_bindings_are_the_rust_table() {
         .filter_map(|(_, var)| {
             let binding = var.binding.as_ref()?;
             assert_eq!(binding.group, 0, "{:?}", var.name);
-            let access = match var.space {
-                naga::AddressSpace::Uniform => Access::Uniform,
-                naga::AddressSpace::Storage { access }
-                    if access.contains(naga::StorageAccess::STORE) =>
-                {
-                    Access::StorageReadWrite
-                }
-                naga::AddressSpace::Storage { .. } => Access::StorageRead,
-                other => panic!("{:?}: unexpected address space {other:?}", var.name),
-            };
-            Some((binding.binding, var.name.clone().unwrap(), access))
+            Some((
+                binding.binding,
+                var.name.clone().unwrap(),
+                access_of(&module, var),
+            ))
         })
         .collect();
     declared.sort_by_key(|d| d.0);
@@ -476,6 +520,74 @@ fn each_kernel_lists_exactly_the_bindings_it_uses() {
         used.sort();
         let listed: Vec<u32> = kernel.bindings.iter().map(|b| b.binding).collect();
         assert_eq!(used, listed, "{}", kernel.name);
+    }
+}
+
+/// Each of the preview's render pipelines lists, group by group, exactly the bindings its
+/// entry points read, with the shader's numbers, names and access; and each binding is visible
+/// to exactly the stages that read it, over every pipeline that binds it (the shading group is
+/// the main pass's and the reflection pass's).
+#[test]
+fn each_preview_pipeline_lists_exactly_the_bindings_it_uses() {
+    use chambre::gpu::kernels::Binding;
+    use std::collections::BTreeMap;
+    type Key = (u32, u32, String);
+    let mut described_stages: BTreeMap<Key, (Binding, wgpu::ShaderStages)> = BTreeMap::new();
+    for pipeline in chambre::preview::PIPELINES {
+        let module = parse_and_validate(&(pipeline.source)());
+        let info = validator().validate(&module).unwrap();
+        let mut used: BTreeMap<Key, (Access, wgpu::ShaderStages)> = BTreeMap::new();
+        let stages = [
+            (Some(pipeline.vertex), wgpu::ShaderStages::VERTEX),
+            (pipeline.fragment, wgpu::ShaderStages::FRAGMENT),
+        ];
+        for (entry, stage) in stages {
+            let Some(entry) = entry else { continue };
+            let index = module
+                .entry_points
+                .iter()
+                .position(|e| e.name == entry)
+                .unwrap_or_else(|| panic!("{}: no entry point {entry}", pipeline.name));
+            let uses = info.get_entry_point(index);
+            for (handle, var) in module.global_variables.iter() {
+                let Some(binding) = &var.binding else {
+                    continue;
+                };
+                if uses[handle].is_empty() {
+                    continue;
+                }
+                let key = (binding.group, binding.binding, var.name.clone().unwrap());
+                let access = access_of(&module, var);
+                used.entry(key).or_insert((access, stage)).1 |= stage;
+            }
+        }
+        let mut listed: BTreeMap<Key, Access> = BTreeMap::new();
+        for (group, bindings) in pipeline.groups.iter().enumerate() {
+            for b in *bindings {
+                let key = (group as u32, b.binding, b.name.to_string());
+                listed.insert(key.clone(), b.access);
+                let stages = used.get(&key).map_or(wgpu::ShaderStages::NONE, |u| u.1);
+                described_stages
+                    .entry(key)
+                    .or_insert((*b, wgpu::ShaderStages::NONE))
+                    .1 |= stages;
+            }
+        }
+        let used_access: BTreeMap<Key, Access> = used
+            .iter()
+            .map(|(k, (access, _))| (k.clone(), *access))
+            .collect();
+        assert_eq!(
+            listed, used_access,
+            "{}: listed against used",
+            pipeline.name
+        );
+    }
+    for ((group, number, name), (binding, stages)) in described_stages {
+        assert_eq!(
+            binding.visibility, stages,
+            "group {group} binding {number} `{name}`: visible to the stages that read it"
+        );
     }
 }
 

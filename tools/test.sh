@@ -43,6 +43,9 @@ export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 
 # Dependencies point one way (docs/architecture.md): no import circle between files or modules.
 python3 tools/check_imports.py
+# Small functions: none over 120 lines outside unit-test modules (its own test first).
+python3 tools/test_check_function_length.py
+python3 tools/check_function_length.py
 cargo build --release --bins
 echo "== GPU adapters"
 ./target/release/chambre info

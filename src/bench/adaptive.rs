@@ -25,7 +25,7 @@ use crate::sampler::SamplerName;
 use crate::scene::Scene;
 
 /// The kinds of held-out scenes ([`held_out_scene`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum HeldOutKind {
     /// A box of random proportions and colours, two to four boxes and spheres on its floor, a

@@ -202,7 +202,7 @@ impl FrameConfig<'_> {
             for &check in checks {
                 let check_suffix = match check == ShaderChecks::default() {
                     true => String::new(),
-                    false => format!("-checks-{}", check.label()),
+                    false => format!("-checks-{}", check.name()),
                 };
                 for &(suffix, set) in feature_sets {
                     let way = Way::Gpu {

@@ -26,6 +26,7 @@ use crate::gpu::kernels::ShaderChecks;
 use crate::gpu::trace::GpuTracer;
 use crate::layout::{FEATURES_ALL, GpuCwNode, GpuPrimitive, GpuRay, NONE, PRIM_TRIANGLE, T_FAR};
 use crate::math::rng::Rng;
+use crate::named::named_enum;
 use crate::pack::{FlatScene, flatten};
 use crate::scene::Scene;
 
@@ -87,21 +88,23 @@ impl RaysConfig {
     }
 }
 
-/// The acceleration structure rays traverse: the renderer's BVH2, the compressed wide BVH
-/// made from it (`accel::cwbvh`), or the CPU's uncompressed 8-wide BVH made from that
-/// (`accel::wide`, CPU only).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum Bvh {
-    /// The renderer's binary BVH.
-    Bvh2,
-    /// The compressed wide BVH: eight children per node.
-    Cwbvh,
-    /// The CWBVH's tree with f32 child boxes, tested eight at a time (the CPU only).
-    Wide,
-    /// The wide BVH traced in packets of eight rays (`accel::wide::packet`; the CPU only):
-    /// 4x2 pixels of a frame for the camera's rays, eight consecutive rays otherwise.
-    Packets,
+named_enum! {
+    /// The acceleration structure rays traverse: the renderer's BVH2, the compressed wide BVH
+    /// made from it (`accel::cwbvh`), or the CPU's uncompressed 8-wide BVH made from that
+    /// (`accel::wide`, CPU only).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum Bvh {
+        /// The renderer's binary BVH.
+        Bvh2 = "bvh2",
+        /// The compressed wide BVH: eight children per node.
+        Cwbvh = "cwbvh",
+        /// The CWBVH's tree with f32 child boxes, tested eight at a time (the CPU only).
+        Wide = "wide",
+        /// The wide BVH traced in packets of eight rays (`accel::wide::packet`; the CPU only):
+        /// 4x2 pixels of a frame for the camera's rays, eight consecutive rays otherwise.
+        Packets = "packets",
+    }
 }
 
 impl Bvh {
@@ -531,14 +534,16 @@ fn ray_bytes(rays: &RaySet) -> Vec<u8> {
     le_bytes(&floats)
 }
 
-/// Which path traces the rays.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum Backend {
-    /// The CPU reference path (rayon threads).
-    Cpu,
-    /// The GPU kernels (wgpu).
-    Gpu,
+named_enum! {
+    /// Which path traces the rays.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum Backend {
+        /// The CPU reference path (rayon threads).
+        Cpu = "cpu",
+        /// The GPU kernels (wgpu).
+        Gpu = "gpu",
+    }
 }
 
 /// Mrays/s of `runs` timed runs after a warm-up of at least `WARM_UP`, each run's time given
@@ -642,7 +647,7 @@ pub fn run(
                             )?;
                             let label = match checks == ShaderChecks::default() {
                                 true => String::new(),
-                                false => format!(", checks: {}", checks.label()),
+                                false => format!(", checks: {}", checks.name()),
                             };
                             (
                                 format!("gpu ({}{label})", tracer.adapter_name()),
@@ -774,6 +779,23 @@ impl RaysReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn reports_and_flags_spell_bvhs_and_backends_alike() {
+        use crate::named::Named;
+        for v in Bvh::VALUES {
+            assert_eq!(
+                serde_json::to_string(&v.value).unwrap(),
+                format!("\"{}\"", v.name)
+            );
+        }
+        for v in Backend::VALUES {
+            assert_eq!(
+                serde_json::to_string(&v.value).unwrap(),
+                format!("\"{}\"", v.name)
+            );
+        }
+    }
 
     #[test]
     fn coherent_rays_pass_through_their_pixels() {

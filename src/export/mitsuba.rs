@@ -18,6 +18,7 @@ use super::files;
 use crate::camera::{CameraSpec, Focus, FocusSurface, Movements};
 use crate::error::{Error, Result};
 use crate::layout::{MODEL_BLINN_PHONG, MODEL_DIELECTRIC, MODEL_PHONG};
+use crate::named::named_enum;
 use crate::output::OutputTarget;
 use crate::sampler::SamplerName;
 use crate::scene::surface::PATCH_QUADS;
@@ -25,17 +26,19 @@ use crate::scene::{
     CurvedPrimitive, Integrator, Light, Scene, Shape, TriangleMesh, field_location,
 };
 
-/// What Mitsuba computes (`chambre export --integrator`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum MitsubaIntegrator {
-    /// chambre's direct light: Mitsuba's `direct` (light samples only), or its `path` with
-    /// `max_depth + 2` where a mirror bounces.
-    #[default]
-    Direct,
-    /// Mitsuba's `depth`: camera rays only (the distance to the first hit).
-    Depth,
-    /// Mitsuba's path tracer with `max_depth + 2`, whatever the materials.
-    Path,
+named_enum! {
+    /// What Mitsuba computes (`chambre export --integrator`).
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+    pub enum MitsubaIntegrator {
+        /// chambre's direct light: Mitsuba's `direct` (light samples only), or its `path` with
+        /// `max_depth + 2` where a mirror bounces.
+        #[default]
+        Direct = "direct",
+        /// Mitsuba's `depth`: camera rays only (the distance to the first hit).
+        Depth = "depth",
+        /// Mitsuba's path tracer with `max_depth + 2`, whatever the materials.
+        Path = "path",
+    }
 }
 
 /// How to export.

@@ -6,12 +6,15 @@
 //! group layout made from its entries of [`BINDINGS`], specialised to the scene's features through
 //! WGSL's pipeline-overridable constants (`layout::FEATURES`): a scene without mirrors gets a
 //! kernel without the bounce, a pinhole one without lens sampling, and so on. Adding a kernel is
-//! adding an entry to [`KERNELS`], not copying set-up code.
+//! adding an entry to [`KERNELS`], not copying set-up code. The preview's render pipelines
+//! describe their bindings with the same [`Binding`] (`preview::PIPELINES`).
 
 use crate::error::{Error, Result};
 use crate::layout::{FEATURES, wgsl_prelude};
+use crate::named::named_enum;
 
-/// How a kernel accesses a binding.
+/// How a shader accesses a binding: the kernels bind buffers only; the preview's render
+/// pipelines (`preview::renderer::pipeline::RasterPipeline`) textures and a sampler too.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Access {
     /// `var<uniform>`: a small struct of constants.
@@ -20,29 +23,117 @@ pub enum Access {
     StorageRead,
     /// `var<storage, read_write>`: an array the kernel writes (or updates atomically).
     StorageReadWrite,
+    /// `texture_2d<f32>`, read texel by texel (`textureLoad`), never filtered.
+    FloatTexture,
+    /// `texture_2d<u32>`, read texel by texel.
+    UintTexture,
+    /// `texture_depth_2d_array`, read through a comparison sampler.
+    DepthTextureArray,
+    /// `sampler_comparison`.
+    ComparisonSampler,
 }
 
-/// One binding of group 0: its number, its WGSL variable name, and its access.
+impl Access {
+    /// Whether it is a storage buffer (adapters limit them per shader stage).
+    pub fn is_storage(self) -> bool {
+        matches!(self, Access::StorageRead | Access::StorageReadWrite)
+    }
+
+    /// wgpu's binding type of it; `dynamic_offset` for a buffer bound at one.
+    fn binding_type(self, dynamic_offset: bool) -> wgpu::BindingType {
+        let buffer = |ty| wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: dynamic_offset,
+            min_binding_size: None,
+        };
+        let texture = |sample_type, view_dimension| wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension,
+            multisampled: false,
+        };
+        let d2 = wgpu::TextureViewDimension::D2;
+        match self {
+            Access::Uniform => buffer(wgpu::BufferBindingType::Uniform),
+            Access::StorageRead => buffer(wgpu::BufferBindingType::Storage { read_only: true }),
+            Access::StorageReadWrite => {
+                buffer(wgpu::BufferBindingType::Storage { read_only: false })
+            }
+            Access::FloatTexture => {
+                texture(wgpu::TextureSampleType::Float { filterable: false }, d2)
+            }
+            Access::UintTexture => texture(wgpu::TextureSampleType::Uint, d2),
+            Access::DepthTextureArray => texture(
+                wgpu::TextureSampleType::Depth,
+                wgpu::TextureViewDimension::D2Array,
+            ),
+            Access::ComparisonSampler => {
+                wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison)
+            }
+        }
+    }
+}
+
+/// One binding of a bind group: its number, its WGSL variable name, its access and the shader
+/// stages that read it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Binding {
-    /// `@binding(n)` in `wgsl/bindings.wgsl`.
+    /// `@binding(n)` in `wgsl/bindings.wgsl` (or the preview's shader).
     pub binding: u32,
     /// The WGSL variable's name, which `Pipeline::bind_group` looks buffers up by.
     pub name: &'static str,
-    /// Uniform or storage, read-only or not.
+    /// Uniform or storage, read-only or not; a texture or a sampler.
     pub access: Access,
+    /// The stages that read it: compute for a kernel's.
+    pub visibility: wgpu::ShaderStages,
     /// Bytes of one element, for a binding bound at a dynamic offset into an array of them
     /// (one per dispatch of a batch); 0 for a binding of the whole buffer.
     pub dynamic_size: u64,
 }
 
-const fn entry(binding: u32, name: &'static str, access: Access) -> Binding {
-    Binding {
-        binding,
-        name,
-        access,
-        dynamic_size: 0,
+impl Binding {
+    /// Binding `binding` called `name`, read by `visibility`'s stages, of its whole resource.
+    pub const fn new(
+        binding: u32,
+        name: &'static str,
+        access: Access,
+        visibility: wgpu::ShaderStages,
+    ) -> Binding {
+        Binding {
+            binding,
+            name,
+            access,
+            visibility,
+            dynamic_size: 0,
+        }
     }
+
+    /// Its entry of a bind group layout.
+    pub fn layout_entry(&self) -> wgpu::BindGroupLayoutEntry {
+        wgpu::BindGroupLayoutEntry {
+            binding: self.binding,
+            visibility: self.visibility,
+            ty: self.access.binding_type(self.dynamic_size > 0),
+            count: None,
+        }
+    }
+}
+
+/// The bind group layout of `bindings`, labelled `label`.
+pub fn bind_group_layout(
+    device: &wgpu::Device,
+    label: &str,
+    bindings: &[Binding],
+) -> wgpu::BindGroupLayout {
+    let entries: Vec<_> = bindings.iter().map(Binding::layout_entry).collect();
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &entries,
+    })
+}
+
+/// A kernel's binding: read by the compute stage.
+const fn entry(binding: u32, name: &'static str, access: Access) -> Binding {
+    Binding::new(binding, name, access, wgpu::ShaderStages::COMPUTE)
 }
 
 /// Group 0's bindings by name, as `wgsl/bindings.wgsl` declares them (same numbers, names and
@@ -259,8 +350,10 @@ pub struct Kernel {
 impl Kernel {
     /// Storage buffers the kernel binds (adapters limit them per shader stage).
     pub fn storage_buffers(&self) -> u32 {
-        let storage = |b: &&Binding| b.access != Access::Uniform;
-        self.bindings.iter().filter(storage).count() as u32
+        self.bindings
+            .iter()
+            .filter(|b| b.access.is_storage())
+            .count() as u32
     }
 }
 
@@ -548,49 +641,24 @@ pub struct Pipeline {
     pub kernel: &'static Kernel,
 }
 
-fn layout_entry(b: &Binding) -> wgpu::BindGroupLayoutEntry {
-    let ty = match b.access {
-        Access::Uniform => wgpu::BufferBindingType::Uniform,
-        Access::StorageRead => wgpu::BufferBindingType::Storage { read_only: true },
-        Access::StorageReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
-    };
-    wgpu::BindGroupLayoutEntry {
-        binding: b.binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: b.dynamic_size > 0,
-            min_binding_size: None,
-        },
-        count: None,
+named_enum! {
+    /// Which of the checks wgpu adds to a shader at run time a kernel is built with.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+    pub enum ShaderChecks {
+        /// wgpu's own: every array index bounded (beyond what the driver's robust buffer access
+        /// already bounds), every loop bounded by a counter, every integer division guarded.
+        #[default]
+        All = "all",
+        /// All but the loop counters: every loop of chambre's kernels ends by construction (a
+        /// traversal by `GpuFrame::traversal_cap`, which it reports; a bit loop when its bits run
+        /// out; the others at a count from a uniform), so the counter only costs time.
+        NoLoopBounding = "no-loop-bounding",
+        /// None of them: for measuring what the checks cost, not for rendering.
+        None = "none",
     }
-}
-
-/// Which of the checks wgpu adds to a shader at run time a kernel is built with.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
-pub enum ShaderChecks {
-    /// wgpu's own: every array index bounded (beyond what the driver's robust buffer access
-    /// already bounds), every loop bounded by a counter, every integer division guarded.
-    #[default]
-    All,
-    /// All but the loop counters: every loop of chambre's kernels ends by construction (a
-    /// traversal by `GpuFrame::traversal_cap`, which it reports; a bit loop when its bits run
-    /// out; the others at a count from a uniform), so the counter only costs time.
-    NoLoopBounding,
-    /// None of them: for measuring what the checks cost, not for rendering.
-    None,
 }
 
 impl ShaderChecks {
-    /// Its name on the command line and in reports.
-    pub fn label(self) -> &'static str {
-        match self {
-            ShaderChecks::All => "all",
-            ShaderChecks::NoLoopBounding => "no-loop-bounding",
-            ShaderChecks::None => "none",
-        }
-    }
-
     fn runtime_checks(self) -> wgpu::ShaderRuntimeChecks {
         let mut checks = wgpu::ShaderRuntimeChecks::checked();
         match self {
@@ -629,11 +697,7 @@ pub fn build_pipeline_with(
     // loops all end (the loop counters), and `ShaderChecks::None` only measures.
     let module =
         unsafe { device.create_shader_module_trusted(descriptor, checks.runtime_checks()) };
-    let entries: Vec<_> = kernel.bindings.iter().map(layout_entry).collect();
-    let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some(kernel.name),
-        entries: &entries,
-    });
+    let bind_group_layout = bind_group_layout(device, kernel.name, kernel.bindings);
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(kernel.name),
         bind_group_layouts: &[Some(&bind_group_layout)],

@@ -44,7 +44,9 @@ pub use reflections::{
     AUTO_PIECE, MAX_AUTO_PIECES, MirrorSurface, ReflectedSet, Reflector, ReflectorPass,
     SELF_REFLECTION_TOLERANCE_PX, grid_point, reflectors, self_reflections_note, sub_triangle,
 };
-pub use renderer::{PreviewFrame, PreviewRenderer, StageTimes, draw, draw_with, shader_source};
+pub use renderer::{
+    PreviewFrame, PreviewRenderer, RasterPipeline, StageTimes, draw, draw_with, shader_source,
+};
 pub use shadows::{
     CUBE_FACES, SHADOW_MAP_SIZE, SHADOW_MEMORY, SHADOW_NORMAL_OFFSET, SHADOW_SHADER,
     SMALLEST_SHADOW_MAP, ShadowLight, ShadowPlan, cube_face, shadow_map_size,
@@ -53,6 +55,16 @@ pub use tessellate::{
     CurvedShapes, Cut, DEFAULT_TOLERANCE_PX, Detail, Grid, PATCH_QUADS, ROUND_QUADS, Seen,
     SurfaceAt, UNSEEN_QUADS, coarse_note, fitting_grid, flat_triangles, grid_deviation, tessellate,
 };
+
+/// Every render pipeline of the preview, by name and binding (its compute kernels, the Fermat
+/// solves and cull, are in `gpu::kernels::KERNELS`); tests/wgsl.rs checks each against its
+/// shader.
+pub const PIPELINES: [&RasterPipeline; 4] = [
+    &renderer::MAIN_PASS,
+    &reflections::passes::REFLECTION_PASS,
+    &shadows::maps::SHADOW_PASS,
+    &window::PRESENT_PASS,
+];
 
 /// One vertex of the preview's triangle list.
 #[repr(C)]

@@ -1,5 +1,9 @@
 //! Value parsers the commands' arguments share: counts of at least 1, pixel tolerances,
-//! spacings and step limits, refused by clap with the flag named and a non-zero exit.
+//! spacings and step limits, refused by clap with the flag named and a non-zero exit; the
+//! library's named enums (tone maps, samplers, backends, ...) by their names.
+
+use chambre::named::Named;
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 
 /// The parser of a `u32` count given on the command line that must be at least 1 (clap says
 /// which flag and why, and exits non-zero).
@@ -41,4 +45,14 @@ pub fn tolerance_px(text: &str) -> std::result::Result<f64, String> {
         Ok(_) => Err("must be a number of pixels above 0".into()),
         Err(e) => Err(e.to_string()),
     }
+}
+
+/// The parser of a flag that takes the names of a library enum ([`Named`]): `--help` lists
+/// each name with its doc comment's summary, and clap refuses any other with the names listed.
+pub fn named<T: Named + Send + Sync>() -> impl TypedValueParser<Value = T> {
+    let values = T::VALUES
+        .iter()
+        .map(|v| PossibleValue::new(v.name).help(v.summary()));
+    PossibleValuesParser::new(values)
+        .try_map(|name| T::from_name(&name).ok_or("a name the possible values hold"))
 }

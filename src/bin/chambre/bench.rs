@@ -14,7 +14,7 @@ use chambre::gpu::kernels::ShaderChecks;
 use chambre::gpu::render::PathKernels;
 use chambre::sampler::SamplerName;
 
-use super::args::{at_least_one, at_least_one_width, fermat_steps, positive, tolerance_px};
+use super::args::{at_least_one, at_least_one_width, fermat_steps, named, positive, tolerance_px};
 
 /// `chambre bench` and its parts.
 #[derive(Debug, clap::Subcommand)]
@@ -64,7 +64,7 @@ pub struct AdaptiveArgs {
     #[arg(long, value_parser = positive(), default_value_t = 96)]
     pub size: u32,
     /// Pixel and lens sample patterns to measure.
-    #[arg(long, value_enum, value_delimiter = ',',
+    #[arg(long, value_parser = named::<SamplerName>(), value_delimiter = ',',
           default_values_t = [SamplerName::Stratified, SamplerName::Sobol])]
     pub samplers: Vec<SamplerName>,
     /// Noise targets.
@@ -218,7 +218,7 @@ pub struct Output {
 #[derive(Debug, clap::Args)]
 pub struct Backends {
     /// Backends to measure, side by side.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::Gpu])]
+    #[arg(long, value_parser = named::<Backend>(), value_delimiter = ',', default_values_t = [Backend::Cpu, Backend::Gpu])]
     pub backends: Vec<Backend>,
 }
 
@@ -332,7 +332,7 @@ pub struct FrameArgs {
     #[arg(long)]
     pub no_general: bool,
     /// wgpu's run-time checks of the GPU kernels, side by side (default: chambre's).
-    #[arg(long, value_enum, value_delimiter = ',')]
+    #[arg(long, value_parser = named::<ShaderChecks>(), value_delimiter = ',')]
     pub shader_checks: Vec<ShaderChecks>,
     /// Override a field of every scene, e.g. --set camera.shutter=[0.0,1.0] (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
@@ -382,10 +382,10 @@ pub struct RaysArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u32,
     /// Acceleration structures to traverse, side by side (`wide` on the CPU only).
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh, Bvh::Wide, Bvh::Packets])]
+    #[arg(long, value_parser = named::<Bvh>(), value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh, Bvh::Wide, Bvh::Packets])]
     pub bvh: Vec<Bvh>,
     /// wgpu's run-time checks of the GPU kernels, side by side (default: chambre's).
-    #[arg(long, value_enum, value_delimiter = ',')]
+    #[arg(long, value_parser = named::<ShaderChecks>(), value_delimiter = ',')]
     pub shader_checks: Vec<ShaderChecks>,
     /// Trace nothing: write the mesh's triangles and both ray sets into this directory, raw
     /// little-endian, for another ray tracer to trace the very same rays

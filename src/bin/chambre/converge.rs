@@ -9,7 +9,7 @@ use chambre::converge::ConvergeSettings;
 use chambre::output::{OutputTarget, Protected};
 use chambre::sampler::SamplerName;
 
-use super::args::{at_least_one, positive};
+use super::args::{at_least_one, named, positive};
 use super::print;
 
 /// Measure how a scene's error against a reference falls with samples per pixel and with time,
@@ -29,7 +29,7 @@ pub struct ConvergeArgs {
     #[arg(long, value_parser = positive(), default_value_t = 64)]
     pub max_spp: u32,
     /// Sample patterns to compare, each used for the pixel and the lens samples.
-    #[arg(long, value_enum, value_delimiter = ',',
+    #[arg(long, value_parser = named::<SamplerName>(), value_delimiter = ',',
           default_values_t = [SamplerName::Random, SamplerName::Stratified, SamplerName::Sobol])]
     pub samplers: Vec<SamplerName>,
     /// Also render adaptively (`--noise-target`) at each of these targets, with --max-spp as
@@ -44,7 +44,7 @@ pub struct ConvergeArgs {
     #[arg(long, value_parser = at_least_one, default_value_t = 1)]
     pub runs: usize,
     /// Backends to measure, side by side.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Backend::Cpu])]
+    #[arg(long, value_parser = named::<Backend>(), value_delimiter = ',', default_values_t = [Backend::Cpu])]
     pub backends: Vec<Backend>,
     /// The CSV to write: one row per run, the command and machine in `#` comments.
     #[arg(long, default_value = "converge.csv")]

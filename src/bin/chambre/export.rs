@@ -7,6 +7,7 @@ use clap::Args;
 
 use chambre::export::{MitsubaIntegrator, MitsubaOptions, write_mitsuba};
 
+use super::args::named;
 use super::{load_and_note, print};
 
 /// `chambre export`: the arguments.
@@ -20,7 +21,7 @@ pub struct ExportArgs {
     pub mitsuba: PathBuf,
     /// What Mitsuba computes: `direct` (chambre's direct light: Mitsuba's `direct`, or its
     /// `path` where mirrors bounce), `depth` (camera rays only), `path` (Mitsuba's path tracer).
-    #[arg(long, value_enum, default_value_t)]
+    #[arg(long, value_parser = named::<MitsubaIntegrator>(), default_value_t)]
     pub integrator: MitsubaIntegrator,
     /// Write the nearest Mitsuba has where it has no match (ambient light dropped, Phong lobes
     /// dropped, movements and blades left out, ...), listing each change, instead of refusing.

@@ -14,15 +14,17 @@ use clap::{Args, ValueEnum};
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::render::PathKernels;
 use chambre::gpu::{GpuContext, GpuRenderer};
-use chambre::output::{Display, ImageFormat, OutputTarget, Protected, ToneMap};
+use chambre::output::{Aov, Display, ImageFormat, OutputTarget, Protected, ToneMap};
 use chambre::pack::{FlatScene, flatten};
 use chambre::render::{
     Backend, Progress, RenderOutput, describe_status_flags, render, render_until,
 };
+use chambre::sampler::SamplerName;
 use chambre::scene::Scene;
 use chambre::shard::Shard;
 use chambre::{Error, Result};
 
+use super::args::named;
 use super::{load, load_and_note};
 
 #[derive(Args)]
@@ -57,11 +59,11 @@ pub struct RenderArgs {
     #[arg(long)]
     pub threads: Option<usize>,
     /// Pixel sample pattern (overrides render.pixel_sampler).
-    #[arg(long, value_enum)]
-    pub pixel_sampler: Option<chambre::sampler::SamplerName>,
+    #[arg(long, value_parser = named::<SamplerName>())]
+    pub pixel_sampler: Option<SamplerName>,
     /// Lens sample pattern (overrides camera.lens_sampler).
-    #[arg(long, value_enum)]
-    pub lens_sampler: Option<chambre::sampler::SamplerName>,
+    #[arg(long, value_parser = named::<SamplerName>())]
+    pub lens_sampler: Option<SamplerName>,
     /// Override any scene field, e.g. --set camera.f_number=2.8 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,
@@ -79,7 +81,7 @@ pub struct RenderArgs {
     )]
     pub exposure: f32,
     /// How an 8-bit image maps radiance to [0, 1].
-    #[arg(long, value_enum, default_value_t = ToneMap::Clamp)]
+    #[arg(long, value_parser = named::<ToneMap>(), default_value_t = ToneMap::Clamp)]
     pub tonemap: ToneMap,
     /// Also write OUT.json: the command, scene hash, seed, samples reached, backend and
     /// timings, to reproduce the image.
@@ -96,8 +98,8 @@ pub struct RenderArgs {
     /// Also write these layers into the EXR image, as named channels: depth (depth.Z), normal
     /// (normal.X/Y/Z), albedo (albedo.R/G/B) of each camera ray's first hit, averaged over the
     /// pixel's samples, and samples (samples.Y), the samples each pixel received.
-    #[arg(long, value_enum, value_delimiter = ',', value_name = "AOV,...")]
-    pub aov: Vec<chambre::output::Aov>,
+    #[arg(long, value_parser = named::<Aov>(), value_delimiter = ',', value_name = "AOV,...")]
+    pub aov: Vec<Aov>,
     /// Also write the samples each pixel received as an image (.exr or .pfm: the count in
     /// every channel), to see where they went.
     #[arg(long, value_name = "FILE")]

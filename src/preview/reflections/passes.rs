@@ -7,14 +7,53 @@ use super::kernel::{FermatCull, FermatPass, FermatSolve};
 use super::{MirrorSurface, Reflector, ReflectorPass};
 use crate::error::Result;
 use crate::gpu::GpuContext;
+use crate::gpu::kernels::Access::{StorageRead, UintTexture};
+use crate::gpu::kernels::Binding;
 use crate::layout::{GpuDrawArgs, GpuReflector};
 use crate::preview::renderer::mesh::{indexed, shared_positions};
 use crate::preview::renderer::pipeline::{
-    COLOR_FORMAT, DEPTH_FORMAT, buffer_entry, color_attachment, depth_attachment, render_pipeline,
-    texture_entry,
+    COLOR_FORMAT, DEPTH_FORMAT, RasterPipeline, buffer_entry, color_attachment, depth_attachment,
+    render_pipeline, texture_entry,
 };
-use crate::preview::renderer::shading::{Shading, ShadingVariant};
-use crate::preview::{CurvedShapes, Detail, PreviewOptions, PreviewVertex};
+use crate::preview::renderer::shading::{SHADING_GROUP, Shading, ShadingVariant};
+use crate::preview::{CurvedShapes, Detail, PreviewOptions, PreviewVertex, shader_source};
+
+const VERTEX: wgpu::ShaderStages = wgpu::ShaderStages::VERTEX;
+
+/// The distinct reflected vertices (`PreviewVertex`).
+pub const REFLECTED_VERTICES: Binding = Binding::new(0, "reflected_vertices", StorageRead, VERTEX);
+/// Every search's reflection points, search after search (a Fermat solve's output).
+pub const REFLECTED_POINTS: Binding = Binding::new(1, "reflected_points", StorageRead, VERTEX);
+/// Per search of a batch, its `ReflectorPass`.
+pub const REFLECTOR_PASSES: Binding = Binding::new(2, "reflector_passes", StorageRead, VERTEX);
+/// The main pass's id target: which mirror each pixel sees, and how far.
+pub const REFLECTOR_IDS: Binding = Binding::new(
+    3,
+    "reflector_ids",
+    UintTexture,
+    wgpu::ShaderStages::FRAGMENT,
+);
+/// Per distinct reflected vertex, the index of its Fermat solve.
+pub const SOLVE_OF: Binding = Binding::new(4, "solve_of", StorageRead, VERTEX);
+
+/// What a batch of searches draws: group 1 of the reflection pass.
+pub const REFLECTION_GROUP: &[Binding] = &[
+    REFLECTED_VERTICES,
+    REFLECTED_POINTS,
+    REFLECTOR_PASSES,
+    REFLECTOR_IDS,
+    SOLVE_OF,
+];
+
+/// The reflection pass: each search's shown reflected triangles over its mirror's pixels
+/// (`wgsl/preview/reflect.wgsl`), shaded as the main pass shades (its group 0).
+pub const REFLECTION_PASS: RasterPipeline = RasterPipeline {
+    name: "preview reflections",
+    source: shader_source,
+    vertex: "reflected_vertex",
+    fragment: Some("reflected_fragment"),
+    groups: &[SHADING_GROUP, REFLECTION_GROUP],
+};
 
 /// What the reflection passes share with the main pass.
 pub(crate) struct ReflectionSetup<'a> {
@@ -89,7 +128,7 @@ impl Reflections {
         let pipeline = render_pipeline(
             device,
             setup.module,
-            ("reflected_vertex", "reflected_fragment"),
+            &REFLECTION_PASS,
             &[],
             &[Some(COLOR_FORMAT.into())],
             &setup.variant.constants(),
@@ -211,11 +250,11 @@ impl Reflections {
                         label: Some("reflector batch"),
                         layout: &self.pipeline.get_bind_group_layout(1),
                         entries: &[
-                            buffer_entry(0, &vertices),
-                            buffer_entry(1, &batch.solve.output),
-                            buffer_entry(2, &passes),
-                            buffer_entry(4, &solve_buffer),
-                            texture_entry(3, &self.id_view),
+                            buffer_entry(REFLECTED_VERTICES, &vertices),
+                            buffer_entry(REFLECTED_POINTS, &batch.solve.output),
+                            buffer_entry(REFLECTOR_PASSES, &passes),
+                            buffer_entry(SOLVE_OF, &solve_buffer),
+                            texture_entry(REFLECTOR_IDS, &self.id_view),
                         ],
                     }))
             })

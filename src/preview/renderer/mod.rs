@@ -45,6 +45,7 @@ mod readback;
 pub(crate) mod shading;
 mod timing;
 
+pub use pipeline::RasterPipeline;
 pub use shading::shader_source;
 pub use timing::StageTimes;
 
@@ -475,6 +476,15 @@ fn frame_uniforms(flat: &FlatScene, clip: glam::DMat4, eye: glam::Vec3) -> Previ
     }
 }
 
+/// The main pass: the meshes' vertices shaded (`wgsl/preview/shading.wgsl`).
+pub const MAIN_PASS: RasterPipeline = RasterPipeline {
+    name: "preview",
+    source: shader_source,
+    vertex: "preview_vertex",
+    fragment: Some("preview_fragment"),
+    groups: &[shading::SHADING_GROUP],
+};
+
 /// The main pass's pipeline: the meshes' vertices (`PreviewVertex`) shaded into the colour and
 /// the id target.
 fn main_pipeline(
@@ -492,7 +502,7 @@ fn main_pipeline(
     render_pipeline(
         device,
         module,
-        ("preview_vertex", "preview_fragment"),
+        &MAIN_PASS,
         &[Some(vertex_layout)],
         &[Some(COLOR_FORMAT.into()), Some(ID_FORMAT.into())],
         &variant.constants(),

@@ -1,6 +1,9 @@
-//! The preview's render targets and pipelines: the targets' formats, the one way its render
-//! pipelines are made (a depth test that keeps the nearest fragment), its passes' attachments
-//! and bind group entries.
+//! The preview's render targets and pipelines: the targets' formats, how a render pipeline is
+//! described ([`RasterPipeline`]: its shader, entry points and bindings by name, as the kernel
+//! registry describes a kernel) and made (a depth test that keeps the nearest fragment), its
+//! passes' attachments and bind group entries.
+
+use crate::gpu::kernels::{Binding, bind_group_layout};
 
 /// The colour target: linear radiance, as the ray tracer's accumulation.
 pub(crate) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -11,30 +14,66 @@ pub(crate) const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth3
 /// from the eye it sees it at.
 pub(crate) const ID_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 
-/// A render pipeline of the preview's module: `entry_points` (vertex, fragment), a depth test
-/// against `DEPTH_FORMAT` that keeps the nearest, the fragment stage's override `constants`
-/// (`ShadingVariant::constants`), the bind group layouts derived from the stages.
+/// A render pipeline of the preview: its shader, its entry points and the bindings of each of
+/// its bind groups by name (`gpu::kernels::Binding`), as `gpu::kernels::Kernel` describes a
+/// compute kernel. Its layout is made from these ([`RasterPipeline::layout`]); tests/wgsl.rs
+/// checks them against what the shader declares and each entry point reads.
+#[derive(Debug)]
+pub struct RasterPipeline {
+    /// Label of its pipeline and layouts.
+    pub name: &'static str,
+    /// Its shader's complete source.
+    pub source: fn() -> String,
+    /// The `@vertex` function.
+    pub vertex: &'static str,
+    /// The `@fragment` function, if any (a depth-only pass has none).
+    pub fragment: Option<&'static str>,
+    /// Each bind group's bindings, group 0 first.
+    pub groups: &'static [&'static [Binding]],
+}
+
+impl RasterPipeline {
+    /// Its pipeline layout: a bind group layout per group, made from its bindings (a bind
+    /// group for group `i` is made with `pipeline.get_bind_group_layout(i)`).
+    pub fn layout(&self, device: &wgpu::Device) -> wgpu::PipelineLayout {
+        let groups: Vec<wgpu::BindGroupLayout> = self
+            .groups
+            .iter()
+            .map(|bindings| bind_group_layout(device, self.name, bindings))
+            .collect();
+        let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().map(Some).collect();
+        device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(self.name),
+            bind_group_layouts: &groups,
+            immediate_size: 0,
+        })
+    }
+}
+
+/// The render pipeline `description` of the preview's `module`: a depth test against
+/// `DEPTH_FORMAT` that keeps the nearest, the fragment stage's override `constants`
+/// (`ShadingVariant::constants`), the layout made from its bindings.
 pub(crate) fn render_pipeline(
     device: &wgpu::Device,
     module: &wgpu::ShaderModule,
-    (vertex, fragment): (&str, &str),
+    description: &RasterPipeline,
     buffers: &[Option<wgpu::VertexBufferLayout>],
     targets: &[Option<wgpu::ColorTargetState>],
     constants: &[(&str, f64)],
 ) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(vertex),
-        layout: None,
+        label: Some(description.name),
+        layout: Some(&description.layout(device)),
         vertex: wgpu::VertexState {
             module,
-            entry_point: Some(vertex),
+            entry_point: Some(description.vertex),
             compilation_options: Default::default(),
             buffers,
         },
         primitive: wgpu::PrimitiveState::default(),
         depth_stencil: depth_test(Default::default()),
         multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
+        fragment: description.fragment.map(|fragment| wgpu::FragmentState {
             module,
             entry_point: Some(fragment),
             compilation_options: wgpu::PipelineCompilationOptions {
@@ -90,18 +129,29 @@ pub(crate) fn depth_attachment(
     })
 }
 
-/// Binding `binding` of a group: all of `buffer`.
-pub(crate) fn buffer_entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+/// `binding` of a group: all of `buffer`.
+pub(crate) fn buffer_entry(binding: Binding, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
-        binding,
+        binding: binding.binding,
         resource: buffer.as_entire_binding(),
     }
 }
 
-/// Binding `binding` of a group: the texture `view`.
-pub(crate) fn texture_entry(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+/// `binding` of a group: the texture `view`.
+pub(crate) fn texture_entry(
+    binding: Binding,
+    view: &wgpu::TextureView,
+) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
-        binding,
+        binding: binding.binding,
         resource: wgpu::BindingResource::TextureView(view),
+    }
+}
+
+/// `binding` of a group: `sampler`.
+pub(crate) fn sampler_entry(binding: Binding, sampler: &wgpu::Sampler) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding: binding.binding,
+        resource: wgpu::BindingResource::Sampler(sampler),
     }
 }

@@ -3,7 +3,9 @@
 //! constants and the shared types), the shading variant a scene needs, and the bind group both
 //! passes share (the uniforms, materials, lights and shadow maps).
 
-use super::pipeline::{buffer_entry, texture_entry};
+use super::pipeline::{buffer_entry, sampler_entry, texture_entry};
+use crate::gpu::kernels::Access::{ComparisonSampler, DepthTextureArray, StorageRead, Uniform};
+use crate::gpu::kernels::Binding;
 use crate::layout::wgsl_prelude;
 use crate::pack::FlatScene;
 use crate::preview::shadows::maps::Shadows;
@@ -53,6 +55,38 @@ impl ShadingVariant {
     }
 }
 
+const FRAGMENT: wgpu::ShaderStages = wgpu::ShaderStages::FRAGMENT;
+
+/// The uniforms (`PreviewUniforms`): the clip matrix for the vertices, the rest for shading.
+pub const UNIFORMS: Binding =
+    Binding::new(0, "preview", Uniform, wgpu::ShaderStages::VERTEX_FRAGMENT);
+/// The scene's materials.
+pub const MATERIALS: Binding = Binding::new(1, "preview_materials", StorageRead, FRAGMENT);
+/// The scene's lights.
+pub const LIGHTS: Binding = Binding::new(2, "preview_lights", StorageRead, FRAGMENT);
+/// Every light's shadow maps, a layer each.
+pub const SHADOW_MAPS: Binding = Binding::new(3, "shadow_maps", DepthTextureArray, FRAGMENT);
+/// The maps' comparison sampler.
+pub const SHADOW_SAMPLER: Binding = Binding::new(4, "shadow_sampler", ComparisonSampler, FRAGMENT);
+/// Each layer's view.
+pub const SHADOW_VIEWS: Binding = Binding::new(5, "shadow_views", StorageRead, FRAGMENT);
+/// Each light's layers (`ShadowLight`).
+pub const SHADOW_LIGHTS: Binding = Binding::new(6, "shadow_lights", StorageRead, FRAGMENT);
+/// Where each cube of maps stands.
+pub const SHADOW_ORIGINS: Binding = Binding::new(7, "shadow_origins", StorageRead, FRAGMENT);
+
+/// What shading reads: group 0 of the main pass and of the reflection pass.
+pub const SHADING_GROUP: &[Binding] = &[
+    UNIFORMS,
+    MATERIALS,
+    LIGHTS,
+    SHADOW_MAPS,
+    SHADOW_SAMPLER,
+    SHADOW_VIEWS,
+    SHADOW_LIGHTS,
+    SHADOW_ORIGINS,
+];
+
 /// What shading reads, the main pass's and the reflection passes' alike (their group 0).
 #[derive(Clone, Copy)]
 pub(crate) struct Shading<'a> {
@@ -63,19 +97,17 @@ pub(crate) struct Shading<'a> {
 }
 
 impl Shading<'_> {
+    /// Its bind group's entries, one per binding of [`SHADING_GROUP`].
     pub(crate) fn entries(&self) -> [wgpu::BindGroupEntry<'_>; 8] {
         [
-            buffer_entry(0, self.uniforms),
-            buffer_entry(1, self.materials),
-            buffer_entry(2, self.lights),
-            texture_entry(3, &self.shadows.maps),
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: wgpu::BindingResource::Sampler(&self.shadows.sampler),
-            },
-            buffer_entry(5, &self.shadows.views),
-            buffer_entry(6, &self.shadows.lights),
-            buffer_entry(7, &self.shadows.origins),
+            buffer_entry(UNIFORMS, self.uniforms),
+            buffer_entry(MATERIALS, self.materials),
+            buffer_entry(LIGHTS, self.lights),
+            texture_entry(SHADOW_MAPS, &self.shadows.maps),
+            sampler_entry(SHADOW_SAMPLER, &self.shadows.sampler),
+            buffer_entry(SHADOW_VIEWS, &self.shadows.views),
+            buffer_entry(SHADOW_LIGHTS, &self.shadows.lights),
+            buffer_entry(SHADOW_ORIGINS, &self.shadows.origins),
         ]
     }
 }

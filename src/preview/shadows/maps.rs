@@ -7,15 +7,29 @@ use std::time::{Duration, Instant};
 use super::{SHADOW_MEMORY, SMALLEST_SHADOW_MAP, ShadowPlan, shadow_map_size};
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
+use crate::gpu::kernels::{Access, Binding};
 use crate::pack::FlatScene;
 use crate::preview::renderer::mesh::MainMesh;
 use crate::preview::renderer::pipeline::{
-    DEPTH_FORMAT, buffer_entry, depth_attachment, depth_test,
+    DEPTH_FORMAT, RasterPipeline, buffer_entry, depth_attachment, depth_test,
 };
 use crate::preview::{PreviewVertex, bounded_sphere};
 
 /// The shadow maps' shader (`wgsl/preview/shadow.wgsl`): positions through a light's view.
 pub const SHADOW_SHADER: &str = include_str!("../../../wgsl/preview/shadow.wgsl");
+
+/// A layer's view: world to the light's clip space.
+pub const LIGHT_VIEW: Binding =
+    Binding::new(0, "light_view", Access::Uniform, wgpu::ShaderStages::VERTEX);
+
+/// The shadow maps' pass: the main pass's triangles, depth only, through one layer's view.
+pub const SHADOW_PASS: RasterPipeline = RasterPipeline {
+    name: "shadow map",
+    source: || SHADOW_SHADER.to_string(),
+    vertex: "shadow_vertex",
+    fragment: None,
+    groups: &[&[LIGHT_VIEW]],
+};
 
 /// The shadow maps of `flat`'s lights, `area_samples`² cubes for an area light, as large as
 /// `SHADOW_MEMORY` holds; refused where not even the smallest fit.
@@ -116,7 +130,7 @@ impl Shadows {
                     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                         label: Some("shadow view"),
                         layout: &pipeline.get_bind_group_layout(0),
-                        entries: &[buffer_entry(0, &uniforms)],
+                        entries: &[buffer_entry(LIGHT_VIEW, &uniforms)],
                     });
                     (target, group)
                 })
@@ -173,11 +187,11 @@ fn shadow_pipeline(device: &wgpu::Device) -> wgpu::RenderPipeline {
         source: wgpu::ShaderSource::Wgsl(SHADOW_SHADER.into()),
     });
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("shadow_vertex"),
-        layout: None,
+        label: Some(SHADOW_PASS.name),
+        layout: Some(&SHADOW_PASS.layout(device)),
         vertex: wgpu::VertexState {
             module: &module,
-            entry_point: Some("shadow_vertex"),
+            entry_point: Some(SHADOW_PASS.vertex),
             compilation_options: Default::default(),
             buffers: &[Some(wgpu::VertexBufferLayout {
                 array_stride: size_of::<PreviewVertex>() as u64,

@@ -27,8 +27,10 @@ use winit::window::{Window, WindowId};
 
 use crate::error::{Error, Result};
 use crate::gpu::GpuContext;
+use crate::gpu::kernels::{Access, Binding};
 use crate::output::OutputTarget;
 use crate::pack::FlatScene;
+use crate::preview::renderer::pipeline::{RasterPipeline, buffer_entry, texture_entry};
 use crate::preview::{PreviewOptions, PreviewRenderer};
 use crate::scene::{Scene, merged_scene_text};
 
@@ -384,14 +386,8 @@ impl App<'_> {
                 label: Some("present"),
                 layout: &screen.present_layout,
                 entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(screen.preview.view()),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: screen.present_uniforms.as_entire_binding(),
-                    },
+                    texture_entry(IMAGE, screen.preview.view()),
+                    buffer_entry(PRESENT, &screen.present_uniforms),
                 ],
             });
         let view = frame.texture.create_view(&Default::default());
@@ -453,8 +449,26 @@ fn compose_key(key: &Key) -> Option<ComposeKey> {
     }
 }
 
+/// The presentation's shader (`wgsl/preview/present.wgsl`).
+const PRESENT_SHADER: &str = include_str!("../../../wgsl/preview/present.wgsl");
+
+/// The preview's image (read by `textureLoad`: a float texture that needs no filtering).
+pub const IMAGE: Binding = Binding::new(0, "image", Access::FloatTexture, FRAGMENT);
+/// How to draw it into the window (`Present`).
+pub const PRESENT: Binding = Binding::new(1, "present", Access::Uniform, FRAGMENT);
+const FRAGMENT: wgpu::ShaderStages = wgpu::ShaderStages::FRAGMENT;
+
+/// The presentation: the preview's image drawn into the window with one triangle.
+pub const PRESENT_PASS: RasterPipeline = RasterPipeline {
+    name: "present",
+    source: || PRESENT_SHADER.to_string(),
+    vertex: "present_vertex",
+    fragment: Some("present_fragment"),
+    groups: &[&[IMAGE, PRESENT]],
+};
+
 /// The pipeline that shows the preview's float image in the window, and its bind group
-/// layout (the image is read by `textureLoad`: a float texture that needs no filtering).
+/// layout.
 fn present_pipeline(
     context: &GpuContext,
     format: wgpu::TextureFormat,
@@ -462,44 +476,14 @@ fn present_pipeline(
     let device = &context.device;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("present"),
-        source: wgpu::ShaderSource::Wgsl(include_str!("../../../wgsl/preview/present.wgsl").into()),
-    });
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("present"),
-        entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-        ],
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("present"),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
+        source: wgpu::ShaderSource::Wgsl(PRESENT_SHADER.into()),
     });
     let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("present"),
-        layout: Some(&pipeline_layout),
+        label: Some(PRESENT_PASS.name),
+        layout: Some(&PRESENT_PASS.layout(device)),
         vertex: wgpu::VertexState {
             module: &module,
-            entry_point: Some("present_vertex"),
+            entry_point: Some(PRESENT_PASS.vertex),
             compilation_options: Default::default(),
             buffers: &[],
         },
@@ -508,13 +492,14 @@ fn present_pipeline(
         multisample: Default::default(),
         fragment: Some(wgpu::FragmentState {
             module: &module,
-            entry_point: Some("present_fragment"),
+            entry_point: PRESENT_PASS.fragment,
             compilation_options: Default::default(),
             targets: &[Some(format.into())],
         }),
         multiview_mask: None,
         cache: None,
     });
+    let layout = pipeline.get_bind_group_layout(0);
     (pipeline, layout)
 }
 
