@@ -81,6 +81,11 @@ lscpu 2>/dev/null | sed -n 's/^Model name: *//p' > bench/cpu.txt || true
             --samplers sobol --noise-targets 0.005,0.002,0.001 --min-spp 64 --runs 3 \
             --csv "bench/converge_adaptive_min64_$scene.csv"
     done
+    # The path tracer by max_depth, against Mitsuba 3's path integrator where it is installed
+    # (CHAMBRE_MITSUBA_SITE from tools/install_mitsuba.sh).
+    echo
+    echo "path tracer by max_depth: scenes/cornell_box.toml"
+    python3 tools/bench_path.py --chambre "$chambre" --runs "$runs" --out bench
 } | tee bench/results.md
 # The plots BENCHMARKS.md shows.
 cp bench/scale.svg docs/images/scale.svg

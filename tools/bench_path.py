@@ -4,14 +4,14 @@ integrator on the same scene (llvm_ad_rgb on the CPU; Python's standard library 
 
   python3 tools/bench_path.py [--chambre BIN] [--runs N] [--out DIR]
 
-On `scenes/interior.toml` framed as Mitsuba's cameras can frame it (no film shift), at
-64 x 64 and 256 spp: a reference from chambre at max_depth 32 and 4096 spp; then for each
+On the path-traced Cornell box (`scenes/cornell_box.toml`, its light's triangles reflecting
+too) at 64 x 64 and 256 spp: a reference from chambre at max_depth 32 and 4096 spp; then for each
 max_depth, chambre's render time (its own report: the render, not the scene's loading) and
 relMSE against the reference, medians of N runs after a warm-up, and the same for Mitsuba
 (`chambre export --mitsuba`, then tools/mitsuba_render.py time: kernels compiled once, each
-render waited for). Writes DIR/path.json and prints the table BENCHMARKS.md shows, with the
-command, the machine and the commit above it. Without Mitsuba (PYTHONPATH from
-tools/install_mitsuba.sh) the Mitsuba columns say so.
+render waited for; the relMSE of its last run). Writes DIR/path.json and prints the table
+BENCHMARKS.md shows. Mitsuba comes from CHAMBRE_MITSUBA_SITE (`eval "$(tools/install_mitsuba.sh)"`)
+or PYTHONPATH; without it the Mitsuba columns say so.
 """
 import argparse
 import json
@@ -23,9 +23,8 @@ import subprocess
 import sys
 import time
 
-SCENE = "scenes/interior.toml"
-FRAMING = ["camera.film_shift=[0.0,0.0]", "camera.position=[0.0,1.0,3.9]",
-           "camera.look_at=[0.0,1.0,0.0]", "render.width=64", "render.height=64"]
+SCENE = "scenes/cornell_box.toml"
+FRAMING = ["render.integrator=\"path\"", "render.width=64", "render.height=64"]
 DEPTHS = [0, 1, 2, 3, 4, 6, 8]
 SPP = 256
 REFERENCE = {"spp": 4096, "max_depth": 32}
@@ -69,10 +68,19 @@ def chambre_render(binary, out, spp, max_depth, seed):
     return float(found.group(1))
 
 
+def with_mitsuba_site():
+    """The environment with CHAMBRE_MITSUBA_SITE on Python's path, for Mitsuba's runs."""
+    env = dict(os.environ)
+    site = env.get("CHAMBRE_MITSUBA_SITE")
+    if site:
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (site, env.get("PYTHONPATH")) if p)
+    return env
+
+
 def mitsuba_available():
     try:
         subprocess.run([sys.executable, "-c", "import mitsuba"], check=True,
-                       capture_output=True)
+                       capture_output=True, env=with_mitsuba_site())
         return True
     except subprocess.CalledProcessError:
         return False
@@ -86,7 +94,7 @@ def mitsuba_render(binary, out_dir, max_depth, runs):
     subprocess.run(export, check=True, capture_output=True)
     pfm = os.path.join(out_dir, f"path_mitsuba_{max_depth}.pfm")
     run = subprocess.run([sys.executable, "tools/mitsuba_render.py", "time", xml, str(runs), pfm],
-                         check=True, capture_output=True, text=True)
+                         check=True, capture_output=True, text=True, env=with_mitsuba_site())
     return json.loads(run.stdout.strip().splitlines()[-1])["seconds"], read_pfm(pfm)[2]
 
 

@@ -48,8 +48,20 @@ fn leaving(kind: u32, id: u32, surface: Surface, transmitted: bool) -> Leaving {
 // next vertex over Russian roulette's odds; not valid where the path ends.
 fn path_bounce(material: GpuMaterial, surface: Surface, wo: vec3<f32>, depth: u32,
                throughput: vec3<f32>, rng: ptr<function, Rng>) -> BsdfSample {
-    rng_seek(rng, bsdf_dimension(depth));
-    let u = rng_next_2d(rng);
+    let dim = bsdf_dimension(depth);
+    rng_seek(rng, dim);
+    var u: vec2<f32>;
+    // The first bounce takes its points from the pixel pattern (not an interleaved one, which
+    // every dimension of a pixel shares): see first_bounce_pattern in the Rust twin.
+    if (depth == 0u && frame.pixel_sampler != SAMPLER_INTERLEAVED) {
+        let source = PatternSource(frame.pixel_sampler, frame.pixel_strata_columns,
+                                   frame.pixel_table_offset, dim);
+        u = sample_2d(source, (*rng).pixel % frame.width, (*rng).pixel / frame.width,
+                      (*rng).sample, rng);
+    } else {
+        u = rng_next_2d(rng);
+    }
+    rng_seek(rng, dim + 2u * (ROULETTE_PAIR - BSDF_PAIR));
     let lobe_roulette = rng_next_2d(rng);
     var s = sample_bsdf(material, surface.shading_normal, surface.geometric_normal, wo,
                         surface.front_facing, u, lobe_roulette.x);

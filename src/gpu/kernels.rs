@@ -442,6 +442,7 @@ pub const WF_SHADE: Kernel = Kernel {
         MATERIALS,
         LIGHTS,
         STATUS,
+        SAMPLE_TABLE,
         WF_HITS,
         WAVE,
         WF_RAYS,

@@ -25,6 +25,7 @@ use crate::camera::Ray;
 use crate::layout::*;
 use crate::math::rng::Rng;
 use crate::pack::FlatScene;
+use crate::sampler::{PatternSource, sample_2d};
 
 /// The first random dimension of the path tracer's draws at vertex `depth`: the pairs after
 /// its light samples (`layout::BSDF_PAIR`, `ROULETTE_PAIR`).
@@ -94,20 +95,44 @@ pub(super) fn leaving(
     (origin, skip)
 }
 
+/// The pixel pattern the first bounce's direction takes its points from, as the lens and the
+/// shutter do (their own permutation of the pixel's strata, keyed by the dimension, so the
+/// camera rays' and the bounces' strata are independent): the bounces off a pixel's first hits
+/// then cover the hemisphere evenly. An interleaved pattern is the same for every dimension of
+/// a pixel, so it would tie the bounce to the pixel position: those bounces draw at random.
+pub(super) fn first_bounce_pattern(frame: &GpuFrame) -> Option<PatternSource> {
+    (frame.pixel_sampler != SAMPLER_INTERLEAVED).then(|| PatternSource {
+        dim: bsdf_dimension(frame, 0),
+        ..PatternSource::pixel(frame)
+    })
+}
+
 /// The bounce that leaves vertex `depth` of a path with throughput `throughput`: the BSDF's
 /// direction and the factor the throughput takes at the next vertex, divided by Russian
 /// roulette's odds of going on from vertex `rr_depth`; none where the path ends there.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn bounce(
-    frame: &GpuFrame,
+    scene: &FlatScene,
     material: &GpuMaterial,
     surface: &Surface,
     wo: Vec3,
     depth: u32,
     throughput: Vec3,
     rng: &mut Rng,
+    flags: &mut u32,
 ) -> Option<BsdfSample> {
-    rng.seek(bsdf_dimension(frame, depth));
-    let u = rng.next_2d();
+    let frame = &scene.frame;
+    let dim = bsdf_dimension(frame, depth);
+    rng.seek(dim);
+    let u = match (depth, first_bounce_pattern(frame)) {
+        (0, Some(source)) => {
+            let (x, y) = (rng.pixel % frame.width, rng.pixel / frame.width);
+            let table = &scene.sample_table;
+            sample_2d(frame, table, source, x, y, rng.sample, rng, flags)
+        }
+        _ => rng.next_2d(),
+    };
+    rng.seek(dim + 2 * (ROULETTE_PAIR - BSDF_PAIR));
     let [u_lobe, u_roulette] = rng.next_2d();
     let n = surface.shading_normal;
     let ng = surface.geometric_normal;
@@ -195,7 +220,9 @@ pub(super) fn trace_path<const F: u32>(
                     scene, time, &surface, material, own, wo, depth, window, rng, stats,
                 );
         }
-        let Some(sample) = bounce(frame, material, &surface, wo, depth, throughput, rng) else {
+        let flags = &mut stats.flags;
+        let sample = bounce(scene, material, &surface, wo, depth, throughput, rng, flags);
+        let Some(sample) = sample else {
             break;
         };
         bounce_weight = sample.weight;
