@@ -44,6 +44,8 @@ frames=(
     "tabletop|tabletop|-D render.width=1920 -D render.height=1080 $wide|--approximate"
     "bunny|bunny|-D render.width=1920 -D render.height=1080 $wide|--approximate"
     "mirrors|mirrors|-D render.width=1920 -D render.height=1080 $wide|--approximate"
+    "cornell_path|cornell_box|-D render.width=1024 -D render.height=1024 -D render.spp=64 -D render.integrator=\"path\" -D render.max_depth=4|"
+    "interior|interior|-D render.width=1024 -D render.height=1024 -D render.spp=64 -D camera.film_shift=[0.0,0.0] -D camera.position=[0.0,1.0,3.9] -D camera.look_at=[0.0,1.0,0.0]|"
 )
 
 stamp "chambre: ray queries (the dragon, 1920x1080 and 1024x1024 x 8 frames)"

@@ -9,7 +9,8 @@ import json
 import os
 import sys
 
-FRAMES = ["dragon", "cornell_direct", "thin_lens", "tabletop", "bunny", "mirrors"]
+FRAMES = ["dragon", "cornell_direct", "thin_lens", "tabletop", "bunny", "mirrors",
+          "cornell_path", "interior"]
 
 
 def load(folder, name):

@@ -12,7 +12,7 @@ use crate::error::Result;
 use crate::gpu::kernels::ShaderChecks;
 use crate::gpu::render::{PathKernels, RendererOptions};
 use crate::gpu::{GpuContext, GpuRenderer};
-use crate::layout::FEATURES_ALL;
+use crate::layout::{FEATURES_ALL, INTEGRATOR_PATH};
 use crate::pack::{FlatScene, flatten};
 use crate::render::{RayBudgets, RenderOutput, render};
 use crate::scene::Scene;
@@ -198,7 +198,12 @@ impl FrameConfig<'_> {
             true => &[ShaderChecks::default()][..],
             false => self.checks,
         };
+        // The megakernel renders Whitted's integrator only.
+        let path_traced = scene.frame.integrator == INTEGRATOR_PATH;
         for &kernels in self.kernels {
+            if path_traced && kernels == PathKernels::Megakernel {
+                continue;
+            }
             for &check in checks {
                 let check_suffix = match check == ShaderChecks::default() {
                     true => String::new(),
@@ -217,7 +222,7 @@ impl FrameConfig<'_> {
             }
         }
         let adapters = RayBudgets::for_adapter(context.is_cpu_adapter);
-        for &n in self.rays_per_invocation {
+        for &n in self.rays_per_invocation.iter().filter(|_| !path_traced) {
             // A fixed shape: N rays per invocation whatever the image size.
             let budgets = RayBudgets {
                 per_invocation: n,
