@@ -171,6 +171,66 @@ fn a_glass_slab_transmits_what_fresnel_says_at_normal_incidence() {
     }
 }
 
+/// A closed glass mesh in a sky of radiance 1 vanishes as a glass sphere does, which holds only
+/// if its triangles keep the winding that says which side is inside: an OBJ material of
+/// `illum 7` and `Ni` is glass under the path tracer (and keeps its Lambert lobe under
+/// Whitted's integrator).
+#[test]
+fn an_obj_glass_tetrahedron_in_a_uniform_sky_vanishes() {
+    let dir = scratch();
+    let corners = [
+        [1.0, 1.0, 1.0],
+        [1.0, -1.0, -1.0],
+        [-1.0, 1.0, -1.0],
+        [-1.0, -1.0, 1.0],
+    ];
+    let mut obj = String::from("mtllib glass.mtl\nusemtl glass\n");
+    for [x, y, z] in corners {
+        obj += &format!("v {x} {y} {} \n", z - 4.0);
+    }
+    for skipped in 0..4 {
+        let mut face: Vec<usize> = (0..4).filter(|&v| v != skipped).collect();
+        // Counter-clockwise seen from outside: the normal points away from the fourth corner.
+        let p = |v: usize| glam::Vec3::from(corners[v].map(|c| c as f32));
+        let normal = (p(face[1]) - p(face[0])).cross(p(face[2]) - p(face[0]));
+        if normal.dot(p(face[0]) - p(skipped)) < 0.0 {
+            face.swap(1, 2);
+        }
+        obj += &format!("f {} {} {}\n", face[0] + 1, face[1] + 1, face[2] + 1);
+    }
+    std::fs::write(dir.join("glass.obj"), obj).unwrap();
+    std::fs::write(
+        dir.join("glass.mtl"),
+        "newmtl glass\nKd 0.5 0.5 0.5\nNi 1.33\nillum 7\n",
+    )
+    .unwrap();
+    let scene_file = |integrator: &str| {
+        let toml = format!(
+            "[render]\nwidth = 24\nheight = 24\nspp = 4\nmax_depth = 64\nrr_depth = 1024\n\
+             background = [1.0, 1.0, 1.0]\nintegrator = \"{integrator}\"\n\n[camera]\n\
+             position = [0.3, 0.2, 0.0]\nlook_at = [0.0, 0.0, -4.0]\nvertical_fov = 40.0\n\
+             film = [36.0, 36.0]\n\n[[shapes]]\ntype = \"mesh\"\nfile = \"glass.obj\"\n"
+        );
+        let file = dir.join(format!("glass_{integrator}.toml"));
+        std::fs::write(&file, toml).unwrap();
+        Scene::load(&file, &[]).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let whitted = scene_file("whitted");
+    assert_eq!(whitted.materials[0].model, chambre::layout::MODEL_LAMBERT);
+    let scene = scene_file("path");
+    assert_eq!(scene.materials[0].model, chambre::layout::MODEL_DIELECTRIC);
+    assert_eq!(scene.materials[0].ior, 1.33);
+    for (path, image) in both(&scene) {
+        for y in 0..24 {
+            for x in 0..24 {
+                for c in pixel(&image, x, y) {
+                    assert!((c - 1.0).abs() < 1e-5, "{path}: ({x}, {y}) is {c}");
+                }
+            }
+        }
+    }
+}
+
 /// A scratch directory of this test process.
 fn scratch() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("chambre-path-{}", std::process::id()));

@@ -313,6 +313,7 @@ pub fn map_factors(
         shininess: exponent,
         mirror: Vec3::ZERO,
         emission,
+        ior: None,
     }
 }
 

@@ -75,7 +75,8 @@ pub const NO_MATERIAL: u32 = u32::MAX;
 
 /// A material of an OBJ `.mtl` file, mapped to chambre's models (see `docs/scene-format.md`):
 /// `Kd` is the diffuse reflectance, `Ks` and `Ns` a Blinn-Phong lobe, `illum` 3 or 5 a mirror
-/// of reflectance `Ks` (1 where `Ks` is absent), `Ke` an emitter.
+/// of reflectance `Ks` (1 where `Ks` is absent), `Ke` an emitter, `illum` 4, 6 or 7 (refraction)
+/// glass of index `Ni` under the path tracer.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshMaterial {
     /// Its `newmtl` name.
@@ -90,6 +91,9 @@ pub struct MeshMaterial {
     pub mirror: Vec3,
     /// `Ke`: emitted radiance; non-zero makes every triangle of it an area light.
     pub emission: Vec3,
+    /// `illum` 4, 6 or 7 (a refracting material): its index of refraction, `Ni` (1.5 where
+    /// absent), clamped to [0.1, 10]; the path tracer renders it as a smooth dielectric.
+    pub ior: Option<f32>,
 }
 
 impl MeshMaterial {
@@ -112,6 +116,8 @@ impl MeshMaterial {
                 (false, _) => Vec3::ZERO,
             },
             emission: rgb(m.emissive).max(Vec3::ZERO),
+            ior: matches!(m.illumination_model, Some(4 | 6 | 7))
+                .then(|| m.optical_density.unwrap_or(1.5).clamp(0.1, 10.0)),
         }
     }
 }

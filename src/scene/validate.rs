@@ -1368,9 +1368,10 @@ fn adopt_mesh_materials(
     let file = path
         .file_name()
         .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+    let path_traced = check.parsed.file.render.integrator == Integrator::Path;
     for m in &mesh.materials {
         let lobe = m.specular.max_element() > 0.0;
-        materials.push(Material {
+        let material = Material {
             name: format!("{file}:{}", m.name),
             model: if lobe {
                 layout::MODEL_BLINN_PHONG
@@ -1383,6 +1384,19 @@ fn adopt_mesh_materials(
             mirror: m.mirror,
             emission: m.emission,
             ior: 1.0,
+        };
+        materials.push(match m.ior {
+            // Glass (`illum` 4, 6, 7) is the path tracer's; Whitted's integrator keeps its
+            // lobes. Its `Tf` and `d` are not read: a clear dielectric.
+            Some(ior) if path_traced && m.emission.max_element() <= 0.0 => Material {
+                model: layout::MODEL_DIELECTRIC,
+                diffuse: Vec3::ZERO,
+                specular: Vec3::ZERO,
+                mirror: Vec3::ZERO,
+                ior,
+                ..material
+            },
+            _ => material,
         });
     }
     for id in &mut mesh.face_materials {
