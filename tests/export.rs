@@ -1318,6 +1318,87 @@ fn a_path_traced_glass_sphere_renders_alike() {
     renders_agree("interior", &scene);
 }
 
+/// relMSE of `image` against `reference` (linear RGB, same order), as `chambre::metrics`.
+fn rel_mse(image: &[f64], reference: &[f64]) -> f64 {
+    let sum: f64 = image
+        .iter()
+        .zip(reference)
+        .map(|(p, q)| (p - q).powi(2) / (q * q + 0.01))
+        .sum();
+    sum / image.len() as f64
+}
+
+/// Mitsuba's image of `scene` at `spp`, seed `seed`, exported to `dir`.
+fn mitsuba_image(mitsuba: &Mitsuba, dir: &Path, scene: &Scene, spp: u32, seed: u32) -> Vec<f64> {
+    let mut scene = scene.clone();
+    scene.render.spp = spp;
+    let xml = dir.join(format!("at-{spp}.xml"));
+    write_mitsuba(&scene, &xml, &MitsubaOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let out = dir.join(format!("at-{spp}-{seed}.pfm"));
+    let args = [
+        xml.display().to_string(),
+        seed.to_string(),
+        out.display().to_string(),
+    ];
+    mitsuba.run("render", &args);
+    let (_, _, channels, values) = read_pfm(&std::fs::read(out).unwrap());
+    assert_eq!(channels, 3);
+    values.into_iter().map(f64::from).collect()
+}
+
+/// The check of the path tracer against Mitsuba's own convergence: chambre's 1024-spp
+/// render's relMSE against Mitsuba's converged image (16384 spp) is within 1.5x of Mitsuba's
+/// own 1024-spp render's. Returns (chambre's, Mitsuba's).
+fn converges_as_mitsuba(name: &str, scene: &Scene) -> Option<(f64, f64)> {
+    let mitsuba = mitsuba()?;
+    let dir = folder(name);
+    let reference = mitsuba_image(mitsuba, &dir, scene, 16384, 7);
+    let theirs = mitsuba_image(mitsuba, &dir, scene, 1024, 1);
+    let mut ours = scene.clone();
+    ours.render.spp = 1024;
+    ours.render.seed = 1;
+    let image: Vec<f64> = common::render_cpu(&flatten(&ours))
+        .pixels
+        .iter()
+        .flat_map(|p| p.to_array().map(f64::from))
+        .collect();
+    let (chambre, peer) = (rel_mse(&image, &reference), rel_mse(&theirs, &reference));
+    eprintln!(
+        "{name}: relMSE at 1024 spp against Mitsuba's 16384: chambre {chambre:.3e}, Mitsuba {peer:.3e}"
+    );
+    assert!(
+        chambre <= 1.5 * peer,
+        "{name}: chambre's relMSE {chambre:.3e} is over 1.5x Mitsuba's {peer:.3e}"
+    );
+    Some((chambre, peer))
+}
+
+#[test]
+fn the_path_tracer_converges_on_the_box_and_the_glass_sphere_as_mitsuba_does() {
+    let box_scene = common::load(
+        "scenes/cornell_box.toml",
+        &[
+            "render.width=32",
+            "render.height=32",
+            "render.max_depth=3",
+            "render.integrator=\"path\"",
+        ],
+    );
+    converges_as_mitsuba("converge_box", &box_scene);
+    let glass = common::load(
+        "scenes/interior.toml",
+        &[
+            "render.width=32",
+            "render.height=32",
+            "render.max_depth=4",
+            "camera.film_shift=[0.0,0.0]",
+            "camera.position=[0.0,1.0,3.9]",
+            "camera.look_at=[0.0,1.0,0.0]",
+        ],
+    );
+    converges_as_mitsuba("converge_glass", &glass);
+}
+
 #[test]
 fn spheres_and_a_cylinder_under_point_directional_and_spot_lights_render_alike() {
     let header = PINHOLE
