@@ -90,6 +90,50 @@ fn render_writes_the_linear_exr_the_library_computes_with_every_override() {
     );
 }
 
+/// `--integrator path --max-depth 2` renders what the library path traces with those fields,
+/// and says how many paths the cut stopped.
+#[test]
+fn the_path_tracer_from_the_command_line() {
+    let out = scratch("cornell_path.exr");
+    let run = chambre()
+        .args(["render", "scenes/cornell_box.toml", "-o"])
+        .arg(&out)
+        .args([
+            "--backend",
+            "cpu",
+            "--spp",
+            "2",
+            "--width",
+            "24",
+            "--height",
+            "24",
+        ])
+        .args(["--integrator", "path", "--max-depth", "2"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("paths were cut off at max_depth"),
+        "{stderr}"
+    );
+    let overrides: Vec<String> = [
+        "render.spp=2",
+        "render.width=24",
+        "render.height=24",
+        "render.max_depth=2",
+        "render.integrator=path",
+    ]
+    .map(String::from)
+    .to_vec();
+    let scene = Scene::load(&scene_path("cornell_box.toml"), &overrides).unwrap();
+    let expected = common::render_cpu(&flatten(&scene));
+    let written = image::open(&out).unwrap().into_rgb32f();
+    for (p, q) in written.pixels().zip(&expected.pixels) {
+        assert_eq!(p.0, q.to_array());
+    }
+}
+
 #[test]
 fn camera_reports_the_solved_tilt_hinge_and_frustum() {
     let output = chambre()

@@ -7,6 +7,7 @@
 
 use std::marker::PhantomData;
 
+use crate::named::named_enum;
 pub use crate::sampler::SamplerName;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, IgnoredAny, SeqAccess, Visitor};
@@ -147,16 +148,19 @@ fn default_rr_depth() -> i64 {
     5
 }
 
-/// The light transport a render computes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Integrator {
-    /// Whitted's: emission, ambient, direct light through shadow rays, perfect-mirror bounces.
-    #[default]
-    Whitted,
-    /// A path tracer: next-event estimation and BSDF sampling combined by multiple importance
-    /// sampling, Russian roulette (`docs/path.md`).
-    Path,
+named_enum! {
+    /// The light transport a render computes.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum Integrator {
+        /// Whitted's: emission, ambient, direct light through shadow rays, perfect-mirror
+        /// bounces.
+        #[default]
+        Whitted = "whitted",
+        /// A path tracer: next-event estimation and BSDF sampling combined by multiple
+        /// importance sampling, Russian roulette (`docs/path.md`).
+        Path = "path",
+    }
 }
 
 /// The `[camera]` section; the model and conventions are in `docs/camera.md`.

@@ -20,7 +20,7 @@ use chambre::render::{
     Backend, Progress, RenderOutput, describe_status_flags, render, render_until,
 };
 use chambre::sampler::SamplerName;
-use chambre::scene::Scene;
+use chambre::scene::{Integrator, Scene};
 use chambre::shard::Shard;
 use chambre::{Error, Result};
 
@@ -58,6 +58,13 @@ pub struct RenderArgs {
     /// Worker threads of the CPU path (default: one per core).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// The light transport (overrides render.integrator).
+    #[arg(long, value_parser = named::<Integrator>())]
+    pub integrator: Option<Integrator>,
+    /// Bounces: Whitted's mirror bounces, the path tracer's of any kind (overrides
+    /// render.max_depth).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
     /// Pixel sample pattern (overrides render.pixel_sampler).
     #[arg(long, value_parser = named::<SamplerName>())]
     pub pixel_sampler: Option<SamplerName>,
@@ -151,6 +158,7 @@ impl RenderArgs {
             ("render.height", height),
             ("render.seed", self.seed),
             ("render.min_spp", self.min_spp),
+            ("render.max_depth", self.max_depth),
         ];
         for (key, value) in fields {
             if let Some(v) = value {
@@ -165,6 +173,9 @@ impl RenderArgs {
             if let Some(v) = value {
                 overrides.push(format!("{key}={}", v.name()));
             }
+        }
+        if let Some(integrator) = self.integrator {
+            overrides.push(format!("render.integrator={integrator}"));
         }
         if let Some(target) = self.noise_target {
             overrides.push(format!("render.noise_target={target:?}"));
