@@ -429,6 +429,42 @@ fn path_traced<const F: u32>(frame: &GpuFrame) -> bool {
     has(F, FEATURE_PATH) && frame.integrator == INTEGRATOR_PATH
 }
 
+/// The closest hit of a path's ray at vertex `depth` (the camera ray's may be known), counted
+/// as a ray traced.
+fn vertex_hit<const F: u32>(
+    scene: &FlatScene,
+    ray: &RayQuery,
+    skip: u32,
+    depth: u32,
+    camera_hit: CameraHit,
+    stats: &mut SampleStats,
+) -> Option<(u32, Hit)> {
+    stats.rays += 1;
+    match (depth, camera_hit) {
+        (0, CameraHit::Known(found)) => found,
+        _ => scene.tracer().closest_hit::<F>(ray, skip, T_FAR),
+    }
+}
+
+/// The primitive, material and surface a path's ray hit; the camera ray's hit also goes to
+/// `first_hit`.
+fn vertex_at<'a>(
+    scene: &'a FlatScene,
+    prim_id: u32,
+    ray: &RayQuery,
+    hit: Hit,
+    depth: u32,
+    first_hit: &mut FirstHit,
+) -> (&'a GpuPrimitive, &'a GpuMaterial, Surface) {
+    let prim = &scene.prims[prim_id as usize];
+    let material = &scene.materials[prim.material as usize];
+    let surface = moved_surface_at(scene, prim_id, ray, hit);
+    if depth == 0 {
+        *first_hit = FirstHit::of(hit.t, &surface, material);
+    }
+    (prim, material, surface)
+}
+
 /// The camera ray's closest hit, as a path starts: traced by the path itself, or already
 /// known (traced in a packet with the pixel's other samples; on the GPU, by a split render's
 /// `primary` kernel).
@@ -467,23 +503,14 @@ pub fn trace_path<const F: u32>(
     let mut ray = RayQuery::new(camera_ray.origin, camera_ray.direction).at_time(time);
     let mut skip = NONE;
     for depth in 0..=frame.max_depth {
-        stats.rays += 1;
-        let found = match (depth, camera_hit) {
-            (0, CameraHit::Known(found)) => found,
-            _ => scene.tracer().closest_hit::<F>(&ray, skip, T_FAR),
-        };
-        let Some((prim_id, hit)) = found else {
+        let Some((prim_id, hit)) = vertex_hit::<F>(scene, &ray, skip, depth, camera_hit, stats)
+        else {
             if first {
                 radiance += throughput * Vec3::from(frame.background);
             }
             break;
         };
-        let prim = &scene.prims[prim_id as usize];
-        let material = &scene.materials[prim.material as usize];
-        let surface = moved_surface_at(scene, prim_id, &ray, hit);
-        if depth == 0 {
-            *first_hit = FirstHit::of(hit.t, &surface, material);
-        }
+        let (prim, material, surface) = vertex_at(scene, prim_id, &ray, hit, depth, first_hit);
         // An area light shows its radiance from the front, is black from behind, reflects nothing.
         if material.model == MODEL_EMITTER {
             if surface.front_facing && first {

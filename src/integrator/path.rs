@@ -18,7 +18,7 @@ use glam::Vec3;
 
 use super::bsdf::{BsdfSample, emitter_hit_weight, has_smooth_lobes, reflects, sample_bsdf};
 use super::{
-    CameraHit, FirstHit, LightWindow, SampleStats, Surface, direct_light, moved_surface_at,
+    CameraHit, FirstHit, LightWindow, SampleStats, Surface, direct_light, vertex_at, vertex_hit,
 };
 use crate::accel::intersect::{RayQuery, offset_ray_origin};
 use crate::camera::Ray;
@@ -170,23 +170,14 @@ pub(super) fn trace_path<const F: u32>(
     let mut skip = NONE;
     for depth in 0..=frame.max_depth + 1 {
         throughput *= bounce_weight;
-        stats.rays += 1;
-        let found = match (depth, camera_hit) {
-            (0, CameraHit::Known(found)) => found,
-            _ => scene.tracer().closest_hit::<F>(&ray, skip, T_FAR),
-        };
-        let Some((prim_id, hit)) = found else {
+        let Some((prim_id, hit)) = vertex_hit::<F>(scene, &ray, skip, depth, camera_hit, stats)
+        else {
             if first {
                 radiance += throughput * Vec3::from(frame.background);
             }
             break;
         };
-        let prim = &scene.prims[prim_id as usize];
-        let material = &scene.materials[prim.material as usize];
-        let surface = moved_surface_at(scene, prim_id, &ray, hit);
-        if depth == 0 {
-            *first_hit = FirstHit::of(hit.t, &surface, material);
-        }
+        let (prim, material, surface) = vertex_at(scene, prim_id, &ray, hit, depth, first_hit);
         let emission = Vec3::from(material.emission);
         if first && surface.front_facing && emission.max_element() > 0.0 {
             let weight = emission_weight(
