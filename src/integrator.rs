@@ -37,6 +37,7 @@ use crate::sampler::{PatternSource, light_sample_2d, pixel_hash, sample_2d, samp
 mod batch;
 pub mod bsdf;
 mod path;
+pub mod texture;
 
 /// Counters a sample adds to (rays traced, paths cut off at `max_depth`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -455,14 +456,31 @@ fn vertex_at<'a>(
     hit: Hit,
     depth: u32,
     first_hit: &mut FirstHit,
-) -> (&'a GpuPrimitive, &'a GpuMaterial, Surface) {
+) -> (&'a GpuPrimitive, GpuMaterial, Surface) {
     let prim = &scene.prims[prim_id as usize];
-    let material = &scene.materials[prim.material as usize];
     let surface = moved_surface_at(scene, prim_id, ray, hit);
+    let material = material_at(scene, prim, hit, &surface);
     if depth == 0 {
-        *first_hit = FirstHit::of(hit.t, &surface, material);
+        *first_hit = FirstHit::of(hit.t, &surface, &material);
     }
     (prim, material, surface)
+}
+
+/// The material of `prim` at `surface`, its diffuse reflectance multiplied by its texture's
+/// colour there where it has one. Twin: `material_at` in integrator.wgsl.
+fn material_at(scene: &FlatScene, prim: &GpuPrimitive, hit: Hit, surface: &Surface) -> GpuMaterial {
+    let mut material = scene.materials[prim.material as usize];
+    if material.texture != 0 {
+        let outward = match surface.front_facing {
+            true => surface.geometric_normal,
+            false => -surface.geometric_normal,
+        };
+        let uv = texture::texture_coordinates(prim, hit, outward, &scene.texcoords);
+        let texture = &scene.textures[material.texture as usize - 1];
+        let colour = texture::texture_lookup(texture, &scene.texels, uv);
+        material.diffuse = (Vec3::from(material.diffuse) * colour).to_array();
+    }
+    material
 }
 
 /// The camera ray's closest hit, as a path starts: traced by the path itself, or already
@@ -511,6 +529,7 @@ pub fn trace_path<const F: u32>(
             break;
         };
         let (prim, material, surface) = vertex_at(scene, prim_id, &ray, hit, depth, first_hit);
+        let material = &material;
         // An area light shows its radiance from the front, is black from behind, reflects nothing.
         if material.model == MODEL_EMITTER {
             if surface.front_facing && first {

@@ -387,7 +387,49 @@ pub struct GpuMaterial {
     /// A `MODEL_DIELECTRIC`'s index of refraction, inside over outside (the side its outward
     /// normal leaves from).
     pub ior: f32,
+    /// 1 + the index in the texture array of the texture whose colour multiplies `diffuse`;
+    /// 0 for none (so a zeroed material has none).
+    pub texture: u32,
+    /// Padding to the WGSL struct's 16-byte alignment.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
 }
+
+/// A texture's place in the texel array and how it is read: `width x height` texels, row by
+/// row from the image's top row, from `offset` on, each RGBA8 packed in a `u32` (red in the
+/// low byte) and sRGB-encoded; `wrap` holds the `WRAP_*` mode of u in its low byte and of v in
+/// the next.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTexture {
+    /// Index of the texture's first texel in the texel array.
+    pub offset: u32,
+    /// Texels per row.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// `WRAP_*` of u | (`WRAP_*` of v) << 8.
+    pub wrap: u32,
+}
+
+/// Texture coordinates of a textured triangle's vertices p0, p1, p2 (u0 v0 u1 v1 u2 v2), at the
+/// same index as its `GpuNormals`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTexCoords {
+    /// (u, v) at p0, p1 and p2.
+    pub uv: [f32; 6],
+}
+
+/// Texture wrap modes (glTF's sampler modes): the texture repeats.
+pub const WRAP_REPEAT: u32 = 0;
+/// Coordinates are clamped to the edge texels.
+pub const WRAP_CLAMP: u32 = 1;
+/// The texture repeats, every other copy mirrored.
+pub const WRAP_MIRROR: u32 = 2;
 
 /// A light. Point: `p0` position, `color` intensity (W/sr). Directional: `p0` unit vector
 /// towards the light, `color` irradiance. Area: `p0` corner, `p1` edge_u, `p2` edge_v, `color`
@@ -831,7 +873,9 @@ const _: () = assert!(size_of::<GpuBvhNode>() == 32);
 const _: () = assert!(size_of::<GpuCwNode>() == 80);
 const _: () = assert!(size_of::<GpuPrimitive>() == 48);
 const _: () = assert!(size_of::<GpuNormals>() == 36);
-const _: () = assert!(size_of::<GpuMaterial>() == 64);
+const _: () = assert!(size_of::<GpuMaterial>() == 80);
+const _: () = assert!(size_of::<GpuTexture>() == 16);
+const _: () = assert!(size_of::<GpuTexCoords>() == 24);
 const _: () = assert!(size_of::<GpuLight>() == 64);
 const _: () = assert!(size_of::<GpuCamera>() == 144);
 const _: () = assert!(size_of::<GpuFrame>() == 112);
@@ -941,6 +985,9 @@ pub fn wgsl_prelude() -> String {
         ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),
         ("MODEL_EMITTER", MODEL_EMITTER),
         ("MODEL_DIELECTRIC", MODEL_DIELECTRIC),
+        ("WRAP_REPEAT", WRAP_REPEAT),
+        ("WRAP_CLAMP", WRAP_CLAMP),
+        ("WRAP_MIRROR", WRAP_MIRROR),
         ("INTEGRATOR_WHITTED", INTEGRATOR_WHITTED),
         ("INTEGRATOR_PATH", INTEGRATOR_PATH),
         ("BSDF_PAIR", BSDF_PAIR),

@@ -10,11 +10,14 @@ use obvhs::bvh2::Bvh2;
 use crate::accel::cwbvh::{self, CwGeometry};
 use crate::accel::traverse::Tracer;
 use crate::accel::wide::WideBvh;
-use crate::accel::{Geometry, Motion, Primitives, build_geometry, intersect};
+use std::sync::Arc;
+
+use crate::accel::{Geometry, Motion, Primitives, VertexAttributes, build_geometry, intersect};
 use crate::layout::*;
 use crate::math::sampling::strata_columns;
 use crate::sampler::SampleTable;
 use crate::scene::mesh::TriangleMesh;
+use crate::scene::texture::Texture;
 use crate::scene::{CurvedPrimitive, Integrator, Light, Scene, Shape, spot_falloff};
 
 /// Everything the kernels (and the CPU reference) read, ready to upload.
@@ -27,8 +30,14 @@ pub struct FlatScene {
     pub prims: Vec<GpuPrimitive>,
     /// Vertex normals of smooth triangles, indexed by `GpuPrimitive::normals`.
     pub normals: Vec<GpuNormals>,
+    /// Texture coordinates of textured triangles, at their normals' index (empty when none).
+    pub texcoords: Vec<GpuTexCoords>,
     /// The scene's materials, then one emitter per area light.
     pub materials: Vec<GpuMaterial>,
+    /// The textures the materials read (`GpuMaterial::texture`).
+    pub textures: Vec<GpuTexture>,
+    /// Every texture's texels, one after another.
+    pub texels: Vec<u32>,
     /// The scene's lights in order, then one per emitting triangle.
     pub lights: Vec<GpuLight>,
     /// The camera as the kernels see it; its aperture polygon's vertices are in `sample_table`.
@@ -161,7 +170,7 @@ impl FlatScene {
 /// emitting mesh triangles into lights, and precomputes the sample table. No AOVs
 /// (`FlatScene::aovs` false) and no CWBVH until first asked for.
 pub fn flatten(scene: &Scene) -> FlatScene {
-    let mut materials = pack_materials(scene);
+    let (mut materials, textures, texels) = pack_materials(scene);
     let PackedShapes {
         mut bounded,
         planes,
@@ -218,7 +227,10 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         nodes: geometry.nodes,
         prims: geometry.prims,
         normals: geometry.normals,
+        texcoords: geometry.texcoords,
         materials,
+        textures,
+        texels,
         lights,
         camera: camera.to_gpu(table.aperture_offset),
         sample_table: table.points,
@@ -236,10 +248,28 @@ pub fn flatten(scene: &Scene) -> FlatScene {
 }
 
 /// The scene's materials as the kernels read them (area lights add theirs after,
-/// [`pack_lights`]).
-fn pack_materials(scene: &Scene) -> Vec<GpuMaterial> {
+/// [`pack_lights`]), with the textures they read (each once, however many read it) and those
+/// textures' texels.
+fn pack_materials(scene: &Scene) -> (Vec<GpuMaterial>, Vec<GpuTexture>, Vec<u32>) {
     let path = scene.render.integrator == Integrator::Path;
-    scene
+    let mut read: Vec<Arc<Texture>> = Vec::new();
+    let (mut textures, mut texels) = (Vec::new(), Vec::new());
+    let mut texture_of = |texture: &Option<Arc<Texture>>| {
+        let texture = texture.as_ref()?;
+        if let Some(k) = read.iter().position(|t| Arc::ptr_eq(t, texture)) {
+            return Some(k as u32 + 1);
+        }
+        read.push(texture.clone());
+        textures.push(GpuTexture {
+            offset: texels.len() as u32,
+            width: texture.width,
+            height: texture.height,
+            wrap: texture.wrap[0].code() | texture.wrap[1].code() << 8,
+        });
+        texels.extend_from_slice(&texture.texels);
+        Some(textures.len() as u32)
+    };
+    let materials = scene
         .materials
         .iter()
         .map(|m| {
@@ -261,15 +291,18 @@ fn pack_materials(scene: &Scene) -> Vec<GpuMaterial> {
                 light_samples: emits as u32,
                 emission: m.emission.to_array(),
                 ior: m.ior,
+                texture: texture_of(&m.diffuse_texture).unwrap_or(0),
+                ..Default::default()
             }
         })
-        .collect()
+        .collect();
+    (materials, textures, texels)
 }
 
 /// The shapes' primitives, before the BVH orders them.
 struct PackedShapes {
-    /// The bounded primitives (and a triangle's vertex normals), shape by shape.
-    bounded: Vec<(GpuPrimitive, Option<GpuNormals>)>,
+    /// The bounded primitives (and a triangle's vertex attributes), shape by shape.
+    bounded: Vec<(GpuPrimitive, VertexAttributes)>,
     /// The unbounded planes.
     planes: Vec<GpuPrimitive>,
     /// Emitting triangles, each a light of one shadow-ray sample per hit (`prim`: its index in
@@ -318,23 +351,25 @@ fn pack_shapes(scene: &Scene) -> PackedShapes {
                     ),
                     Vec3::ZERO,
                 ),
-                None,
+                VertexAttributes::default(),
             )),
             Shape::Quad {
                 corner,
                 edge_u,
                 edge_v,
                 material,
-            } => packed
-                .bounded
-                .push((prim(PRIM_QUAD, *material, *corner, *edge_u, *edge_v), None)),
+            } => packed.bounded.push((
+                prim(PRIM_QUAD, *material, *corner, *edge_u, *edge_v),
+                VertexAttributes::default(),
+            )),
             Shape::Curved {
                 primitive,
                 orientation,
                 material,
-            } => packed
-                .bounded
-                .push((curved_primitive(primitive, *orientation, *material), None)),
+            } => packed.bounded.push((
+                curved_primitive(primitive, *orientation, *material),
+                VertexAttributes::default(),
+            )),
             Shape::Plane {
                 point,
                 normal,
@@ -372,9 +407,18 @@ fn pack_mesh(scene: &Scene, mesh: &TriangleMesh, material: u32, packed: &mut Pac
                 n: [na.x, na.y, na.z, nb.x, nb.y, nb.z, nc.x, nc.y, nc.z],
             }
         });
+        // Texture coordinates go only with the triangles whose material reads them.
+        let textured = scene.materials[material as usize].diffuse_texture.is_some();
+        let texcoords = mesh.texcoords.as_ref().filter(|_| textured).map(|uv| {
+            let [ta, tb, tc] = t.map(|i| uv[i as usize]);
+            GpuTexCoords {
+                uv: [ta.x, ta.y, tb.x, tb.y, tc.x, tc.y],
+            }
+        });
+        let attributes = VertexAttributes { normals, texcoords };
         packed
             .bounded
-            .push((prim(PRIM_TRIANGLE, material, a, b, c), normals));
+            .push((prim(PRIM_TRIANGLE, material, a, b, c), attributes));
         if emitting {
             packed.triangle_lights.push(GpuLight {
                 p0: a.to_array(),
@@ -397,7 +441,7 @@ fn pack_mesh(scene: &Scene, mesh: &TriangleMesh, material: u32, packed: &mut Pac
 fn pack_lights(
     scene: &Scene,
     materials: &mut Vec<GpuMaterial>,
-    bounded: &mut Vec<(GpuPrimitive, Option<GpuNormals>)>,
+    bounded: &mut Vec<(GpuPrimitive, VertexAttributes)>,
 ) -> Vec<GpuLight> {
     let mut lights = Vec::new();
     for light in &scene.lights {
@@ -454,7 +498,8 @@ fn pack_lights(
                     ..Default::default()
                 });
                 let material = materials.len() as u32 - 1;
-                bounded.push((prim(PRIM_QUAD, material, corner, edge_u, edge_v), None));
+                let quad = prim(PRIM_QUAD, material, corner, edge_u, edge_v);
+                bounded.push((quad, VertexAttributes::default()));
                 GpuLight {
                     p0: corner.to_array(),
                     kind: LIGHT_AREA,

@@ -381,9 +381,23 @@ fn shared_structs_have_identical_layouts() {
             mirror,
             light_samples,
             emission,
-            ior
+            ior,
+            texture,
+            _pad0,
+            _pad1,
+            _pad2
         }
     );
+    layout!(
+        module,
+        GpuTexture {
+            offset,
+            width,
+            height,
+            wrap
+        }
+    );
+    layout!(module, GpuTexCoords { uv });
     layout!(
         module,
         GpuLight {

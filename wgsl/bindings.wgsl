@@ -66,3 +66,8 @@
 @group(0) @binding(32) var<storage, read_write> wf_shadow_terms: array<GpuShadowTerm>;
 @group(0) @binding(33) var<storage, read_write> wf_shadow_queue: array<u32>;
 @group(0) @binding(34) var<storage, read_write> wf_aovs: array<vec4<f32>>;
+// Textured triangles' texture coordinates (at their normals' index), the textures the
+// materials read, and their texels (wgsl/texture.wgsl).
+@group(0) @binding(35) var<storage, read> texcoords: array<GpuTexCoords>;
+@group(0) @binding(36) var<storage, read> textures: array<GpuTexture>;
+@group(0) @binding(37) var<storage, read> texels: array<u32>;

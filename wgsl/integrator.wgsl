@@ -291,6 +291,18 @@ fn moved_surface_at(id: u32, ray: RayQuery, hit: Hit) -> Surface {
     return surface;
 }
 
+// The material of `prim` at `surface`, its diffuse reflectance times its texture's colour
+// there where it has one. Twin: `material_at` in src/integrator.rs.
+fn material_at(prim: GpuPrimitive, hit: Hit, surface: Surface) -> GpuMaterial {
+    var material = materials[prim.material];
+    if (material.texture != 0u) {
+        let outward = select(-surface.geometric_normal, surface.geometric_normal, surface.front_facing);
+        let uv = texture_coordinates(prim, hit, outward);
+        material.diffuse *= texture_lookup(textures[material.texture - 1u], uv);
+    }
+    return material;
+}
+
 // The camera ray's query: what the path's first closest-hit search traces.
 fn camera_query(camera_ray: CameraRay) -> RayQuery {
     return ray_at_time(ray_query_new(camera_ray.origin, camera_ray.direction), camera_ray.time);
@@ -318,8 +330,8 @@ fn trace_path(camera_ray: CameraRay, window: LightWindow, rng: ptr<function, Rng
             break;
         }
         let prim = prims[found.prim];
-        let material = materials[prim.material];
         let surface = moved_surface_at(found.prim, ray, found.hit);
+        let material = material_at(prim, found.hit, surface);
         if (depth == 0u) {
             *first_hit = first_hit_of(found.hit.t, surface, material);
         }

@@ -43,6 +43,21 @@ struct GpuMaterial {
     light_samples: u32,
     emission: vec3<f32>,
     ior: f32,
+    texture: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+struct GpuTexture {
+    offset: u32,
+    width: u32,
+    height: u32,
+    wrap: u32,
+}
+
+struct GpuTexCoords {
+    uv: array<f32, 6>,
 }
 
 struct GpuLight {

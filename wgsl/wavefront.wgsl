@@ -226,8 +226,9 @@ fn wf_shade(@builtin(global_invocation_id) id: vec3<u32>,
     }
     let ray = ray_at_time(ray_query_new(traced.origin, traced.direction), traced.time);
     let prim = prims[stored.prim];
-    let material = materials[prim.material];
-    let surface = moved_surface_at(stored.prim, ray, Hit(stored.t, stored.b1, stored.b2));
+    let hit = Hit(stored.t, stored.b1, stored.b2);
+    let surface = moved_surface_at(stored.prim, ray, hit);
+    let material = material_at(prim, hit, surface);
     if (depth == 0u) {
         store_first_hit(p, first_hit_of(stored.t, surface, material));
     }

@@ -38,6 +38,9 @@ pub struct Geometry {
     pub prims: Vec<GpuPrimitive>,
     /// Vertex normals of smooth triangles, indexed by `GpuPrimitive::normals`.
     pub normals: Vec<GpuNormals>,
+    /// Texture coordinates of textured triangles, at their normals' index; empty when no
+    /// triangle has any.
+    pub texcoords: Vec<GpuTexCoords>,
     /// Index in `prims` of the first plane: the number of bounded primitives.
     pub plane_start: u32,
     /// Planes at the end of `prims`.
@@ -127,10 +130,21 @@ pub(crate) fn swept_bounds(p: &GpuPrimitive, velocity: Vec3, shutter: [f32; 2]) 
 /// Relative widening of node boxes: 16 ULPs of the box's largest coordinate.
 const BOX_WIDENING: f32 = 16.0 * f32::EPSILON;
 
-/// Builds the BVH over `bounded` (each with its vertex normals, if any), puts the primitives in
+/// What a triangle carries at its vertices beside their positions, each when it has it. A
+/// triangle with either gets one index (`GpuPrimitive::normals`) into both arrays; zero normals
+/// stand for a textured triangle's missing ones (a zero interpolated normal shades flat).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VertexAttributes {
+    /// Vertex normals (smooth shading).
+    pub normals: Option<GpuNormals>,
+    /// Texture coordinates (a textured material).
+    pub texcoords: Option<GpuTexCoords>,
+}
+
+/// Builds the BVH over `bounded` (each with its vertex attributes), puts the primitives in
 /// BVH order, and appends `planes`.
 pub fn build_geometry(
-    bounded: Vec<(GpuPrimitive, Option<GpuNormals>)>,
+    bounded: Vec<(GpuPrimitive, VertexAttributes)>,
     planes: Vec<GpuPrimitive>,
     motion: &Motion,
 ) -> Geometry {
@@ -154,11 +168,16 @@ pub fn build_geometry(
     }
     let mut prims = Vec::with_capacity(bounded.len() + planes.len());
     let mut normals = Vec::new();
+    let mut texcoords = Vec::new();
+    let any_texcoords = bounded.iter().any(|(_, a)| a.texcoords.is_some());
     for &old in order {
-        let (mut p, n) = bounded[old as usize];
-        if let Some(n) = n {
+        let (mut p, attributes) = bounded[old as usize];
+        if attributes != VertexAttributes::default() {
             p.normals = normals.len() as u32;
-            normals.push(n);
+            normals.push(attributes.normals.unwrap_or_default());
+            if any_texcoords {
+                texcoords.push(attributes.texcoords.unwrap_or_default());
+            }
         }
         prims.push(p);
     }
@@ -196,6 +215,7 @@ pub fn build_geometry(
         nodes,
         prims,
         normals,
+        texcoords,
         plane_start,
         plane_count: planes.len() as u32,
         motion_base,

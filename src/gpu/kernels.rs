@@ -220,12 +220,18 @@ pub mod slot {
     pub const WF_SHADOW_QUEUE: Binding = entry(33, "wf_shadow_queue", StorageReadWrite);
     /// The camera ray's first hit of each path, for the AOV layers.
     pub const WF_AOVS: Binding = entry(34, "wf_aovs", StorageReadWrite);
+    /// Textured triangles' texture coordinates.
+    pub const TEXCOORDS: Binding = entry(35, "texcoords", StorageRead);
+    /// The textures the materials read.
+    pub const TEXTURES: Binding = entry(36, "textures", StorageRead);
+    /// Every texture's texels.
+    pub const TEXELS: Binding = entry(37, "texels", StorageRead);
 }
 
 use slot::*;
 
 /// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
-pub const BINDINGS: [Binding; 35] = [
+pub const BINDINGS: [Binding; 38] = [
     CAMERA,
     FRAME,
     PASS_INFO,
@@ -261,9 +267,12 @@ pub const BINDINGS: [Binding; 35] = [
     WF_SHADOW_TERMS,
     WF_SHADOW_QUEUE,
     WF_AOVS,
+    TEXCOORDS,
+    TEXTURES,
+    TEXELS,
 ];
 
-/// The bindings of the megakernel: ten storage buffers, two more than WebGPU's baseline
+/// The bindings of the megakernel: thirteen storage buffers, five more than WebGPU's baseline
 /// (every Vulkan, Metal and D3D12 adapter allows more; `GpuRenderer` says so where one does not).
 const RENDER_BINDINGS: &[Binding] = &[
     CAMERA,
@@ -278,6 +287,9 @@ const RENDER_BINDINGS: &[Binding] = &[
     SAMPLE_TABLE,
     CW_NODES,
     PIXEL_LIST,
+    TEXCOORDS,
+    TEXTURES,
+    TEXELS,
 ];
 
 /// The bindings of the ray-query kernels.
@@ -304,7 +316,7 @@ const FERMAT_CULL_BINDINGS: &[Binding] = &[
 ];
 
 /// (file name, source) of every WGSL module a kernel may compose.
-pub const MODULES: [(&str, &str); 18] = [
+pub const MODULES: [(&str, &str); 19] = [
     ("types.wgsl", include_str!("../../wgsl/types.wgsl")),
     ("bindings.wgsl", include_str!("../../wgsl/bindings.wgsl")),
     ("status.wgsl", include_str!("../../wgsl/status.wgsl")),
@@ -320,6 +332,7 @@ pub const MODULES: [(&str, &str); 18] = [
     ),
     ("sampler.wgsl", include_str!("../../wgsl/sampler.wgsl")),
     ("bsdf.wgsl", include_str!("../../wgsl/bsdf.wgsl")),
+    ("texture.wgsl", include_str!("../../wgsl/texture.wgsl")),
     ("path.wgsl", include_str!("../../wgsl/path.wgsl")),
     (
         "integrator.wgsl",
@@ -372,6 +385,7 @@ pub const RENDER: Kernel = Kernel {
         "traverse_cwbvh.wgsl",
         "sampler.wgsl",
         "bsdf.wgsl",
+        "texture.wgsl",
         "integrator.wgsl",
         "render.wgsl",
     ],
@@ -392,6 +406,7 @@ const WAVEFRONT_MODULES: &[&str] = &[
     "traverse_cwbvh.wgsl",
     "sampler.wgsl",
     "bsdf.wgsl",
+    "texture.wgsl",
     "path.wgsl",
     "integrator.wgsl",
     "render.wgsl",
@@ -454,6 +469,9 @@ pub const WF_SHADE: Kernel = Kernel {
         WF_SHADOW_TERMS,
         WF_SHADOW_QUEUE,
         WF_AOVS,
+        TEXCOORDS,
+        TEXTURES,
+        TEXELS,
     ],
 };
 

@@ -573,6 +573,27 @@ fn upload_scene(
         ),
         // Replaced by `set_pixel_list` in an adaptive render.
         (slot::PIXEL_LIST, storage("pixel list", &[0; 4])?),
+        (
+            slot::TEXCOORDS,
+            storage(
+                &format!(
+                    "the texture coordinates of {} triangles",
+                    scene.texcoords.len()
+                ),
+                bytemuck::cast_slice(&scene.texcoords),
+            )?,
+        ),
+        (
+            slot::TEXTURES,
+            storage("textures", bytemuck::cast_slice(&scene.textures))?,
+        ),
+        (
+            slot::TEXELS,
+            storage(
+                &format!("the texels of {} textures", scene.textures.len()),
+                bytemuck::cast_slice(&scene.texels),
+            )?,
+        ),
     ])
 }
 

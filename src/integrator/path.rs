@@ -178,6 +178,7 @@ pub(super) fn trace_path<const F: u32>(
             break;
         };
         let (prim, material, surface) = vertex_at(scene, prim_id, &ray, hit, depth, first_hit);
+        let material = &material;
         let emission = Vec3::from(material.emission);
         if first && surface.front_facing && emission.max_element() > 0.0 {
             let weight = emission_weight(

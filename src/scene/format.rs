@@ -262,6 +262,10 @@ pub struct MaterialEntry {
     pub mirror: Option<Vec3>,
     /// Index of refraction inside over outside, in [0.1, 10] (default 1.5); dielectric only.
     pub ior: Option<f64>,
+    /// A PNG or JPEG image (relative to the scene file) whose colour multiplies `diffuse`.
+    pub diffuse_texture: Option<String>,
+    /// How `diffuse_texture` continues beyond [0, 1] along u and v (default "repeat").
+    pub texture_wrap: Option<crate::scene::texture::Wrap>,
 }
 
 /// The `type` of a `[[shapes]]` table.

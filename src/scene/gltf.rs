@@ -6,10 +6,12 @@
 //! or the one `gltf.camera` names. The mappings are in docs/scene-format.md ("glTF").
 
 use std::path::Path;
+use std::sync::Arc;
 
-use glam::{DMat4, DVec3, Vec3};
+use glam::{DMat4, DVec3, Vec2, Vec3};
 
 use super::mesh::{MeshMaterial, NO_MATERIAL, TriangleMesh};
+use super::texture::{Texture, Wrap};
 
 /// Luminous efficacy (lm/W) at 555 nm: candela and lux to W/sr and W/m².
 pub const LUMENS_PER_WATT: f64 = 683.0;
@@ -146,14 +148,20 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
         .default_scene()
         .or_else(|| document.scenes().next())
         .ok_or("the file has no scene")?;
+    let textures = read_textures(document, base, &buffers)?;
+    let (materials, texture_uses): (Vec<_>, Vec<_>) = document
+        .materials()
+        .map(|m| textured_material(m, &textures))
+        .unzip();
     let mut out = GltfScene {
         mesh: TriangleMesh {
-            materials: document.materials().map(map_material).collect(),
+            materials,
             ..Default::default()
         },
         ..Default::default()
     };
     let mut normals = Vec::new();
+    let mut texcoords = Vec::new();
     let mut any_normals = false;
     // Depth first in node order: the stack holds the nodes still to visit in reverse.
     let mut stack: Vec<(gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
@@ -166,6 +174,7 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
                 let added =
                     add_primitive(&mut out.mesh, &mut normals, &primitive, &buffers, world)?;
                 any_normals |= added;
+                add_texcoords(&mut texcoords, &primitive, &buffers, &texture_uses)?;
             }
         }
         if let Some(camera) = node.camera() {
@@ -180,6 +189,10 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
     if any_normals {
         out.mesh.normals = Some(normals);
     }
+    if texture_uses.iter().any(Option::is_some) {
+        texcoords.resize(out.mesh.positions.len(), Vec2::ZERO);
+        out.mesh.texcoords = Some(texcoords);
+    }
     // Primitives without a material take glTF's default one (white, metallic 1, roughness 1).
     if out.mesh.face_materials.contains(&NO_MATERIAL) {
         let default = out.mesh.materials.len() as u32;
@@ -193,9 +206,9 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
     }
     for material in document.materials() {
         let pbr = material.pbr_metallic_roughness();
-        if pbr.base_color_texture().is_some() || pbr.metallic_roughness_texture().is_some() {
+        if pbr.metallic_roughness_texture().is_some() {
             out.notes.push(format!(
-                "material {:?}: textures are not read; its factors are",
+                "material {:?}: its metallic-roughness texture is not read; its factors are",
                 material.name().unwrap_or("(unnamed)")
             ));
         }
@@ -263,6 +276,179 @@ fn add_primitive(
     Ok(had_normals)
 }
 
+/// How a material reads its base colour texture: from which TEXCOORD set, through which
+/// KHR_texture_transform (baked into the coordinates of the primitives that use it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct TextureUse {
+    set: u32,
+    /// offset, rotation (radians), scale, as the extension gives them.
+    transform: Option<([f32; 2], f32, [f32; 2])>,
+}
+
+/// Every texture of the file, decoded, with its sampler's wrap modes; `None` for a texture no
+/// base colour uses (it is never decoded).
+fn read_textures(
+    document: &gltf::Document,
+    base: &Path,
+    buffers: &[gltf::buffer::Data],
+) -> Result<Vec<Option<Arc<Texture>>>, String> {
+    let used: Vec<usize> = document
+        .materials()
+        .filter_map(|m| m.pbr_metallic_roughness().base_color_texture())
+        .map(|info| info.texture().index())
+        .collect();
+    document
+        .textures()
+        .map(|texture| {
+            if !used.contains(&texture.index()) {
+                return Ok(None);
+            }
+            let image = texture.source();
+            let (bytes, source) = image_bytes(&image, base, buffers)
+                .map_err(|e| format!("image {}: {e}", image.index()))?;
+            let decoded = Texture::decode(&bytes, &source)
+                .map_err(|e| format!("image {} ({}): {e}", image.index(), source.display()))?;
+            let sampler = texture.sampler();
+            let wrap = [sampler.wrap_s(), sampler.wrap_t()].map(|mode| match mode {
+                gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
+                gltf::texture::WrappingMode::MirroredRepeat => Wrap::Mirror,
+                gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+            });
+            Ok(Some(Arc::new(Texture { wrap, ..decoded })))
+        })
+        .collect()
+}
+
+/// The encoded bytes of `image` and where they came from: a buffer view, a `data:` URI, or a
+/// file beside the glTF file.
+fn image_bytes(
+    image: &gltf::Image,
+    base: &Path,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(Vec<u8>, std::path::PathBuf), String> {
+    use base64::Engine;
+    match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let buffer = buffers.get(view.buffer().index()).ok_or("no such buffer")?;
+            let bytes = buffer
+                .0
+                .get(view.offset()..view.offset() + view.length())
+                .ok_or("its buffer view lies beyond its buffer")?;
+            Ok((
+                bytes.to_vec(),
+                base.join(format!("image {}", image.index())),
+            ))
+        }
+        gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
+            Some(data) => {
+                let (_, encoded) = data
+                    .split_once(";base64,")
+                    .ok_or("a data URI not in base64")?;
+                let bytes = base64::engine::general_purpose::STANDARD
+                    .decode(encoded)
+                    .map_err(|e| format!("its data URI: {e}"))?;
+                Ok((bytes, base.join(format!("image {}", image.index()))))
+            }
+            None => {
+                let path = base.join(percent_decoded(uri));
+                let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+                Ok((bytes, path))
+            }
+        },
+    }
+}
+
+/// A URI's path with its %XX escapes decoded.
+fn percent_decoded(uri: &str) -> String {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = bytes
+            .get(i + 1..i + 3)
+            .and_then(|h| std::str::from_utf8(h).ok());
+        match (bytes[i], hex.and_then(|h| u8::from_str_radix(h, 16).ok())) {
+            (b'%', Some(byte)) => {
+                out.push(byte);
+                i += 3;
+            }
+            (byte, _) => {
+                out.push(byte);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// A material mapped by [`map_material`] with its base colour texture, and how it reads it.
+fn textured_material(
+    material: gltf::Material,
+    textures: &[Option<Arc<Texture>>],
+) -> (MeshMaterial, Option<TextureUse>) {
+    let info = material.pbr_metallic_roughness().base_color_texture();
+    let texture_use = info.as_ref().map(|info| {
+        let transform = info.texture_transform();
+        TextureUse {
+            set: transform
+                .as_ref()
+                .and_then(|t| t.tex_coord())
+                .unwrap_or(info.tex_coord()),
+            transform: transform.map(|t| (t.offset(), t.rotation(), t.scale())),
+        }
+    });
+    let texture = info.and_then(|info| textures.get(info.texture().index()).cloned().flatten());
+    let mapped = MeshMaterial {
+        diffuse_texture: texture,
+        ..map_material(material)
+    };
+    (mapped, texture_use)
+}
+
+/// Appends a primitive's texture coordinates (after those of the vertices before it), from
+/// the set its material's base colour texture reads, through its KHR_texture_transform; zero
+/// for a primitive whose material has no texture.
+fn add_texcoords(
+    texcoords: &mut Vec<Vec2>,
+    primitive: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+    texture_uses: &[Option<TextureUse>],
+) -> Result<(), String> {
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let count = reader.read_positions().map_or(0, |p| p.len());
+    let first = texcoords.len();
+    let used = primitive
+        .material()
+        .index()
+        .and_then(|m| texture_uses.get(m).copied().flatten());
+    if let Some(texture_use) = used {
+        let read = reader.read_tex_coords(texture_use.set).ok_or_else(|| {
+            format!(
+                "a primitive whose material's baseColorTexture reads TEXCOORD_{}, which it \
+                 lacks",
+                texture_use.set
+            )
+        })?;
+        texcoords.extend(
+            read.into_f32()
+                .map(|uv| transformed(Vec2::from(uv), texture_use)),
+        );
+    }
+    texcoords.resize(first + count, Vec2::ZERO);
+    Ok(())
+}
+
+/// `uv` through KHR_texture_transform: scaled, rotated by `rotation` radians (anticlockwise
+/// in the image as it is shown, v growing downwards), then offset.
+fn transformed(uv: Vec2, texture_use: TextureUse) -> Vec2 {
+    let Some((offset, rotation, scale)) = texture_use.transform else {
+        return uv;
+    };
+    let s = uv * Vec2::from(scale);
+    let (sin, cos) = rotation.sin_cos();
+    Vec2::new(cos * s.x + sin * s.y, -sin * s.x + cos * s.y) + Vec2::from(offset)
+}
+
 /// glTF's metallic-roughness material in chambre's models: metallic 1 and roughness 0 is a
 /// mirror of the base colour; otherwise diffuse `base (1 - metallic)` and a Blinn-Phong lobe of
 /// reflectance `0.04 (1 - metallic) + base metallic` and exponent `2 / α² - 2` with
@@ -314,6 +500,7 @@ pub fn map_factors(
         mirror: Vec3::ZERO,
         emission,
         ior: None,
+        diffuse_texture: None,
     }
 }
 

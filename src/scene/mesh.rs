@@ -9,9 +9,13 @@ use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
-use glam::{DQuat, DVec3, Mat3, Vec3};
+use std::sync::Arc;
+
+use glam::{DQuat, DVec3, Mat3, Vec2, Vec3};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{DefaultElement, Encoding, Header, Property, PropertyType, ScalarType};
+
+use super::texture::{Texture, TextureCache, Wrap, resolve_file};
 
 /// Most bytes read from one mesh file, after decompression: a file that never ends (a device,
 /// a gzip bomb) stops here with an error instead of exhausting memory.
@@ -27,6 +31,9 @@ pub struct TriangleMesh {
     pub positions: Vec<Vec3>,
     /// Per-vertex normals, when the file has them and the shape asks for smooth shading.
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates (glTF's convention: v = 0 at the image's top), when the
+    /// file gives every vertex some.
+    pub texcoords: Option<Vec<Vec2>>,
     /// Vertex indices of each triangle, into `positions` (and `normals`).
     pub triangles: Vec<[u32; 3]>,
     /// Zero-area triangles dropped on load (they can never be hit).
@@ -94,10 +101,37 @@ pub struct MeshMaterial {
     /// `illum` 4, 6 or 7 (a refracting material): its index of refraction, `Ni` (1.5 where
     /// absent), clamped to [0.1, 10]; the path tracer renders it as a smooth dielectric.
     pub ior: Option<f32>,
+    /// `map_Kd`: a texture whose colour multiplies `diffuse`, as the MTL format defines it.
+    pub diffuse_texture: Option<Arc<Texture>>,
 }
 
 impl MeshMaterial {
-    fn from_mtl(m: &tobj::Material) -> MeshMaterial {
+    /// The MTL material `m`, its texture (`map_Kd`, the file name after any options) read
+    /// from `folder`, the library's, through `textures`.
+    fn from_mtl(
+        m: &tobj::Material,
+        folder: &Path,
+        textures: &mut TextureCache,
+    ) -> Result<MeshMaterial, String> {
+        let diffuse_texture = match m.diffuse_texture.as_deref() {
+            Some(map) => {
+                let name = map.split_whitespace().last().unwrap_or(map);
+                let path = resolve_file(folder, name);
+                let texture = textures.get(&path, [Wrap::Repeat; 2]).map_err(|e| {
+                    format!("material {:?}: map_Kd {}: {e}", m.name, path.display())
+                })?;
+                Some(texture)
+            }
+            None => None,
+        };
+        Ok(MeshMaterial {
+            diffuse_texture,
+            ..MeshMaterial::from_mtl_factors(m)
+        })
+    }
+
+    /// The MTL material `m`'s factors.
+    fn from_mtl_factors(m: &tobj::Material) -> MeshMaterial {
         let rgb = |v: Option<[f32; 3]>| v.map_or(Vec3::ZERO, Vec3::from);
         let specular = rgb(m.specular);
         let mirror = matches!(m.illumination_model, Some(3 | 5));
@@ -118,6 +152,7 @@ impl MeshMaterial {
             emission: rgb(m.emissive).max(Vec3::ZERO),
             ior: matches!(m.illumination_model, Some(4 | 6 | 7))
                 .then(|| m.optical_density.unwrap_or(1.5).clamp(0.1, 10.0)),
+            diffuse_texture: None,
         }
     }
 }
@@ -256,9 +291,16 @@ pub(super) fn read_obj(reader: &mut GuardedReader, obj: &Path) -> Result<Triangl
     // `usemtl` faces get none: whether that matters is the scene's to say.
     let position = reader.position.clone();
     let missing = RefCell::new(Vec::new());
+    // Each library's folder, with its number of materials: their textures are named from there.
+    let libraries = RefCell::new(Vec::new());
     let (models, materials) = tobj::load_obj_buf(reader, &options, |name| {
         let path = directory.join(name);
-        tobj::load_mtl(&path).or_else(|e| {
+        let folder = path.parent().unwrap_or(directory).to_path_buf();
+        let loaded = tobj::load_mtl(&path);
+        if let Ok((materials, _)) = &loaded {
+            libraries.borrow_mut().push((folder, materials.len()));
+        }
+        loaded.or_else(|e| {
             missing.borrow_mut().push(MissingLibrary {
                 obj: obj.to_path_buf(),
                 line: position.current_line(),
@@ -271,8 +313,17 @@ pub(super) fn read_obj(reader: &mut GuardedReader, obj: &Path) -> Result<Triangl
     .map_err(|e| reader.explain(obj_error_message(e, reader.current_line())))?;
     // The loader above stands in for every library that fails, so tobj has no error to give.
     let materials = materials.unwrap_or_default();
+    let folders = libraries
+        .into_inner()
+        .into_iter()
+        .flat_map(|(folder, count)| std::iter::repeat_n(folder, count));
+    let mut textures = TextureCache::default();
     let mut mesh = TriangleMesh {
-        materials: materials.iter().map(MeshMaterial::from_mtl).collect(),
+        materials: materials
+            .iter()
+            .zip(folders.chain(std::iter::repeat(directory.to_path_buf())))
+            .map(|(m, folder)| MeshMaterial::from_mtl(m, &folder, &mut textures))
+            .collect::<Result<_, _>>()?,
         missing_libraries: missing.into_inner(),
         ..TriangleMesh::default()
     };
@@ -280,7 +331,11 @@ pub(super) fn read_obj(reader: &mut GuardedReader, obj: &Path) -> Result<Triangl
     let all_have_normals = models
         .iter()
         .all(|m| m.mesh.normals.len() == m.mesh.positions.len());
+    let all_have_texcoords = models
+        .iter()
+        .all(|m| 3 * m.mesh.texcoords.len() == 2 * m.mesh.positions.len());
     let mut normals = Vec::new();
+    let mut texcoords = Vec::new();
     for model in &models {
         let base = mesh.positions.len() as u32;
         let m = &model.mesh;
@@ -296,6 +351,14 @@ pub(super) fn read_obj(reader: &mut GuardedReader, obj: &Path) -> Result<Triangl
                     .map(|n| Vec3::new(n[0], n[1], n[2])),
             );
         }
+        // OBJ's v grows upwards from the image's bottom; glTF's, chambre's, from its top.
+        if all_have_texcoords {
+            texcoords.extend(
+                m.texcoords
+                    .chunks_exact(2)
+                    .map(|t| Vec2::new(t[0], 1.0 - t[1])),
+            );
+        }
         mesh.triangles.extend(
             m.indices
                 .chunks_exact(3)
@@ -308,6 +371,9 @@ pub(super) fn read_obj(reader: &mut GuardedReader, obj: &Path) -> Result<Triangl
     }
     if all_have_normals && !normals.is_empty() {
         mesh.normals = Some(normals);
+    }
+    if all_have_texcoords && !texcoords.is_empty() {
+        mesh.texcoords = Some(texcoords);
     }
     Ok(mesh)
 }
@@ -497,6 +563,18 @@ pub(super) fn check_mesh(mut mesh: TriangleMesh) -> Result<TriangleMesh, String>
             p.x, p.y, p.z
         ));
     }
+    if let Some((i, t)) = mesh
+        .texcoords
+        .iter()
+        .flatten()
+        .enumerate()
+        .find(|(_, t)| !t.is_finite())
+    {
+        return Err(format!(
+            "vertex {i} has a non-finite texture coordinate ({}, {})",
+            t.x, t.y
+        ));
+    }
     let count = mesh.positions.len() as u32;
     if let Some(t) = mesh
         .triangles
@@ -567,6 +645,8 @@ pub fn compute_vertex_normals(mesh: &mut TriangleMesh, crease_deg: f32) {
     }
     let cos_crease = crease_deg.to_radians().cos();
     let mut new_positions = Vec::with_capacity(positions.len());
+    let mut new_texcoords = Vec::new();
+    let texcoords = mesh.texcoords.as_ref();
     let mut normals = Vec::with_capacity(positions.len());
     let mut index = std::collections::HashMap::new();
     let mut triangles = Vec::with_capacity(mesh.triangles.len());
@@ -586,12 +666,18 @@ pub fn compute_vertex_normals(mesh: &mut TriangleMesh, crease_deg: f32) {
                 .entry((v, n.to_array().map(f32::to_bits)))
                 .or_insert_with(|| {
                     new_positions.push(positions[v as usize]);
+                    if let Some(t) = texcoords {
+                        new_texcoords.push(t[v as usize]);
+                    }
                     normals.push(n);
                     new_positions.len() as u32 - 1
                 })
         }));
     }
     mesh.positions = new_positions;
+    if mesh.texcoords.is_some() {
+        mesh.texcoords = Some(new_texcoords);
+    }
     mesh.normals = Some(normals);
     mesh.triangles = triangles;
 }

@@ -12,6 +12,7 @@ pub mod mesh;
 pub mod mesh_file;
 pub mod parametric;
 pub mod surface;
+pub mod texture;
 mod validate;
 
 use std::path::{Path, PathBuf};
@@ -101,6 +102,9 @@ pub struct Material {
     pub emission: Vec3,
     /// A dielectric's index of refraction (inside over outside); 1 for the others.
     pub ior: f32,
+    /// A texture whose colour multiplies `diffuse` (glTF's base colour texture, an OBJ's
+    /// `map_Kd`, a scene material's `diffuse_texture`).
+    pub diffuse_texture: Option<std::sync::Arc<texture::Texture>>,
 }
 
 /// A shape; `material` indexes [`Scene::materials`].

@@ -327,6 +327,7 @@ fn empty_mesh() -> TriangleMesh {
     TriangleMesh {
         positions: Vec::new(),
         normals: Some(Vec::new()),
+        texcoords: None,
         triangles: Vec::new(),
         dropped_degenerate: 0,
         materials: Vec::new(),

@@ -940,9 +940,48 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
             mirror: check.reflectance(&at("mirror"), m.mirror.unwrap_or(default_mirror))?,
             emission: Vec3::ZERO,
             ior,
+            diffuse_texture: diffuse_texture(check, file, i)?,
         });
     }
     Ok(materials)
+}
+
+/// A material's `diffuse_texture`, read relative to the scene file, with its `texture_wrap`.
+fn diffuse_texture(
+    check: &Checker,
+    file: &SceneFile,
+    i: usize,
+) -> Result<Option<std::sync::Arc<super::texture::Texture>>> {
+    let m = &file.materials[i];
+    let at = |f: &str| format!("materials[{i}].{f}");
+    let Some(name) = &m.diffuse_texture else {
+        if m.texture_wrap.is_some() {
+            return Err(check.err(
+                &at("texture_wrap"),
+                "applies to a diffuse_texture, and there is none",
+            ));
+        }
+        return Ok(None);
+    };
+    if matches!(m.model, MaterialModel::Mirror | MaterialModel::Dielectric) {
+        return Err(check.err(
+            &at("diffuse_texture"),
+            "the material has no diffuse reflectance to texture",
+        ));
+    }
+    let folder = check
+        .parsed
+        .path
+        .parent()
+        .unwrap_or(std::path::Path::new("."));
+    let path = folder.join(name);
+    let wrap = m.texture_wrap.unwrap_or_default();
+    let texture = super::texture::Texture::read(&path)
+        .map_err(|e| check.err(&at("diffuse_texture"), format!("{}: {e}", path.display())))?;
+    Ok(Some(std::sync::Arc::new(super::texture::Texture {
+        wrap: [wrap; 2],
+        ..texture
+    })))
 }
 
 fn validate_shapes(
@@ -1012,9 +1051,44 @@ fn validate_shapes(
                 curved_shape(i, surface, required()?, &mut surfaces)
             }
         };
+        textures_have_coordinates(check, &prefix, kind, &shape, materials)?;
         shapes.push(shape);
     }
     Ok((shapes, surfaces))
+}
+
+/// A textured material on a shape without texture coordinates is refused: a plane, a curved
+/// surface, or a mesh whose file gives none.
+fn textures_have_coordinates(
+    check: &Checker,
+    prefix: &str,
+    kind: &str,
+    shape: &Shape,
+    materials: &[Material],
+) -> Result<()> {
+    let textured = |m: u32| materials[m as usize].diffuse_texture.is_some();
+    let (material, has_coordinates) = match shape {
+        Shape::Sphere { material, .. } | Shape::Quad { material, .. } => (*material, true),
+        Shape::Plane { material, .. } | Shape::Curved { material, .. } => (*material, false),
+        Shape::Mesh { mesh, material } => {
+            let face = mesh.face_materials.iter().copied().find(|&m| textured(m));
+            (face.unwrap_or(*material), mesh.texcoords.is_some())
+        }
+    };
+    if !textured(material) || has_coordinates {
+        return Ok(());
+    }
+    let why = match shape {
+        Shape::Mesh { .. } => "its file gives its vertices no texture coordinates".to_string(),
+        _ => format!("{} {kind} has no texture coordinates", article(kind)),
+    };
+    Err(check.err(
+        &format!("{prefix}.material"),
+        format!(
+            "material `{}` has a diffuse texture, but {why}",
+            materials[material as usize].name
+        ),
+    ))
 }
 
 /// A shape type as the scene file spells it.
@@ -1384,6 +1458,7 @@ fn adopt_mesh_materials(
             mirror: m.mirror,
             emission: m.emission,
             ior: 1.0,
+            diffuse_texture: m.diffuse_texture.clone(),
         };
         materials.push(match m.ior {
             // Glass (`illum` 4, 6, 7) is the path tracer's; Whitted's integrator keeps its
@@ -1394,6 +1469,7 @@ fn adopt_mesh_materials(
                 specular: Vec3::ZERO,
                 mirror: Vec3::ZERO,
                 ior,
+                diffuse_texture: None,
                 ..material
             },
             _ => material,
