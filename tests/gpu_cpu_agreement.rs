@@ -272,3 +272,18 @@ fn fermat_teapot_agrees() {
         &["render.width=96", "render.height=72", "render.spp=4"],
     );
 }
+
+#[test]
+fn textured_mesh_agrees_on_both_integrators() {
+    for integrator in ["path", "whitted"] {
+        check(
+            "scenes/spot.toml",
+            &[
+                "render.width=64",
+                "render.height=48",
+                "render.spp=4",
+                &format!("render.integrator=\"{integrator}\""),
+            ],
+        );
+    }
+}
