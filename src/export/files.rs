@@ -1,14 +1,16 @@
 //! The binary files an export writes beside its scene file: triangle meshes as PLY, tables as
 //! PFM.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
-/// A binary little-endian PLY of triangles: positions, vertex normals when given, and faces
-/// as lists of three `int` indices (what Mitsuba's, pbrt's and Blender's readers take).
+/// A binary little-endian PLY of triangles: positions, vertex normals and texture coordinates
+/// (`u`, `v`) when given, and faces as lists of three `int` indices (what Mitsuba's, pbrt's and
+/// Blender's readers take).
 pub fn ply(
     comment: &str,
     positions: &[Vec3],
     normals: Option<&[Vec3]>,
+    texcoords: Option<&[Vec2]>,
     triangles: &[[u32; 3]],
 ) -> Vec<u8> {
     let mut header = format!(
@@ -20,11 +22,14 @@ pub fn ply(
     if normals.is_some() {
         header += "property float nx\nproperty float ny\nproperty float nz\n";
     }
+    if texcoords.is_some() {
+        header += "property float u\nproperty float v\n";
+    }
     header += &format!(
         "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
         triangles.len()
     );
-    let floats_per_vertex = if normals.is_some() { 6 } else { 3 };
+    let floats_per_vertex = 3 + 3 * normals.is_some() as usize + 2 * texcoords.is_some() as usize;
     let mut bytes = Vec::with_capacity(
         header.len() + positions.len() * floats_per_vertex * 4 + triangles.len() * 13,
     );
@@ -38,6 +43,11 @@ pub fn ply(
         put(*p);
         if let Some(n) = normals {
             put(n[k]);
+        }
+        if let Some(t) = texcoords {
+            for c in t[k].to_array() {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
         }
     }
     for t in triangles {

@@ -12,7 +12,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 
 use super::files;
 use crate::camera::{CameraSpec, Focus, FocusSurface, Movements};
@@ -22,6 +22,7 @@ use crate::named::named_enum;
 use crate::output::OutputTarget;
 use crate::sampler::SamplerName;
 use crate::scene::surface::PATCH_QUADS;
+use crate::scene::texture::Wrap;
 use crate::scene::{
     CurvedPrimitive, Integrator, Light, Scene, Shape, TriangleMesh, field_location,
 };
@@ -422,10 +423,27 @@ impl<'a> Exporter<'a> {
                     material,
                 } => {
                     let bsdf = self.bsdf(*material, i);
+                    let placement = match self.textured(*material) {
+                        // Mitsuba's sphere has its pole on its z axis and its longitude from x
+                        // towards y: turned so that they are chambre's (pole +y, longitude
+                        // from +x towards -z), the same texture coordinates.
+                        true => format!(
+                            "    <transform name=\"to_world\">\n      <matrix value=\"{}\"/>\n    </transform>\n",
+                            matrix([
+                                DVec3::X * *radius as f64,
+                                DVec3::NEG_Z * *radius as f64,
+                                DVec3::Y * *radius as f64,
+                                (*center + offset).as_dvec3(),
+                            ])
+                        ),
+                        false => format!(
+                            "    <point name=\"center\" value=\"{}\"/>\n    <float name=\"radius\" value=\"{radius}\"/>\n",
+                            f3(*center + offset)
+                        ),
+                    };
                     let _ = writeln!(
                         self.shapes,
-                        "  <shape type=\"sphere\">\n    <point name=\"center\" value=\"{}\"/>\n    <float name=\"radius\" value=\"{radius}\"/>\n{bsdf}  </shape>",
-                        f3(*center + offset)
+                        "  <shape type=\"sphere\">\n{placement}{bsdf}  </shape>"
                     );
                 }
                 Shape::Quad {
@@ -435,7 +453,14 @@ impl<'a> Exporter<'a> {
                     material,
                 } => {
                     let bsdf = self.bsdf(*material, i);
-                    self.shapes += &rectangle(*corner + offset, *edge_u, *edge_v, &bsdf);
+                    let corner = *corner + offset;
+                    // Mitsuba's rectangle has v = 0 on its corner's side, chambre's quad on the
+                    // far side: a textured one is placed from the far edge (its two-sided BSDF
+                    // does not see the normal this turns).
+                    self.shapes += &match self.textured(*material) {
+                        true => rectangle(corner + *edge_v, *edge_u, -*edge_v, &bsdf),
+                        false => rectangle(corner, *edge_u, *edge_v, &bsdf),
+                    };
                 }
                 Shape::Plane {
                     point,
@@ -550,8 +575,14 @@ impl<'a> Exporter<'a> {
             };
             let emission = self.scene.materials[m as usize].emission;
             let emits = emission.max_element() > 0.0;
-            let (positions, normals, triangles) =
-                compact(mesh, &triangles, offset, !emits && mesh.normals.is_some());
+            let textured = self.scene.materials[m as usize].diffuse_texture.is_some();
+            let (positions, normals, texcoords, triangles) = compact(
+                mesh,
+                &triangles,
+                offset,
+                !emits && mesh.normals.is_some(),
+                textured,
+            );
             let comment = format!(
                 "chambre export: shapes[{i}] of {}, material `{}`",
                 self.scene.source.display(),
@@ -571,7 +602,13 @@ impl<'a> Exporter<'a> {
             };
             self.files.push((
                 name.clone(),
-                files::ply(&comment, &positions, normals.as_deref(), &triangles),
+                files::ply(
+                    &comment,
+                    &positions,
+                    normals.as_deref(),
+                    texcoords.as_deref(),
+                    &triangles,
+                ),
             ));
             let _ = writeln!(
                 self.shapes,
@@ -641,7 +678,9 @@ impl<'a> Exporter<'a> {
         }
         let (d, r) = (m.diffuse, m.mirror);
         let (max_d, max_r) = (d.max_element(), r.max_element());
+        let textured = m.diffuse_texture.is_some();
         let inner = match (max_d > 0.0, max_r > 0.0) {
+            _ if textured => self.textured_diffuse(k, shape),
             (_, false) => diffuse(d, "    "),
             (false, true) => conductor(r, "    "),
             (true, true) => {
@@ -663,6 +702,70 @@ impl<'a> Exporter<'a> {
         );
         self.bsdf_ids.insert(k, id.clone());
         format!("    <ref id=\"{id}\"/>\n")
+    }
+
+    /// Whether material `k` has a texture.
+    fn textured(&self, k: u32) -> bool {
+        self.scene.materials[k as usize].diffuse_texture.is_some()
+    }
+
+    /// The diffuse BSDF of textured material `k` (of shape `shape`): Mitsuba's `bitmap` of
+    /// its texture, written as a PNG beside the XML (the same sRGB bytes), filtered bilinearly
+    /// as chambre does. Mitsuba's `diffuse` has no factor to multiply a texture by: a grey
+    /// factor k is a `blendbsdf` of weight k with black, a coloured one is lossy.
+    fn textured_diffuse(&mut self, k: u32, shape: usize) -> String {
+        let m = &self.scene.materials[k as usize];
+        let Some(texture) = m.diffuse_texture.clone() else {
+            return diffuse(m.diffuse, "    ");
+        };
+        let (name, factor) = (m.name.clone(), m.diffuse);
+        let field = format!("shapes[{shape}].material");
+        if m.mirror.max_element() > 0.0 {
+            self.lossy(
+                &field,
+                &format!("material `{name}` has a texture and a mirror term"),
+                "its textured diffuse part alone",
+            );
+        }
+        if texture.wrap[0] != texture.wrap[1] {
+            self.lossy(
+                &field,
+                &format!("material `{name}`'s texture wraps u and v differently: Mitsuba's bitmap has one mode"),
+                "u's mode for both",
+            );
+        }
+        if factor.max_element() - factor.min_element() > 0.0 {
+            self.lossy(
+                &field,
+                &format!("material `{name}` multiplies its texture by a colour: Mitsuba's diffuse cannot"),
+                "the texture times the colour's largest channel",
+            );
+        }
+        let file = format!("{}-texture{k}.png", self.stem);
+        let mut png = Vec::new();
+        let bytes: Vec<u8> = texture.texels.iter().flat_map(|t| t.to_le_bytes()).collect();
+        let image = image::RgbaImage::from_raw(texture.width, texture.height, bytes)
+            .expect("a texture holds width x height texels");
+        image
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .expect("a PNG encodes in memory");
+        self.files.push((file.clone(), png));
+        let wrap = match texture.wrap[0] {
+            Wrap::Repeat => "repeat",
+            Wrap::Clamp => "clamp",
+            Wrap::Mirror => "mirror",
+        };
+        let bitmap = format!(
+            "<bsdf type=\"diffuse\">\n      <texture type=\"bitmap\" name=\"reflectance\">\n        <string name=\"filename\" value=\"{}\"/>\n        <string name=\"filter_type\" value=\"bilinear\"/>\n        <string name=\"wrap_mode\" value=\"{wrap}\"/>\n      </texture>\n    </bsdf>\n",
+            attribute(&file)
+        );
+        match factor.max_element() {
+            k if k >= 1.0 => format!("    {bitmap}"),
+            k => format!(
+                "    <bsdf type=\"blendbsdf\">\n      <float name=\"weight\" value=\"{k}\"/>\n{}      {bitmap}    </bsdf>\n",
+                diffuse(Vec3::ZERO, "      ")
+            ),
+        }
     }
 
     /// Every light: point, directional and spot lights as Mitsuba's, area lights as emitting
@@ -857,7 +960,9 @@ impl<'a> Exporter<'a> {
         if background.max_element() <= 0.0 {
             return String::new();
         }
-        if integrator != "direct" {
+        // chambre's path tracer, like Mitsuba's, lights surfaces by the background through
+        // their bounces; Whitted's mirrors only see it.
+        if integrator != "direct" && render.integrator != Integrator::Path {
             self.lossy(
                 "render.background",
                 "a background seen but not lighting the scene: Mitsuba's path tracer lights \
@@ -877,14 +982,20 @@ impl<'a> Exporter<'a> {
     }
 }
 
+/// The vertices of a mesh's triangles as a PLY file holds them: positions, normals and
+/// texture coordinates when written, and the triangles indexing them.
+type Compacted = (Vec<Vec3>, Option<Vec<Vec3>>, Option<Vec<Vec2>>, Vec<[u32; 3]>);
+
 /// The vertices triangles `triangles` of `mesh` use, moved by `offset`, with their normals
-/// when `normals`, and the triangles indexing them.
+/// when `normals` and their texture coordinates when `texcoords`, and the triangles indexing
+/// them.
 fn compact(
     mesh: &TriangleMesh,
     triangles: &[[u32; 3]],
     offset: Vec3,
     normals: bool,
-) -> (Vec<Vec3>, Option<Vec<Vec3>>, Vec<[u32; 3]>) {
+    texcoords: bool,
+) -> Compacted {
     let mut index = vec![u32::MAX; mesh.positions.len()];
     let mut positions = Vec::new();
     let mut kept = Vec::new();
@@ -905,7 +1016,11 @@ fn compact(
         (true, Some(n)) => Some(kept.iter().map(|&v| n[v as usize]).collect()),
         _ => None,
     };
-    (positions, normals, out)
+    let texcoords = match (texcoords, &mesh.texcoords) {
+        (true, Some(t)) => Some(kept.iter().map(|&v| t[v as usize]).collect()),
+        _ => None,
+    };
+    (positions, normals, texcoords, out)
 }
 
 /// A parallelogram as Mitsuba's `rectangle` ([-1, 1]² in z = 0, normal +z) placed by the
