@@ -265,3 +265,48 @@ fn a_texture_where_a_shape_has_no_coordinates_or_the_file_is_unreadable_is_refus
         }
     }
 }
+
+/// A real file as it was made: the Sponza's `.mtl` names its textures in capitals that its
+/// files do not have, and two of its materials share each of several. Every material with a
+/// `map_Kd` gets its texture, each image read once.
+#[test]
+fn the_sponza_reads_every_map_kd_of_its_library_once() {
+    let scene = common::load(
+        "scenes/sponza.toml",
+        &["render.width=16", "render.height=12"],
+    );
+    let mtl = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/sponza/sponza.mtl"),
+    )
+    .unwrap();
+    let mut with_map = Vec::new();
+    let mut current = String::new();
+    for line in mtl.lines().map(str::trim) {
+        if let Some(name) = line.strip_prefix("newmtl ") {
+            current = name.trim().to_string();
+        } else if let Some(map) = line.strip_prefix("map_Kd ") {
+            with_map.push((current.clone(), map.trim().to_lowercase()));
+        }
+    }
+    assert_eq!(with_map.len(), 19, "materials with map_Kd");
+    for (name, map) in &with_map {
+        let material = scene
+            .materials
+            .iter()
+            .find(|m| m.name.ends_with(&format!(":{name}")))
+            .unwrap_or_else(|| panic!("material {name}"));
+        let texture = material
+            .diffuse_texture
+            .as_ref()
+            .unwrap_or_else(|| panic!("{name} has no texture"));
+        let file = texture
+            .source
+            .file_name()
+            .unwrap()
+            .to_string_lossy()
+            .to_lowercase();
+        assert_eq!(&file, map, "{name}");
+    }
+    let distinct: std::collections::BTreeSet<_> = with_map.iter().map(|(_, m)| m).collect();
+    assert_eq!(flatten(&scene).textures.len(), distinct.len());
+}

@@ -737,13 +737,19 @@ impl<'a> Exporter<'a> {
         if factor.max_element() - factor.min_element() > 0.0 {
             self.lossy(
                 &field,
-                &format!("material `{name}` multiplies its texture by a colour: Mitsuba's diffuse cannot"),
+                &format!(
+                    "material `{name}` multiplies its texture by a colour: Mitsuba's diffuse cannot"
+                ),
                 "the texture times the colour's largest channel",
             );
         }
         let file = format!("{}-texture{k}.png", self.stem);
         let mut png = Vec::new();
-        let bytes: Vec<u8> = texture.texels.iter().flat_map(|t| t.to_le_bytes()).collect();
+        let bytes: Vec<u8> = texture
+            .texels
+            .iter()
+            .flat_map(|t| t.to_le_bytes())
+            .collect();
         let image = image::RgbaImage::from_raw(texture.width, texture.height, bytes)
             .expect("a texture holds width x height texels");
         image
@@ -984,7 +990,12 @@ impl<'a> Exporter<'a> {
 
 /// The vertices of a mesh's triangles as a PLY file holds them: positions, normals and
 /// texture coordinates when written, and the triangles indexing them.
-type Compacted = (Vec<Vec3>, Option<Vec<Vec3>>, Option<Vec<Vec2>>, Vec<[u32; 3]>);
+type Compacted = (
+    Vec<Vec3>,
+    Option<Vec<Vec3>>,
+    Option<Vec<Vec2>>,
+    Vec<[u32; 3]>,
+);
 
 /// The vertices triangles `triangles` of `mesh` use, moved by `offset`, with their normals
 /// when `normals` and their texture coordinates when `texcoords`, and the triangles indexing
