@@ -184,6 +184,8 @@ pub fn eval_brdf(material: &GpuMaterial, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
         if cos_h > 0.0 {
             f += specular * ((exponent + 8.0) / (8.0 * PI)) * cos_h.powf(exponent);
         }
+    } else if material.model == MODEL_ROUGH_CONDUCTOR {
+        f += specular * bsdf::ggx_reflection(exponent, n, wo, wi);
     }
     f
 }

@@ -100,6 +100,10 @@ pub const MODEL_EMITTER: u32 = 3;
 /// A smooth dielectric (glass): Fresnel reflection and refraction at `GpuMaterial::ior`, no
 /// other term; the path tracer's only.
 pub const MODEL_DIELECTRIC: u32 = 4;
+/// A rough conductor: a GGX microfacet lobe with Smith's separable shadowing and a Fresnel
+/// factor of 1, f = ks D G1(wo) G1(wi) / (4 cos_o cos_i), of reflectance `specular` and
+/// roughness alpha in `shininess` (Mitsuba's `roughconductor` of material `none`).
+pub const MODEL_ROUGH_CONDUCTOR: u32 = 5;
 
 /// Focal surfaces (`GpuCamera::focus_surface`): the thin lens's plane.
 pub const FOCUS_PLANE: u32 = 0;
@@ -374,7 +378,8 @@ pub struct GpuMaterial {
     pub model: u32,
     /// Specular reflectance ks of the Phong or Blinn-Phong lobe, in [0, 1].
     pub specular: [f32; 3],
-    /// Exponent n of the Phong or Blinn-Phong lobe, in [0, 1e4].
+    /// Exponent n of the Phong or Blinn-Phong lobe, in [0, 1e4]; a rough conductor's GGX
+    /// alpha, in [1e-4, 1].
     pub shininess: f32,
     /// Perfect-mirror reflectance in [0, 1] per channel; non-zero makes paths bounce.
     pub mirror: [f32; 3],
@@ -985,6 +990,7 @@ pub fn wgsl_prelude() -> String {
         ("MODEL_BLINN_PHONG", MODEL_BLINN_PHONG),
         ("MODEL_EMITTER", MODEL_EMITTER),
         ("MODEL_DIELECTRIC", MODEL_DIELECTRIC),
+        ("MODEL_ROUGH_CONDUCTOR", MODEL_ROUGH_CONDUCTOR),
         ("WRAP_REPEAT", WRAP_REPEAT),
         ("WRAP_CLAMP", WRAP_CLAMP),
         ("WRAP_MIRROR", WRAP_MIRROR),

@@ -190,6 +190,17 @@ fn metallic_smooth_is_a_mirror_and_roughness_sets_the_lobe() {
     assert_eq!(half.diffuse, gold * 0.5);
     assert_eq!(half.specular, Vec3::splat(0.02) + gold * 0.5);
     assert_eq!(half.emission, Vec3::ONE);
+    // A rough metal: GGX of the base colour, its roughness kept (alpha = roughness²).
+    let metal = map_factors("r", gold, 1.0, 0.5, Vec3::ZERO);
+    assert_eq!(
+        (
+            metal.conductor_roughness,
+            metal.specular,
+            metal.diffuse,
+            metal.mirror
+        ),
+        (Some(0.5), gold, Vec3::ZERO, Vec3::ZERO)
+    );
 }
 
 #[test]

@@ -414,3 +414,98 @@ fn what_the_path_tracer_refuses_is_refused_by_name() {
     let message = ambient.expect_err("ambient is refused").to_string();
     assert!(message.contains("render.ambient"), "{message}");
 }
+
+/// The albedo of a white GGX conductor (Smith's separable masking, Fresnel 1) seen head-on,
+/// by quadrature in double precision over the half vector's angle: with wo the normal,
+/// f cos_i dω_i = D(h) cos_h G1(wi) dω_h, wi at twice the half vector's angle.
+fn ggx_albedo_head_on(alpha: f64) -> f64 {
+    let a2 = alpha * alpha;
+    let g1 = |c: f64| 2.0 * c / (c + (a2 + (1.0 - a2) * c * c).sqrt());
+    let steps = 200_000;
+    let top = std::f64::consts::FRAC_PI_4;
+    (0..steps)
+        .map(|k| {
+            let theta = (k as f64 + 0.5) / steps as f64 * top;
+            let (sin, cos) = theta.sin_cos();
+            let d = a2 / (std::f64::consts::PI * (sin * sin + cos * cos * a2).powi(2));
+            d * cos * g1((2.0 * theta).cos()) * 2.0 * std::f64::consts::PI * sin * top
+                / steps as f64
+        })
+        .sum()
+}
+
+/// A rough conductor of reflectance 1 in a sky of radiance 1 shows its directional albedo
+/// (a convex shape sees only the sky): head-on, the quadrature's value; below 1 by what
+/// Smith's model loses between microfacets, more the rougher it is.
+#[test]
+fn a_white_rough_conductor_in_a_uniform_sky_shows_its_albedo() {
+    for roughness in [0.3, 0.7, 1.0] {
+        let expected = ggx_albedo_head_on(roughness * roughness);
+        let scene = path_traced(
+            SceneBuilder::new(32, 32)
+                .spp(1024)
+                .max_depth(0)
+                .background([1.0, 1.0, 1.0])
+                .rough_conductor("metal", [1.0; 3], roughness)
+                .sphere([0.0, 0.0, -4.0], 1.0, "metal"),
+        );
+        for (path, image) in both(&scene) {
+            // The centre pixels see normals within about 4° of the view.
+            let centre: Vec<f32> = [(15, 15), (16, 15), (15, 16), (16, 16)]
+                .iter()
+                .map(|&(x, y)| pixel(&image, x, y)[0])
+                .collect();
+            let got = centre.iter().sum::<f32>() as f64 / 4.0;
+            assert!(
+                (got - expected).abs() < 0.01 * expected,
+                "{path}: roughness {roughness}: {got}, quadrature {expected}"
+            );
+            assert!(
+                got < 1.0,
+                "{path}: roughness {roughness} creates energy: {got}"
+            );
+        }
+    }
+}
+
+/// A rough conductor's fields are checked by name: its roughness within [0.01, 1] (0 is a
+/// mirror), no diffuse or mirror term, no shininess; no other model takes a roughness.
+#[test]
+fn rough_conductor_fields_are_refused_by_name() {
+    let cases = [
+        (
+            "model = \"rough_conductor\"\nroughness = 0.0",
+            "materials[0].roughness",
+        ),
+        (
+            "model = \"rough_conductor\"\nroughness = 1.5",
+            "materials[0].roughness",
+        ),
+        (
+            "model = \"rough_conductor\"\ndiffuse = [0.5, 0.5, 0.5]",
+            "materials[0].diffuse",
+        ),
+        (
+            "model = \"rough_conductor\"\nmirror = [0.5, 0.5, 0.5]",
+            "materials[0].mirror",
+        ),
+        (
+            "model = \"rough_conductor\"\nshininess = 10.0",
+            "materials[0].shininess",
+        ),
+        (
+            "model = \"lambert\"\nroughness = 0.5",
+            "materials[0].roughness",
+        ),
+    ];
+    for (fields, field) in cases {
+        let text = format!(
+            "[render]\nwidth = 8\nheight = 8\n[camera]\nposition = [0.0, 0.0, 0.0]\n\
+             look_at = [0.0, 0.0, -1.0]\nfilm = [24.0, 24.0]\n[[materials]]\nname = \"m\"\n{fields}\n"
+        );
+        let e = Scene::from_str(Path::new("scene.toml"), &text, &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(field), "{fields}: `{e}` should name {field}");
+    }
+}

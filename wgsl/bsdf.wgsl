@@ -15,7 +15,8 @@ fn max3(v: vec3<f32>) -> f32 {
 fn material_lobes(material: GpuMaterial) -> Lobes {
     let diffuse = max3(material.diffuse);
     var glossy = 0.0;
-    if (material.model == MODEL_PHONG || material.model == MODEL_BLINN_PHONG) {
+    if (material.model == MODEL_PHONG || material.model == MODEL_BLINN_PHONG
+        || material.model == MODEL_ROUGH_CONDUCTOR) {
         glossy = max3(material.specular);
     }
     let mirror = max3(material.mirror);
@@ -98,16 +99,57 @@ fn reflect_about(v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return 2.0 * dot(n, v) * n - v;
 }
 
+fn ggx_distribution(alpha: f32, cos_h: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let c2 = cos_h * cos_h;
+    let d = max(1.0 - c2, 0.0) + c2 * a2;
+    return a2 / (PI * d * d);
+}
+
+fn ggx_masking(alpha: f32, cos: f32) -> f32 {
+    let a2 = alpha * alpha;
+    return 2.0 * cos / (cos + sqrt(max(a2 + (1.0 - a2) * cos * cos, 0.0)));
+}
+
+fn ggx_reflection(alpha: f32, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let cos_o = dot(n, wo);
+    let cos_i = dot(n, wi);
+    if (cos_o <= 0.0 || cos_i <= 0.0) {
+        return 0.0;
+    }
+    let half = normalize(wo + wi);
+    let cos_h = dot(n, half);
+    if (cos_h <= 0.0 || dot(wo, half) <= 0.0) {
+        return 0.0;
+    }
+    let g = ggx_masking(alpha, cos_o) * ggx_masking(alpha, cos_i);
+    return ggx_distribution(alpha, cos_h) * g / (4.0 * cos_o * cos_i);
+}
+
+fn ggx_half_vector(n: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f32> {
+    let d = concentric_disk(u);
+    let basis = tangents(n);
+    let r2 = d.x * d.x + d.y * d.y;
+    return normalize(basis.t * (alpha * d.x) + basis.b * (alpha * d.y) + n * sqrt(max(1.0 - r2, 0.0)));
+}
+
 fn glossy_pdf(material: GpuMaterial, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     if (material.model == MODEL_PHONG) {
         return power_cosine_pdf(material.shininess, dot(reflect_about(wo, n), wi));
     }
     let half = normalize(wo + wi);
     let cos_o = dot(wo, half);
-    if (cos_o > 0.0) {
-        return power_cosine_pdf(material.shininess, dot(n, half)) / (4.0 * cos_o);
+    let cos_h = dot(n, half);
+    if (cos_o <= 0.0) {
+        return 0.0;
     }
-    return 0.0;
+    if (material.model == MODEL_ROUGH_CONDUCTOR) {
+        if (cos_h > 0.0) {
+            return ggx_distribution(material.shininess, cos_h) * cos_h / (4.0 * cos_o);
+        }
+        return 0.0;
+    }
+    return power_cosine_pdf(material.shininess, cos_h) / (4.0 * cos_o);
 }
 
 fn bsdf_pdf(material: GpuMaterial, lobes: Lobes, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
@@ -165,6 +207,8 @@ fn sample_bsdf(material: GpuMaterial, n: vec3<f32>, ng: vec3<f32>, wo: vec3<f32>
     if (lobes.glossy > 0.0 && u_lobe >= lobes.diffuse) {
         if (material.model == MODEL_PHONG) {
             wi = power_cosine_direction(reflect_about(wo, n), material.shininess, u);
+        } else if (material.model == MODEL_ROUGH_CONDUCTOR) {
+            wi = reflect_about(wo, ggx_half_vector(n, material.shininess, u));
         } else {
             wi = reflect_about(wo, power_cosine_direction(n, material.shininess, u));
         }

@@ -92,6 +92,8 @@ fn eval_brdf(material: GpuMaterial, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) 
         if (cos_h > 0.0) {
             f += material.specular * ((exponent + 8.0) / (8.0 * PI)) * pow(cos_h, exponent);
         }
+    } else if (material.model == MODEL_ROUGH_CONDUCTOR) {
+        f += material.specular * ggx_reflection(exponent, n, wo, wi);
     }
     return f;
 }

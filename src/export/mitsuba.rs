@@ -17,7 +17,7 @@ use glam::{DVec3, Vec2, Vec3};
 use super::files;
 use crate::camera::{CameraSpec, Focus, FocusSurface, Movements};
 use crate::error::{Error, Result};
-use crate::layout::{MODEL_BLINN_PHONG, MODEL_DIELECTRIC, MODEL_PHONG};
+use crate::layout::{MODEL_BLINN_PHONG, MODEL_DIELECTRIC, MODEL_PHONG, MODEL_ROUGH_CONDUCTOR};
 use crate::named::named_enum;
 use crate::output::OutputTarget;
 use crate::sampler::SamplerName;
@@ -672,6 +672,19 @@ impl<'a> Exporter<'a> {
                 "  <!-- materials: `{}` -->\n  <bsdf type=\"dielectric\" id=\"{id}\">\n    <float name=\"int_ior\" value=\"{}\"/>\n    <float name=\"ext_ior\" value=\"1\"/>\n  </bsdf>",
                 comment(&m.name),
                 m.ior
+            );
+            self.bsdf_ids.insert(k, id.clone());
+            return format!("    <ref id=\"{id}\"/>\n");
+        }
+        if m.model == MODEL_ROUGH_CONDUCTOR {
+            // The same lobe: GGX, Smith's separable shadowing, a Fresnel factor of 1.
+            let id = format!("mat{k}");
+            let _ = writeln!(
+                self.bsdfs,
+                "  <!-- materials: `{}` -->\n  <bsdf type=\"twosided\" id=\"{id}\">\n    <bsdf type=\"roughconductor\">\n      <string name=\"material\" value=\"none\"/>\n      <string name=\"distribution\" value=\"ggx\"/>\n      <float name=\"alpha\" value=\"{}\"/>\n      <rgb name=\"specular_reflectance\" value=\"{}\"/>\n    </bsdf>\n  </bsdf>",
+                comment(&m.name),
+                m.shininess,
+                f3(m.specular)
             );
             self.bsdf_ids.insert(k, id.clone());
             return format!("    <ref id=\"{id}\"/>\n");

@@ -130,6 +130,17 @@ impl SceneBuilder {
         ])
     }
 
+    /// A rough conductor of reflectance `specular` and perceptual `roughness` (GGX alpha =
+    /// roughness²).
+    pub fn rough_conductor(self, name: &str, specular: [f64; 3], roughness: f64) -> Self {
+        self.add_materials(&[
+            ("name", name.into()),
+            ("model", "rough_conductor".into()),
+            ("specular", vec3(specular)),
+            ("roughness", roughness.into()),
+        ])
+    }
+
     /// A Blinn-Phong material: diffuse plus a lobe of reflectance `specular` and exponent
     /// `shininess`.
     pub fn blinn_phong(

@@ -242,6 +242,9 @@ pub enum MaterialModel {
     /// A smooth dielectric (glass) of index of refraction `ior`: Fresnel reflection and
     /// refraction, nothing else; the path tracer renders it.
     Dielectric,
+    /// A rough metal: a GGX microfacet lobe of reflectance `specular` and `roughness`
+    /// (docs/path.md).
+    RoughConductor,
 }
 
 /// One `[[materials]]` table.
@@ -262,6 +265,9 @@ pub struct MaterialEntry {
     pub mirror: Option<Vec3>,
     /// Index of refraction inside over outside, in [0.1, 10] (default 1.5); dielectric only.
     pub ior: Option<f64>,
+    /// A rough conductor's roughness in [0.01, 1] (GGX alpha = roughness², glTF's and
+    /// Disney's convention; default 0.3).
+    pub roughness: Option<f64>,
     /// A PNG or JPEG image (relative to the scene file) whose colour multiplies `diffuse`.
     pub diffuse_texture: Option<String>,
     /// How `diffuse_texture` continues beyond [0, 1] along u and v (default "repeat").

@@ -193,10 +193,16 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
         texcoords.resize(out.mesh.positions.len(), Vec2::ZERO);
         out.mesh.texcoords = Some(texcoords);
     }
-    // Primitives without a material take glTF's default one (white, metallic 1, roughness 1).
+    // Primitives without a material take a white Lambert: glTF's default (white, metallic 1,
+    // roughness 1) as a rough conductor would keep a third of the light (Smith's GGX loses
+    // what bounces between microfacets), where viewers show a light grey.
     if out.mesh.face_materials.contains(&NO_MATERIAL) {
         let default = out.mesh.materials.len() as u32;
-        let white = map_factors("glTF default", Vec3::ONE, 1.0, 1.0, Vec3::ZERO);
+        let white = MeshMaterial {
+            name: "glTF default".to_string(),
+            diffuse: Vec3::ONE,
+            ..Default::default()
+        };
         out.mesh.materials.push(white);
         for m in &mut out.mesh.face_materials {
             if *m == NO_MATERIAL {
@@ -450,7 +456,8 @@ fn transformed(uv: Vec2, texture_use: TextureUse) -> Vec2 {
 }
 
 /// glTF's metallic-roughness material in chambre's models: metallic 1 and roughness 0 is a
-/// mirror of the base colour; otherwise diffuse `base (1 - metallic)` and a Blinn-Phong lobe of
+/// mirror of the base colour, metallic 1 and roughness r > 0 a rough conductor of reflectance
+/// the base colour and GGX alpha r²; otherwise diffuse `base (1 - metallic)` and a Blinn-Phong lobe of
 /// reflectance `0.04 (1 - metallic) + base metallic` and exponent `2 / α² - 2` with
 /// `α = roughness²` (Walter et al.'s correspondence; at most 1e4); the emissive factor
 /// becomes an emitter.
@@ -486,6 +493,15 @@ pub fn map_factors(
             ..Default::default()
         };
     }
+    if metallic >= 1.0 {
+        return MeshMaterial {
+            name,
+            specular: base,
+            emission,
+            conductor_roughness: Some(roughness),
+            ..Default::default()
+        };
+    }
     let alpha = roughness * roughness;
     let exponent = if alpha > 0.0 {
         (2.0 / (alpha * alpha) - 2.0).clamp(0.0, 1.0e4)
@@ -501,6 +517,7 @@ pub fn map_factors(
         emission,
         ior: None,
         diffuse_texture: None,
+        conductor_roughness: None,
     }
 }
 

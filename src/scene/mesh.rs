@@ -103,6 +103,9 @@ pub struct MeshMaterial {
     pub ior: Option<f32>,
     /// `map_Kd`: a texture whose colour multiplies `diffuse`, as the MTL format defines it.
     pub diffuse_texture: Option<Arc<Texture>>,
+    /// A rough conductor's perceptual roughness (a glTF metal's `roughnessFactor`): its lobe,
+    /// of reflectance `specular`, is GGX's instead of Blinn-Phong's.
+    pub conductor_roughness: Option<f32>,
 }
 
 impl MeshMaterial {
@@ -153,6 +156,7 @@ impl MeshMaterial {
             ior: matches!(m.illumination_model, Some(4 | 6 | 7))
                 .then(|| m.optical_density.unwrap_or(1.5).clamp(0.1, 10.0)),
             diffuse_texture: None,
+            conductor_roughness: None,
         }
     }
 }

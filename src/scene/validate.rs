@@ -902,21 +902,31 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
             return Err(check.err(&at("name"), format!("duplicate material name `{}`", m.name)));
         }
         let ior = dielectric_ior(check, file, i)?;
+        let roughness = conductor_roughness(check, file, i)?;
         let is_mirror = m.model == MaterialModel::Mirror;
-        let no_diffuse = is_mirror || m.model == MaterialModel::Dielectric;
+        let conductor = m.model == MaterialModel::RoughConductor;
+        let no_diffuse = is_mirror || m.model == MaterialModel::Dielectric || conductor;
         let default_diffuse = Exact(if no_diffuse { [0.0; 3] } else { [0.8; 3] });
         let default_mirror = Exact(if is_mirror { [1.0; 3] } else { [0.0; 3] });
-        let specular = check.reflectance(&at("specular"), m.specular.unwrap_or_default())?;
+        let default_specular = Exact(if conductor { [0.9; 3] } else { [0.0; 3] });
+        let specular =
+            check.reflectance(&at("specular"), m.specular.unwrap_or(default_specular))?;
         let uses_lobe = matches!(m.model, MaterialModel::Phong | MaterialModel::BlinnPhong);
-        if !uses_lobe && (m.specular.is_some() || m.shininess.is_some()) {
-            let field = if m.specular.is_some() {
-                "specular"
-            } else {
-                "shininess"
-            };
+        let foreign_lobe = match (uses_lobe, conductor) {
+            (true, _) => None,
+            (false, true) => m.shininess.map(|_| "shininess"),
+            (false, false) => [
+                ("specular", m.specular.is_some()),
+                ("shininess", m.shininess.is_some()),
+            ]
+            .iter()
+            .find_map(|(name, given)| given.then_some(*name)),
+        };
+        if let Some(field) = foreign_lobe {
             return Err(check.err(
                 &at(field),
-                "only phong and blinn_phong materials have a specular lobe",
+                "only phong, blinn_phong and rough_conductor materials have a specular lobe \
+                 (a rough conductor's is shaped by its roughness, not a shininess)",
             ));
         }
         let shininess = check.finite(&at("shininess"), m.shininess.unwrap_or(32.0))?;
@@ -933,10 +943,11 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
                 MaterialModel::Phong => layout::MODEL_PHONG,
                 MaterialModel::BlinnPhong => layout::MODEL_BLINN_PHONG,
                 MaterialModel::Dielectric => layout::MODEL_DIELECTRIC,
+                MaterialModel::RoughConductor => layout::MODEL_ROUGH_CONDUCTOR,
             },
             diffuse: check.reflectance(&at("diffuse"), m.diffuse.unwrap_or(default_diffuse))?,
             specular,
-            shininess: shininess as f32,
+            shininess: roughness.map_or(shininess as f32, ggx_alpha),
             mirror: check.reflectance(&at("mirror"), m.mirror.unwrap_or(default_mirror))?,
             emission: Vec3::ZERO,
             ior,
@@ -944,6 +955,51 @@ fn validate_materials(check: &Checker, file: &SceneFile) -> Result<Vec<Material>
         });
     }
     Ok(materials)
+}
+
+/// GGX's alpha for a perceptual `roughness` (glTF's and Disney's alpha = roughness²), kept at
+/// 1e-4 or more: below it the lobe is a mirror in f32 (use the mirror model).
+pub(super) fn ggx_alpha(roughness: f32) -> f32 {
+    (roughness * roughness).max(1e-4)
+}
+
+/// A rough conductor's `roughness` in [0.01, 1] (default 0.3), which no other model takes; its
+/// lobe is its only term (no `diffuse`, `mirror` or texture).
+fn conductor_roughness(check: &Checker, file: &SceneFile, i: usize) -> Result<Option<f32>> {
+    let m = &file.materials[i];
+    let at = |f: &str| format!("materials[{i}].{f}");
+    if m.model != MaterialModel::RoughConductor {
+        return match m.roughness {
+            Some(_) => Err(check.err(
+                &at("roughness"),
+                "only rough_conductor materials have a roughness",
+            )),
+            None => Ok(None),
+        };
+    }
+    if let Some(field) = [
+        ("diffuse", m.diffuse.is_some()),
+        ("mirror", m.mirror.is_some()),
+    ]
+    .iter()
+    .find_map(|(name, given)| given.then_some(*name))
+    {
+        return Err(check.err(
+            &at(field),
+            "a rough conductor reflects by its GGX lobe alone",
+        ));
+    }
+    let roughness = check.finite(&at("roughness"), m.roughness.unwrap_or(0.3))?;
+    if !(0.01..=1.0).contains(&roughness) {
+        return Err(check.err(
+            &at("roughness"),
+            format!(
+                "must lie in [0.01, 1] (0 is a mirror: use model = \"mirror\"), got {}",
+                num(roughness)
+            ),
+        ));
+    }
+    Ok(Some(roughness as f32))
 }
 
 /// A material's `diffuse_texture`, read relative to the scene file, with its `texture_wrap`.
@@ -963,7 +1019,10 @@ fn diffuse_texture(
         }
         return Ok(None);
     };
-    if matches!(m.model, MaterialModel::Mirror | MaterialModel::Dielectric) {
+    if matches!(
+        m.model,
+        MaterialModel::Mirror | MaterialModel::Dielectric | MaterialModel::RoughConductor
+    ) {
         return Err(check.err(
             &at("diffuse_texture"),
             "the material has no diffuse reflectance to texture",
@@ -1447,14 +1506,14 @@ fn adopt_mesh_materials(
         let lobe = m.specular.max_element() > 0.0;
         let material = Material {
             name: format!("{file}:{}", m.name),
-            model: if lobe {
-                layout::MODEL_BLINN_PHONG
-            } else {
-                layout::MODEL_LAMBERT
+            model: match (m.conductor_roughness, lobe) {
+                (Some(_), _) => layout::MODEL_ROUGH_CONDUCTOR,
+                (None, true) => layout::MODEL_BLINN_PHONG,
+                (None, false) => layout::MODEL_LAMBERT,
             },
             diffuse: m.diffuse,
             specular: m.specular,
-            shininess: m.shininess,
+            shininess: m.conductor_roughness.map_or(m.shininess, ggx_alpha),
             mirror: m.mirror,
             emission: m.emission,
             ior: 1.0,
