@@ -186,6 +186,14 @@ fn run_check(path: &Path, overrides: &[String]) -> anyhow::Result<ExitCode> {
         scene.lights.len(),
         scene.materials.len()
     )?;
+    if !flat.textures.is_empty() {
+        writeln!(
+            text,
+            "textures: {}, {:.1} MiB of texels",
+            flat.textures.len(),
+            flat.texels.len() as f64 * 4.0 / (1 << 20) as f64
+        )?;
+    }
     writeln!(text, "{}", camera_summary(camera))?;
     if let Focus::Points(_) = camera.focus {
         let m = &camera.movements;
