@@ -884,6 +884,7 @@ const REFUSED: &[(&str, &[&str])] = &[
         ],
     ),
     ("thin_lens.toml", &["shapes[1].material", "render.ambient"]),
+    ("sky.toml", &["lights[0].file"]),
 ];
 
 #[test]

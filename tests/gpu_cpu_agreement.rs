@@ -272,3 +272,11 @@ fn fermat_teapot_agrees() {
         &["render.width=96", "render.height=72", "render.spp=4"],
     );
 }
+
+#[test]
+fn environment_map_sky_path_traced_agrees() {
+    check(
+        "scenes/sky.toml",
+        &["render.width=96", "render.height=64", "render.spp=2"],
+    );
+}
