@@ -36,6 +36,7 @@ use crate::sampler::{PatternSource, light_sample_2d, pixel_hash, sample_2d, samp
 
 mod batch;
 pub mod bsdf;
+pub mod environment;
 mod path;
 pub mod texture;
 
@@ -347,10 +348,78 @@ fn punctual_light_sample(
     }
 }
 
+/// A direction drawn from sky light `light` (an environment or a sun) with the unit-square
+/// point `square`, seen from `surface`: its term is the BRDF times the cosine times the
+/// radiance over the density (a sun's radiance over density is its `light_total` scale); under
+/// the path tracer (`mis`), weighted against the BSDF's sample of the same direction.
+#[allow(clippy::too_many_arguments)]
+fn sky_light_sample(
+    light: &GpuLight,
+    environment_data: &[f32],
+    square: [f32; 2],
+    surface: &Surface,
+    material: &GpuMaterial,
+    wo: Vec3,
+    mis: bool,
+) -> LightSample {
+    let sky = environment::sky_sample(light, environment_data, square);
+    let n = surface.shading_normal;
+    let cos_surface = n.dot(sky.wi);
+    let traced = sky.pdf > 0.0 && cos_surface > 0.0 && surface.geometric_normal.dot(sky.wi) > 0.0;
+    let radiance_over_pdf = match light.kind {
+        LIGHT_SUN => Vec3::ONE,
+        _ => sky.radiance / sky.pdf,
+    };
+    let mut f = match traced {
+        true => eval_brdf(material, n, wo, sky.wi) * radiance_over_pdf * cos_surface,
+        false => Vec3::ZERO,
+    };
+    if mis && traced {
+        let bsdf_pdf = bsdf::bsdf_pdf(material, &bsdf::lobes(material), n, wo, sky.wi);
+        f *= bsdf::sky_sample_weight(light.samples, sky.pdf, bsdf_pdf);
+    }
+    LightSample {
+        wi: sky.wi,
+        t_max: shadow_ray_length(T_FAR),
+        skip: NONE,
+        f,
+        traced,
+    }
+}
+
+/// The radiance a ray that escapes along `direction` sees of the lights at infinity (not the
+/// background), each weighted against its light samples where the ray was drawn by a BSDF with
+/// density `bsdf_pdf` (0: a camera or mirror ray, weight 1).
+fn sky_seen<const F: u32>(scene: &FlatScene, direction: Vec3, bsdf_pdf: f32) -> Vec3 {
+    let mut total = Vec3::ZERO;
+    if !has(F, FEATURE_AREA_LIGHTS) {
+        return total;
+    }
+    for light in &scene.lights[..scene.frame.light_count as usize] {
+        if light.is_sky() {
+            let (radiance, pdf) = environment::sky_radiance(light, &scene.environment, direction);
+            let weight = bsdf::sky_hit_weight(light.samples, pdf, bsdf_pdf);
+            total += Vec3::from(light.color) * radiance * weight;
+        }
+    }
+    total
+}
+
+/// A sampled light's scale of its samples' sum besides `color / samples`: an area light's
+/// area, a sun's radiance over density per irradiance (`layout::LIGHT_SUN`), 1 for an
+/// environment, whose terms carry their radiance over density.
+fn light_scale(light: &GpuLight) -> f32 {
+    match light.kind {
+        LIGHT_SUN => light.p2[0],
+        LIGHT_ENVIRONMENT => 1.0,
+        _ => area_light_of(light).area,
+    }
+}
+
 /// What a light adds from `sum`, the sum of its visible samples' terms.
 fn light_total(light: &GpuLight, sum: Vec3) -> Vec3 {
-    if light.is_area() {
-        Vec3::from(light.color) * sum * (area_light_of(light).area / light.samples as f32)
+    if light.is_sampled() {
+        Vec3::from(light.color) * sum * (light_scale(light) / light.samples as f32)
     } else {
         sum
     }
@@ -387,7 +456,7 @@ fn direct_light<const F: u32>(
     let mut total = Vec3::ZERO;
     let mut sample_offset = 0;
     for light in &scene.lights[..scene.frame.light_count as usize] {
-        if has(F, FEATURE_AREA_LIGHTS) && light.is_area() {
+        if has(F, FEATURE_AREA_LIGHTS) && light.is_sampled() {
             let shape = area_light_of(light);
             let samples = window.clip(light.samples);
             let light_dim = light_dimension(&scene.frame, depth, sample_offset, 0);
@@ -411,7 +480,18 @@ fn direct_light<const F: u32>(
                     rng.next_2d(),
                     &mut stats.flags,
                 );
-                let s = area_light_sample(light, &shape, square, surface, material, wo, mis);
+                let s = match light.is_sky() {
+                    true => sky_light_sample(
+                        light,
+                        &scene.environment,
+                        square,
+                        surface,
+                        material,
+                        wo,
+                        mis,
+                    ),
+                    false => area_light_sample(light, &shape, square, surface, material, wo, mis),
+                };
                 if s.traced && visible(&s, stats) {
                     sum += s.f;
                 }
@@ -527,6 +607,7 @@ pub fn trace_path<const F: u32>(
         else {
             if first {
                 radiance += throughput * Vec3::from(frame.background);
+                radiance += throughput * sky_seen::<F>(scene, ray.direction, 0.0);
             }
             break;
         };

@@ -130,6 +130,17 @@ pub const LIGHT_TRIANGLE: u32 = 3;
 /// `saturate(cos * p2.x + p2.y)^2` with `cos` between `p1` and the direction to the lit point
 /// (KHR_lights_punctual's falloff from the inner to the outer cone).
 pub const LIGHT_SPOT: u32 = 4;
+/// An environment light: radiance from every direction at infinity, `color` times either 1 (a
+/// constant environment: `p0.y` = 0) or the texel of an equirectangular map of `p0.y` x `p0.z`
+/// texels (`FlatScene::environment`) turned by `p0.x` turns about +y; sampled with `samples`
+/// shadow rays (`integrator::environment`). `p1` is its mean radiance (the raster preview's).
+pub const LIGHT_ENVIRONMENT: u32 = 5;
+/// A sun: a disc of uniform radiance at infinity seen within a cone about the unit `p0`
+/// (towards the sun), `color` its irradiance at normal incidence; `p1` = (1 - cos alpha,
+/// radiance per irradiance 1 / (pi sin^2 alpha), the cone's sampling density), `p2.x` the
+/// radiance over that density per irradiance, 1 / cos^2(alpha / 2); sampled with `samples`
+/// shadow rays.
+pub const LIGHT_SUN: u32 = 6;
 
 /// Sample patterns (`GpuFrame::pixel_sampler`, `GpuFrame::lens_sampler`); see `src/sampler.rs`.
 /// Random: independent uniform points.
@@ -220,7 +231,8 @@ pub const INTERLEAVED_TILE: u32 = 3;
 pub const FEATURE_LENS: u32 = 1;
 /// Some material has a non-zero mirror reflectance: paths bounce.
 pub const FEATURE_MIRRORS: u32 = 2;
-/// Area lights (parallelograms or emitting triangles): shadow-ray samples per vertex.
+/// Lights sampled with shadow-ray samples per vertex (`GpuLight::is_sampled`): area lights
+/// (parallelograms or emitting triangles), environment lights and suns.
 pub const FEATURE_AREA_LIGHTS: u32 = 4;
 /// Point or directional lights.
 pub const FEATURE_PUNCTUAL_LIGHTS: u32 = 8;
@@ -439,6 +451,7 @@ pub const WRAP_MIRROR: u32 = 2;
 /// A light. Point: `p0` position, `color` intensity (W/sr). Directional: `p0` unit vector
 /// towards the light, `color` irradiance. Area: `p0` corner, `p1` edge_u, `p2` edge_v, `color`
 /// radiance, `samples` shadow rays, `prim` its emitting quad (skipped by its own shadow rays).
+/// Environment and sun: see `LIGHT_ENVIRONMENT` and `LIGHT_SUN`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuLight {
@@ -869,6 +882,17 @@ impl GpuLight {
     pub fn is_area(&self) -> bool {
         self.kind == LIGHT_AREA || self.kind == LIGHT_TRIANGLE
     }
+
+    /// A light at infinity that escaping rays see: an environment or a sun.
+    pub fn is_sky(&self) -> bool {
+        self.kind == LIGHT_ENVIRONMENT || self.kind == LIGHT_SUN
+    }
+
+    /// A light sampled with `samples` shadow rays per path vertex, each drawing its own random
+    /// dimensions (`integrator::light_dimension`): an area light or a sky light.
+    pub fn is_sampled(&self) -> bool {
+        self.is_area() || self.is_sky()
+    }
 }
 
 const _: () = assert!(size_of::<GpuRay>() == 32);
@@ -1002,6 +1026,8 @@ pub fn wgsl_prelude() -> String {
         ("LIGHT_POINT", LIGHT_POINT),
         ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
         ("LIGHT_SPOT", LIGHT_SPOT),
+        ("LIGHT_ENVIRONMENT", LIGHT_ENVIRONMENT),
+        ("LIGHT_SUN", LIGHT_SUN),
         ("FOCUS_PLANE", FOCUS_PLANE),
         ("FOCUS_SPHERE", FOCUS_SPHERE),
         ("FOCUS_CYLINDER", FOCUS_CYLINDER),

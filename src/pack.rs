@@ -38,6 +38,9 @@ pub struct FlatScene {
     pub textures: Vec<GpuTexture>,
     /// Every texture's texels, one after another.
     pub texels: Vec<u32>,
+    /// The environment light's map and its sampling distribution
+    /// (`scene::environment::EnvironmentMap::packed`); empty without a map.
+    pub environment: Vec<f32>,
     /// The scene's lights in order, then one per emitting triangle.
     pub lights: Vec<GpuLight>,
     /// The camera as the kernels see it; its aperture polygon's vertices are in `sample_table`.
@@ -145,11 +148,11 @@ impl FlatScene {
             FEATURE_MIRRORS,
         );
         add(
-            self.lights.iter().any(GpuLight::is_area),
+            self.lights.iter().any(GpuLight::is_sampled),
             FEATURE_AREA_LIGHTS,
         );
         add(
-            self.lights.iter().any(|l| !l.is_area()),
+            self.lights.iter().any(|l| !l.is_sampled()),
             FEATURE_PUNCTUAL_LIGHTS,
         );
         add(
@@ -231,6 +234,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         materials,
         textures,
         texels,
+        environment: environment_data(scene),
         lights,
         camera: camera.to_gpu(table.aperture_offset),
         sample_table: table.points,
@@ -512,9 +516,79 @@ fn pack_lights(
                     strata_columns: strata_columns(samples),
                 }
             }
+            Light::Environment {
+                radiance,
+                ref map,
+                rotate_deg,
+                samples,
+            } => {
+                let (width, height, mean) = match map {
+                    Some(m) => (m.width, m.height, m.mean()),
+                    None => (0, 0, [1.0; 3]),
+                };
+                GpuLight {
+                    p0: [rotate_deg / 360.0, width as f32, height as f32],
+                    kind: LIGHT_ENVIRONMENT,
+                    p1: mean,
+                    samples,
+                    prim: NONE,
+                    color: radiance.to_array(),
+                    strata_columns: strata_columns(samples),
+                    ..Default::default()
+                }
+            }
+            Light::Sun {
+                direction,
+                irradiance,
+                angular_radius_deg,
+                samples,
+            } => GpuLight {
+                p0: (-direction).to_array(),
+                kind: LIGHT_SUN,
+                p1: sun_cone(angular_radius_deg),
+                samples,
+                p2: [sun_radiance_over_density(angular_radius_deg), 0.0, 0.0],
+                prim: NONE,
+                color: irradiance.to_array(),
+                strata_columns: strata_columns(samples),
+            },
         });
     }
     lights
+}
+
+/// A sun's cone of half-angle `alpha_deg` as its light reads it (`layout::LIGHT_SUN`): 1 -
+/// cos alpha (as 2 sin^2(alpha / 2), exact for the smallest cones), the radiance per unit of
+/// irradiance 1 / (pi sin^2 alpha), and the density 1 / (2 pi (1 - cos alpha)) of a direction
+/// drawn uniformly in the cone; in f64, rounded once.
+pub fn sun_cone(alpha_deg: f64) -> [f32; 3] {
+    use std::f64::consts::PI;
+    let alpha = alpha_deg.to_radians();
+    let one_minus_cos = 2.0 * (0.5 * alpha).sin().powi(2);
+    [
+        one_minus_cos as f32,
+        (1.0 / (PI * alpha.sin().powi(2))) as f32,
+        (1.0 / (2.0 * PI * one_minus_cos)) as f32,
+    ]
+}
+
+/// A sun's radiance over its cone's sampling density, per unit of irradiance:
+/// 2 pi (1 - cos alpha) / (pi sin^2 alpha) = 1 / cos^2(alpha / 2), which stays exact where
+/// both factors are extreme.
+pub fn sun_radiance_over_density(alpha_deg: f64) -> f32 {
+    (1.0 / (0.5 * alpha_deg.to_radians()).cos().powi(2)) as f32
+}
+
+/// The packed map of the scene's environment light, if it has one with a map.
+fn environment_data(scene: &Scene) -> Vec<f32> {
+    scene
+        .lights
+        .iter()
+        .find_map(|l| match l {
+            Light::Environment { map: Some(m), .. } => Some(m.packed()),
+            _ => None,
+        })
+        .unwrap_or_default()
 }
 
 /// The frame's constants: image, samples, lights, the BVH's extent and sample tables.
@@ -527,7 +601,7 @@ fn frame_constants(
     let (render, camera) = (&scene.render, &scene.camera);
     let light_samples_per_vertex = lights
         .iter()
-        .filter(|l| l.is_area())
+        .filter(|l| l.is_sampled())
         .map(|l| l.samples)
         .sum();
     let path = render.integrator == Integrator::Path;

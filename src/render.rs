@@ -465,7 +465,7 @@ impl RayBound {
         };
         RayBound {
             vertices,
-            punctual_per_vertex: scene.lights.iter().filter(|l| !l.is_area()).count() as u64,
+            punctual_per_vertex: scene.lights.iter().filter(|l| !l.is_sampled()).count() as u64,
             light_samples_per_vertex: scene.frame.light_samples_per_vertex as u64,
         }
     }
@@ -497,7 +497,7 @@ pub fn plan_passes(scene: &FlatScene, budgets: &RayBudgets) -> RenderPlan {
     let per_pass = (rays_per_invocation / bound.per_sample()).clamp(1, spp as u64) as u32;
     let light_windows = light_windows(scene, bound, rays_per_invocation);
     let window_width = light_windows[0].1.min(frame.light_samples_per_vertex) as u64;
-    let area_lights = scene.lights.iter().filter(|l| l.is_area()).count() as u64;
+    let area_lights = scene.lights.iter().filter(|l| l.is_sampled()).count() as u64;
     let rays_per_sample_and_window = if light_windows.len() > 1 {
         bound.vertices * (1 + bound.punctual_per_vertex + window_width * area_lights)
     } else {
@@ -526,7 +526,7 @@ pub fn plan_passes(scene: &FlatScene, budgets: &RayBudgets) -> RenderPlan {
 /// windows of equal width, sized so that one window's rays fit it (at least one sample wide:
 /// a scene whose path vertices alone exceed the budget is left to the loop-limit check).
 fn light_windows(scene: &FlatScene, bound: RayBound, per_invocation: u64) -> Vec<(u32, u32)> {
-    let area_lights = scene.lights.iter().filter(|l| l.is_area());
+    let area_lights = scene.lights.iter().filter(|l| l.is_sampled());
     let most = area_lights.clone().map(|l| l.samples).max().unwrap_or(0);
     if bound.per_sample() <= per_invocation || most <= 1 {
         return vec![(0, u32::MAX)];

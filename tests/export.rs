@@ -884,6 +884,8 @@ const REFUSED: &[(&str, &[&str])] = &[
         ],
     ),
     ("thin_lens.toml", &["shapes[1].material", "render.ambient"]),
+    ("sky.toml", &["lights[0].file"]),
+    ("spot.toml", &["render.background"]),
 ];
 
 #[test]

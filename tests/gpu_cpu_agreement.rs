@@ -312,3 +312,11 @@ fn textured_sponza_agrees() {
         ],
     );
 }
+
+#[test]
+fn environment_map_sky_path_traced_agrees() {
+    check(
+        "scenes/sky.toml",
+        &["render.width=96", "render.height=64", "render.spp=2"],
+    );
+}

@@ -71,3 +71,6 @@
 @group(0) @binding(35) var<storage, read> texcoords: array<GpuTexCoords>;
 @group(0) @binding(36) var<storage, read> textures: array<GpuTexture>;
 @group(0) @binding(37) var<storage, read> texels: array<u32>;
+// The environment light's map: its texels' RGB, each texel's density in (u, v), the marginal CDF
+// over rows and each row's conditional CDF (`EnvironmentMap::packed`; wgsl/environment.wgsl).
+@group(0) @binding(38) var<storage, read> environment: array<f32>;

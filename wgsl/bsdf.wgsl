@@ -240,3 +240,16 @@ fn emitter_hit_weight(samples: u32, distance2: f32, cos_light: f32, area: f32, p
     let ratio = f32(samples) * distance2 / (pdf * cos_light * area);
     return 1.0 / (1.0 + ratio * ratio);
 }
+
+fn sky_sample_weight(samples: u32, light_pdf: f32, bsdf_pdf: f32) -> f32 {
+    let ratio = bsdf_pdf / (f32(samples) * light_pdf);
+    return 1.0 / (1.0 + ratio * ratio);
+}
+
+fn sky_hit_weight(samples: u32, light_pdf: f32, bsdf_pdf: f32) -> f32 {
+    if (bsdf_pdf <= 0.0 || light_pdf <= 0.0) {
+        return 1.0;
+    }
+    let ratio = f32(samples) * light_pdf / bsdf_pdf;
+    return 1.0 / (1.0 + ratio * ratio);
+}

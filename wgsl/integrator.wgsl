@@ -199,10 +199,73 @@ fn punctual_light_sample(light: GpuLight, surface: Surface, material: GpuMateria
     return LightSample(wi, shadow_ray_length(distance), NONE, f, traced);
 }
 
+// A direction drawn from sky light `light` with `square`, seen from `surface` (see the Rust twin).
+fn sky_light_sample(light: GpuLight, square: vec2<f32>, surface: Surface, material: GpuMaterial,
+                    wo: vec3<f32>, mis: bool) -> LightSample {
+    let sky = sky_sample(light, square);
+    let n = surface.shading_normal;
+    let cos_surface = dot(n, sky.wi);
+    let traced = sky.pdf > 0.0 && cos_surface > 0.0 && dot(surface.geometric_normal, sky.wi) > 0.0;
+    var radiance_over_pdf = vec3<f32>(1.0);
+    if (light.kind != LIGHT_SUN) {
+        radiance_over_pdf = sky.radiance / sky.pdf;
+    }
+    var f = vec3<f32>(0.0);
+    if (traced) {
+        f = eval_brdf(material, n, wo, sky.wi) * radiance_over_pdf * cos_surface;
+    }
+    if (mis && traced) {
+        let pdf = bsdf_pdf(material, material_lobes(material), n, wo, sky.wi);
+        f *= sky_sample_weight(light.samples, sky.pdf, pdf);
+    }
+    return LightSample(sky.wi, shadow_ray_length(T_FAR), NONE, f, traced);
+}
+
+// A sampled light's sample: a sky light's or an area light's.
+fn sampled_light_sample(light: GpuLight, shape: AreaLight, square: vec2<f32>, surface: Surface,
+                        material: GpuMaterial, wo: vec3<f32>, mis: bool) -> LightSample {
+    if (is_sky_light(light)) {
+        return sky_light_sample(light, square, surface, material, wo, mis);
+    }
+    return area_light_sample(light, shape, square, surface, material, wo, mis);
+}
+
+// The radiance a ray escaping along `direction` sees of the lights at infinity, weighted against
+// their light samples where a BSDF drew it with density `bsdf_pdf` (0: a camera or mirror ray).
+fn sky_seen(direction: vec3<f32>, bsdf_pdf: f32) -> vec3<f32> {
+    var total = vec3<f32>(0.0);
+    if (!FEATURE_AREA_LIGHTS) {
+        return total;
+    }
+    for (var l = 0u; l < frame.light_count; l += 1u) {
+        let light = lights[l];
+        if (is_sky_light(light)) {
+            let seen = sky_radiance(light, direction);
+            total += light.color * seen.xyz * sky_hit_weight(light.samples, seen.w, bsdf_pdf);
+        }
+    }
+    return total;
+}
+
+fn is_sampled_light(light: GpuLight) -> bool {
+    return is_area_light(light) || is_sky_light(light);
+}
+
+// A sampled light's scale of its samples' sum besides color / samples (see the Rust twin).
+fn light_scale(light: GpuLight) -> f32 {
+    if (light.kind == LIGHT_SUN) {
+        return light.p2.x;
+    }
+    if (light.kind == LIGHT_ENVIRONMENT) {
+        return 1.0;
+    }
+    return area_light_of(light).area;
+}
+
 // What a light adds from `sum`, the sum of its visible samples' terms.
 fn light_total(light: GpuLight, sum: vec3<f32>) -> vec3<f32> {
-    if (FEATURE_AREA_LIGHTS && is_area_light(light)) {
-        return light.color * sum * (area_light_of(light).area / f32(light.samples));
+    if (FEATURE_AREA_LIGHTS && is_sampled_light(light)) {
+        return light.color * sum * (light_scale(light) / f32(light.samples));
     }
     return sum;
 }
@@ -232,7 +295,7 @@ fn direct_light(time: f32, surface: Surface, material: GpuMaterial, own: u32, wo
     var sample_offset = 0u;
     for (var l = 0u; l < frame.light_count; l += 1u) {
         let light = lights[l];
-        if (FEATURE_AREA_LIGHTS && is_area_light(light)) {
+        if (FEATURE_AREA_LIGHTS && is_sampled_light(light)) {
             let shape = area_light_of(light);
             let range = window_samples(window, light.samples);
             let key = seek_light_samples(rng, depth, sample_offset, range.x);
@@ -241,7 +304,7 @@ fn direct_light(time: f32, surface: Surface, material: GpuMaterial, own: u32, wo
             for (var k = range.x; k < range.y; k += 1u) {
                 let square = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
                                              rng_next_2d(rng));
-                let s = area_light_sample(light, shape, square, surface, material, wo, path_traced());
+                let s = sampled_light_sample(light, shape, square, surface, material, wo, path_traced());
                 if (s.traced) {
                     (*counters).rays += 1u;
                     if (!cw_occluded(ray_at_time(ray_query_new(origin, s.wi), time), own, s.skip, s.t_max)) {
@@ -328,6 +391,7 @@ fn trace_path(camera_ray: CameraRay, window: LightWindow, rng: ptr<function, Rng
         if (found.prim == NONE) {
             if (first) {
                 radiance += throughput * frame.background;
+                radiance += throughput * sky_seen(ray.direction, 0.0);
             }
             break;
         }

@@ -113,7 +113,7 @@ fn emit_shadow_rays(p: u32, time: f32, surface: Surface, material: GpuMaterial, 
     var sample_offset = 0u;
     for (var l = 0u; l < frame.light_count; l += 1u) {
         let light = lights[l];
-        if (FEATURE_AREA_LIGHTS && is_area_light(light)) {
+        if (FEATURE_AREA_LIGHTS && is_sampled_light(light)) {
             let shape = area_light_of(light);
             let range = window_samples(window, light.samples);
             let key = seek_light_samples(rng, depth, sample_offset, range.x);
@@ -121,7 +121,7 @@ fn emit_shadow_rays(p: u32, time: f32, surface: Surface, material: GpuMaterial, 
             for (var k = range.x; k < range.y; k += 1u) {
                 let square = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
                                              rng_next_2d(rng));
-                let s = area_light_sample(light, shape, square, surface, material, wo, path_traced());
+                let s = sampled_light_sample(light, shape, square, surface, material, wo, path_traced());
                 if (s.traced && count < wave.shadow_stride) {
                     store_shadow_ray(base + count, origin, time, own, s, l);
                     count += 1u;
@@ -216,6 +216,7 @@ fn wf_shade(@builtin(global_invocation_id) id: vec3<u32>,
     if (stored.prim == NONE) {
         if (first) {
             path.radiance += path.throughput * frame.background;
+            path.radiance += path.throughput * sky_seen(traced.direction, path.bsdf_pdf);
         }
         if (depth == 0u) {
             store_first_hit(p, FirstHit(0.0, vec3<f32>(0.0), vec3<f32>(0.0)));

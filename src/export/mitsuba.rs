@@ -791,7 +791,8 @@ impl<'a> Exporter<'a> {
     /// rectangles. Each is sampled in proportion to chambre's samples of it (`sampling_weight`).
     fn lights(&mut self) {
         for (i, light) in self.scene.lights.iter().enumerate() {
-            self.punctual_lights |= !matches!(light, Light::Area { .. });
+            self.punctual_lights |=
+                !matches!(light, Light::Area { .. } | Light::Environment { .. });
             match *light {
                 Light::Point {
                     position,
@@ -837,6 +838,24 @@ impl<'a> Exporter<'a> {
                     self.light_samples += samples as u64;
                     let inside = black_bsdf() + &area_emitter(radiance, samples as u64);
                     self.emitters += &rectangle(corner, edge_u, edge_v, &inside);
+                }
+                Light::Environment {
+                    radiance,
+                    ref map,
+                    rotate_deg,
+                    samples,
+                } => {
+                    self.light_samples += samples as u64;
+                    self.environment(i, radiance, map.as_deref(), rotate_deg, samples);
+                }
+                Light::Sun {
+                    direction,
+                    irradiance,
+                    samples,
+                    ..
+                } => {
+                    self.light_samples += samples as u64;
+                    self.sun(i, direction, irradiance, samples);
                 }
             }
         }
@@ -954,6 +973,81 @@ impl<'a> Exporter<'a> {
                 )
             }
         }
+    }
+
+    /// An environment light: Mitsuba's `constant` of the same radiance, sampled in proportion
+    /// to `samples`. A map is refused (with `--approximate`, Mitsuba's `envmap` of the same
+    /// file, copied beside the XML, and `scale`): Mitsuba reads the file as another sky (it
+    /// interpolates bilinearly between pixel centres it places on the poles, where chambre's
+    /// texels are constant cells, docs/mitsuba.md), its longitude turning the other way, which
+    /// a `to_world` with a reflection undoes.
+    fn environment(
+        &mut self,
+        i: usize,
+        radiance: Vec3,
+        map: Option<&crate::scene::environment::EnvironmentMap>,
+        rotate_deg: f32,
+        samples: u32,
+    ) {
+        let weight = format!("    <float name=\"sampling_weight\" value=\"{samples}\"/>\n");
+        let Some(map) = map else {
+            let _ = writeln!(
+                self.emitters,
+                "  <emitter type=\"constant\">\n    <rgb name=\"radiance\" value=\"{}\"/>\n{weight}  </emitter>",
+                f3(radiance)
+            );
+            return;
+        };
+        let field = format!("lights[{i}].file");
+        self.lossy(
+            &field,
+            "an environment map: Mitsuba's `envmap` interpolates the file's pixels bilinearly \
+             between centres on the poles, where chambre's texels are constant cells",
+            "Mitsuba's envmap of the same file",
+        );
+        if !self.options.approximate {
+            return;
+        }
+        let bytes = match std::fs::read(&map.source) {
+            Ok(bytes) => bytes,
+            Err(e) => {
+                let message = format!("{}: {e}", map.source.display());
+                self.refusals.push((field, message));
+                return;
+            }
+        };
+        let file_name = map.source.file_name().map_or_else(
+            || "environment.exr".into(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        let name = format!("{}-{file_name}", self.stem);
+        self.files.push((name.clone(), bytes));
+        let (sin, cos) = (rotate_deg as f64).to_radians().sin_cos();
+        // Mitsuba's local direction at longitude phi is (sin phi, ., -cos phi), chambre's
+        // (cos(phi + rotate), ., -sin(phi + rotate)): this matrix takes one to the other.
+        let to_world = format!("{} 0 {} 0 0 1 0 0 {} 0 {} 0 0 0 0 1", -sin, -cos, -cos, sin);
+        let _ = writeln!(
+            self.emitters,
+            "  <emitter type=\"envmap\">\n    <string name=\"filename\" value=\"{}\"/>\n    <float name=\"scale\" value=\"{}\"/>\n    <transform name=\"to_world\">\n      <matrix value=\"{to_world}\"/>\n    </transform>\n{weight}  </emitter>",
+            attribute(&name),
+            radiance.x
+        );
+    }
+
+    /// A sun: refused (with `--approximate`, Mitsuba's `directional` of the same irradiance,
+    /// the limit of a vanishing disc).
+    fn sun(&mut self, i: usize, direction: Vec3, irradiance: Vec3, samples: u32) {
+        self.lossy(
+            &format!("lights[{i}].type"),
+            "a sun: Mitsuba 3 has no disc of uniform radiance at infinity",
+            "a directional light of the same irradiance (the sun's limit as its disc vanishes)",
+        );
+        let _ = writeln!(
+            self.emitters,
+            "  <emitter type=\"directional\">\n    <vector name=\"direction\" value=\"{}\"/>\n    <rgb name=\"irradiance\" value=\"{}\"/>\n    <float name=\"sampling_weight\" value=\"{samples}\"/>\n  </emitter>",
+            f3(direction),
+            f3(irradiance)
+        );
     }
 
     /// chambre's ambient term and background radiance. A depth image sees neither. Ambient
@@ -1168,7 +1262,7 @@ fn scene_extent(scene: &Scene) -> f64 {
                 add(corner.as_dvec3(), 0.0);
                 add((corner + edge_u + edge_v).as_dvec3(), 0.0);
             }
-            Light::Directional { .. } => {}
+            Light::Directional { .. } | Light::Environment { .. } | Light::Sun { .. } => {}
         }
     }
     let diagonal = (hi - lo).length();

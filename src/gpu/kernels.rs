@@ -226,12 +226,14 @@ pub mod slot {
     pub const TEXTURES: Binding = entry(36, "textures", StorageRead);
     /// Every texture's texels.
     pub const TEXELS: Binding = entry(37, "texels", StorageRead);
+    /// The environment light's map and sampling distribution (`FlatScene::environment`).
+    pub const ENVIRONMENT: Binding = entry(38, "environment", StorageRead);
 }
 
 use slot::*;
 
 /// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
-pub const BINDINGS: [Binding; 38] = [
+pub const BINDINGS: [Binding; 39] = [
     CAMERA,
     FRAME,
     PASS_INFO,
@@ -270,6 +272,7 @@ pub const BINDINGS: [Binding; 38] = [
     TEXCOORDS,
     TEXTURES,
     TEXELS,
+    ENVIRONMENT,
 ];
 
 /// The bindings of the megakernel: thirteen storage buffers, five more than WebGPU's baseline
@@ -290,6 +293,7 @@ const RENDER_BINDINGS: &[Binding] = &[
     TEXCOORDS,
     TEXTURES,
     TEXELS,
+    ENVIRONMENT,
 ];
 
 /// The bindings of the ray-query kernels.
@@ -316,7 +320,7 @@ const FERMAT_CULL_BINDINGS: &[Binding] = &[
 ];
 
 /// (file name, source) of every WGSL module a kernel may compose.
-pub const MODULES: [(&str, &str); 19] = [
+pub const MODULES: [(&str, &str); 20] = [
     ("types.wgsl", include_str!("../../wgsl/types.wgsl")),
     ("bindings.wgsl", include_str!("../../wgsl/bindings.wgsl")),
     ("status.wgsl", include_str!("../../wgsl/status.wgsl")),
@@ -333,6 +337,10 @@ pub const MODULES: [(&str, &str); 19] = [
     ("sampler.wgsl", include_str!("../../wgsl/sampler.wgsl")),
     ("bsdf.wgsl", include_str!("../../wgsl/bsdf.wgsl")),
     ("texture.wgsl", include_str!("../../wgsl/texture.wgsl")),
+    (
+        "environment.wgsl",
+        include_str!("../../wgsl/environment.wgsl"),
+    ),
     ("path.wgsl", include_str!("../../wgsl/path.wgsl")),
     (
         "integrator.wgsl",
@@ -386,6 +394,7 @@ pub const RENDER: Kernel = Kernel {
         "sampler.wgsl",
         "bsdf.wgsl",
         "texture.wgsl",
+        "environment.wgsl",
         "integrator.wgsl",
         "render.wgsl",
     ],
@@ -407,6 +416,7 @@ const WAVEFRONT_MODULES: &[&str] = &[
     "sampler.wgsl",
     "bsdf.wgsl",
     "texture.wgsl",
+    "environment.wgsl",
     "path.wgsl",
     "integrator.wgsl",
     "render.wgsl",
@@ -472,6 +482,7 @@ pub const WF_SHADE: Kernel = Kernel {
         TEXCOORDS,
         TEXTURES,
         TEXELS,
+        ENVIRONMENT,
     ],
 };
 

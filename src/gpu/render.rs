@@ -407,7 +407,7 @@ fn plan_wavefront(scene: &FlatScene, plan: &RenderPlan) -> Result<Wavefront> {
         lights: scene
             .lights
             .iter()
-            .map(|l| (l.is_area(), l.samples))
+            .map(|l| (l.is_sampled(), l.samples))
             .collect(),
     };
     let widest = plan
@@ -592,6 +592,13 @@ fn upload_scene(
             storage(
                 &format!("the texels of {} textures", scene.textures.len()),
                 bytemuck::cast_slice(&scene.texels),
+            )?,
+        ),
+        (
+            slot::ENVIRONMENT,
+            storage(
+                "the environment map (lights[].file) with its sampling distribution",
+                bytemuck::cast_slice(&scene.environment),
             )?,
         ),
     ])

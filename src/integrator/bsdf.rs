@@ -351,6 +351,24 @@ pub fn emitter_hit_weight(
     1.0 / (1.0 + ratio * ratio)
 }
 
+/// The power heuristic's weight of one of `samples` directions drawn from a light at infinity
+/// with solid-angle density `light_pdf`, against the BSDF's one sample with `bsdf_pdf`.
+pub fn sky_sample_weight(samples: u32, light_pdf: f32, bsdf_pdf: f32) -> f32 {
+    let ratio = bsdf_pdf / (samples as f32 * light_pdf);
+    1.0 / (1.0 + ratio * ratio)
+}
+
+/// The power heuristic's weight of a BSDF sample with density `bsdf_pdf` that escapes towards
+/// a light at infinity whose `samples` light samples draw its direction with `light_pdf`: 1
+/// where they cannot (a camera or mirror ray, `bsdf_pdf` 0; outside a sun, `light_pdf` 0).
+pub fn sky_hit_weight(samples: u32, light_pdf: f32, bsdf_pdf: f32) -> f32 {
+    if bsdf_pdf <= 0.0 || light_pdf <= 0.0 {
+        return 1.0;
+    }
+    let ratio = samples as f32 * light_pdf / bsdf_pdf;
+    1.0 / (1.0 + ratio * ratio)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

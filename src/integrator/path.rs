@@ -7,8 +7,10 @@
 //! direction drawn from the BSDF (`bsdf`), which Russian roulette may end from vertex
 //! `rr_depth` on. After `max_depth` bounces the path takes one more, as Mitsuba's does, only to
 //! see the emission its BSDF sample hits (the other half of the last vertex's multiple
-//! importance sampling): `max_depth = 0` is direct light. Escaping rays see the background, a
-//! constant environment no light samples. Equations and choices: `docs/path.md`.
+//! importance sampling): `max_depth = 0` is direct light. Escaping rays see the background (a
+//! constant no light samples) and the lights at infinity (an environment, suns), weighted
+//! against their light samples as emitters are. Equations and choices: `docs/path.md`,
+//! `docs/lights.md`.
 //!
 //! The bounce's throughput factor is kept apart from the throughput until the next vertex, as
 //! the GPU's wavefront render must keep it (its shadow rays are resolved after the bounce is
@@ -18,7 +20,8 @@ use glam::Vec3;
 
 use super::bsdf::{BsdfSample, emitter_hit_weight, has_smooth_lobes, reflects, sample_bsdf};
 use super::{
-    CameraHit, FirstHit, LightWindow, SampleStats, Surface, direct_light, vertex_at, vertex_hit,
+    CameraHit, FirstHit, LightWindow, SampleStats, Surface, direct_light, sky_seen, vertex_at,
+    vertex_hit,
 };
 use crate::accel::intersect::{RayQuery, offset_ray_origin};
 use crate::camera::Ray;
@@ -174,6 +177,7 @@ pub(super) fn trace_path<const F: u32>(
         else {
             if first {
                 radiance += throughput * Vec3::from(frame.background);
+                radiance += throughput * sky_seen::<F>(scene, ray.direction, bsdf_pdf);
             }
             break;
         };

@@ -261,6 +261,45 @@ impl SceneBuilder {
         ])
     }
 
+    /// A constant environment light of radiance `radiance`, sampled with `samples` shadow rays.
+    pub fn environment_light(self, radiance: [f64; 3], samples: u32) -> Self {
+        self.add_lights(&[
+            ("type", "environment".into()),
+            ("radiance", vec3(radiance)),
+            ("samples", Value::Integer(samples as i64)),
+        ])
+    }
+
+    /// An environment light of the equirectangular map `file` times `scale`, turned `rotate`
+    /// degrees about +y, sampled with `samples` shadow rays.
+    pub fn environment_map(self, file: &str, scale: f64, rotate: f64, samples: u32) -> Self {
+        self.add_lights(&[
+            ("type", "environment".into()),
+            ("file", file.into()),
+            ("scale", Value::Float(scale)),
+            ("rotate", Value::Float(rotate)),
+            ("samples", Value::Integer(samples as i64)),
+        ])
+    }
+
+    /// A sun whose light travels along `direction`, of irradiance `irradiance` from a disc of
+    /// half-angle `angular_radius_deg`, sampled with `samples` shadow rays.
+    pub fn sun(
+        self,
+        direction: [f64; 3],
+        irradiance: [f64; 3],
+        angular_radius_deg: f64,
+        samples: u32,
+    ) -> Self {
+        self.add_lights(&[
+            ("type", "sun".into()),
+            ("direction", vec3(direction)),
+            ("irradiance", vec3(irradiance)),
+            ("angular_radius_deg", Value::Float(angular_radius_deg)),
+            ("samples", Value::Integer(samples as i64)),
+        ])
+    }
+
     fn add_materials(mut self, fields: &[(&str, Value)]) -> Self {
         self.materials.push(entry(fields));
         self

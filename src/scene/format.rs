@@ -410,6 +410,12 @@ pub enum LightType {
     /// A spot light: `position`, `direction` (where it points), `intensity` on its axis,
     /// `outer_angle` and `inner_angle`.
     Spot,
+    /// Light from every direction at infinity: a constant `radiance`, or an equirectangular
+    /// map `file` times `scale`, turned `rotate` degrees about +y; `samples`.
+    Environment,
+    /// The sun: a disc at infinity of half-angle `angular_radius_deg` about `direction` (where
+    /// its light travels), giving `irradiance` at normal incidence; `samples`.
+    Sun,
 }
 
 /// One `[[lights]]` table: the fields its `type` takes are checked in `validate.rs`.
@@ -436,10 +442,21 @@ pub struct LightEntry {
     pub edge_u: Option<Vec3>,
     /// Area: the second edge from `corner`.
     pub edge_v: Option<Vec3>,
-    /// Area: emitted radiance, 0..=1e20.
+    /// Area: emitted radiance, 0..=1e20; environment: its constant radiance.
     pub radiance: Option<Vec3>,
-    /// Area: shadow rays per shading point (default 1).
+    /// Area, environment, sun: shadow rays per shading point (default 1).
     pub samples: Option<i64>,
+    // environment
+    /// Environment: an equirectangular map of linear RGB radiance (OpenEXR or Radiance HDR),
+    /// relative to the scene file.
+    pub file: Option<String>,
+    /// Environment: the map's radiance multiplier, > 0 (default 1).
+    pub scale: Option<f64>,
+    /// Environment: degrees the map turns about +y (from +x towards -z; default 0).
+    pub rotate: Option<f64>,
+    // sun
+    /// Sun: the half-angle (degrees) of the disc, [1e-4, 45] (default 0.2675, the sun's).
+    pub angular_radius_deg: Option<f64>,
     // spot
     /// Spot: angle (degrees) from its axis where the light ends, (0, 90]; default 45.
     pub outer_angle: Option<f64>,

@@ -5,6 +5,7 @@
 //! has no error channel and may assume NaN and infinity never occur.
 
 pub mod builder;
+pub mod environment;
 pub mod format;
 pub mod gltf;
 mod load;
@@ -233,6 +234,30 @@ pub enum Light {
         inner_deg: f32,
         /// Angle from the axis where it ends (degrees).
         outer_deg: f32,
+    },
+    /// Radiance from every direction at infinity, seen by escaping rays (in place of
+    /// `render.background`) and sampled by shadow rays.
+    Environment {
+        /// Constant radiance where there is no map; the map's multiplier (its `scale`) where
+        /// there is one.
+        radiance: Vec3,
+        /// The equirectangular map, if any (`docs/lights.md` gives its directions).
+        map: Option<std::sync::Arc<environment::EnvironmentMap>>,
+        /// Degrees the map turns about +y, from +x towards -z.
+        rotate_deg: f32,
+        /// Shadow rays per shading point, >= 1.
+        samples: u32,
+    },
+    /// A disc of uniform radiance at infinity (the sun), seen within a cone.
+    Sun {
+        /// Unit direction the light travels.
+        direction: Vec3,
+        /// Irradiance on a surface facing it.
+        irradiance: Vec3,
+        /// The cone's half-angle (degrees).
+        angular_radius_deg: f64,
+        /// Shadow rays per shading point, >= 1.
+        samples: u32,
     },
 }
 

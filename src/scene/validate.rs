@@ -1574,11 +1574,43 @@ fn validate_lights(check: &Checker, file: &SceneFile) -> Result<Vec<Light>> {
             LightType::Directional => ("directional light", directional_light),
             LightType::Spot => ("spot light", spot_light),
             LightType::Area => ("area light", area_light),
+            LightType::Environment => ("environment light", environment_light),
+            LightType::Sun => ("sun", sun_light),
         };
         check.forbid(&prefix, kind, &foreign_light_fields(l))?;
         lights.push(validate(check, &prefix, l)?);
     }
+    one_environment(check, file)?;
     Ok(lights)
+}
+
+/// At most one environment light (as in Mitsuba: two would be one with their sum), and none
+/// beside a non-zero `render.background`, which it replaces for escaping rays.
+fn one_environment(check: &Checker, file: &SceneFile) -> Result<()> {
+    let mut environments = file
+        .lights
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.kind == LightType::Environment)
+        .map(|(i, _)| i);
+    let Some(first) = environments.next() else {
+        return Ok(());
+    };
+    if let Some(second) = environments.next() {
+        return Err(check.err(
+            &format!("lights[{second}].type"),
+            format!("a second environment light (lights[{first}] is one): a scene has one"),
+        ));
+    }
+    if file.render.background.0.iter().any(|&c| c != 0.0) {
+        return Err(check.err(
+            "render.background",
+            format!(
+                "is what escaping rays see where there is no environment light; lights[{first}]                  is one: set the background to 0 (the environment replaces it)"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The fields `l` gives that its type does not take, in the order a refusal names the first.
@@ -1595,6 +1627,10 @@ fn foreign_light_fields(l: &LightEntry) -> Vec<(&'static str, bool)> {
         ("samples", l.samples.is_some()),
         ("outer_angle", l.outer_angle.is_some()),
         ("inner_angle", l.inner_angle.is_some()),
+        ("file", l.file.is_some()),
+        ("scale", l.scale.is_some()),
+        ("rotate", l.rotate.is_some()),
+        ("angular_radius_deg", l.angular_radius_deg.is_some()),
     ];
     let own: &[&str] = match l.kind {
         LightType::Point => &["position", "intensity"],
@@ -1607,6 +1643,8 @@ fn foreign_light_fields(l: &LightEntry) -> Vec<(&'static str, bool)> {
             "inner_angle",
         ],
         LightType::Area => &["corner", "edge_u", "edge_v", "radiance", "samples"],
+        LightType::Environment => &["radiance", "file", "scale", "rotate", "samples"],
+        LightType::Sun => &["direction", "irradiance", "angular_radius_deg", "samples"],
     };
     given
         .into_iter()
@@ -1702,6 +1740,119 @@ fn area_light(check: &Checker, prefix: &str, l: &LightEntry) -> Result<Light> {
             &at("radiance"),
             check.require(&at("radiance"), l.radiance, "area light")?,
         )?,
+        samples: check.integer(&at("samples"), l.samples.unwrap_or(1), 1, MAX_LIGHT_SAMPLES)?,
+    })
+}
+
+/// An environment light: a constant `radiance`, or a map `file` (relative to the scene file)
+/// times `scale`, turned `rotate` degrees about +y.
+fn environment_light(check: &Checker, prefix: &str, l: &LightEntry) -> Result<Light> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let samples = check.integer(&at("samples"), l.samples.unwrap_or(1), 1, MAX_LIGHT_SAMPLES)?;
+    let Some(name) = &l.file else {
+        for (field, given) in [("scale", l.scale.is_some()), ("rotate", l.rotate.is_some())] {
+            if given {
+                return Err(check.err(
+                    &at(field),
+                    "applies to an environment map `file`, and there is none",
+                ));
+            }
+        }
+        let radiance = check.require(
+            &at("radiance"),
+            l.radiance,
+            "constant environment light (or give a map `file`)",
+        )?;
+        return Ok(Light::Environment {
+            radiance: check.radiometric(&at("radiance"), radiance)?,
+            map: None,
+            rotate_deg: 0.0,
+            samples,
+        });
+    };
+    if l.radiance.is_some() {
+        return Err(check.err(
+            &at("radiance"),
+            "does not apply to an environment map, whose texels give the radiance (use `scale`)",
+        ));
+    }
+    let scale = check.positive(&at("scale"), l.scale.unwrap_or(1.0))?;
+    let rotate = check.finite(&at("rotate"), l.rotate.unwrap_or(0.0))?;
+    let folder = check
+        .parsed
+        .path
+        .parent()
+        .unwrap_or(std::path::Path::new("."));
+    let path = folder.join(name);
+    let map = super::environment::EnvironmentMap::read(&path)
+        .map_err(|e| check.err(&at("file"), format!("{}: {e}", path.display())))?;
+    let peak = map
+        .texels
+        .iter()
+        .flatten()
+        .fold(0f64, |m, &c| m.max(c as f64))
+        * scale;
+    if peak > MAX_RADIOMETRIC {
+        return Err(check.err(
+            &at("scale"),
+            format!(
+                "makes the map's brightest texel {} (over {MAX_RADIOMETRIC:e}): sums of samples \
+                 would overflow the 32-bit floats of the render",
+                num(peak)
+            ),
+        ));
+    }
+    Ok(Light::Environment {
+        radiance: glam::Vec3::splat(scale as f32),
+        map: Some(std::sync::Arc::new(map)),
+        rotate_deg: rotate.rem_euclid(360.0) as f32,
+        samples,
+    })
+}
+
+/// Smallest and largest half-angle of a sun (degrees): below 1e-4 the cone's radiance
+/// E / (pi sin^2 alpha) nears f32's range for bright suns; above 45 it is no longer a sun.
+pub const SUN_ANGLE_RANGE: [f64; 2] = [1e-4, 45.0];
+
+/// A sun: the direction its light travels, its irradiance and its angular radius.
+fn sun_light(check: &Checker, prefix: &str, l: &LightEntry) -> Result<Light> {
+    let at = |f: &str| format!("{prefix}.{f}");
+    let direction = check.nonzero(
+        &at("direction"),
+        check.require(&at("direction"), l.direction, "sun")?,
+    )?;
+    let irradiance = check.radiometric(
+        &at("irradiance"),
+        check.require(&at("irradiance"), l.irradiance, "sun")?,
+    )?;
+    let alpha = check.finite(
+        &at("angular_radius_deg"),
+        l.angular_radius_deg.unwrap_or(0.2675),
+    )?;
+    let [low, high] = SUN_ANGLE_RANGE;
+    if !(low..=high).contains(&alpha) {
+        return Err(check.err(
+            &at("angular_radius_deg"),
+            format!("lies in [{low:e}, {high}] degrees, got {}", num(alpha)),
+        ));
+    }
+    let radiance =
+        irradiance.max_element() as f64 / (std::f64::consts::PI * alpha.to_radians().sin().powi(2));
+    if radiance > MAX_RADIOMETRIC {
+        return Err(check.err(
+            &at("irradiance"),
+            format!(
+                "seen through a disc of {} degrees is a radiance of {} (over {MAX_RADIOMETRIC:e}): \
+                 sums of samples would overflow the 32-bit floats of the render",
+                num(alpha),
+                num(radiance)
+            ),
+        ));
+    }
+    Ok(Light::Sun {
+        direction: direction.normalize().as_vec3(),
+        irradiance,
+        angular_radius_deg: alpha,
         samples: check.integer(&at("samples"), l.samples.unwrap_or(1), 1, MAX_LIGHT_SAMPLES)?,
     })
 }

@@ -91,8 +91,13 @@ override PREVIEW_SHADOWS: bool = true;
 
 // Irradiance-like factor (W/m^2 per unit BRDF) at `p` with normal `n` from light `light`.
 fn light_at(light: GpuLight, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    if (light.kind == LIGHT_DIRECTIONAL) {
+    // A sun as the directional light it nears; an environment as its mean radiance over the
+    // hemisphere above n, unshadowed (the irradiance pi L of a constant sky).
+    if (light.kind == LIGHT_DIRECTIONAL || light.kind == LIGHT_SUN) {
         return light.color * max(dot(n, light.p0), 0.0);
+    }
+    if (light.kind == LIGHT_ENVIRONMENT) {
+        return light.color * light.p1 * 3.14159265358979323846;
     }
     if (PREVIEW_AREA_LIGHTS && (light.kind == LIGHT_AREA || light.kind == LIGHT_TRIANGLE)) {
         return light.color * projected_solid_angle(light, p, n);

@@ -221,7 +221,7 @@ impl PreviewRenderer {
                 wgpu_error_text(&e)
             )));
         }
-        let [r, g, b] = flat.frame.background.map(f64::from);
+        let [r, g, b] = preview_background(flat).map(f64::from);
         Ok(PreviewRenderer {
             context: context.clone(),
             pipeline,
@@ -466,13 +466,24 @@ fn frame_uniforms(flat: &FlatScene, clip: glam::DMat4, eye: glam::Vec3) -> Previ
             0.0,
         ],
         eye: [eye.x, eye.y, eye.z, 0.0],
-        background: [
-            flat.frame.background[0],
-            flat.frame.background[1],
-            flat.frame.background[2],
-            0.0,
-        ],
+        background: {
+            let [r, g, b] = preview_background(flat);
+            [r, g, b, 0.0]
+        },
         ..Default::default()
+    }
+}
+
+/// What the preview shows where nothing is: the background, or an environment light's mean
+/// radiance (`layout::LIGHT_ENVIRONMENT`), which the preview draws no map of.
+fn preview_background(flat: &FlatScene) -> [f32; 3] {
+    let environment = flat
+        .lights
+        .iter()
+        .find(|l| l.kind == crate::layout::LIGHT_ENVIRONMENT);
+    match environment {
+        Some(l) => (glam::Vec3::from(l.color) * glam::Vec3::from(l.p1)).to_array(),
+        None => flat.frame.background,
     }
 }
 

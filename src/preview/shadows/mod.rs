@@ -24,7 +24,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
 
-use crate::layout::{GpuLight, LIGHT_AREA, LIGHT_DIRECTIONAL, LIGHT_TRIANGLE};
+use crate::layout::{
+    GpuLight, LIGHT_AREA, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SUN, LIGHT_TRIANGLE,
+};
 
 pub(crate) mod maps;
 
@@ -127,7 +129,10 @@ impl ShadowPlan {
         };
         for light in lights {
             let first = plan.views.len() as u32;
-            let entry = if light.kind == LIGHT_DIRECTIONAL {
+            let entry = if light.kind == LIGHT_ENVIRONMENT {
+                // Light from everywhere: the preview draws it unshadowed.
+                ShadowLight::default()
+            } else if light.kind == LIGHT_DIRECTIONAL || light.kind == LIGHT_SUN {
                 plan.views
                     .push(directional_view(Vec3::from(light.p0), (center, radius)));
                 ShadowLight {
@@ -174,7 +179,8 @@ impl ShadowPlan {
         lights
             .iter()
             .map(|l| match l.kind {
-                LIGHT_DIRECTIONAL => 1,
+                LIGHT_ENVIRONMENT => 0,
+                LIGHT_DIRECTIONAL | LIGHT_SUN => 1,
                 LIGHT_AREA | LIGHT_TRIANGLE => 6 * area_samples * area_samples,
                 _ => 6,
             })
