@@ -885,7 +885,7 @@ const REFUSED: &[(&str, &[&str])] = &[
     ),
     ("thin_lens.toml", &["shapes[1].material", "render.ambient"]),
     ("sky.toml", &["lights[0].file"]),
-    ("spot.toml", &["render.background"]),
+    ("sponza.toml", &["camera.film_shift", "shapes[0].material"]),
 ];
 
 #[test]
