@@ -76,7 +76,7 @@ fn map_texel(map: MapLayout, column: u32, row: u32) -> vec3<f32> {
 fn map_direction(u: f32, v: f32, turns: f32) -> vec4<f32> {
     let theta = sin_cos_turns(0.5 * v);
     let phi = sin_cos_turns(u + turns);
-    return vec4<f32>(theta.x * phi.y, theta.y, -theta.x * phi.x, theta.x);
+    return vec4<f32>(theta.x * phi.x, theta.y, -theta.x * phi.y, theta.x);
 }
 
 fn map_solid_angle_pdf(pdf_uv: f32, sin_theta: f32) -> f32 {
@@ -105,7 +105,7 @@ fn environment_sample(light: GpuLight, u: vec2<f32>) -> SkySample {
 
 // Map coordinates (u, v) of unit direction `d` on a map turned `turns` about +y.
 fn map_coordinates(d: vec3<f32>, turns: f32) -> vec2<f32> {
-    let u = atan2(-d.z, d.x) / (2.0 * PI) - turns;
+    let u = atan2(d.x, -d.z) / (2.0 * PI) - turns;
     let sin_theta = sqrt(d.x * d.x + d.z * d.z);
     return vec2<f32>(u - floor(u), atan2(sin_theta, d.y) / PI);
 }

@@ -1024,8 +1024,8 @@ impl<'a> Exporter<'a> {
         self.files.push((name.clone(), bytes));
         let (sin, cos) = (rotate_deg as f64).to_radians().sin_cos();
         // Mitsuba's local direction at longitude phi is (sin phi, ., -cos phi), chambre's
-        // (cos(phi + rotate), ., -sin(phi + rotate)): this matrix takes one to the other.
-        let to_world = format!("{} 0 {} 0 0 1 0 0 {} 0 {} 0 0 0 0 1", -sin, -cos, -cos, sin);
+        // (sin(phi + rotate), ., -cos(phi + rotate)): the turn about +y by rotate.
+        let to_world = format!("{cos} 0 {} 0 0 1 0 0 {sin} 0 {cos} 0 0 0 0 1", -sin);
         let _ = writeln!(
             self.emitters,
             "  <emitter type=\"envmap\">\n    <string name=\"filename\" value=\"{}\"/>\n    <float name=\"scale\" value=\"{}\"/>\n    <transform name=\"to_world\">\n      <matrix value=\"{to_world}\"/>\n    </transform>\n{weight}  </emitter>",

@@ -112,7 +112,7 @@ fn map_direction(u: f32, v: f32, turns: f32) -> (Vec3, f32) {
     let (sin_theta, cos_theta) = sin_cos_turns(0.5 * v);
     let (sin_phi, cos_phi) = sin_cos_turns(u + turns);
     (
-        Vec3::new(sin_theta * cos_phi, cos_theta, -sin_theta * sin_phi),
+        Vec3::new(sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi),
         sin_theta,
     )
 }
@@ -152,10 +152,11 @@ pub fn environment_sample(light: &GpuLight, data: &[f32], u: [f32; 2]) -> SkySam
 }
 
 /// The map coordinates (u, v) of unit direction `d` on a map turned `turns` about +y: u the
-/// longitude from +x towards -z over 2 pi, v the angle from +y over pi
-/// (`texture::sphere_coordinates`).
+/// longitude from -z towards +x over 2 pi, v the angle from +y over pi: Mitsuba's and pbrt's
+/// orientation, in which a map seen from inside the scene shows its image as it is (a
+/// sphere's texture, seen from outside, runs the other way: `texture::sphere_coordinates`).
 pub fn map_coordinates(d: Vec3, turns: f32) -> (f32, f32) {
-    let u = (-d.z).atan2(d.x) / (2.0 * PI) - turns;
+    let u = d.x.atan2(-d.z) / (2.0 * PI) - turns;
     let sin_theta = (d.x * d.x + d.z * d.z).sqrt();
     (u - u.floor(), sin_theta.atan2(d.y) / PI)
 }
@@ -263,9 +264,9 @@ mod tests {
                 );
             }
         }
-        // u = 0 is +x, u = 1/4 is -z, v = 0 is +y (texture::sphere_coordinates).
-        assert!((map_direction(0.0, 0.5, 0.0).0 - Vec3::X).length() < 1e-6);
-        assert!((map_direction(0.25, 0.5, 0.0).0 + Vec3::Z).length() < 1e-6);
+        // u = 0 is -z, u = 1/4 is +x (Mitsuba's envmap), v = 0 is +y.
+        assert!((map_direction(0.0, 0.5, 0.0).0 + Vec3::Z).length() < 1e-6);
+        assert!((map_direction(0.25, 0.5, 0.0).0 - Vec3::X).length() < 1e-6);
         assert!((map_direction(0.3, 0.0, 0.0).0 - Vec3::Y).length() < 1e-6);
     }
 

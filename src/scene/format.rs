@@ -452,7 +452,7 @@ pub struct LightEntry {
     pub file: Option<String>,
     /// Environment: the map's radiance multiplier, > 0 (default 1).
     pub scale: Option<f64>,
-    /// Environment: degrees the map turns about +y (from +x towards -z; default 0).
+    /// Environment: degrees the map turns about +y (from -z towards +x; default 0).
     pub rotate: Option<f64>,
     // sun
     /// Sun: the half-angle (degrees) of the disc, [1e-4, 45] (default 0.2675, the sun's).

@@ -243,7 +243,7 @@ pub enum Light {
         radiance: Vec3,
         /// The equirectangular map, if any (`docs/lights.md` gives its directions).
         map: Option<std::sync::Arc<environment::EnvironmentMap>>,
-        /// Degrees the map turns about +y, from +x towards -z.
+        /// Degrees the map turns about +y, from -z towards +x.
         rotate_deg: f32,
         /// Shadow rays per shading point, >= 1.
         samples: u32,
