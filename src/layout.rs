@@ -918,14 +918,14 @@ const _: () = assert!(size_of::<GpuPass>() == 64);
 pub const REFLECTION_TOLERANCE: f32 = 1e-2;
 
 /// The Fermat search's initial corner C stands off the middle of AB by this many lengths of AB
-/// (the seed asks only for a triangle that is not flat).
+/// (Roger and Holzschuch ask only for a triangle that is not flat).
 pub const FERMAT_C_OFFSET: f32 = 0.25;
 
 /// A sphere's (or ellipsoid's, in its unit sphere's coordinates) point O, which the initial
 /// corners A and B aim at, lies this fraction of the radius from the centre toward the bisector
 /// of E and V (the facing frame's x axis): A and B then cross the surface near the reflection,
 /// which lies between them, instead of at E's and V's own directions. At the centre (the
-/// seed's figure) 96.9% of the test's random configurations converged within 5 steps; here
+/// Roger and Holzschuch's figure) 96.9% of the test's random configurations converged within 5 steps; here
 /// 99.9% (docs/fermat.md).
 pub const FERMAT_INSIDE: f32 = 0.9;
 
@@ -937,7 +937,7 @@ pub const FERMAT_SPREAD: f32 = 1e-3;
 /// twice its area below this fraction of its longest side squared (a height under 1/1000 of the
 /// side). Then the next farthest goes. On a sphere d(u, v) is separable in the facing frame:
 /// A, B and every point the search finds lie on the equator, and replacing C there left three
-/// collinear corners whose gradients' system is singular, the next step noise. The seed warns
+/// collinear corners whose gradients' system is singular, the next step noise. Roger and Holzschuch warn
 /// that flat triangles break the step's system.
 pub const FERMAT_FLAT: f32 = 1e-3;
 

@@ -47,17 +47,6 @@ fn build(builder: SceneBuilder, integrator: &str) -> Scene {
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// The scene rendered on the CPU and on the GPU (a GPU test fails without an adapter unless
-/// CHAMBRE_SKIP_GPU=1).
-fn both(scene: &Scene) -> Vec<(&'static str, Image)> {
-    let flat = flatten(scene);
-    let mut images = vec![("CPU", common::render_cpu(&flat))];
-    if let Some(gpu) = common::render_gpu(&flat) {
-        images.push(("GPU", gpu));
-    }
-    images
-}
-
 /// Mean and standard error of the mean of channel `c` over pixels `xs` x `ys`.
 fn block_mean(
     image: &Image,
@@ -120,7 +109,7 @@ fn a_convex_sphere_in_a_constant_environment_shows_its_albedo() {
                 sphere_scene(albedo, |b| b.environment_light([1.0; 3], 4)),
                 integrator,
             );
-            for (path, image) in both(&scene) {
+            for (path, image) in common::both(&scene) {
                 let what = format!("{integrator} {path} albedo {albedo}");
                 let worst = assert_block(&what, &image, 10..22, 10..22, albedo, 0.0);
                 eprintln!("{what}: worst {worst:.2} standard errors");
@@ -148,7 +137,7 @@ fn an_infinite_plane_under_a_constant_sky_shows_albedo_times_the_sky() {
                 .environment_light([sky; 3], 2),
             integrator,
         );
-        for (path, image) in both(&scene) {
+        for (path, image) in common::both(&scene) {
             let what = format!("{integrator} {path}");
             assert_block(&what, &image, 0..24, 16..24, albedo * sky, 0.0);
             assert_eq!(image.pixels[0], Vec3::splat(sky as f32), "{what}: sky");
@@ -177,7 +166,7 @@ fn a_plane_facing_a_sun_receives_its_irradiance_times_the_cosine() {
                     .sun(direction, [irradiance; 3], alpha, 4),
                 integrator,
             );
-            for (path, image) in both(&scene) {
+            for (path, image) in common::both(&scene) {
                 let what = format!("{integrator} {path} alpha {alpha}");
                 let worst = assert_block(&what, &image, 0..24, 16..24, expected, 1e-4);
                 eprintln!("{what}: worst {worst:.2} standard errors");
@@ -241,7 +230,7 @@ fn a_map_of_one_value_lights_as_the_constant_environment() {
             }),
             integrator,
         );
-        for (path, image) in both(&scene) {
+        for (path, image) in common::both(&scene) {
             let what = format!("{integrator} {path}");
             assert_block(&what, &image, 10..22, 10..22, 0.5, 0.0);
             assert_eq!(image.pixels[0], Vec3::ONE, "{what}: corner");

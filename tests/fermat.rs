@@ -153,7 +153,7 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points() {
         },
         eye.as_vec3(),
         &vertices.iter().map(|v| v.as_vec3()).collect::<Vec<_>>(),
-        chambre::preview::reflections::kernel::SEED_STEPS,
+        chambre::preview::reflections::kernel::PAPER_STEPS,
     )
     .unwrap();
     let solver = Solver::default();
@@ -703,7 +703,7 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points_on_a_torus_an_ellipsoid_and_a_cyl
             surface,
             eye.as_vec3(),
             &vertices.iter().map(|v| v.as_vec3()).collect::<Vec<_>>(),
-            chambre::preview::reflections::kernel::SEED_STEPS,
+            chambre::preview::reflections::kernel::PAPER_STEPS,
         )
         .unwrap();
         let (mut compared, mut agree, mut own_agree) = (0, 0, 0);
@@ -931,7 +931,7 @@ fn the_gpu_kernel_finds_the_cpu_solvers_points_on_bezier_patches() {
             MirrorSurface::Patch(*patch),
             eye.as_vec3(),
             &vertices.iter().map(|v| v.as_vec3()).collect::<Vec<_>>(),
-            chambre::preview::reflections::kernel::SEED_STEPS,
+            chambre::preview::reflections::kernel::PAPER_STEPS,
         )
         .unwrap();
         for (v, gpu) in vertices.iter().zip(&on_gpu) {

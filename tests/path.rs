@@ -20,16 +20,6 @@ fn path_traced(builder: SceneBuilder) -> Scene {
         .unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// The scene rendered on the CPU and, where an adapter is, on the GPU.
-fn both(scene: &Scene) -> Vec<(&'static str, Image)> {
-    let flat = flatten(scene);
-    let mut images = vec![("CPU", common::render_cpu(&flat))];
-    if let Some(gpu) = common::render_gpu(&flat) {
-        images.push(("GPU", gpu));
-    }
-    images
-}
-
 fn pixel(image: &Image, x: u32, y: u32) -> [f32; 3] {
     image.pixels[(y * image.width + x) as usize].to_array()
 }
@@ -54,7 +44,7 @@ fn a_convex_lambert_sphere_in_a_uniform_sky_reflects_exactly_its_albedo() {
                 .lambert("grey", [albedo; 3])
                 .sphere([0.0, 0.0, -4.0], 1.0, "grey"),
         );
-        for (path, image) in both(&scene) {
+        for (path, image) in common::both(&scene) {
             // The centre 12 x 12 pixels lie inside the sphere's outline, the corners outside.
             for y in 10..22 {
                 for x in 10..22 {
@@ -87,7 +77,7 @@ fn an_infinite_plane_under_a_uniform_sky_reflects_albedo_times_the_sky() {
             .lambert("ground", [albedo; 3])
             .plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "ground"),
     );
-    for (path, image) in both(&scene) {
+    for (path, image) in common::both(&scene) {
         // The lower rows see the plane, the top row the sky.
         for x in 0..24 {
             let [ground, ..] = pixel(&image, x, 23);
@@ -116,7 +106,7 @@ fn a_glass_sphere_in_a_uniform_sky_vanishes() {
             .dielectric("glass", 1.5)
             .sphere([0.0, 0.0, -4.0], 1.0, "glass"),
     );
-    for (path, image) in both(&scene) {
+    for (path, image) in common::both(&scene) {
         for y in 0..24 {
             for x in 0..24 {
                 for c in pixel(&image, x, y) {
@@ -161,7 +151,7 @@ fn a_glass_slab_transmits_what_fresnel_says_at_normal_incidence() {
                 1,
             ),
     );
-    for (path, image) in both(&scene) {
+    for (path, image) in common::both(&scene) {
         let measured = mean(&image);
         eprintln!("{path}: {measured:.5} (Fresnel {expected:.5})");
         assert!(
@@ -220,7 +210,7 @@ fn an_obj_glass_tetrahedron_in_a_uniform_sky_vanishes() {
     let scene = scene_file("path");
     assert_eq!(scene.materials[0].model, chambre::layout::MODEL_DIELECTRIC);
     assert_eq!(scene.materials[0].ior, 1.33);
-    for (path, image) in both(&scene) {
+    for (path, image) in common::both(&scene) {
         for y in 0..24 {
             for x in 0..24 {
                 for c in pixel(&image, x, y) {
@@ -301,7 +291,7 @@ fn a_closed_emitting_box_sums_the_geometric_series_cut_at_max_depth() {
         let expected: f64 = (0..=max_depth + 1)
             .map(|k| emission * rho.powi(k as i32))
             .sum();
-        for (path, image) in both(&scene) {
+        for (path, image) in common::both(&scene) {
             let measured = mean(&image);
             eprintln!("{path}: max_depth {max_depth}: {measured:.5} (series {expected:.5})");
             assert!(
@@ -449,7 +439,7 @@ fn a_white_rough_conductor_in_a_uniform_sky_shows_its_albedo() {
                 .rough_conductor("metal", [1.0; 3], roughness)
                 .sphere([0.0, 0.0, -4.0], 1.0, "metal"),
         );
-        for (path, image) in both(&scene) {
+        for (path, image) in common::both(&scene) {
             // The centre pixels see normals within about 4° of the view.
             let centre: Vec<f32> = [(15, 15), (16, 15), (15, 16), (16, 16)]
                 .iter()

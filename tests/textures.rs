@@ -80,16 +80,6 @@ fn assert_quadrants_upright(what: &str, image: &Image) {
     }
 }
 
-/// The scene rendered on the CPU and, where an adapter is, on the GPU.
-fn both(scene: &Scene) -> Vec<(&'static str, Image)> {
-    let flat = flatten(scene);
-    let mut images = vec![("CPU", common::render_cpu(&flat))];
-    if let Some(gpu) = common::render_gpu(&flat) {
-        images.push(("GPU", gpu));
-    }
-    images
-}
-
 fn load(dir: &Path, text: &str) -> Result<Scene, String> {
     let path = dir.join("scene.toml");
     std::fs::write(&path, text).unwrap();
@@ -114,7 +104,7 @@ diffuse = [1.0, 1.0, 1.0]
 diffuse_texture = "quadrants.png""#,
     );
     let scene = load(&dir, &text).unwrap();
-    for (path, image) in both(&scene) {
+    for (path, image) in common::both(&scene) {
         assert_quadrants_upright(&format!("quad, {path}"), &image);
     }
 }
@@ -141,7 +131,7 @@ fn an_obj_map_kd_is_read_beside_its_library_whatever_its_case() {
         "",
     );
     let scene = load(&dir, &text).unwrap();
-    for (path, image) in both(&scene) {
+    for (path, image) in common::both(&scene) {
         assert_quadrants_upright(&format!("OBJ, {path}"), &image);
     }
 }

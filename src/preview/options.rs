@@ -30,7 +30,7 @@ pub struct PreviewOptions {
 }
 
 impl Default for PreviewOptions {
-    /// Curved shapes within half a pixel; automatic subdivision; 12 steps, where the seed's 5
+    /// Curved shapes within half a pixel; automatic subdivision; 12 steps, where Roger and Holzschuch's 5
     /// leave 13% of a fine floor's vertices unconverged (holes in the reflection) and 12 leave
     /// 0.5% (docs/fermat.md).
     fn default() -> PreviewOptions {

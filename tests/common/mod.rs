@@ -81,6 +81,17 @@ pub fn render_clean(flat: &FlatScene, backend: &mut dyn Backend) -> RenderOutput
     output
 }
 
+/// The scene rendered on the CPU and, where an adapter is, on the GPU (in CI a GPU test fails
+/// without one: `gpu_context`), each with its path's name.
+pub fn both(scene: &Scene) -> Vec<(&'static str, Image)> {
+    let flat = flatten(scene);
+    let mut images = vec![("CPU", render_cpu(&flat))];
+    if let Some(gpu) = render_gpu(&flat) {
+        images.push(("GPU", gpu));
+    }
+    images
+}
+
 pub fn render_both(path: &str, overrides: &[&str]) -> Option<(Image, Image)> {
     let flat = flatten(&load(path, overrides));
     let gpu = render_gpu(&flat)?;

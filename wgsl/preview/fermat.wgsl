@@ -8,12 +8,12 @@
 // anchored_on_patch, anchored_on_torus_half), src/scene/parametric.rs (Sphere, Sphere::facing,
 // Torus, BezierPatch, Ellipsoid, Cylinder: the surfaces' points, tangents and normals).
 
-// Steps at most: the seed's 5 unless the pipeline overrides it (`preview::reflections::kernel::FermatPass`).
+// Steps at most: Roger and Holzschuch's 5 unless the pipeline overrides it (`preview::reflections::kernel::FermatPass`).
 override FERMAT_STEPS: u32 = 5u;
 // The reflector's kind (`REFLECTOR_SPHERE`, ...): a pipeline per kind, so that each carries
 // only its own surface's code (`preview::reflections::kernel::FermatPass`).
 override REFLECTOR_KIND: u32 = 0u;
-// Whether a patch's own points are searched again where the seed's corners find nothing (with
+// Whether a patch's own points are searched again where Roger and Holzschuch's corners find nothing (with
 // self-reflections: `preview::reflections::kernel::FermatPass`).
 override OWN_POINTS_SEARCHED_AGAIN: bool = false;
 // The search stops when its triangle's longest side in (u, v), or its last step, is below this.
@@ -324,7 +324,7 @@ struct Search {
     degenerate: u32,
 }
 
-// The seed's search from initial corners A and B (`fermat::Solver::solve`): the gradients of d
+// Roger and Holzschuch's search from initial corners A and B (`fermat::Solver::solve`): the gradients of d
 // at A, B and C, the point where their linear interpolation vanishes replacing a corner, until
 // the triangle or the step is small or the steps run out.
 fn search_from(f: Frame, eye: vec3<f32>, vertex: vec3<f32>, a: vec2<f32>, b_start: vec2<f32>)
@@ -472,7 +472,7 @@ fn fermat(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     var result = search_from(f, eye, vertex, a0, b0);
     var found = found_at(f, result, world_vertex);
-    // A teapot's own point that the seed's corners do not lead to a reflection on this patch
+    // A teapot's own point that Roger and Holzschuch's corners do not lead to a reflection on this patch
     // searches again from the patch's point that fails the law of reflection least
     // (`fermat::solve_on_patch`): a point of the mirror sees its other patches from close by,
     // where the segment V -> O seldom crosses them near the reflection.

@@ -69,7 +69,7 @@ fn reflected_vertex(@builtin(vertex_index) k: u32) -> ReflectedOut {
     let r = reflected_points[row * search.solves + solve_of[i]];
     var clip = preview.clip * vec4<f32>(r.point, 1.0);
     // Depth linear in |P - V| (interpolated across the triangle after the perspective divide,
-    // as the seed's z-buffer does).
+    // as Roger and Holzschuch's z-buffer does).
     clip.z = clamp(r.depth / search.far, 0.0, 1.0) * clip.w;
     return ReflectedOut(clip, v.position, v.normal, v.material, r.point, r.normal, v.reflector,
         search.id, search.material);

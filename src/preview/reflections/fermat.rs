@@ -44,7 +44,7 @@ pub trait Reflector: ParametricSurface {
     /// The parameters of the surface point where the segment from `outside` to
     /// `inside(outside)` crosses the surface.
     fn crossing(&self, outside: DVec3) -> DVec2;
-    /// The initial corners A and B for the reflection of `vertex` seen from `eye`: the seed's
+    /// The initial corners A and B for the reflection of `vertex` seen from `eye`: Roger and Holzschuch's
     /// crossings of E → O and V → O, unless the surface knows better.
     fn initial_corners(&self, eye: DVec3, vertex: DVec3) -> (DVec2, DVec2) {
         (self.crossing(eye), self.crossing(vertex))
@@ -138,7 +138,7 @@ impl Reflector for Torus {
 }
 
 /// The half of a torus one of its two searches shows the images on. A point can show on a
-/// torus more than once, and the seed's crossings lead the search to the images on the outer
+/// torus more than once, and Roger and Holzschuch's crossings lead the search to the images on the outer
 /// half only: never, for instance, to the image of a floor point inside the hole, which the
 /// eye sees in the far inner wall, nor to a point of the torus itself, whose own crossing is
 /// the point (P = V). So a torus is searched twice, as a teapot's patches are searched each,
@@ -146,7 +146,7 @@ impl Reflector for Torus {
 /// (`anchored_on_torus_half`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TorusHalf {
-    /// cos v ≥ 0, facing away from the axis: searched from the seed's crossings.
+    /// cos v ≥ 0, facing away from the axis: searched from Roger and Holzschuch's crossings.
     Outer,
     /// cos v < 0, the wall of the hole: searched from across the hole, where what a point
     /// sees of the inner wall lies: both corners on the inner equator, across from E's and
@@ -282,7 +282,7 @@ impl Reflector for BezierPatch {
 /// The solver's settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Solver {
-    /// Steps at most (the seed's 4–5).
+    /// Steps at most (Roger and Holzschuch's 4–5).
     pub max_steps: u32,
     /// The search stops when the triangle's longest side in (u, v) is below this, or its last
     /// step moved less (the triangle keeps a far corner where it would otherwise go flat).
@@ -319,7 +319,7 @@ pub fn gradient(reflector: &impl Reflector, eye: DVec3, vertex: DVec3, uv: DVec2
     DVec2::new(-fu.dot(pull), -fv.dot(pull))
 }
 
-/// The seed's initial triangle: A and B where E → O and V → O cross the reflector (or where
+/// Roger and Holzschuch's initial triangle: A and B where E → O and V → O cross the reflector (or where
 /// the surface starts instead, `Reflector::initial_corners`: a torus's inner half across the
 /// hole), C off the middle of AB by `FERMAT_C_OFFSET` of its length, so the triangle is not
 /// flat (or a triangle of side `FERMAT_SPREAD` at A when A and B coincide).
@@ -346,7 +346,7 @@ pub fn initial_triangle(reflector: &impl Reflector, eye: DVec3, vertex: DVec3) -
     }
 }
 
-/// The corner a step's new point `p` replaces: the farthest from it (the seed's rule), or the
+/// The corner a step's new point `p` replaces: the farthest from it (Roger and Holzschuch's rule), or the
 /// next farthest where replacing that one would leave a flat triangle (`FERMAT_FLAT`).
 pub fn replaced_corner(corners: &[DVec2; 3], p: DVec2) -> usize {
     let mut by_distance = [0, 1, 2];
@@ -471,7 +471,7 @@ pub fn sampled_start(patch: &BezierPatch, eye: DVec3, vertex: DVec3) -> DVec2 {
 }
 
 /// The search for `vertex`, a point of the mirror `patch` is part of (a teapot's own point),
-/// on `patch`: the seed's search, and where the preview would show nothing of it, another
+/// on `patch`: Roger and Holzschuch's search, and where the preview would show nothing of it, another
 /// from `sampled_start` (A there, B = A + (`SAMPLED_START_SIDE`, half that)). A point of the
 /// mirror sees its other patches from close by, where the segment V → O seldom crosses them
 /// near the reflection. The kernel's, with `OWN_POINTS_SEARCHED_AGAIN`.

@@ -16,8 +16,8 @@ use crate::gpu::GpuContext;
 use crate::gpu::kernels::{self, FERMAT, FERMAT_CULL, FERMAT_START, slot};
 use crate::layout::{GpuDrawArgs, GpuReflection, GpuReflector, REFLECTOR_PATCH};
 
-/// The seed's step count ("4–5 steps"), the kernel's default.
-pub const SEED_STEPS: u32 = 5;
+/// Roger and Holzschuch's step count ("4–5 steps"), the kernel's default.
+pub const PAPER_STEPS: u32 = 5;
 
 /// Vertices an invocation group of the kernel takes (its `@workgroup_size`).
 const WORKGROUP: u32 = 64;
@@ -73,7 +73,7 @@ pub struct FermatCull {
 
 impl FermatPass {
     /// Builds the kernel for each of `kinds` of reflector, to take at most `steps` steps, a
-    /// patch's own points searched again where the seed's corners find nothing when
+    /// patch's own points searched again where Roger and Holzschuch's corners find nothing when
     /// `own_points` (mirrors reflecting themselves; without, the kernel carries none of that
     /// code: on lavapipe it cost the teapot's frame 5% unused). Validation errors surface
     /// through the caller's error scope.
@@ -360,7 +360,7 @@ pub fn shown_triangles(
 
 /// The reflection point of each of `vertices`, points of the mirror `surface` is part of,
 /// seen from `eye` on `surface`, found in at most `steps` steps (a teapot's own points
-/// search again where the seed's corners find none: `fermat::solve_on_patch`).
+/// search again where Roger and Holzschuch's corners find none: `fermat::solve_on_patch`).
 pub fn own_reflections(
     context: &GpuContext,
     surface: MirrorSurface,

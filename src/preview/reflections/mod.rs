@@ -162,9 +162,10 @@ impl MirrorSurface {
 
 /// The scene's curved mirrors: mirror spheres in primitive order, then the scene's mirror
 /// parametric surfaces (tori, ellipsoids, cylinders, Bézier shapes; flat
-/// mirrors, mirror triangles and quads of meshes are drawn with their diffuse term only: the
-/// seed's method is for smooth curved reflectors). None where the scene's paths do not bounce
-/// (`max_depth` 0): the ray tracer shows no reflection there either.
+/// mirrors, mirror triangles and quads of meshes are drawn with their diffuse term only:
+/// Roger and Holzschuch's Fermat search is for smooth curved reflectors). None where the
+/// scene's paths do not bounce (`max_depth` 0): the ray tracer shows no reflection there
+/// either.
 pub fn reflectors(scene: &FlatScene) -> Vec<Reflector> {
     if scene.frame.max_depth == 0 {
         return Vec::new();
@@ -257,7 +258,7 @@ pub(crate) fn reflector_tags(scene: &FlatScene, reflectors: &[Reflector]) -> Vec
 /// leave no edge longer than `AUTO_PIECE` of the scene's radius (at most `MAX_AUTO_PIECES`).
 /// The raster pipeline draws a reflected triangle straight between its vertices' reflection
 /// points, where the true reflection of a straight edge is curved: subdividing is what keeps
-/// the error small (the seed subdivides its floor 16x16).
+/// the error small (Roger and Holzschuch subdivide their floor 16x16).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReflectedSet {
     longest: f32,
