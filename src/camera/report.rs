@@ -4,6 +4,7 @@ use std::fmt::Write;
 
 use glam::{DMat4, DVec3};
 
+use super::lens::LensSystem;
 use super::optics::{Line, Plane};
 use super::{CameraSpec, Focus};
 
@@ -243,4 +244,66 @@ pub fn camera_summary(camera: &CameraSpec) -> String {
             format!("f/{}", camera.f_number)
         }
     )
+}
+
+/// What `chambre lens` prints: a prescription's paraxial properties (mm, along the axis from the
+/// first vertex towards the film) and its image circle at the f-number it is set to, for a film
+/// focused at infinity.
+pub fn lens_report(lens: &LensSystem) -> String {
+    let p = &lens.paraxial;
+    let f = p.focal_length;
+    let circle = lens.image_circle(f, f / 400.0, 4.0 * f);
+    let mut out = String::new();
+    let mut line = |label: &str, value: String| {
+        let _ = writeln!(out, "{label:<28} {value}");
+    };
+    line("surfaces", lens.surfaces.len().to_string());
+    line("focal length", format!("{f:.4} mm"));
+    line(
+        "back focal distance",
+        format!("{:.4} mm", p.back_focal_distance),
+    );
+    line(
+        "front focal distance",
+        format!("{:.4} mm", p.front_focal_distance),
+    );
+    line(
+        "front principal point H",
+        format!("{:.4} mm", p.front_principal),
+    );
+    line(
+        "rear principal point H'",
+        format!("{:.4} mm", p.rear_principal),
+    );
+    line("last vertex", format!("{:.4} mm", p.last_vertex));
+    let stop_scale = p.widest_f_number / lens.f_number;
+    line(
+        "entrance pupil",
+        format!(
+            "at {:.4} mm, diameter {:.4} mm",
+            p.entrance_pupil,
+            p.entrance_pupil_diameter * stop_scale
+        ),
+    );
+    line(
+        "exit pupil",
+        format!(
+            "at {:.4} mm, diameter {:.4} mm",
+            p.exit_pupil,
+            p.exit_pupil_diameter * stop_scale
+        ),
+    );
+    line(
+        "f-number",
+        format!("f/{:.3} (widest f/{:.3})", lens.f_number, p.widest_f_number),
+    );
+    line(
+        "image circle at infinity",
+        format!(
+            "diameter {:.2} mm at half illumination, {:.2} mm to dark (cos^4 and vignetting)",
+            2.0 * circle.half_radius,
+            2.0 * circle.dark_radius
+        ),
+    );
+    out
 }

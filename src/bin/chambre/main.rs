@@ -13,7 +13,8 @@ use clap::{Parser, Subcommand};
 
 use chambre::Result;
 use chambre::camera::Focus;
-use chambre::camera::report::{camera_report, camera_summary};
+use chambre::camera::lens::{LensSystem, Prescription};
+use chambre::camera::report::{camera_report, camera_summary, lens_report};
 use chambre::gpu::describe_adapters;
 use chambre::pack::flatten;
 use chambre::scene::Scene;
@@ -66,6 +67,15 @@ enum Command {
         #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
+    /// Print what a lens prescription does (pbrt's tabular format; docs/lens.md): focal length,
+    /// focal distances, principal points, pupils and the image circle at an f-number.
+    Lens {
+        /// Prescription file (radius, thickness, index, aperture per surface, in mm).
+        file: PathBuf,
+        /// The f-number to stop the lens to (default: the widest it opens to).
+        #[arg(long)]
+        f_number: Option<f64>,
+    },
     /// Parse and validate a scene without rendering.
     Check {
         /// Scene file (TOML; see docs/scene-format.md).
@@ -110,6 +120,7 @@ fn main() -> ExitCode {
             far,
             set,
         } => run_camera(&scene, coc, far, &set),
+        Command::Lens { file, f_number } => run_lens(&file, f_number),
         Command::Preview(args) => preview::run(&args),
         Command::Info => run_info(),
         Command::Merge(args) => shard::run_merge(&args),
@@ -211,6 +222,14 @@ fn run_check(path: &Path, overrides: &[String]) -> anyhow::Result<ExitCode> {
         flat.build_time.as_secs_f64() * 1e3
     )?;
     print(&text)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_lens(path: &Path, f_number: Option<f64>) -> anyhow::Result<ExitCode> {
+    let prescription = Prescription::read(path)?;
+    let lens = LensSystem::new(&prescription, f_number)
+        .map_err(|message| anyhow::anyhow!("{}: {message}", path.display()))?;
+    print(&lens_report(&lens))?;
     Ok(ExitCode::SUCCESS)
 }
 

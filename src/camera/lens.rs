@@ -1,0 +1,694 @@
+//! Real lenses: a prescription of spherical surfaces and a stop, read from pbrt's tabular lens
+//! format, its paraxial properties by ray-transfer matrices, and exact rays traced through it
+//! (Snell's law at each surface, total internal reflection and every clear aperture stopping a
+//! ray). CPU, f64: the reference the kernels' f32 tracing will be measured against. Model and
+//! equations: `docs/lens.md`.
+//!
+//! A prescription lists its surfaces from the object side to the image side, one per line:
+//! `radius thickness index aperture` in millimetres, where a positive radius has its centre of
+//! curvature on the image side, `thickness` is the axial distance to the next surface, `index`
+//! is the refractive index of the medium after the surface (towards the image) and `aperture`
+//! the clear diameter. A radius of 0 is the aperture stop (its index 0 or 1: it sits in air), its
+//! diameter the stop's at the lens's widest f-number. The last thickness is ignored: the film's
+//! distance is the camera's focus, not the lens's. `#` starts a comment.
+//!
+//! The surfaces are placed in the camera's *lens frame* (optical axis +z towards the object,
+//! lengths in mm) with the origin at the rear principal point H': the point the thin lens's
+//! centre stands for, so that a film at `film_distance` = f behind it is focused at infinity
+//! whatever the lens, and the movements turn the stack about it (in air the rear nodal point).
+
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::error::{Error, Location, Result};
+
+/// One surface of a prescription, as the file gives it (mm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrescriptionSurface {
+    /// Radius of curvature; positive: the centre lies on the image side. 0: the aperture stop.
+    pub radius: f64,
+    /// Axial distance to the next surface.
+    pub thickness: f64,
+    /// Refractive index of the medium after the surface (1 for air; the stop's is 1).
+    pub index: f64,
+    /// Clear aperture's diameter (the stop's at the widest f-number).
+    pub aperture: f64,
+}
+
+impl PrescriptionSurface {
+    /// Whether this is the aperture stop.
+    pub fn is_stop(&self) -> bool {
+        self.radius == 0.0
+    }
+}
+
+/// A lens prescription: its surfaces from the object side to the image side, with exactly one
+/// stop.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prescription {
+    /// Surfaces, object side first.
+    pub surfaces: Vec<PrescriptionSurface>,
+}
+
+/// The column names of a prescription line, as errors name them.
+const COLUMNS: [&str; 4] = ["radius", "thickness", "index", "aperture"];
+
+/// Indices above this are not glass (diamond is 2.42; the bound catches a column mistaken for
+/// another, such as a thickness in the index column).
+const MAX_INDEX: f64 = 4.0;
+
+impl Prescription {
+    /// Reads a prescription file.
+    pub fn read(path: &Path) -> Result<Prescription> {
+        let text = std::fs::read_to_string(path).map_err(|cause| Error::Io {
+            path: path.to_path_buf(),
+            cause,
+        })?;
+        Prescription::parse(path, &text)
+    }
+
+    /// Parses a prescription's text; `path` names the file in errors, with the line and column.
+    pub fn parse(path: &Path, text: &str) -> Result<Prescription> {
+        let error = |line: usize, field: &str, message: String| Error::Scene {
+            location: Location {
+                file: path.to_path_buf(),
+                line,
+                column: 1,
+                field: field.to_string(),
+            },
+            message,
+        };
+        let mut surfaces = Vec::new();
+        let mut stop_line = None;
+        for (number, line) in text.lines().enumerate().map(|(i, l)| (i + 1, l)) {
+            let content = line.split('#').next().unwrap_or("").trim();
+            if content.is_empty() {
+                continue;
+            }
+            let words: Vec<&str> = content.split_whitespace().collect();
+            if words.len() != 4 {
+                return Err(error(
+                    number,
+                    "",
+                    format!(
+                        "{} numbers where a surface has 4: radius, thickness, index, aperture (mm)",
+                        words.len()
+                    ),
+                ));
+            }
+            let mut values = [0.0; 4];
+            for (k, word) in words.iter().enumerate() {
+                values[k] = word
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| {
+                        error(
+                            number,
+                            COLUMNS[k],
+                            format!("`{word}` is not a finite number"),
+                        )
+                    })?;
+            }
+            let [radius, thickness, index, aperture] = values;
+            let surface = PrescriptionSurface {
+                radius,
+                thickness,
+                index: if radius == 0.0 && index == 0.0 {
+                    1.0
+                } else {
+                    index
+                },
+                aperture,
+            };
+            check_surface(&surface, |field, message| error(number, field, message))?;
+            if surface.is_stop() {
+                if let Some(first) = stop_line {
+                    return Err(error(
+                        number,
+                        "radius",
+                        format!("a second aperture stop (radius 0); the first is on line {first}"),
+                    ));
+                }
+                stop_line = Some(number);
+            }
+            surfaces.push(surface);
+        }
+        if stop_line.is_none() {
+            return Err(error(
+                0,
+                "radius",
+                "no aperture stop: one surface must have radius 0".to_string(),
+            ));
+        }
+        if surfaces.last().is_some_and(|s| s.index != 1.0) {
+            return Err(error(
+                0,
+                "index",
+                "the last surface must leave the lens into air (index 1)".to_string(),
+            ));
+        }
+        Ok(Prescription { surfaces })
+    }
+
+    /// The stop's position in `surfaces`.
+    pub fn stop(&self) -> usize {
+        self.surfaces
+            .iter()
+            .position(|s| s.is_stop())
+            .expect("a parsed prescription has a stop")
+    }
+
+    /// The paraxial properties (ray-transfer matrices in f64).
+    pub fn paraxial(&self) -> Paraxial {
+        Paraxial::of(self)
+    }
+}
+
+/// Refuses a surface whose numbers cannot describe glass and air.
+fn check_surface(s: &PrescriptionSurface, error: impl Fn(&str, String) -> Error) -> Result<()> {
+    if s.thickness < 0.0 {
+        return Err(error(
+            "thickness",
+            format!("{} mm: a thickness is at least 0", s.thickness),
+        ));
+    }
+    if s.aperture <= 0.0 {
+        return Err(error(
+            "aperture",
+            format!("{} mm: a clear aperture is above 0", s.aperture),
+        ));
+    }
+    if s.is_stop() && s.index != 1.0 {
+        return Err(error(
+            "index",
+            format!(
+                "{}: the stop (radius 0) sits in air, its index 0 or 1",
+                s.index
+            ),
+        ));
+    }
+    if !(1.0..=MAX_INDEX).contains(&s.index) {
+        return Err(error(
+            "index",
+            format!("{}: a refractive index lies in [1, {MAX_INDEX}]", s.index),
+        ));
+    }
+    if s.radius != 0.0 && s.aperture > 2.0 * s.radius.abs() {
+        return Err(error(
+            "aperture",
+            format!(
+                "{} mm is wider than the surface's sphere (radius {} mm)",
+                s.aperture, s.radius
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A 2x2 ray-transfer matrix acting on (height, index x angle).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Transfer {
+    a: f64,
+    b: f64,
+    c: f64,
+    d: f64,
+}
+
+impl Transfer {
+    const IDENTITY: Transfer = Transfer {
+        a: 1.0,
+        b: 0.0,
+        c: 0.0,
+        d: 1.0,
+    };
+
+    /// Refraction at a sphere of radius `radius` from index `before` to `after`: power
+    /// (after - before) / radius; a plane (radius 0) has none.
+    fn refraction(radius: f64, before: f64, after: f64) -> Transfer {
+        let power = if radius == 0.0 {
+            0.0
+        } else {
+            (after - before) / radius
+        };
+        Transfer {
+            c: -power,
+            ..Transfer::IDENTITY
+        }
+    }
+
+    /// Travel over `distance` in a medium of index `index` (reduced distance distance / index).
+    fn translation(distance: f64, index: f64) -> Transfer {
+        Transfer {
+            b: distance / index,
+            ..Transfer::IDENTITY
+        }
+    }
+
+    /// `self` after `first`: the matrix of `first` followed by `self`.
+    fn after(self, first: Transfer) -> Transfer {
+        Transfer {
+            a: self.a * first.a + self.b * first.c,
+            b: self.a * first.b + self.b * first.d,
+            c: self.c * first.a + self.d * first.c,
+            d: self.c * first.b + self.d * first.d,
+        }
+    }
+}
+
+/// The matrix from just before surface `from` to just after surface `to - 1`, with the
+/// thicknesses between them.
+fn transfer(p: &Prescription, from: usize, to: usize) -> Transfer {
+    let mut m = Transfer::IDENTITY;
+    for i in from..to {
+        let s = &p.surfaces[i];
+        let before = if i == 0 { 1.0 } else { p.surfaces[i - 1].index };
+        if i > from {
+            let previous = &p.surfaces[i - 1];
+            m = Transfer::translation(previous.thickness, previous.index).after(m);
+        }
+        m = Transfer::refraction(s.radius, before, s.index).after(m);
+    }
+    m
+}
+
+/// A lens's paraxial (first-order) properties, in mm along the axis from the first surface's
+/// vertex towards the image (the *axial* coordinate t: the first vertex at 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Paraxial {
+    /// Effective focal length f = -1/C.
+    pub focal_length: f64,
+    /// Back focal distance: from the last vertex to the rear focal point.
+    pub back_focal_distance: f64,
+    /// Front focal distance: from the front focal point to the first vertex.
+    pub front_focal_distance: f64,
+    /// Axial position of the front principal point H.
+    pub front_principal: f64,
+    /// Axial position of the rear principal point H' (the lens frame's origin).
+    pub rear_principal: f64,
+    /// Axial position of the last vertex.
+    pub last_vertex: f64,
+    /// Axial position of the entrance pupil (the stop's image through the surfaces before it).
+    pub entrance_pupil: f64,
+    /// Entrance pupil's diameter at the prescription's stop diameter.
+    pub entrance_pupil_diameter: f64,
+    /// Axial position of the exit pupil (the stop's image through the surfaces after it).
+    pub exit_pupil: f64,
+    /// Exit pupil's diameter at the prescription's stop diameter.
+    pub exit_pupil_diameter: f64,
+    /// The widest f-number: f / entrance pupil diameter.
+    pub widest_f_number: f64,
+}
+
+impl Paraxial {
+    fn of(p: &Prescription) -> Paraxial {
+        let n = p.surfaces.len();
+        let stop = p.stop();
+        let last_vertex: f64 = p.surfaces[..n - 1].iter().map(|s| s.thickness).sum();
+        let whole = transfer(p, 0, n);
+        let focal_length = -1.0 / whole.c;
+        let back_focal_distance = -whole.a / whole.c;
+        let front_focal_distance = -whole.d / whole.c;
+        let stop_diameter = p.surfaces[stop].aperture;
+        // Entrance pupil: the plane at distance e before the first vertex conjugate to the stop,
+        // M_front T(e) having B = 0 (e = -B/A), magnified by A (both ends in air).
+        let front = match stop {
+            0 => Transfer::IDENTITY,
+            _ => {
+                let before = &p.surfaces[stop - 1];
+                Transfer::translation(before.thickness, before.index).after(transfer(p, 0, stop))
+            }
+        };
+        let entrance_distance = -front.b / front.a;
+        // Exit pupil: the plane at q after the last vertex conjugate to the stop, T(q) M_rear
+        // having B = 0 (q = -B/D), magnified by 1/D.
+        let rear = transfer_from_stop(p, stop);
+        let exit_distance = -rear.b / rear.d;
+        let entrance_pupil_diameter = stop_diameter / front.a.abs();
+        Paraxial {
+            focal_length,
+            back_focal_distance,
+            front_focal_distance,
+            front_principal: focal_length - front_focal_distance,
+            rear_principal: last_vertex + back_focal_distance - focal_length,
+            last_vertex,
+            entrance_pupil: -entrance_distance,
+            entrance_pupil_diameter,
+            exit_pupil: last_vertex + exit_distance,
+            exit_pupil_diameter: stop_diameter * rear.d.abs().recip(),
+            widest_f_number: focal_length / entrance_pupil_diameter,
+        }
+    }
+}
+
+/// The matrix from the stop's plane to just after the last surface.
+fn transfer_from_stop(p: &Prescription, stop: usize) -> Transfer {
+    let n = p.surfaces.len();
+    if stop + 1 == n {
+        return Transfer::IDENTITY;
+    }
+    let s = &p.surfaces[stop];
+    transfer(p, stop + 1, n).after(Transfer::translation(s.thickness, s.index))
+}
+
+/// One surface placed in the lens frame (mm, axis +z towards the object).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlacedSurface {
+    /// The vertex's z.
+    pub z: f64,
+    /// Radius with the prescription's sign (positive: centre towards the image, at z - radius);
+    /// 0 for the stop, a plane.
+    pub radius: f64,
+    /// Clear aperture's radius (the stop's at the chosen f-number).
+    pub aperture_radius: f64,
+    /// Index on the image (film) side.
+    pub index_behind: f64,
+    /// Index on the object side.
+    pub index_in_front: f64,
+}
+
+/// A lens placed in the lens frame at an f-number: its surfaces from the film side (the first
+/// a ray from the film meets) to the object side.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LensSystem {
+    /// Surfaces, rearmost first.
+    pub surfaces: Vec<PlacedSurface>,
+    /// Paraxial properties of the prescription.
+    pub paraxial: Paraxial,
+    /// The f-number the stop is set to.
+    pub f_number: f64,
+}
+
+/// Why a ray from the film does not leave the lens.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lost {
+    /// It misses a surface's sphere or meets it outside the clear aperture (or on the far half
+    /// of its sphere): the barrel or the stop blocks it. The index of the surface, rearmost 0.
+    Blocked(usize),
+    /// Total internal reflection at a surface.
+    TotalInternalReflection(usize),
+}
+
+impl LensSystem {
+    /// The prescription placed with H' at the origin, its stop closed to `f_number` (the
+    /// prescription's widest when `None`). Refuses an f-number wider than the lens opens.
+    pub fn new(
+        prescription: &Prescription,
+        f_number: Option<f64>,
+    ) -> std::result::Result<LensSystem, String> {
+        let paraxial = prescription.paraxial();
+        if !(paraxial.focal_length.is_finite() && paraxial.focal_length > 0.0) {
+            return Err(format!(
+                "the lens's focal length is {:.6} mm: chambre's cameras need a converging lens",
+                paraxial.focal_length
+            ));
+        }
+        let widest = paraxial.widest_f_number;
+        let f_number = f_number.unwrap_or(widest);
+        if f_number < widest * (1.0 - 1e-9) {
+            return Err(format!(
+                "f/{f_number}: this lens opens to f/{widest:.3} at most"
+            ));
+        }
+        let stop_scale = widest / f_number;
+        let mut axial = 0.0;
+        let mut surfaces = Vec::with_capacity(prescription.surfaces.len());
+        for (i, s) in prescription.surfaces.iter().enumerate() {
+            let in_front = if i == 0 {
+                1.0
+            } else {
+                prescription.surfaces[i - 1].index
+            };
+            surfaces.push(PlacedSurface {
+                z: paraxial.rear_principal - axial,
+                radius: s.radius,
+                aperture_radius: 0.5 * s.aperture * if s.is_stop() { stop_scale } else { 1.0 },
+                index_behind: s.index,
+                index_in_front: in_front,
+            });
+            axial += s.thickness;
+        }
+        surfaces.reverse();
+        Ok(LensSystem {
+            surfaces,
+            paraxial,
+            f_number,
+        })
+    }
+
+    /// The rear surface's vertex z (the lens's back, towards the film).
+    pub fn rear_z(&self) -> f64 {
+        self.surfaces[0].z
+    }
+
+    /// The ray from `origin` (behind the lens, lens frame, mm) along `direction` (unit, +z
+    /// component) traced through every surface: the ray leaving the front surface, or why it
+    /// is lost.
+    pub fn trace_from_film(
+        &self,
+        origin: DVec3,
+        direction: DVec3,
+    ) -> std::result::Result<(DVec3, DVec3), Lost> {
+        let (mut o, mut d) = (origin, direction);
+        for (i, s) in self.surfaces.iter().enumerate() {
+            let t = intersect(s, o, d).ok_or(Lost::Blocked(i))?;
+            let p = o + t * d;
+            if p.x * p.x + p.y * p.y > s.aperture_radius * s.aperture_radius {
+                return Err(Lost::Blocked(i));
+            }
+            o = p;
+            if s.radius != 0.0 {
+                let normal = surface_normal(s, p, d);
+                d = refract(d, normal, s.index_behind / s.index_in_front)
+                    .ok_or(Lost::TotalInternalReflection(i))?;
+            }
+        }
+        Ok((o, d))
+    }
+}
+
+/// How far from the axis a film at one distance stays lit: the radii (mm on the film) where the
+/// relative illumination falls to one half and to 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImageCircle {
+    /// Where the relative illumination falls to 0.5.
+    pub half_radius: f64,
+    /// The first radius where no ray passes.
+    pub dark_radius: f64,
+}
+
+/// The square grid over the disk the illumination integrals sum over: this many cells across.
+pub const ILLUMINATION_GRID: usize = 96;
+
+/// How much wider than the rear element's clear aperture the disk of directions is: a ray from
+/// far off the axis reaches the rear surface's rim through the vertex plane outside the
+/// aperture's own radius (pbrt's `BoundExitPupil` widens it by the same factor).
+const REAR_DISK_MARGIN: f64 = 1.5;
+
+impl LensSystem {
+    /// The irradiance at `film_point` (lens frame, mm) under a uniform radiance of 1 beyond the
+    /// lens: the sum over a grid of points on the rear vertex's plane (a disk 1.5 times the rear
+    /// element's radius) of cos(theta)^2 / distance^2 times the cell's area, for the rays that
+    /// pass (cos^4 falloff and vignetting by every aperture, the stop included).
+    pub fn irradiance(&self, film_point: DVec3, grid: usize) -> f64 {
+        let z = self.rear_z();
+        let radius = REAR_DISK_MARGIN * self.surfaces[0].aperture_radius;
+        let cell = 2.0 * radius / grid as f64;
+        let mut sum = 0.0;
+        for i in 0..grid {
+            for j in 0..grid {
+                let x = -radius + (i as f64 + 0.5) * cell;
+                let y = -radius + (j as f64 + 0.5) * cell;
+                if x * x + y * y > radius * radius {
+                    continue;
+                }
+                let to = DVec3::new(x, y, z) - film_point;
+                let distance2 = to.length_squared();
+                let direction = to / distance2.sqrt();
+                if self.trace_from_film(film_point, direction).is_ok() {
+                    let cos = direction.z;
+                    sum += cos * cos / distance2;
+                }
+            }
+        }
+        sum * cell * cell
+    }
+
+    /// Irradiance at `radius` mm from the axis on a film square to it at `film_distance` mm
+    /// behind H', relative to the irradiance on the axis.
+    pub fn relative_illumination(&self, radius: f64, film_distance: f64, grid: usize) -> f64 {
+        let at = |r: f64| self.irradiance(DVec3::new(r, 0.0, -film_distance), grid);
+        at(radius) / at(0.0)
+    }
+
+    /// The image circle on a film square to the axis at `film_distance` mm behind H', found by
+    /// stepping out from the axis by `step` mm (to `limit` mm at most: then `dark_radius` is
+    /// `limit`, the circle reaching past it).
+    pub fn image_circle(&self, film_distance: f64, step: f64, limit: f64) -> ImageCircle {
+        let centre = self.irradiance(DVec3::new(0.0, 0.0, -film_distance), ILLUMINATION_GRID);
+        let relative = |r: f64| {
+            self.irradiance(DVec3::new(r, 0.0, -film_distance), ILLUMINATION_GRID) / centre
+        };
+        let (mut previous, mut half_radius) = (1.0, None);
+        let mut r = step;
+        while r < limit {
+            let value = relative(r);
+            if half_radius.is_none() && value <= 0.5 {
+                // Linear between the two radii around one half.
+                half_radius = Some(r - step * (0.5 - value) / (previous - value));
+            }
+            if value == 0.0 {
+                return ImageCircle {
+                    half_radius: half_radius.unwrap_or(r),
+                    dark_radius: r,
+                };
+            }
+            previous = value;
+            r += step;
+        }
+        ImageCircle {
+            half_radius: half_radius.unwrap_or(limit),
+            dark_radius: limit,
+        }
+    }
+}
+
+/// Distance along the ray to the surface (its cap about the vertex), if it is ahead.
+fn intersect(s: &PlacedSurface, o: DVec3, d: DVec3) -> Option<f64> {
+    if s.radius == 0.0 {
+        // A stop in the plane of the vertex before it (no thickness between) is met at t = 0.
+        let t = (s.z - o.z) / d.z;
+        return (t.is_finite() && t >= 0.0).then_some(t);
+    }
+    let centre = DVec3::new(0.0, 0.0, s.z - s.radius);
+    let oc = o - centre;
+    let b = oc.dot(d);
+    let c = oc.length_squared() - s.radius * s.radius;
+    let discriminant = b * b - c;
+    if discriminant < 0.0 {
+        return None;
+    }
+    let root = discriminant.sqrt();
+    // Travelling towards +z, a ray meets a surface whose centre lies behind its vertex (radius
+    // > 0) where it leaves that sphere, and one whose centre lies ahead where it enters it.
+    let t = if s.radius > 0.0 { -b + root } else { -b - root };
+    let p = o + t * d;
+    // The cap about the vertex: on the vertex's side of the centre.
+    let on_cap = (p.z - centre.z) * s.radius > 0.0;
+    (t > 0.0 && on_cap).then_some(t)
+}
+
+/// The unit normal at `p`, facing against the ray.
+fn surface_normal(s: &PlacedSurface, p: DVec3, d: DVec3) -> DVec3 {
+    let centre = DVec3::new(0.0, 0.0, s.z - s.radius);
+    let n = (p - centre).normalize();
+    if n.dot(d) > 0.0 { -n } else { n }
+}
+
+/// Snell's law: `d` through a surface of normal `n` (facing against `d`) with index ratio
+/// `eta` = incident / transmitted; `None` on total internal reflection.
+pub fn refract(d: DVec3, n: DVec3, eta: f64) -> Option<DVec3> {
+    let cos_i = -n.dot(d);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some((eta * d + (eta * cos_i - cos_t) * n).normalize())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Prescription> {
+        Prescription::parse(Path::new("test.dat"), text)
+    }
+
+    /// A biconvex lens of index 1.5 with no thickness whose lensmaker's focal length is `f`,
+    /// its stop of diameter 10 mm in front: paraxial only (its edges would cross).
+    fn thin(f: f64) -> Prescription {
+        parse(&format!("0 0 1 10\n{f} 0 1.5 20\n{} 0 1 20\n", -f)).unwrap()
+    }
+
+    /// [`thin`] with the centre thickness its 20 mm aperture needs: a lens rays can cross.
+    fn biconvex(f: f64) -> Prescription {
+        let sag = f - (f * f - 100.0).sqrt();
+        parse(&format!(
+            "0 0 1 10\n{f} {} 1.5 20\n{} 0 1 20\n",
+            2.0 * sag + 0.1,
+            -f
+        ))
+        .unwrap()
+    }
+
+    #[test]
+    fn a_thin_biconvex_lens_has_the_lensmakers_focal_length_and_no_principal_gap() {
+        let p = thin(100.0).paraxial();
+        assert!((p.focal_length - 100.0).abs() < 1e-9, "{p:?}");
+        assert!((p.back_focal_distance - 100.0).abs() < 1e-9);
+        assert!(p.front_principal.abs() < 1e-9 && p.rear_principal.abs() < 1e-9);
+        assert!((p.widest_f_number - 10.0).abs() < 1e-9);
+        assert!(p.entrance_pupil.abs() < 1e-12 && (p.entrance_pupil_diameter - 10.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn errors_name_the_line_and_the_column() {
+        let cases = [
+            ("10 1 1.5 5\n0 1 0 4\n-10 0 1\n", 3, ""),
+            ("10 1 1.5 5\n0 1 0 4\n-10 x 1 5\n", 3, "thickness"),
+            ("10 1 1.5 5\n0 1 1.5 4\n-10 0 1 5\n", 2, "index"),
+            ("10 1 1.5 25\n0 1 0 4\n-10 0 1 5\n", 1, "aperture"),
+            ("10 -1 1.5 5\n0 1 0 4\n-10 0 1 5\n", 1, "thickness"),
+            (
+                "# c\n10 1 1.5 5\n0 1 0 4\n0 1 0 4\n-10 0 1 5\n",
+                4,
+                "radius",
+            ),
+        ];
+        for (text, line, field) in cases {
+            match parse(text) {
+                Err(Error::Scene { location, .. }) => {
+                    assert_eq!(
+                        (location.line, location.field.as_str()),
+                        (line, field),
+                        "{text}"
+                    )
+                }
+                other => panic!("{text}: {other:?}"),
+            }
+        }
+        assert!(parse("10 1 1.5 5\n-10 0 1 5\n").is_err(), "no stop");
+    }
+
+    #[test]
+    fn an_f_number_wider_than_the_lens_opens_is_refused() {
+        let lens = thin(100.0);
+        assert!(LensSystem::new(&lens, Some(5.0)).is_err());
+        let stopped = LensSystem::new(&lens, Some(20.0)).unwrap();
+        let stop = stopped.surfaces.iter().find(|s| s.radius == 0.0).unwrap();
+        assert!((stop.aperture_radius - 2.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_ray_outside_the_stop_or_past_the_critical_angle_is_lost() {
+        let lens = LensSystem::new(&biconvex(100.0), None).unwrap();
+        let from = DVec3::new(0.0, 0.0, -100.0);
+        assert!(lens.trace_from_film(from, DVec3::Z).is_ok());
+        let steep = DVec3::new(0.0, 6.0, 100.0).normalize();
+        assert_eq!(lens.trace_from_film(from, steep), Err(Lost::Blocked(2)));
+        // Inside glass, a ray at 60 degrees to the normal cannot leave into air.
+        let glass = PlacedSurface {
+            z: 0.0,
+            radius: -1e6,
+            aperture_radius: 100.0,
+            index_behind: 1.5,
+            index_in_front: 1.0,
+        };
+        let d = DVec3::new(60f64.to_radians().sin(), 0.0, 60f64.to_radians().cos());
+        let n = surface_normal(&glass, DVec3::ZERO, d);
+        assert!(refract(d, n, 1.5).is_none());
+        assert!(refract(d, n, 1.0 / 1.5).is_some());
+    }
+}
