@@ -28,7 +28,7 @@ use crate::accel::intersect::{
     sphere_surface_point, triangle_point,
 };
 use crate::accel::wide::PACKET;
-use crate::camera::{Ray, film_position_mm, generate_ray};
+use crate::camera::{Ray, film_position_mm, generate_lens_ray, generate_ray};
 use crate::layout::*;
 use crate::math::rng::Rng;
 use crate::pack::FlatScene;
@@ -671,6 +671,9 @@ pub struct CameraRay {
     pub ray: Ray,
     /// Seconds into the shutter (its opening when the shutter is instant).
     pub time: f32,
+    /// What the ray's radiance counts for: 1, or through a real lens the exit-pupil sample's
+    /// weight (0: the ray was lost in the lens).
+    pub weight: f32,
 }
 
 /// Camera sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1),
@@ -711,7 +714,10 @@ pub fn camera_sample<const F: u32>(
             rng,
             flags,
         );
-        lens = Vec2::from(sample_aperture(camera, &scene.sample_table, u));
+        lens = match camera.projection {
+            PROJECTION_LENS => Vec2::from(u),
+            _ => Vec2::from(sample_aperture(camera, &scene.sample_table, u)),
+        };
     }
     let mut time = camera.shutter_open;
     if camera.shutter_span > 0.0 {
@@ -723,10 +729,11 @@ pub fn camera_sample<const F: u32>(
         let u = sample_2d(frame, &scene.sample_table, source, x, y, sample, rng, flags);
         time += u[0] * camera.shutter_span;
     }
-    CameraRay {
-        ray: generate_ray(camera, film, lens),
-        time,
-    }
+    let (ray, weight) = match camera.projection {
+        PROJECTION_LENS => generate_lens_ray(camera, &scene.sample_table, film, lens.to_array()),
+        _ => (generate_ray(camera, film, lens), 1.0),
+    };
+    CameraRay { ray, time, weight }
 }
 
 /// Radiance of sample `sample` of pixel (x, y): its camera ray ([`camera_sample`]), then the
@@ -743,7 +750,7 @@ pub fn trace_sample<const F: u32>(
     let frame = &scene.frame;
     let mut rng = Rng::new(frame.seed, y * frame.width + x, sample);
     let camera = camera_sample::<F>(scene, x, y, sample, &mut rng, &mut stats.flags);
-    trace_path::<F>(
+    let radiance = trace_path::<F>(
         scene,
         camera.ray,
         CameraHit::Trace,
@@ -752,7 +759,8 @@ pub fn trace_sample<const F: u32>(
         &mut rng,
         stats,
         first_hit,
-    )
+    );
+    radiance * camera.weight
 }
 
 /// [`trace_sample`] for samples `samples` of pixel (x, y), each sample's radiance and first
@@ -811,7 +819,7 @@ pub fn trace_pixel<const F: u32>(
                 stats,
                 &mut first_hit,
             );
-            add(radiance, &first_hit);
+            add(radiance * camera.weight, &first_hit);
         }
         start += count as u32;
     }

@@ -116,6 +116,11 @@ pub const FOCUS_CYLINDER: u32 = 2;
 pub const PROJECTION_PERSPECTIVE: u32 = 0;
 /// Parallel rays along the viewing axis from a window (docs/camera.md, "Orthographic camera").
 pub const PROJECTION_ORTHOGRAPHIC: u32 = 1;
+/// Through a real lens's prescription (docs/lens.md): rays from the film traced through its
+/// surfaces, each with the weight its exit-pupil bounds give it.
+pub const PROJECTION_LENS: u32 = 2;
+/// Cells across the film, in each direction, of a real lens's exit-pupil bounds table.
+pub const LENS_PUPIL_CELLS: u32 = 16;
 
 /// Light kinds (`GpuLight::kind`; fields per kind on [`GpuLight`]): a point light.
 pub const LIGHT_POINT: u32 = 0;
@@ -526,10 +531,11 @@ pub struct GpuCamera {
     /// frame's z axis (the rays' direction), each from its film point (the film then is the
     /// window, in mm as scene units / `units_per_mm`; no lens, the focal length 0).
     pub projection: u32,
-    /// Padding to the WGSL layout.
-    pub _pad4: u32,
-    /// Padding to the WGSL layout.
-    pub _pad5: u32,
+    /// A real lens's surfaces (`PROJECTION_LENS`); 0 otherwise.
+    pub lens_surface_count: u32,
+    /// Where a real lens's table starts in the sample table: its exposure, its surfaces
+    /// rearmost first and its exit-pupil bounds (`camera::lens::LensSystem::kernel_table`).
+    pub lens_table_offset: u32,
 }
 
 /// Settings constant over one render.
@@ -724,8 +730,10 @@ pub struct GpuPath {
     /// The path tracer: the solid-angle density its last bounce's direction was drawn with
     /// (0: a camera ray or a mirror's, which no light sample could have drawn).
     pub bsdf_pdf: f32,
-    /// Padding to the WGSL layout.
-    pub _pad1: u32,
+    /// What its radiance counts for (`CameraRay::weight`): 1, or a real lens's exit-pupil
+    /// sample's weight, applied as the sample is accumulated (Russian roulette sees the
+    /// throughput alone, as on the CPU).
+    pub camera_weight: f32,
 }
 
 /// A shadow ray of a wavefront path vertex, traced by the any-hit kernel.
@@ -1033,6 +1041,8 @@ pub fn wgsl_prelude() -> String {
         ("FOCUS_CYLINDER", FOCUS_CYLINDER),
         ("PROJECTION_PERSPECTIVE", PROJECTION_PERSPECTIVE),
         ("PROJECTION_ORTHOGRAPHIC", PROJECTION_ORTHOGRAPHIC),
+        ("PROJECTION_LENS", PROJECTION_LENS),
+        ("LENS_PUPIL_CELLS", LENS_PUPIL_CELLS),
         ("LIGHT_AREA", LIGHT_AREA),
         ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),
         ("SAMPLER_RANDOM", SAMPLER_RANDOM),

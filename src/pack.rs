@@ -236,8 +236,14 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         texels,
         environment: environment_data(scene),
         lights,
-        camera: camera.to_gpu(table.aperture_offset),
-        sample_table: table.points,
+        camera: GpuCamera {
+            lens_table_offset: match camera.lens {
+                Some(_) => table.points.len() as u32,
+                None => 0,
+            },
+            ..camera.to_gpu(table.aperture_offset)
+        },
+        sample_table: [table.points, camera.lens_table()].concat(),
         bvh_depth: geometry.bvh_depth,
         traversal_iterations: geometry.traversal_iterations,
         triangle_count,

@@ -93,7 +93,10 @@ fn relative_illumination_follows_the_cosine_fourth_law_through_a_small_stop() {
         let relative = lens.relative_illumination(r, film, 400);
         let cos = (film + exit_pupil_z) / (r * r + (film + exit_pupil_z).powi(2)).sqrt();
         let law = cos.powi(4);
-        assert!((relative / law - 1.0).abs() < 0.01, "r {r}: {relative} against {law}");
+        assert!(
+            (relative / law - 1.0).abs() < 0.01,
+            "r {r}: {relative} against {law}"
+        );
     }
     let prescription = Prescription::read(Path::new(LENSES[0].0)).unwrap();
     let open = LensSystem::new(&prescription, None).unwrap();
@@ -105,8 +108,232 @@ fn relative_illumination_follows_the_cosine_fourth_law_through_a_small_stop() {
             open.relative_illumination(r, film, 128),
             stopped.relative_illumination(r, film, 128),
         );
-        assert!(wide <= previous + 1e-9, "falls off the axis: {wide} after {previous}");
-        assert!(narrow >= wide - 0.01, "r {r}: f/8 {narrow} against f/2 {wide}");
+        assert!(
+            wide <= previous + 1e-9,
+            "falls off the axis: {wide} after {previous}"
+        );
+        assert!(
+            narrow >= wide - 0.01,
+            "r {r}: f/8 {narrow} against f/2 {wide}"
+        );
         previous = wide;
+    }
+}
+
+mod common;
+
+use chambre::metrics::rel_mse;
+use chambre::scene::Scene;
+
+/// A scene of `camera` lines (TOML) with spheres on a floor under two lights, `size` pixels,
+/// read as if it stood in `scenes/` (so `lens = "lenses/..."` finds the shipped files).
+fn scene(camera: &str, size: [u32; 2], spp: u32, seed: u32, extra: &str) -> Scene {
+    let text = format!(
+        r#"
+[render]
+width = {w}
+height = {h}
+spp = {spp}
+seed = {seed}
+background = [0.2, 0.25, 0.3]
+{extra}
+
+[camera]
+position = [0.0, 1.0, 6.0]
+look_at = [0.0, 0.8, 0.0]
+lens_sampler = "stratified"
+{camera}
+
+[[materials]]
+name = "clay"
+model = "lambert"
+diffuse = [0.7, 0.5, 0.3]
+
+[[materials]]
+name = "floor"
+model = "lambert"
+diffuse = [0.4, 0.4, 0.4]
+
+[[shapes]]
+type = "sphere"
+center = [0.0, 0.8, 0.0]
+radius = 0.8
+material = "clay"
+
+[[shapes]]
+type = "sphere"
+center = [1.3, 0.4, 2.0]
+radius = 0.4
+material = "clay"
+
+[[shapes]]
+type = "sphere"
+center = [-1.5, 0.5, -3.0]
+radius = 0.5
+material = "clay"
+
+[[shapes]]
+type = "quad"
+corner = [-10.0, 0.0, -10.0]
+edge_u = [0.0, 0.0, 20.0]
+edge_v = [20.0, 0.0, 0.0]
+material = "floor"
+
+[[lights]]
+type = "point"
+position = [3.0, 5.0, 4.0]
+intensity = [30.0, 30.0, 30.0]
+
+[[lights]]
+type = "area"
+corner = [-3.0, 4.0, 1.0]
+edge_u = [1.0, 0.0, 0.0]
+edge_v = [0.0, 0.0, 1.0]
+radiance = [4.0, 4.0, 4.0]
+"#,
+        w = size[0],
+        h = size[1],
+    );
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/lens_test.toml");
+    Scene::from_str(&path, &text, &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A uniform sky of radiance 1 seen through `camera` at 12 x 8 pixels and 4096 samples (one
+/// small sphere behind the camera, which no ray meets).
+fn sky(camera: &str) -> Scene {
+    let text = format!(
+        r#"
+[render]
+width = 12
+height = 8
+spp = 4096
+max_depth = 0
+background = [1.0, 1.0, 1.0]
+
+[camera]
+position = [0.0, 0.0, 0.0]
+look_at = [0.0, 0.0, -1.0]
+lens_sampler = "stratified"
+{camera}
+
+[[materials]]
+name = "grey"
+model = "lambert"
+diffuse = [0.5, 0.5, 0.5]
+
+[[shapes]]
+type = "sphere"
+center = [0.0, 0.0, 10.0]
+radius = 0.1
+material = "grey"
+"#
+    );
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/lens_sky.toml");
+    Scene::from_str(&path, &text, &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The same scene through a real lens renders alike on the GPU and the CPU (the kernels' f32
+/// tracing through the glass, the exit-pupil bounds and the weights), under Whitted and the
+/// path tracer (the wavefront render), wide open and with the lens tilted and the film shifted.
+#[test]
+fn a_real_lens_renders_alike_on_gpu_and_cpu() {
+    let cameras = [
+        "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"\nfocus_distance = 6.0",
+        "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"\nf_number = 4.0\n\
+         focus_distance = 6.0\nlens_tilt = 6.0\nfilm_shift = [0.0, 4.0]",
+    ];
+    for camera in cameras {
+        for integrator in ["max_depth = 1", "integrator = \"path\"\nmax_depth = 3"] {
+            let images = common::both(&scene(camera, [48, 32], 16, 3, integrator));
+            let Some((_, gpu)) = images.get(1) else {
+                continue;
+            };
+            let (within, mean) = common::agreement(&images[0].1, gpu, 1e-3);
+            assert!(
+                within >= 0.999,
+                "{camera} {integrator}: {within} within 1e-3, mean {mean}"
+            );
+        }
+    }
+}
+
+/// A real lens that is nearly the thin lens (a biconvex singlet of 100 mm at f/16, its field
+/// 3 degrees wide, so cos^4 stays within 0.5%) renders the thin lens's image of the same focal
+/// length and f-number, with a lens tilt and a film shift: its error against the thin lens (whose
+/// image is nearly noiseless here) is no more than the error between two of its own renders of
+/// different seeds (twice its variance: so any bias is below its noise), and its mean is the thin
+/// lens's within 1%.
+#[test]
+fn a_nearly_thin_real_lens_renders_the_thin_lens_image() {
+    let prescription = Prescription::read(Path::new("scenes/lenses/singlet_100mm.dat")).unwrap();
+    let f = LensSystem::new(&prescription, Some(16.0))
+        .unwrap()
+        .paraxial
+        .focal_length;
+    let movements = "film = [8.0, 6.0]\nf_number = 16.0\nfocus_distance = 6.0\n\
+                     lens_tilt = 3.0\nfilm_shift = [1.0, 0.5]";
+    let real = format!("{movements}\nlens = \"lenses/singlet_100mm.dat\"");
+    let thin = format!("{movements}\nfocal_length = {f}");
+    let render = |camera: &str, seed: u32| {
+        let scene = scene(camera, [40, 30], 256, seed, "max_depth = 1");
+        common::render_cpu(&chambre::pack::flatten(&scene))
+    };
+    let (real, real_again, thin) = (render(&real, 1), render(&real, 2), render(&thin, 3));
+    let (error, noise) = (rel_mse(&real, &thin), rel_mse(&real, &real_again));
+    assert!(
+        error <= noise,
+        "relMSE {error:e} against the thin lens, {noise:e} between seeds"
+    );
+    let mean = |image: &chambre::render::Image| {
+        image.pixels.iter().map(|p| p.x as f64).sum::<f64>() / image.pixels.len() as f64
+    };
+    let ratio = mean(&real) / mean(&thin);
+    assert!(
+        (ratio - 1.0).abs() < 0.01,
+        "mean {ratio} of the thin lens's"
+    );
+}
+
+/// Under a uniform sky of radiance 1 each pixel records the relative illumination at its film
+/// point: it matches the f64 integral over the rays the f64 tracer lets through (within 2%,
+/// where at least 30% of the axis's light arrives), centred, with a rising front and with a
+/// tilted lens.
+#[test]
+fn relative_illumination_on_the_film_matches_the_traced_exit_pupil() {
+    let cameras = [
+        "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"",
+        "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"\nf_number = 2.8\n\
+         film_shift = [0.0, 6.0]",
+        "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"\nf_number = 2.8\n\
+         lens_tilt = 8.0",
+    ];
+    for camera in cameras {
+        let sky = sky(camera);
+        let image = common::render_cpu(&chambre::pack::flatten(&sky));
+        let spec = &sky.camera;
+        let lens = spec.lens.as_ref().unwrap();
+        let s = spec.standards();
+        let axis = lens.irradiance(DVec3::new(0.0, 0.0, -spec.film_distance_mm), 256);
+        let normal = s.lens.transpose() * s.film.z_axis;
+        let mut compared = 0;
+        for y in 0..8u32 {
+            for x in 0..12u32 {
+                let film_mm = glam::DVec2::new(
+                    (x as f64 + 0.5) / 12.0 * 36.0 - 18.0,
+                    12.0 - (y as f64 + 0.5) / 8.0 * 24.0,
+                );
+                let point = s.to_lens_frame(s.film_point(film_mm));
+                let expected = lens.irradiance_on(point, normal, 256) / axis;
+                let got = image.pixels[(y * 12 + x) as usize].x as f64;
+                if expected >= 0.3 {
+                    compared += 1;
+                    assert!(
+                        (got / expected - 1.0).abs() < 0.02,
+                        "{camera}: pixel ({x}, {y}) {got} against {expected}"
+                    );
+                }
+            }
+        }
+        assert!(compared >= 24, "{camera}: {compared} pixels compared");
     }
 }

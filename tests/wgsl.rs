@@ -303,7 +303,7 @@ fn shared_structs_have_identical_layouts() {
             shadow_count,
             truncated,
             bsdf_pdf,
-            _pad1
+            camera_weight
         }
     );
     layout!(
@@ -434,8 +434,8 @@ fn shared_structs_have_identical_layouts() {
             focus_surface,
             focus_radius_mm,
             projection,
-            _pad4,
-            _pad5
+            lens_surface_count,
+            lens_table_offset
         }
     );
     layout!(

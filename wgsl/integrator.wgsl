@@ -438,10 +438,13 @@ fn trace_path(camera_ray: CameraRay, window: LightWindow, rng: ptr<function, Rng
 }
 
 // A camera sample: the ray and the time it is traced at.
+// `weight`: what its radiance counts for (1, or through a real lens its exit-pupil sample's
+// weight, 0 when lost in the lens).
 struct CameraRay {
     origin: vec3<f32>,
     direction: vec3<f32>,
     time: f32,
+    weight: f32,
 }
 
 // Camera sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1), lens
@@ -456,7 +459,12 @@ fn camera_sample(x: u32, y: u32, sample: u32, rng: ptr<function, Rng>) -> Camera
     var lens = vec2<f32>(0.0, 0.0);
     if (FEATURE_LENS && camera.lens_radius_mm > 0.0) {
         let lens_source = PatternSource(frame.lens_sampler, frame.lens_strata_columns, frame.lens_table_offset, LENS_DIMENSION);
-        lens = sample_aperture(sample_2d(lens_source, x, y, sample, rng));
+        let u = sample_2d(lens_source, x, y, sample, rng);
+        if (camera.projection == PROJECTION_LENS) {
+            lens = u;
+        } else {
+            lens = sample_aperture(u);
+        }
     }
     var time = camera.shutter_open;
     if (camera.shutter_span > 0.0) {
@@ -464,8 +472,12 @@ fn camera_sample(x: u32, y: u32, sample: u32, rng: ptr<function, Rng>) -> Camera
         let time_source = PatternSource(frame.pixel_sampler, frame.pixel_strata_columns, frame.pixel_table_offset, TIME_DIMENSION);
         time += sample_2d(time_source, x, y, sample, rng).x * camera.shutter_span;
     }
+    if (camera.projection == PROJECTION_LENS) {
+        let traced = generate_lens_ray(film, lens);
+        return CameraRay(traced.ray.origin, traced.ray.direction, time, traced.weight);
+    }
     let ray = generate_ray(camera, film, lens);
-    return CameraRay(ray.origin, ray.direction, time);
+    return CameraRay(ray.origin, ray.direction, time, 1.0);
 }
 
 // The random numbers of camera sample `sample` of pixel (x, y).
@@ -478,5 +490,5 @@ fn trace_sample(x: u32, y: u32, sample: u32, window: LightWindow,
                 counters: ptr<function, PathCounters>, first_hit: ptr<function, FirstHit>) -> vec3<f32> {
     var rng = sample_rng(x, y, sample);
     let camera_ray = camera_sample(x, y, sample, &rng);
-    return trace_path(camera_ray, window, &rng, counters, first_hit);
+    return trace_path(camera_ray, window, &rng, counters, first_hit) * camera_ray.weight;
 }

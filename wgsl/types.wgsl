@@ -92,8 +92,8 @@ struct GpuCamera {
     focus_surface: u32,
     focus_radius_mm: f32,
     projection: u32,
-    _pad4: u32,
-    _pad5: u32,
+    lens_surface_count: u32,
+    lens_table_offset: u32,
 }
 
 struct GpuFrame {
@@ -173,7 +173,7 @@ struct GpuPath {
     shadow_count: u32,
     truncated: u32,
     bsdf_pdf: f32,
-    _pad1: u32,
+    camera_weight: f32,
 }
 
 struct GpuShadowRay {

@@ -19,9 +19,10 @@
 
 use std::path::Path;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3, Vec2, Vec3};
 
 use crate::error::{Error, Location, Result};
+use crate::layout::LENS_PUPIL_CELLS;
 
 /// One surface of a prescription, as the file gives it (mm).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -437,6 +438,12 @@ impl LensSystem {
         })
     }
 
+    /// How far the front principal point H lies ahead of H' (mm, along +z): object distances
+    /// from the lens centre (H') less this are the thick lens's object distances from H.
+    pub fn principal_gap(&self) -> f64 {
+        self.paraxial.rear_principal - self.paraxial.front_principal
+    }
+
     /// The rear surface's vertex z (the lens's back, towards the film).
     pub fn rear_z(&self) -> f64 {
         self.surfaces[0].z
@@ -481,38 +488,48 @@ pub struct ImageCircle {
 /// The square grid over the disk the illumination integrals sum over: this many cells across.
 pub const ILLUMINATION_GRID: usize = 96;
 
-/// How much wider than the rear element's clear aperture the disk of directions is: a ray from
+/// How much wider than the rear element's clear aperture the square of directions is: a ray from
 /// far off the axis reaches the rear surface's rim through the vertex plane outside the
 /// aperture's own radius (pbrt's `BoundExitPupil` widens it by the same factor).
 const REAR_DISK_MARGIN: f64 = 1.5;
 
 impl LensSystem {
-    /// The irradiance at `film_point` (lens frame, mm) under a uniform radiance of 1 beyond the
-    /// lens: the sum over a grid of points on the rear vertex's plane (a disk 1.5 times the rear
-    /// element's radius) of cos(theta)^2 / distance^2 times the cell's area, for the rays that
-    /// pass (cos^4 falloff and vignetting by every aperture, the stop included).
+    /// Half the side of the square on the rear vertex's plane that every ray leaving the film
+    /// through the lens crosses (mm): 1.5 times the rear element's clear radius.
+    pub fn rear_square(&self) -> f64 {
+        REAR_DISK_MARGIN * self.surfaces[0].aperture_radius
+    }
+
+    /// The irradiance at `film_point` (lens frame, mm) on a film square to the axis, under a
+    /// uniform radiance of 1 beyond the lens: the sum over a `grid` x `grid` of points on the
+    /// rear vertex's plane of cos(theta)^2 / distance^2 times the cell's area, for the rays that
+    /// pass (cos^4 falloff and vignetting by every aperture, the stop included). The grid spans
+    /// the point's own `pupil_bounds`, so a small stop is resolved as finely as a wide one.
     pub fn irradiance(&self, film_point: DVec3, grid: usize) -> f64 {
+        self.irradiance_on(film_point, DVec3::Z, grid)
+    }
+
+    /// [`irradiance`](Self::irradiance) on a film whose unit normal (towards the lens) is
+    /// `film_normal`: cos(film) = |normal . direction| in place of the direction's z.
+    pub fn irradiance_on(&self, film_point: DVec3, film_normal: DVec3, grid: usize) -> f64 {
+        let Some([lo, hi]) = self.pupil_bounds(&[film_point]) else {
+            return 0.0;
+        };
         let z = self.rear_z();
-        let radius = REAR_DISK_MARGIN * self.surfaces[0].aperture_radius;
-        let cell = 2.0 * radius / grid as f64;
+        let cell = (hi - lo) / grid as f64;
         let mut sum = 0.0;
         for i in 0..grid {
             for j in 0..grid {
-                let x = -radius + (i as f64 + 0.5) * cell;
-                let y = -radius + (j as f64 + 0.5) * cell;
-                if x * x + y * y > radius * radius {
-                    continue;
-                }
-                let to = DVec3::new(x, y, z) - film_point;
+                let p = lo + DVec2::new(i as f64 + 0.5, j as f64 + 0.5) * cell;
+                let to = p.extend(z) - film_point;
                 let distance2 = to.length_squared();
                 let direction = to / distance2.sqrt();
                 if self.trace_from_film(film_point, direction).is_ok() {
-                    let cos = direction.z;
-                    sum += cos * cos / distance2;
+                    sum += film_normal.dot(direction).abs() * direction.z / distance2;
                 }
             }
         }
-        sum * cell * cell
+        sum * cell.x * cell.y
     }
 
     /// Irradiance at `radius` mm from the axis on a film square to it at `film_distance` mm
@@ -552,6 +569,184 @@ impl LensSystem {
             dark_radius: limit,
         }
     }
+}
+
+/// Points across a pupil-bounds search's grid on the rear square, in each direction.
+const PUPIL_SEARCH_GRID: usize = 32;
+
+/// The bounds of an empty cell (no ray passes): a rectangle whose low corner lies above its
+/// high one, which the kernels read as weight 0.
+const EMPTY_BOUNDS: [[f32; 2]; 2] = [[1.0, 1.0], [-1.0, -1.0]];
+
+impl LensSystem {
+    /// The rectangle (low and high corners) on the rear vertex's plane that holds every point a
+    /// ray from one of `film_points` passes the lens through, searched on a 32 x 32 grid over the
+    /// rear square and widened by one grid step on each side (clamped to the square); `None`
+    /// when no ray passes.
+    pub fn pupil_bounds(&self, film_points: &[DVec3]) -> Option<[DVec2; 2]> {
+        let z = self.rear_z();
+        let half = self.rear_square();
+        let step = 2.0 * half / PUPIL_SEARCH_GRID as f64;
+        let mut bounds: Option<[DVec2; 2]> = None;
+        for i in 0..=PUPIL_SEARCH_GRID {
+            for j in 0..=PUPIL_SEARCH_GRID {
+                let p = DVec2::new(-half + i as f64 * step, -half + j as f64 * step);
+                let passes = film_points.iter().any(|&film| {
+                    let direction = (p.extend(z) - film).normalize();
+                    self.trace_from_film(film, direction).is_ok()
+                });
+                if passes {
+                    bounds = Some(match bounds {
+                        None => [p, p],
+                        Some([lo, hi]) => [lo.min(p), hi.max(p)],
+                    });
+                }
+            }
+        }
+        let square = DVec2::splat(half);
+        bounds.map(|[lo, hi]| [(lo - step).max(-square), (hi + step).min(square)])
+    }
+
+    /// The lens as the kernels read it from the sample table (`GpuCamera::lens_table_offset`),
+    /// in f32 pairs: the exposure (1 / the irradiance on the axis at `film_distance`, so a
+    /// uniform radiance of 1 exposes the axis to 1), the surfaces rearmost first as (z, radius)
+    /// and (clear radius, index behind / index in front), then for each of the film's
+    /// `LENS_PUPIL_CELLS`^2 cells (rows from the bottom, image coordinates) the low and high
+    /// corners of its `pupil_bounds`. `cell_points(i, j)` gives the film points (lens frame) whose
+    /// rays bound cell (column i, row j).
+    pub fn kernel_table(
+        &self,
+        film_distance: f64,
+        cell_points: impl Fn(u32, u32) -> Vec<DVec3> + Sync,
+    ) -> Vec<[f32; 2]> {
+        use rayon::prelude::*;
+        let axis = self.irradiance(DVec3::new(0.0, 0.0, -film_distance), ILLUMINATION_GRID);
+        let mut table = vec![[(1.0 / axis) as f32, 0.0]];
+        for s in &self.surfaces {
+            table.push([s.z as f32, s.radius as f32]);
+            table.push([
+                s.aperture_radius as f32,
+                (s.index_behind / s.index_in_front) as f32,
+            ]);
+        }
+        let cells = LENS_PUPIL_CELLS;
+        let bounds: Vec<[[f32; 2]; 2]> = (0..cells * cells)
+            .into_par_iter()
+            .map(
+                |c| match self.pupil_bounds(&cell_points(c % cells, c / cells)) {
+                    Some([lo, hi]) => [lo.as_vec2().to_array(), hi.as_vec2().to_array()],
+                    None => EMPTY_BOUNDS,
+                },
+            )
+            .collect();
+        table.extend(bounds.into_iter().flatten());
+        table
+    }
+}
+
+/// A camera ray through a real lens: the ray leaving the front surface (lens frame, mm) and its
+/// weight; a ray lost in the lens has weight 0 and the chief ray's direction through H' (so the
+/// first-hit layers see what the lens images).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LensRay {
+    /// Origin in the lens frame (mm).
+    pub origin: Vec3,
+    /// Unit direction in the lens frame.
+    pub direction: Vec3,
+    /// The sample's weight: the bounds' area times cos(film) cos(rear) / distance^2, times the
+    /// exposure; 0 when the ray is lost.
+    pub weight: f32,
+}
+
+/// The ray from film point `film_point` (lens frame, mm) through the point `u` of its cell's
+/// exit-pupil bounds, traced through the lens in f32. `film_normal` is the film's unit normal
+/// (towards the lens); `cell` the film cell (column, row). Twin: `lens_ray` in wgsl/lens.wgsl.
+pub fn lens_ray(
+    table: &[[f32; 2]],
+    offset: u32,
+    count: u32,
+    film_point: Vec3,
+    film_normal: Vec3,
+    cell: [u32; 2],
+    u: [f32; 2],
+) -> LensRay {
+    let chief = LensRay {
+        origin: Vec3::ZERO,
+        direction: -film_point.normalize(),
+        weight: 0.0,
+    };
+    let at = |k: u32| Vec2::from(table[(offset + k) as usize]);
+    let bounds = 1 + 2 * count + 2 * (cell[1] * LENS_PUPIL_CELLS + cell[0]);
+    let (lo, hi) = (at(bounds), at(bounds + 1));
+    if hi.x < lo.x {
+        return chief;
+    }
+    let rear_z = at(1).x;
+    let aim = (lo + Vec2::from(u) * (hi - lo)).extend(rear_z);
+    let to = aim - film_point;
+    let distance2 = to.length_squared();
+    let mut d = to / distance2.sqrt();
+    let mut o = film_point;
+    for i in 0..count {
+        let shape = at(1 + 2 * i);
+        let glass = at(2 + 2 * i);
+        let Some(t) = surface_distance(shape.x, shape.y, o, d) else {
+            return chief;
+        };
+        o += t * d;
+        if o.x * o.x + o.y * o.y > glass.x * glass.x {
+            return chief;
+        }
+        if shape.y != 0.0 {
+            let centre = Vec3::new(0.0, 0.0, shape.x - shape.y);
+            let mut n = (o - centre).normalize();
+            if n.dot(d) > 0.0 {
+                n = -n;
+            }
+            let Some(refracted) = refract_f32(d, n, glass.y) else {
+                return chief;
+            };
+            d = refracted;
+        }
+    }
+    let area = (hi.x - lo.x) * (hi.y - lo.y);
+    let cosines = film_normal.dot(to).abs() * to.z / (distance2 * distance2);
+    LensRay {
+        origin: o,
+        direction: d,
+        weight: at(0).x * area * cosines,
+    }
+}
+
+/// [`intersect`] in f32 for a surface at `z` of radius `radius` (0: a plane).
+fn surface_distance(z: f32, radius: f32, o: Vec3, d: Vec3) -> Option<f32> {
+    if radius == 0.0 {
+        let t = (z - o.z) / d.z;
+        return (t.is_finite() && t >= 0.0).then_some(t);
+    }
+    let centre = Vec3::new(0.0, 0.0, z - radius);
+    let oc = o - centre;
+    let b = oc.dot(d);
+    let c = oc.length_squared() - radius * radius;
+    let discriminant = b * b - c;
+    if discriminant < 0.0 {
+        return None;
+    }
+    let root = discriminant.sqrt();
+    let t = if radius > 0.0 { -b + root } else { -b - root };
+    let p = o + t * d;
+    (t > 0.0 && (p.z - centre.z) * radius > 0.0).then_some(t)
+}
+
+/// [`refract`] in f32.
+fn refract_f32(d: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let cos_i = -n.dot(d);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    Some((eta * d + (eta * cos_i - cos_t) * n).normalize())
 }
 
 /// Distance along the ray to the surface (its cap about the vertex), if it is ahead.

@@ -30,8 +30,8 @@ pub mod report;
 use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
 
 use crate::layout::{
-    FOCUS_CYLINDER, FOCUS_PLANE, FOCUS_SPHERE, GpuCamera, PROJECTION_ORTHOGRAPHIC,
-    PROJECTION_PERSPECTIVE,
+    FOCUS_CYLINDER, FOCUS_PLANE, FOCUS_SPHERE, GpuCamera, LENS_PUPIL_CELLS, PROJECTION_LENS,
+    PROJECTION_ORTHOGRAPHIC, PROJECTION_PERSPECTIVE,
 };
 use crate::sampler::SamplerName;
 
@@ -118,6 +118,9 @@ pub struct CameraSpec {
     pub shutter: [f64; 2],
     /// The surface of sharp focus (a curved one takes `focus_distance` as its radius).
     pub focus_surface: FocusSurface,
+    /// A real lens's prescription placed at its f-number (`camera.lens`), traced in place of the
+    /// thin lens: its H' is the lens centre (docs/lens.md).
+    pub lens: Option<lens::LensSystem>,
 }
 
 /// The surface a lens focuses on.
@@ -339,6 +342,11 @@ impl CameraSpec {
         let lens_axis_world = |column: DVec3| f32x3(basis.to_world(column));
         let film_dir = |v: DVec3| f32x3(s.lens.transpose() * v);
         let (focal_length_mm, inv_focal_length_mm, projection) = match self.projection {
+            Projection::Perspective if self.lens.is_some() => (
+                self.focal_length_mm as f32,
+                (1.0 / self.focal_length_mm) as f32,
+                PROJECTION_LENS,
+            ),
             Projection::Perspective => (
                 self.focal_length_mm as f32,
                 (1.0 / self.focal_length_mm) as f32,
@@ -374,8 +382,34 @@ impl CameraSpec {
                 _ => 0.0,
             },
             projection,
+            lens_surface_count: self.lens.as_ref().map_or(0, |l| l.surfaces.len() as u32),
             ..Default::default()
         }
+    }
+
+    /// A real lens's table for the kernels (`LensSystem::kernel_table`): each film cell's
+    /// bounds searched from its corners and centre in the lens frame; empty without a lens.
+    pub fn lens_table(&self) -> Vec<[f32; 2]> {
+        let Some(lens) = &self.lens else {
+            return Vec::new();
+        };
+        let s = self.standards();
+        let cells = LENS_PUPIL_CELLS as f64;
+        let [w, h] = self.film_mm;
+        let film = |x: f64, y: f64| {
+            s.to_lens_frame(s.film_point(DVec2::new((x / cells - 0.5) * w, (y / cells - 0.5) * h)))
+        };
+        let cell_points = |i: u32, j: u32| {
+            let (x, y) = (i as f64, j as f64);
+            vec![
+                film(x, y),
+                film(x + 1.0, y),
+                film(x, y + 1.0),
+                film(x + 1.0, y + 1.0),
+                film(x + 0.5, y + 0.5),
+            ]
+        };
+        lens.kernel_table(self.film_distance_mm, cell_points)
     }
 }
 
@@ -426,6 +460,41 @@ pub fn generate_ray(camera: &GpuCamera, film_mm: Vec2, lens_mm: Vec2) -> Ray {
         origin: Vec3::from(camera.lens_center) + lens_to_world(camera, origin_lens),
         direction: lens_to_world(camera, direction_lens),
     }
+}
+
+/// The ray from image-plane point `film_mm` through a real lens (`PROJECTION_LENS`), aimed at
+/// the point `u` (in [0, 1)^2) of its film cell's exit-pupil bounds, with its weight (0: lost in
+/// the lens, the ray then the chief ray through the lens centre). Twin: `generate_lens_ray` in
+/// wgsl/lens.wgsl.
+pub fn generate_lens_ray(
+    camera: &GpuCamera,
+    table: &[[f32; 2]],
+    film_mm: Vec2,
+    u: [f32; 2],
+) -> (Ray, f32) {
+    let film_u = Vec3::from(camera.film_u);
+    let film_v = Vec3::from(camera.film_v);
+    let film_point = Vec3::from(camera.film_center) + film_mm.x * film_u + film_mm.y * film_v;
+    let cells = LENS_PUPIL_CELLS as f32;
+    let cell = |x: f32, size: f32| ((x / size + 0.5) * cells).clamp(0.0, cells - 1.0) as u32;
+    let traced = lens::lens_ray(
+        table,
+        camera.lens_table_offset,
+        camera.lens_surface_count,
+        film_point,
+        film_u.cross(film_v),
+        [
+            cell(film_mm.x, camera.film_width_mm),
+            cell(film_mm.y, camera.film_height_mm),
+        ],
+        u,
+    );
+    let ray = Ray {
+        origin: Vec3::from(camera.lens_center)
+            + lens_to_world(camera, traced.origin * camera.units_per_mm),
+        direction: lens_to_world(camera, traced.direction),
+    };
+    (ray, traced.weight)
 }
 
 /// Where the chief ray of film point `film_point` (lens frame, mm; the lens centre at the

@@ -237,6 +237,13 @@ impl<'a> Exporter<'a> {
         let camera = &self.scene.camera;
         self.movements(camera);
         let lens = !camera.is_pinhole();
+        if camera.lens.is_some() {
+            self.lossy(
+                "camera.lens",
+                "a real lens's prescription: Mitsuba's cameras are a pinhole or a thin lens",
+                "a thin lens of its focal length and f-number at its rear principal point",
+            );
+        }
         if lens && camera.aperture_blades >= 3 {
             self.lossy(
                 "camera.aperture_blades",

@@ -221,6 +221,7 @@ fn rays_lanes<const LENS: bool>(
                 direction: Vec3::from(turn(d.map(|c| c * recip))),
             },
             time: camera.shutter_open,
+            weight: 1.0,
         };
     }
 }

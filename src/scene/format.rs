@@ -219,6 +219,9 @@ pub struct CameraSection {
     /// The surface of sharp focus: "plane" (default), or "sphere" / "cylinder" of radius
     /// `focus_distance` about the lens centre.
     pub focus_surface: Option<crate::camera::FocusSurface>,
+    /// A real lens's prescription (pbrt's tabular format, relative to the scene file), traced
+    /// in place of the thin lens: its focal length and widest f-number come from it.
+    pub lens: Option<String>,
 }
 
 fn default_up() -> Vec3 {

@@ -21,6 +21,7 @@ use super::parametric::{BezierPatch, Cylinder, Ellipsoid, Torus};
 use super::surface::{CurvedSurface, Surface, load_bezier_patches, orient_outward};
 use super::{CameraSpec, Integrator, Light, Material, RenderSettings, Scene, Shape};
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
+use crate::camera::lens::{LensSystem, Prescription};
 use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, FocusSurface, Movements, Projection};
 use crate::error::{Error, Result};
@@ -430,10 +431,18 @@ fn validate_camera(
         check.positive("camera.film[1]", h)?,
     ];
     check_aspect(check, "camera.film", film, "mm", render)?;
-    let focal_length_mm = focal_length(check, c, film)?;
-    let f_number = f_number(check, c)?;
+    let lens = real_lens(check, c)?;
+    let (focal_length_mm, f_number, principal_gap) = match &lens {
+        Some(lens) => (
+            lens.paraxial.focal_length,
+            lens.f_number,
+            lens.principal_gap(),
+        ),
+        None => (focal_length(check, c, film)?, f_number(check, c)?, 0.0),
+    };
     let units_per_mm = 0.001 / meters_per_unit;
-    let focus_distance = focus_distance(check, c, f_number, focal_length_mm, units_per_mm)?;
+    let focus = (f_number, focal_length_mm, units_per_mm, principal_gap);
+    let focus_distance = focus_distance(check, c, focus)?;
     let movements = movements(check, c)?;
     let aperture_blades = aperture_blades(check, c)?;
     let mut camera = CameraSpec {
@@ -456,6 +465,7 @@ fn validate_camera(
         units_per_mm,
         shutter: shutter(check, c.shutter)?,
         focus_surface: c.focus_surface.unwrap_or_default(),
+        lens,
     };
     if f_number > 0.0 {
         check_sampler_spp(
@@ -469,6 +479,71 @@ fn validate_camera(
     check_film_behind_lens(check, &camera)?;
     check_focus_surface(check, &camera)?;
     Ok(camera)
+}
+
+/// `camera.lens`: the prescription read and stopped to `f_number` (its widest when none is
+/// given), with the fields a real lens replaces or does not have yet refused by name.
+fn real_lens(check: &Checker, c: &CameraSection) -> Result<Option<LensSystem>> {
+    let Some(name) = &c.lens else {
+        return Ok(None);
+    };
+    let replaced = [
+        (
+            "focal_length",
+            c.focal_length.is_some(),
+            "the lens file sets the focal length",
+        ),
+        (
+            "vertical_fov",
+            c.vertical_fov.is_some(),
+            "the lens file sets the focal length",
+        ),
+        (
+            "aperture_blades",
+            c.aperture_blades.is_some(),
+            "a real lens's stop is round",
+        ),
+        (
+            "aperture_rotation",
+            c.aperture_rotation.is_some(),
+            "a real lens's stop is round",
+        ),
+        (
+            "focus_points",
+            c.focus_points.is_some(),
+            "focus_points is not solved for a real lens yet",
+        ),
+        (
+            "focus_surface",
+            c.focus_surface.is_some(),
+            "a real lens's focal surface is its own",
+        ),
+    ];
+    if let Some((field, _, why)) = replaced.iter().find(|(_, given, _)| *given) {
+        return Err(check.err(
+            &format!("camera.{field}"),
+            format!("{why}: leave it out with `lens`"),
+        ));
+    }
+    let folder = check
+        .parsed
+        .path
+        .parent()
+        .unwrap_or(std::path::Path::new("."));
+    let prescription = Prescription::read(&folder.join(name))?;
+    let f_number = match c.f_number {
+        Some(n) => Some(check.positive("camera.f_number", n)?),
+        None => None,
+    };
+    let lens = LensSystem::new(&prescription, f_number).map_err(|e| {
+        let field = if f_number.is_some() {
+            "camera.f_number"
+        } else {
+            "camera.lens"
+        };
+        check.err(field, format!("{name}: {e}"))
+    })?;
+    Ok(Some(lens))
 }
 
 /// The focal length (mm): `focal_length`, or the one that gives `vertical_fov` on the film's
@@ -515,18 +590,19 @@ fn f_number(check: &Checker, c: &CameraSection) -> Result<f64> {
 
 /// `focus_distance` in scene units (`None`: infinity or not given), beyond the focal length
 /// when there is a lens.
+/// `focus_distance` (scene units from the lens centre), checked to lie beyond the front focal
+/// point: the focal length from the front principal point, `principal_gap` mm ahead of the
+/// lens centre (0 for the thin lens).
 fn focus_distance(
     check: &Checker,
     c: &CameraSection,
-    f_number: f64,
-    focal_length_mm: f64,
-    units_per_mm: f64,
+    (f_number, focal_length_mm, units_per_mm, principal_gap): (f64, f64, f64, f64),
 ) -> Result<Option<f64>> {
     Ok(match c.focus_distance {
         Some(d) if d == f64::INFINITY => None,
         Some(d) => {
             let d = check.positive("camera.focus_distance", d)?;
-            if f_number > 0.0 && d / units_per_mm <= focal_length_mm {
+            if f_number > 0.0 && d / units_per_mm - principal_gap <= focal_length_mm {
                 return Err(check.err(
                     "camera.focus_distance",
                     format!(
@@ -643,8 +719,9 @@ fn place_focus(
         camera.film_distance_mm = solution.film_distance_mm;
         camera.focus = Focus::Points(world);
     } else if f_number > 0.0 {
+        let gap = camera.lens.as_ref().map_or(0.0, |l| l.principal_gap());
         camera.film_distance_mm = match focus_distance {
-            Some(d) => 1.0 / (1.0 / focal_length_mm - units_per_mm / d),
+            Some(d) => 1.0 / (1.0 / focal_length_mm - 1.0 / (d / units_per_mm - gap)),
             None => focal_length_mm,
         };
         camera.focus = Focus::Distance(focus_distance);
@@ -752,6 +829,7 @@ fn validate_orthographic(
         ("aperture_blades", c.aperture_blades.is_some()),
         ("aperture_rotation", c.aperture_rotation.is_some()),
         ("focus_surface", c.focus_surface.is_some()),
+        ("lens", c.lens.is_some()),
     ];
     if let Some((name, _)) = lens_fields.iter().find(|(_, given)| *given) {
         let why = match *name {
@@ -803,6 +881,7 @@ fn validate_orthographic(
         units_per_mm,
         shutter: shutter(check, c.shutter)?,
         focus_surface: FocusSurface::Plane,
+        lens: None,
     })
 }
 
@@ -834,8 +913,10 @@ fn check_focus_surface(check: &Checker, camera: &CameraSpec) -> Result<()> {
 /// plane would send rays sideways at infinite slope.
 fn check_film_behind_lens(check: &Checker, camera: &CameraSpec) -> Result<()> {
     let margin = 0.01 * camera.focal_length_mm;
+    // A real lens's back is its rear vertex, not H'.
+    let back = camera.lens.as_ref().map_or(0.0, |l| l.rear_z().min(0.0));
     for corner in camera.film_corners_in_lens_frame() {
-        if corner.z > -margin {
+        if corner.z > back - margin {
             let m = &camera.movements;
             return Err(check.err(
                 "camera",
