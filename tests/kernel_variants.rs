@@ -91,7 +91,7 @@ fn specialised_kernels_render_the_general_kernels_image() {
 /// The wavefront render (a kernel per stage of a path vertex, paths and shadow rays in queues)
 /// renders the megakernel's image bit for bit: the same camera samples, hits, shadow rays and
 /// shading, summed in the same order; with light windows, adaptive passes (pixel lists), AOV
-/// layers, curved mirrors cut off at max_depth and motion blur too, and the same rays, cut-off
+/// layers, a real lens, curved mirrors cut off at max_depth and motion blur too, and the same rays, cut-off
 /// paths and per-pixel sample counts.
 #[test]
 fn the_wavefront_render_renders_the_megakernels_image() {
@@ -102,7 +102,7 @@ fn the_wavefront_render_renders_the_megakernels_image() {
         per_invocation: 4,
         ..RayBudgets::DEFAULT
     };
-    let cases: [(&str, &[&str], RayBudgets); 6] = [
+    let cases: [(&str, &[&str], RayBudgets); 7] = [
         // mirrors, a point light, a plane
         (
             "scenes/spheres.toml",
@@ -130,6 +130,12 @@ fn the_wavefront_render_renders_the_megakernels_image() {
         // a thin lens
         (
             "scenes/thin_lens.toml",
+            &["render.width=72", "render.height=48"],
+            RayBudgets::DEFAULT,
+        ),
+        // a real lens: camera samples weighted by its exit-pupil bounds, some lost in the glass
+        (
+            "scenes/double_gauss.toml",
             &["render.width=72", "render.height=48"],
             RayBudgets::DEFAULT,
         ),

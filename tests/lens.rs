@@ -337,3 +337,49 @@ fn relative_illumination_on_the_film_matches_the_traced_exit_pupil() {
         assert!(compared >= 24, "{camera}: {compared} pixels compared");
     }
 }
+
+/// What a real lens replaces or does not have yet is refused by field name, as are an f-number
+/// wider than the lens opens, a film pushed into the glass and a lens file that is missing.
+#[test]
+fn camera_fields_a_real_lens_cannot_take_are_refused_by_name() {
+    let lens = "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"";
+    let cases = [
+        (
+            format!("{lens}\nfocal_length = 50.0"),
+            "camera.focal_length",
+        ),
+        (
+            format!("{lens}\naperture_blades = 6"),
+            "camera.aperture_blades",
+        ),
+        (format!("{lens}\nf_number = 1.4"), "camera.f_number"),
+        (
+            format!("{lens}\nfocus_points = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]"),
+            "camera.focus_points",
+        ),
+        (
+            format!("{lens}\nfocus_surface = \"sphere\"\nfocus_distance = 5.0"),
+            "camera.focus_surface",
+        ),
+        (
+            format!("{lens}\nfilm_distance = 50.0\nfilm_tilt = 60.0"),
+            "film corner reaches",
+        ),
+        (
+            "film = [36.0, 24.0]\nlens = \"lenses/none.dat\"".to_string(),
+            "none.dat",
+        ),
+    ];
+    for (camera, field) in cases {
+        let text = format!(
+            "[render]\nwidth = 36\nheight = 24\n\n[camera]\nposition = [0, 0, 5]\n\
+             look_at = [0, 0, 0]\n{camera}\n\n[[shapes]]\ntype = \"sphere\"\n\
+             center = [0, 0, 0]\nradius = 1\n"
+        );
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/lens_refused.toml");
+        match Scene::from_str(&path, &text, &[]) {
+            Err(e) => assert!(e.to_string().contains(field), "{camera}: {e}"),
+            Ok(_) => panic!("{camera}: accepted"),
+        }
+    }
+}
