@@ -362,7 +362,7 @@ fn camera_fields_a_real_lens_cannot_take_are_refused_by_name() {
             "camera.focus_surface",
         ),
         (
-            format!("{lens}\nfilm_distance = 50.0\nfilm_tilt = 60.0"),
+            format!("{lens}\nfilm_distance = 52.0\nlens_tilt = 70.0"),
             "film corner reaches",
         ),
         (
@@ -373,8 +373,9 @@ fn camera_fields_a_real_lens_cannot_take_are_refused_by_name() {
     for (camera, field) in cases {
         let text = format!(
             "[render]\nwidth = 36\nheight = 24\n\n[camera]\nposition = [0, 0, 5]\n\
-             look_at = [0, 0, 0]\n{camera}\n\n[[shapes]]\ntype = \"sphere\"\n\
-             center = [0, 0, 0]\nradius = 1\n"
+             look_at = [0, 0, 0]\n{camera}\n\n[[materials]]\nname = \"m\"\n\
+             model = \"lambert\"\ndiffuse = [0.5, 0.5, 0.5]\n\n[[shapes]]\n\
+             type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n"
         );
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/lens_refused.toml");
         match Scene::from_str(&path, &text, &[]) {
