@@ -384,3 +384,39 @@ fn camera_fields_a_real_lens_cannot_take_are_refused_by_name() {
         }
     }
 }
+
+/// With the film square to the axis, a corner's light depends on its distance from the axis
+/// alone: the rise that keeps every corner above half the axis's light puts the top corners on
+/// the image circle `chambre lens` reports (within 1%). A film past the circle is warned of.
+#[test]
+fn movement_limits_put_the_corners_on_the_image_circle() {
+    let f = 50.3582;
+    let camera = format!(
+        "film = [24.0, 16.0]\nlens = \"lenses/dgauss_50mm.dat\"\nf_number = 8.0\n\
+         film_distance = {f}"
+    );
+    let scene = scene(&camera, [24, 16], 1, 1, "");
+    let spec = &scene.camera;
+    let lens = spec.lens.as_ref().unwrap();
+    let circle = lens.image_circle(spec.film_distance_mm, f / 400.0, 4.0 * f);
+    let limits = spec.movement_limits();
+    let rise = limits
+        .iter()
+        .find(|(m, _)| *m == chambre::camera::coverage::Movement::Rise)
+        .and_then(|(_, v)| *v)
+        .unwrap();
+    let corner = 12.0_f64.hypot(8.0 + rise);
+    assert!(
+        (corner / circle.half_radius - 1.0).abs() < 0.01,
+        "corner at {corner} mm, circle {circle:?}"
+    );
+    assert!(scene.warnings().is_empty(), "{:?}", scene.warnings());
+    let wide_open = "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"";
+    let wide_open = self::scene(wide_open, [36, 24], 1, 1, "");
+    assert!(
+        wide_open
+            .warnings()
+            .iter()
+            .any(|w| w.contains("image circle"))
+    );
+}

@@ -23,6 +23,7 @@
 //! window's normal as they turn a view camera's film away from its rays, which makes the
 //! projection oblique (docs/camera.md, "Orthographic camera").
 
+pub mod coverage;
 pub mod lens;
 pub mod optics;
 pub mod report;

@@ -44,6 +44,48 @@ pub fn camera_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
     if camera.is_orthographic() {
         return orthographic_report(camera, far);
     }
+    let thin = thin_lens_report(camera, coc_mm, far);
+    match &camera.lens {
+        Some(lens) => thin + &coverage_report(camera, lens),
+        None => thin,
+    }
+}
+
+/// A real lens's part of `chambre camera`: the prescription's report, the light at the film's
+/// corners and how far each movement may go inside the image circle.
+fn coverage_report(camera: &CameraSpec, lens: &LensSystem) -> String {
+    let mut out = String::from(
+        "\nreal lens (paraxial and traced; the lines above take it as a thin lens at H'):\n",
+    );
+    out += &lens_report(lens);
+    if let Some(corners) = camera.corner_illumination() {
+        let percent: Vec<String> = corners
+            .iter()
+            .map(|c| format!("{:.0}%", 100.0 * c))
+            .collect();
+        let _ = writeln!(
+            out,
+            "{:<28} {} (bottom left, bottom right, top right, top left)",
+            "light at the film's corners",
+            percent.join(", ")
+        );
+    }
+    let _ = writeln!(
+        out,
+        "how far each movement may go with every corner above half the axis's light:"
+    );
+    for (movement, limit) in camera.movement_limits() {
+        let reach = match limit {
+            Some(v) => format!("{v:.2}"),
+            None => "none: a corner is already below half".to_string(),
+        };
+        let _ = writeln!(out, "  {:<34} {reach}", movement.label());
+    }
+    out
+}
+
+/// `chambre camera` for the thin lens (a real lens's camera as the thin lens at its H').
+fn thin_lens_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
     let mut out = String::new();
     let m = &camera.movements;
     let fov = camera.field_of_view_deg();

@@ -334,6 +334,7 @@ impl Scene {
                 warnings.push(format!("{missing}; going on without it: {instead}"));
             }
         }
+        warnings.extend(self.camera.coverage_warning());
         warnings
     }
 
