@@ -6,6 +6,7 @@
 use glam::DVec2;
 
 use super::CameraSpec;
+use crate::layout::LENS_PUPIL_CELLS;
 
 /// A corner below this fraction of the axis's irradiance is outside the image circle (the
 /// radius `chambre lens` reports as "at half illumination").
@@ -126,6 +127,31 @@ impl CameraSpec {
                 (movement, Some(inside))
             })
             .collect()
+    }
+
+    /// How many camera rays pass the lens, over the film's points where any passes: aimed
+    /// through each film cell's exit-pupil bounds as the kernels aim them, and aimed at the whole
+    /// rear square (1.5 times the rear element) as without bounds. Sampled at the centres of the
+    /// kernels' cells, each with its cell's bounds, on a 32 x 32 grid of aims. `None` without a
+    /// real lens.
+    pub fn passing_fractions(&self) -> Option<[f64; 2]> {
+        let lens = self.lens.as_ref()?;
+        let half = lens.rear_square();
+        let square = [DVec2::splat(-half), DVec2::splat(half)];
+        let (mut bounded, mut whole, mut lit) = (0.0, 0.0, 0usize);
+        for j in 0..LENS_PUPIL_CELLS {
+            for i in 0..LENS_PUPIL_CELLS {
+                let points = self.pupil_cell_points(i, j);
+                let Some(bounds) = lens.pupil_bounds(&points) else {
+                    continue;
+                };
+                let centre = points[4];
+                lit += 1;
+                bounded += lens.passing_fraction(centre, bounds, 32);
+                whole += lens.passing_fraction(centre, square, 32);
+            }
+        }
+        (lit > 0).then(|| [bounded / lit as f64, whole / lit as f64])
     }
 
     /// A warning when a film corner gets less than half the axis's light: the movements (or

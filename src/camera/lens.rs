@@ -580,17 +580,44 @@ const EMPTY_BOUNDS: [[f32; 2]; 2] = [[1.0, 1.0], [-1.0, -1.0]];
 
 impl LensSystem {
     /// The rectangle (low and high corners) on the rear vertex's plane that holds every point a
-    /// ray from one of `film_points` passes the lens through, searched on a 32 x 32 grid over the
-    /// rear square and widened by one grid step on each side (clamped to the square); `None`
-    /// when no ray passes.
+    /// ray from one of `film_points` passes the lens through, or `None` when none passes. A first
+    /// search on a 33 x 33 grid over the rear square (or, when it finds nothing, the points
+    /// where the rays towards the paraxial exit pupil's centre cross the plane, for a stop too
+    /// small for that grid) gives a rectangle; a second search on a 33 x 33 grid over it, widened
+    /// by the first grid's step, refines it; the result is widened by the second grid's step
+    /// (clamped to the square).
     pub fn pupil_bounds(&self, film_points: &[DVec3]) -> Option<[DVec2; 2]> {
-        let z = self.rear_z();
         let half = self.rear_square();
-        let step = 2.0 * half / PUPIL_SEARCH_GRID as f64;
+        let square = [DVec2::splat(-half), DVec2::splat(half)];
+        let coarse_step = 2.0 * half / PUPIL_SEARCH_GRID as f64;
+        let (found, step) = match self.passing_within(film_points, square) {
+            Some(found) => (found, coarse_step),
+            None => {
+                let seed = self.chief_crossings(film_points)?;
+                let stop_scale = self.paraxial.widest_f_number / self.f_number;
+                let pupil = self.paraxial.exit_pupil_diameter * stop_scale;
+                (seed, pupil.min(coarse_step))
+            }
+        };
+        let clamp = |[lo, hi]: [DVec2; 2], margin: f64| {
+            [(lo - margin).max(square[0]), (hi + margin).min(square[1])]
+        };
+        let region = clamp(found, step);
+        let fine_step = (region[1] - region[0]).max_element() / PUPIL_SEARCH_GRID as f64;
+        let refined = self.passing_within(film_points, region).unwrap_or(found);
+        Some(clamp(refined, fine_step))
+    }
+
+    /// The smallest rectangle holding the points of a 33 x 33 grid over `region` (on the rear
+    /// vertex's plane) through which a ray from one of `film_points` passes.
+    fn passing_within(&self, film_points: &[DVec3], region: [DVec2; 2]) -> Option<[DVec2; 2]> {
+        let z = self.rear_z();
+        let [lo, hi] = region;
         let mut bounds: Option<[DVec2; 2]> = None;
         for i in 0..=PUPIL_SEARCH_GRID {
             for j in 0..=PUPIL_SEARCH_GRID {
-                let p = DVec2::new(-half + i as f64 * step, -half + j as f64 * step);
+                let t = DVec2::new(i as f64, j as f64) / PUPIL_SEARCH_GRID as f64;
+                let p = lo + t * (hi - lo);
                 let passes = film_points.iter().any(|&film| {
                     let direction = (p.extend(z) - film).normalize();
                     self.trace_from_film(film, direction).is_ok()
@@ -603,8 +630,52 @@ impl LensSystem {
                 }
             }
         }
-        let square = DVec2::splat(half);
-        bounds.map(|[lo, hi]| [(lo - step).max(-square), (hi + step).min(square)])
+        bounds
+    }
+
+    /// Where the rays from `film_points` towards the paraxial exit pupil's centre cross the rear
+    /// vertex's plane, for those that pass: the rectangle holding them.
+    fn chief_crossings(&self, film_points: &[DVec3]) -> Option<[DVec2; 2]> {
+        let z = self.rear_z();
+        let pupil = DVec3::new(
+            0.0,
+            0.0,
+            self.paraxial.rear_principal - self.paraxial.exit_pupil,
+        );
+        let mut bounds: Option<[DVec2; 2]> = None;
+        for &film in film_points {
+            let direction = (pupil - film).normalize();
+            if self.trace_from_film(film, direction).is_err() {
+                continue;
+            }
+            let p = (film + direction * ((z - film.z) / direction.z)).truncate();
+            bounds = Some(match bounds {
+                None => [p, p],
+                Some([lo, hi]) => [lo.min(p), hi.max(p)],
+            });
+        }
+        bounds
+    }
+
+    /// The fraction of rays from `film_point` aimed uniformly at the rectangle `bounds` (on the
+    /// rear vertex's plane) that pass the lens, on a `grid` x `grid` of aims.
+    pub fn passing_fraction(&self, film_point: DVec3, bounds: [DVec2; 2], grid: usize) -> f64 {
+        let [lo, hi] = bounds;
+        let z = self.rear_z();
+        let mut passed = 0usize;
+        for i in 0..grid {
+            for j in 0..grid {
+                let t = DVec2::new(i as f64 + 0.5, j as f64 + 0.5) / grid as f64;
+                let aim = (lo + t * (hi - lo)).extend(z);
+                if self
+                    .trace_from_film(film_point, (aim - film_point).normalize())
+                    .is_ok()
+                {
+                    passed += 1;
+                }
+            }
+        }
+        passed as f64 / (grid * grid) as f64
     }
 
     /// The lens as the kernels read it from the sample table (`GpuCamera::lens_table_offset`),

@@ -389,28 +389,31 @@ impl CameraSpec {
     }
 
     /// A real lens's table for the kernels (`LensSystem::kernel_table`): each film cell's
-    /// bounds searched from its corners and centre in the lens frame; empty without a lens.
+    /// bounds searched from [`pupil_cell_points`](Self::pupil_cell_points); empty without a lens.
     pub fn lens_table(&self) -> Vec<[f32; 2]> {
         let Some(lens) = &self.lens else {
             return Vec::new();
         };
+        lens.kernel_table(self.film_distance_mm, |i, j| self.pupil_cell_points(i, j))
+    }
+
+    /// The film points (lens frame, mm) whose rays bound the exit pupil of film cell (column i,
+    /// row j from the bottom) of the `LENS_PUPIL_CELLS`^2: its four corners and its centre.
+    pub fn pupil_cell_points(&self, i: u32, j: u32) -> Vec<DVec3> {
         let s = self.standards();
         let cells = LENS_PUPIL_CELLS as f64;
         let [w, h] = self.film_mm;
         let film = |x: f64, y: f64| {
             s.to_lens_frame(s.film_point(DVec2::new((x / cells - 0.5) * w, (y / cells - 0.5) * h)))
         };
-        let cell_points = |i: u32, j: u32| {
-            let (x, y) = (i as f64, j as f64);
-            vec![
-                film(x, y),
-                film(x + 1.0, y),
-                film(x, y + 1.0),
-                film(x + 1.0, y + 1.0),
-                film(x + 0.5, y + 0.5),
-            ]
-        };
-        lens.kernel_table(self.film_distance_mm, cell_points)
+        let (x, y) = (i as f64, j as f64);
+        vec![
+            film(x, y),
+            film(x + 1.0, y),
+            film(x, y + 1.0),
+            film(x + 1.0, y + 1.0),
+            film(x + 0.5, y + 0.5),
+        ]
     }
 }
 

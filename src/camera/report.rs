@@ -70,6 +70,15 @@ fn coverage_report(camera: &CameraSpec, lens: &LensSystem) -> String {
             percent.join(", ")
         );
     }
+    if let Some([bounded, whole]) = camera.passing_fractions() {
+        let _ = writeln!(
+            out,
+            "{:<28} {:.0}% through the film cells' pupil bounds, {:.0}% aimed at the rear element",
+            "camera rays that pass",
+            100.0 * bounded,
+            100.0 * whole
+        );
+    }
     let _ = writeln!(
         out,
         "how far each movement may go with every corner above half the axis's light:"
