@@ -884,7 +884,6 @@ const REFUSED: &[(&str, &[&str])] = &[
         ],
     ),
     ("thin_lens.toml", &["shapes[1].material", "render.ambient"]),
-    ("sky.toml", &["lights[0].file"]),
     ("sponza.toml", &["camera.film_shift", "shapes[0].material"]),
 ];
 
@@ -1758,4 +1757,129 @@ fn a_path_traced_rough_metal_sphere_renders_alike() {
             .any(|m| m.model == chambre::layout::MODEL_ROUGH_CONDUCTOR)
     );
     renders_agree("rough_metal", &scene);
+}
+
+/// Mitsuba 3's `envmap` lookup (src/emitters/envmap.cpp, `eval_spectrum`) of a `width` x
+/// `height` bitmap at (u, v): the bitmap gets a last column repeating its first, pixel
+/// centres stand at u = (x + 1/2) / width and v = y / (height - 1), and the four nearest
+/// are blended bilinearly.
+fn mitsuba_envmap_lookup(
+    width: usize,
+    height: usize,
+    texels: &[[f32; 3]],
+    u: f64,
+    v: f64,
+) -> [f64; 3] {
+    let u = u - 0.5 / width as f64;
+    let (u, v) = (u - u.floor(), v - v.floor());
+    let (x, y) = (u * width as f64, v * (height - 1) as f64);
+    let (px, py) = ((x as usize).min(width - 1), (y as usize).min(height - 2));
+    let (wx, wy) = (x - px as f64, y - py as f64);
+    let at = |column: usize, row: usize| texels[row * width + column % width].map(f64::from);
+    let (a, b, c, d) = (
+        at(px, py),
+        at(px + 1, py),
+        at(px, py + 1),
+        at(px + 1, py + 1),
+    );
+    std::array::from_fn(|k| {
+        (1.0 - wy) * ((1.0 - wx) * a[k] + wx * b[k]) + wy * ((1.0 - wx) * c[k] + wx * d[k])
+    })
+}
+
+/// The sky's map as the export writes it for Mitsuba: Mitsuba's radiance (its lookup applied
+/// to the written bitmap) equals chambre's texel (nearest, constant cells) at every direction
+/// but those on strips 1/k of a texel wide at texel edges, k the bitmap's samples per texel
+/// side; over directions uniform on the sphere the mean relative difference is small and
+/// stated. A map too large for k = 16 within the bitmap's limit is refused without
+/// `--approximate` and written with it.
+#[test]
+fn an_environment_map_is_written_so_that_mitsubas_bilinear_lookup_keeps_chambres_texels() {
+    let sky = common::load("scenes/sky.toml", &[]);
+    let export = export(&sky);
+    assert!(export.notes.is_empty(), "{:?}", export.notes);
+    let (_, bytes) = export
+        .files
+        .iter()
+        .find(|(name, _)| name.ends_with("environment.exr"))
+        .expect("the resampled map");
+    let written = image::load_from_memory(bytes).unwrap().into_rgb32f();
+    let (width, height) = (written.width() as usize, written.height() as usize);
+    let written: Vec<[f32; 3]> = written.pixels().map(|p| p.0).collect();
+    let map =
+        chambre::scene::environment::EnvironmentMap::read(&Path::new(ROOT).join("scenes/sky.exr"))
+            .unwrap();
+    let (w, h) = (map.width as usize, map.height as usize);
+    let k = width / w;
+    assert_eq!((width, height), (k * w, k * h + 1));
+    assert!(k >= 16, "{k} samples per texel side");
+    let luminance = |c: [f64; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    // Directions uniform over the sphere: u uniform, cos(theta) uniform, stratified.
+    let n = 2000;
+    let (mut differing, mut relative, mut count) = (0usize, 0.0f64, 0usize);
+    for i in 0..n {
+        for j in 0..n {
+            let u = (i as f64 + 0.5) / n as f64;
+            let cos_theta = 1.0 - 2.0 * (j as f64 + 0.5) / n as f64;
+            let v = cos_theta.acos() / std::f64::consts::PI;
+            let ours = map.texels
+                [((v * h as f64) as usize).min(h - 1) * w + ((u * w as f64) as usize).min(w - 1)]
+            .map(f64::from);
+            let theirs = mitsuba_envmap_lookup(width, height, &written, u, v);
+            let difference =
+                (luminance(theirs) - luminance(ours)).abs() / luminance(ours).max(1e-6);
+            let exact = (0..3).all(|c| (theirs[c] - ours[c]).abs() <= 1e-6 * ours[c].max(1e-3));
+            if !exact {
+                differing += 1;
+                // Where they differ, Mitsuba's value lies between chambre's texel and a
+                // neighbour's: at most the strip's share of the sphere.
+                let (su, sv) = (
+                    (u * width as f64) % k as f64,
+                    (v * (height - 1) as f64) % k as f64,
+                );
+                assert!(
+                    !(0.5 + 1e-9..k as f64 - 0.5 - 1e-9).contains(&su)
+                        || sv >= k as f64 - 1.0 - 1e-9,
+                    "({u}, {v}) differs away from a texel edge"
+                );
+            }
+            relative += difference;
+            count += 1;
+        }
+    }
+    let fraction = differing as f64 / count as f64;
+    let mean_relative = relative / count as f64;
+    eprintln!(
+        "sky.exr at {k} x {k}: {:.2}% of directions differ; mean relative luminance difference {mean_relative:.4}",
+        100.0 * fraction
+    );
+    assert!(fraction <= 2.0 / k as f64, "{fraction}");
+    // Measured 0.023 (2.4% of directions differ): the sun's texels, a thousand times the sky,
+    // blended into their neighbours' strips make nearly all of it.
+    assert!(mean_relative < 0.03, "{mean_relative}");
+
+    let large = chambre::scene::environment::EnvironmentMap::new(
+        Path::new("large.exr"),
+        1024,
+        512,
+        vec![[1.0, 0.5, 0.25]; 1024 * 512],
+    )
+    .unwrap();
+    let mut big = sky.clone();
+    for light in &mut big.lights {
+        if let chambre::scene::Light::Environment { map, .. } = light {
+            *map = Some(std::sync::Arc::new(large.clone()));
+        }
+    }
+    let refused = refusal(&big, &options(MitsubaIntegrator::Path, false));
+    assert!(refused.contains("lights[0].file"), "{refused}");
+    let approximate = to_mitsuba(&big, "t", &options(MitsubaIntegrator::Path, true)).unwrap();
+    assert!(
+        approximate
+            .notes
+            .iter()
+            .any(|n| n.starts_with("lights[0].file")),
+        "{:?}",
+        approximate.notes
+    );
 }

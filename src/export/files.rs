@@ -72,3 +72,59 @@ pub fn pfm_gray(size: u32, value: impl Fn(u32, u32) -> f32) -> Vec<u8> {
     }
     bytes
 }
+
+/// Most texels of a map resampled for Mitsuba's `envmap` (12 MiB as 32-bit RGB).
+pub const ENVMAP_MAX_TEXELS: u64 = 1 << 20;
+
+/// Most samples per texel side of a map resampled for Mitsuba's `envmap`.
+pub const ENVMAP_MAX_FACTOR: u32 = 32;
+
+/// chambre's map (`width` x `height` texels, piecewise constant: texel (i, j) covers
+/// u in [i / W, (i + 1) / W), v in [j / H, (j + 1) / H)) as a bitmap for Mitsuba's `envmap`,
+/// which interpolates bilinearly between pixel centres at u = (x + 1/2) / W' and
+/// v = y / (H' - 1) (rows on the poles). Each texel becomes `factor` x `factor` samples of
+/// itself, plus one last row on the -y pole: W' = k W, H' = k H + 1. Column x holds texel
+/// x / k, so two neighbouring columns differ only where they straddle a texel edge; row y
+/// holds texel min(y / k, H - 1), so rows y and y + 1 differ only in the interval just above
+/// an edge. Mitsuba's radiance is chambre's except on strips of width 1 / W' beside each
+/// texel edge (a fraction 1 / k of the longitudes and (H - 1) / (k H) of the colatitudes),
+/// where it is a blend of the two texels. Returns (W', H', texels row by row from the top).
+pub fn envmap_resampled(
+    width: u32,
+    height: u32,
+    texels: &[[f32; 3]],
+    factor: u32,
+) -> (u32, u32, Vec<[f32; 3]>) {
+    let (w, h) = (width * factor, height * factor + 1);
+    let mut out = Vec::with_capacity(w as usize * h as usize);
+    for y in 0..h {
+        let row = (y / factor).min(height - 1);
+        for x in 0..w {
+            out.push(texels[(row * width + x / factor) as usize]);
+        }
+    }
+    (w, h, out)
+}
+
+/// The samples per texel side for a `width` x `height` map: the most, up to
+/// `ENVMAP_MAX_FACTOR`, that keep the bitmap within `ENVMAP_MAX_TEXELS` (at least 1).
+pub fn envmap_factor(width: u32, height: u32) -> u32 {
+    let fits =
+        |k: u32| (width as u64 * k as u64) * (height as u64 * k as u64 + 1) <= ENVMAP_MAX_TEXELS;
+    (1..=ENVMAP_MAX_FACTOR)
+        .rev()
+        .find(|&k| fits(k))
+        .unwrap_or(1)
+}
+
+/// A 32-bit float RGB OpenEXR of `width` x `height` texels, rows from the top.
+pub fn exr_rgb(width: u32, height: u32, texels: &[[f32; 3]]) -> Result<Vec<u8>, String> {
+    let flat: Vec<f32> = texels.iter().flatten().copied().collect();
+    let image = image::Rgb32FImage::from_raw(width, height, flat)
+        .ok_or_else(|| "texel count does not match the size".to_string())?;
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image::DynamicImage::ImageRgb32F(image)
+        .write_to(&mut bytes, image::ImageFormat::OpenExr)
+        .map_err(|e| e.to_string())?;
+    Ok(bytes.into_inner())
+}

@@ -86,6 +86,11 @@ const INFINITE_FOCUS: f64 = 1e9;
 const SPOT_TABLE_SIZE: u32 = 512;
 /// Widest spot cone the table spans finely enough (it covers tan(outer) across its side).
 const SPOT_TABLE_MAX_DEG: f32 = 85.0;
+/// Samples per texel side from which a resampled environment map counts as faithful: Mitsuba's
+/// radiance differs from chambre's on under 1/16 of the longitudes and 1/16 of the
+/// colatitudes, and there only by a blend of two neighbouring texels (docs/lights.md).
+pub const ENVMAP_FAITHFUL_FACTOR: u32 = 16;
+
 /// Quads around and across an ellipsoid or torus written as a mesh (`--approximate`).
 const CURVED_MESH_GRID: [u32; 2] = [256, 128];
 
@@ -983,11 +988,11 @@ impl<'a> Exporter<'a> {
     }
 
     /// An environment light: Mitsuba's `constant` of the same radiance, sampled in proportion
-    /// to `samples`. A map is refused (with `--approximate`, Mitsuba's `envmap` of the same
-    /// file, copied beside the XML, and `scale`): Mitsuba reads the file as another sky (it
-    /// interpolates bilinearly between pixel centres it places on the poles, where chambre's
-    /// texels are constant cells, docs/mitsuba.md), its longitude turning the other way, which
-    /// a `to_world` with a reflection undoes.
+    /// to `samples`. A map is Mitsuba's `envmap` (and `scale`) of a bitmap written beside the
+    /// XML that repeats each texel k x k times (`files::envmap_resampled`), so that Mitsuba's
+    /// bilinear interpolation only blends neighbouring texels on strips 1/k of a texel wide at
+    /// their edges. Where the map is too large for k >= `ENVMAP_FAITHFUL_FACTOR` within
+    /// `files::ENVMAP_MAX_TEXELS`, the export is lossy (refused without `--approximate`).
     fn environment(
         &mut self,
         i: usize,
@@ -1006,28 +1011,34 @@ impl<'a> Exporter<'a> {
             return;
         };
         let field = format!("lights[{i}].file");
-        self.lossy(
-            &field,
-            "an environment map: Mitsuba's `envmap` interpolates the file's pixels bilinearly \
-             between centres on the poles, where chambre's texels are constant cells",
-            "Mitsuba's envmap of the same file",
-        );
-        if !self.options.approximate {
-            return;
+        let factor = files::envmap_factor(map.width, map.height);
+        if factor < ENVMAP_FAITHFUL_FACTOR {
+            self.lossy(
+                &field,
+                &format!(
+                    "an environment map of {} x {} texels: Mitsuba's `envmap` interpolates \
+                     bilinearly, and a bitmap of at most {} texels repeats each texel only \
+                     {factor} x {factor} times (a faithful export needs {ENVMAP_FAITHFUL_FACTOR})",
+                    map.width,
+                    map.height,
+                    files::ENVMAP_MAX_TEXELS
+                ),
+                "Mitsuba's envmap of that bitmap, blurred over 1/{factor} of each texel",
+            );
+            if !self.options.approximate {
+                return;
+            }
         }
-        let bytes = match std::fs::read(&map.source) {
+        let (width, height, texels) =
+            files::envmap_resampled(map.width, map.height, &map.texels, factor);
+        let bytes = match files::exr_rgb(width, height, &texels) {
             Ok(bytes) => bytes,
             Err(e) => {
-                let message = format!("{}: {e}", map.source.display());
-                self.refusals.push((field, message));
+                self.refusals.push((field, e));
                 return;
             }
         };
-        let file_name = map.source.file_name().map_or_else(
-            || "environment.exr".into(),
-            |n| n.to_string_lossy().into_owned(),
-        );
-        let name = format!("{}-{file_name}", self.stem);
+        let name = format!("{}-environment.exr", self.stem);
         self.files.push((name.clone(), bytes));
         let (sin, cos) = (rotate_deg as f64).to_radians().sin_cos();
         // Mitsuba's local direction at longitude phi is (sin phi, ., -cos phi), chambre's
