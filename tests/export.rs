@@ -1884,3 +1884,27 @@ fn an_environment_map_is_written_so_that_mitsubas_bilinear_lookup_keeps_chambres
         approximate.notes
     );
 }
+
+/// An environment-lit scene (`scenes/sky.toml`: a clay sphere, a mirror sphere and its glass
+/// sphere turned clay, on a plane), path traced under a constant sky (Mitsuba's `constant`,
+/// exact): it converges as Mitsuba does (chambre 4.7e-5 against Mitsuba's 4.0e-5 when
+/// measured). Under the sky map, exported as its k x k bitmap, the block means stand apart
+/// (|t| up to 23): not yet explained, so not asserted (docs/lights.md).
+#[test]
+fn the_path_tracer_converges_under_a_constant_environment_as_mitsuba_does() {
+    let text = std::fs::read_to_string(Path::new(ROOT).join("scenes/sky.toml")).unwrap();
+    let text = text
+        .replace("material = \"glass\"", "material = \"clay\"")
+        .replace("file = \"sky.exr\"", "radiance = [0.8, 0.9, 1.0]");
+    let overrides: Vec<String> = [
+        "render.width=32",
+        "render.height=32",
+        "camera.film=[24.0,24.0]",
+        "render.max_depth=3",
+    ]
+    .map(String::from)
+    .to_vec();
+    let path = Path::new(ROOT).join("scenes/sky.toml");
+    let scene = Scene::from_str(&path, &text, &overrides).unwrap_or_else(|e| panic!("{e}"));
+    converges_as_mitsuba("converge_sky_constant", &scene);
+}
