@@ -1,8 +1,10 @@
 //! Real lenses: a prescription of spherical surfaces and a stop, read from pbrt's tabular lens
 //! format, its paraxial properties by ray-transfer matrices, and exact rays traced through it
 //! (Snell's law at each surface, total internal reflection and every clear aperture stopping a
-//! ray). CPU, f64: the reference the kernels' f32 tracing will be measured against. Model and
-//! equations: `docs/lens.md`.
+//! ray), in f64 on the CPU: the reference for the exit-pupil bounds, the image circle and the
+//! tests. The kernels' f32 camera rays through the lens ([`lens_ray`], twin `generate_lens_ray`
+//! in wgsl/camera.wgsl) read the table [`LensSystem::kernel_table`] writes. Model and equations:
+//! `docs/lens.md`.
 //!
 //! A prescription lists its surfaces from the object side to the image side, one per line:
 //! `radius thickness index aperture` in millimetres, where a positive radius has its centre of
