@@ -122,6 +122,10 @@ fn relative_illumination_follows_the_cosine_fourth_law_through_a_small_stop() {
 
 mod common;
 
+/// Where the tests' scene texts say they stand: a path no file has, in `scenes/`, so that their
+/// `lens = "lenses/..."` finds the shipped prescriptions.
+const IN_SCENES: &str = "scenes/virtual_lens_scene.toml";
+
 use chambre::metrics::rel_mse;
 use chambre::scene::Scene;
 
@@ -194,7 +198,7 @@ radiance = [4.0, 4.0, 4.0]
         w = size[0],
         h = size[1],
     );
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/lens_test.toml");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(IN_SCENES);
     Scene::from_str(&path, &text, &[]).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -228,7 +232,7 @@ radius = 0.1
 material = "grey"
 "#
     );
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/lens_sky.toml");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(IN_SCENES);
     Scene::from_str(&path, &text, &[]).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -377,7 +381,7 @@ fn camera_fields_a_real_lens_cannot_take_are_refused_by_name() {
              model = \"lambert\"\ndiffuse = [0.5, 0.5, 0.5]\n\n[[shapes]]\n\
              type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n"
         );
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/lens_refused.toml");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(IN_SCENES);
         match Scene::from_str(&path, &text, &[]) {
             Err(e) => assert!(e.to_string().contains(field), "{camera}: {e}"),
             Ok(_) => panic!("{camera}: accepted"),

@@ -733,7 +733,7 @@ pub struct LensRay {
 
 /// The ray from film point `film_point` (lens frame, mm) through the point `u` of its cell's
 /// exit-pupil bounds, traced through the lens in f32. `film_normal` is the film's unit normal
-/// (towards the lens); `cell` the film cell (column, row). Twin: `lens_ray` in wgsl/lens.wgsl.
+/// (towards the lens); `cell` the film cell (column, row). Twin: `generate_lens_ray` in wgsl/camera.wgsl.
 pub fn lens_ray(
     table: &[[f32; 2]],
     offset: u32,

@@ -469,7 +469,7 @@ pub fn generate_ray(camera: &GpuCamera, film_mm: Vec2, lens_mm: Vec2) -> Ray {
 /// The ray from image-plane point `film_mm` through a real lens (`PROJECTION_LENS`), aimed at
 /// the point `u` (in [0, 1)^2) of its film cell's exit-pupil bounds, with its weight (0: lost in
 /// the lens, the ray then the chief ray through the lens centre). Twin: `generate_lens_ray` in
-/// wgsl/lens.wgsl.
+/// wgsl/camera.wgsl.
 pub fn generate_lens_ray(
     camera: &GpuCamera,
     table: &[[f32; 2]],
