@@ -446,6 +446,15 @@ impl LensSystem {
         self.paraxial.rear_principal - self.paraxial.front_principal
     }
 
+    /// The stop's z (mm, lens frame).
+    pub fn stop_z(&self) -> f64 {
+        self.surfaces
+            .iter()
+            .find(|s| s.radius == 0.0)
+            .expect("a prescription has exactly one stop")
+            .z
+    }
+
     /// The rear surface's vertex z (the lens's back, towards the film).
     pub fn rear_z(&self) -> f64 {
         self.surfaces[0].z

@@ -3,9 +3,10 @@
 //!
 //! Geometry is built in f64 in the *camera frame* (x right, y up, z forward, origin at the lens
 //! centre before any lens shift, lengths in mm): the lens is rotated by L = R_y(lens_swing) *
-//! R_x(lens_tilt) about its centre and shifted by `lens_shift`; the film is rotated by
-//! T = R_y(-film_swing) * R_x(film_tilt) about the point where the rail axis meets it, at
-//! `film_distance` behind the lens, and shifted within its rotated plane by `film_shift`.
+//! R_x(lens_tilt) about its pivot (its centre unless `lens_pivot` moves it) and shifted by
+//! `lens_shift`; the film is rotated by T = R_y(-film_swing) * R_x(film_tilt) about the point
+//! where the rail axis meets it, at `film_distance` behind the lens, and shifted within its
+//! rotated plane by `film_shift`.
 //!
 //! The kernels then work in the *lens frame* (lens plane z = 0, optical axis +z) with the paraxial
 //! ray-transfer form of the ideal thin lens: a ray from film point A through lens point P has
@@ -25,6 +26,7 @@
 
 pub mod coverage;
 pub mod lens;
+pub mod lens_focus;
 pub mod optics;
 pub mod report;
 
@@ -54,6 +56,10 @@ pub struct Movements {
     pub lens_swing: f64,
     /// [right, up] movement of the lens (mm).
     pub lens_shift: [f64; 2],
+    /// The point the lens turns about when tilted or swung (mm, in the unturned lens frame,
+    /// from the lens centre): zero turns it about its centre (a real lens's rear nodal point
+    /// H'); a point below the lens is a base tilt's axis (`docs/camera.md`).
+    pub lens_pivot: [f64; 3],
 }
 
 /// How the focus was set (kept for reports; the geometry only needs `film_distance_mm`).
@@ -160,6 +166,16 @@ impl CameraBasis {
     }
 }
 
+/// How far turning the lens by `lens` about `pivot` (mm from its centre, unturned lens frame)
+/// moves its centre: p - L p.
+fn turned_about_pivot(lens: DMat3, pivot: [f64; 3]) -> DVec3 {
+    let pivot = DVec3::from_array(pivot);
+    if pivot == DVec3::ZERO {
+        return DVec3::ZERO;
+    }
+    pivot - lens * pivot
+}
+
 /// R_y(swing) * R_x(tilt) in camera-frame components (x right, y up, z forward): tilt first,
 /// so the tilt axis follows the swing. R_x(t) * z = (0, -sin t, cos t).
 pub fn standard_rotation(tilt_deg: f64, swing_deg: f64) -> DMat3 {
@@ -226,6 +242,12 @@ impl CameraSpec {
         self.film_mm.map(|v| v * self.units_per_mm)
     }
 
+    /// How far the front principal point H lies ahead of the lens centre H' along the optical
+    /// axis (mm): object distances count from H. 0 for the thin lens, whose H and H' coincide.
+    pub fn principal_gap(&self) -> f64 {
+        self.lens.as_ref().map_or(0.0, |l| l.principal_gap())
+    }
+
     /// Aperture radius, f / (2 N), in mm; 0 for a pinhole.
     pub fn lens_radius_mm(&self) -> f64 {
         if self.is_pinhole() {
@@ -249,7 +271,8 @@ impl CameraSpec {
         let film_u = -film.x_axis;
         let film_v = -film.y_axis;
         Standards {
-            lens_center: DVec3::new(m.lens_shift[0], m.lens_shift[1], 0.0),
+            lens_center: DVec3::new(m.lens_shift[0], m.lens_shift[1], 0.0)
+                + turned_about_pivot(lens, m.lens_pivot),
             lens,
             film_pivot,
             film,

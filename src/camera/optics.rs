@@ -80,7 +80,8 @@ impl CameraSpec {
     }
 
     /// The conjugate (object-side) plane of the film plane scaled by `k` about the lens centre,
-    /// in the lens frame; `None` when it lies at infinity.
+    /// in the lens frame but relative to the front principal point H; `None` when it lies at
+    /// infinity.
     fn conjugate_plane_lens_frame(&self, k: f64) -> Option<RawPlane> {
         let film = self.film_plane_lens_frame();
         let f = self.focal_length_mm;
@@ -92,11 +93,14 @@ impl CameraSpec {
         })
     }
 
+    /// An object-side plane of the lens frame, given relative to the front principal point H
+    /// (the thin lens's conjugates hold from H; H lies `principal_gap` ahead of the lens
+    /// centre H'), in world space.
     fn lens_plane_to_world(&self, plane: RawPlane) -> Plane {
         let s = self.standards();
         let length = plane.normal.length();
         let mut normal = plane.normal / length;
-        let mut offset = plane.offset / length;
+        let mut offset = (plane.offset + self.principal_gap() * plane.normal.z) / length;
         // Orient the normal away from the lens centre.
         if offset < 0.0 {
             normal = -normal;
@@ -124,23 +128,27 @@ impl CameraSpec {
             .map(|p| self.lens_plane_to_world(p))
     }
 
-    /// Hinge line: where the plane through the lens centre parallel to the film meets the front
-    /// focal plane; the plane of sharp focus turns about it as the focus changes. `None` when
-    /// lens and film are parallel (no tilt between them: the line is at infinity).
+    /// Hinge line: where the plane through the front principal point H (the thin lens's
+    /// centre) parallel to the film meets the front focal plane; the plane of sharp focus turns
+    /// about it as the focus changes. `None` when lens and film are parallel (no tilt between
+    /// them: the line is at infinity).
     pub fn hinge_line(&self) -> Option<Line> {
         let film = self.film_plane_lens_frame();
-        let parallel_through_lens = RawPlane {
+        let gap = self.principal_gap();
+        let parallel_through_h = RawPlane {
             normal: film.normal,
-            offset: 0.0,
+            offset: gap * film.normal.z,
         };
         let front_focal = RawPlane {
             normal: DVec3::Z,
-            offset: self.focal_length_mm,
+            offset: self.focal_length_mm + gap,
         };
-        intersect_planes(parallel_through_lens, front_focal).map(|l| self.lens_line_to_world(l))
+        intersect_planes(parallel_through_h, front_focal).map(|l| self.lens_line_to_world(l))
     }
 
     /// Scheimpflug line: where the film plane meets the lens plane (and the plane of sharp focus).
+    /// For a real lens the lens plane is the rear principal plane; the plane of sharp focus
+    /// meets the front one in the same line moved `principal_gap` along the axis.
     pub fn scheimpflug_line(&self) -> Option<Line> {
         let lens_plane = RawPlane {
             normal: DVec3::Z,
@@ -359,17 +367,63 @@ pub struct FocusSolution {
     pub film_distance_mm: f64,
 }
 
-/// Solve `focus_points` for a camera whose film movements, lens shift and focal length are set.
-///
-/// With the points' plane m.X = e (camera frame, origin at the lens centre, |m| = 1, e > 0) and
-/// the film normal n_f, the Scheimpflug and hinge rules leave one family of lens axes:
-/// a = (f / e)(m - mu n_f) with |a| = 1, a quadratic in mu; the root whose axis lies nearer the
-/// rail is taken. The film distance then follows from the conjugate of the plane.
+/// How many times [`solve_focus_points`] re-solves before it gives up: the lens centre moves
+/// with the tilt when the lens turns about a pivot away from it, and a thick lens's H moves
+/// along its axis; each pass shrinks the error by about pivot distance (or gap) over object
+/// distance.
+const FOCUS_ITERATIONS: usize = 100;
+
+/// Solve `focus_points` for a camera whose film movements, lens shift and pivot, and lens are
+/// set: the thin-lens solution from the front principal point H, re-solved until the lens
+/// centre and H stop moving with the tilt it finds (once for a thin lens turned about its
+/// centre). A real lens's paraxial solution is then refined by tracing
+/// (`lens_focus::refine_focus_points`).
 pub fn solve_focus_points(
     camera: &CameraSpec,
     points: [DVec3; 3],
 ) -> Result<FocusSolution, String> {
+    let mut trial = camera.clone();
+    let mut last: Option<FocusSolution> = None;
+    for _ in 0..FOCUS_ITERATIONS {
+        let solution = solve_with_lens_centre_fixed(&trial, points)?;
+        if last == Some(solution) || last.is_some_and(|l| l.settled_with(&solution)) {
+            return Ok(solution);
+        }
+        trial.movements.lens_tilt = solution.lens_tilt;
+        trial.movements.lens_swing = solution.lens_swing;
+        trial.film_distance_mm = solution.film_distance_mm;
+        last = Some(solution);
+    }
+    Err(format!(
+        "the focus does not settle in {FOCUS_ITERATIONS} passes: the lens's pivot lies too far \
+         from it for points this near"
+    ))
+}
+
+impl FocusSolution {
+    /// Whether two passes agree to rounding (1e-12 degrees, 1e-12 of the film distance).
+    fn settled_with(&self, next: &FocusSolution) -> bool {
+        (self.lens_tilt - next.lens_tilt).abs() <= 1e-12
+            && (self.lens_swing - next.lens_swing).abs() <= 1e-12
+            && (self.film_distance_mm - next.film_distance_mm).abs()
+                <= 1e-12 * next.film_distance_mm
+    }
+}
+
+/// One pass of [`solve_focus_points`], with the lens centre where `camera`'s current tilt puts
+/// it and H `principal_gap` ahead of it along its current axis.
+///
+/// With the points' plane m.X = e (camera frame, origin at the lens centre, |m| = 1, e > 0),
+/// e_H = e - gap (m . a_current) its offset from H, and the film normal n_f, the Scheimpflug and
+/// hinge rules leave one family of lens axes: a = (f / e_H)(m - mu n_f) with |a| = 1, a
+/// quadratic in mu; the root whose axis lies nearer the rail is taken. The film distance then
+/// follows from the conjugate of the plane.
+fn solve_with_lens_centre_fixed(
+    camera: &CameraSpec,
+    points: [DVec3; 3],
+) -> Result<FocusSolution, String> {
     let f = camera.focal_length_mm;
+    let gap = camera.principal_gap();
     let s = camera.standards();
     let local: Vec<DVec3> = points
         .iter()
@@ -395,6 +449,14 @@ pub fn solve_focus_points(
     if e <= 1e-9 * local[0].length() {
         return Err("the plane through the points passes through the lens centre".into());
     }
+    let e = e - gap * m.dot(s.lens.z_axis);
+    if e <= 1e-9 * local[0].length() {
+        return Err(
+            "the plane through the points passes through the lens's front principal \
+                    point"
+                .into(),
+        );
+    }
     let film_normal = s.film.z_axis;
     let cos_mf = m.dot(film_normal);
     let discriminant = cos_mf * cos_mf - 1.0 + (e / f) * (e / f);
@@ -414,11 +476,11 @@ pub fn solve_focus_points(
         return Err("the lens would have to turn 90 degrees or more to focus on the points".into());
     }
     for (i, p) in local.iter().enumerate() {
-        if a.dot(*p) <= f {
+        if a.dot(*p) - gap <= f {
             return Err(format!(
                 "point {i} lies {:.4} mm in front of the lens, within its focal length {f} mm: \
                  no real image of it forms",
-                a.dot(*p)
+                a.dot(*p) - gap
             ));
         }
     }
@@ -430,6 +492,8 @@ pub fn solve_focus_points(
     let m_lens = lens.transpose() * m;
     let n_lens = lens.transpose() * film_normal;
     let c = f / (((f / e) * m_lens - DVec3::Z).dot(n_lens));
+    // The film's offset from the lens centre this pass assumed (where the found tilt puts it
+    // is the next pass's).
     let film_distance_mm = -(c + film_normal.dot(s.lens_center)) / film_normal.z;
     if !(film_distance_mm.is_finite() && film_distance_mm > 0.0) {
         return Err(format!(

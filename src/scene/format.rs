@@ -206,6 +206,10 @@ pub struct CameraSection {
     pub lens_swing: Option<f64>,
     /// mm: [right, up] movement of the lens (front standard shift)
     pub lens_shift: Option<Pair>,
+    /// What the lens turns about when tilted or swung: "rear_nodal" (default: the lens centre,
+    /// a real lens's H'), "front_nodal", "stop", or a point [right, up, forward] in mm from the
+    /// lens centre in the unturned lens (e.g. [0, -100, 0]: a base tilt 100 mm below the axis).
+    pub lens_pivot: Option<LensPivot>,
     /// 0: circular; n >= 3: regular n-gon inscribed in the f/N circle
     pub aperture_blades: Option<i64>,
     /// degrees, counter-clockwise in the image
@@ -222,6 +226,16 @@ pub struct CameraSection {
     /// A real lens's prescription (pbrt's tabular format, relative to the scene file), traced
     /// in place of the thin lens: its focal length and widest f-number come from it.
     pub lens: Option<String>,
+}
+
+/// `camera.lens_pivot`: a named point on the optical axis, or a point in mm.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub enum LensPivot {
+    /// "rear_nodal", "front_nodal" or "stop".
+    Named(String),
+    /// [right, up, forward] in mm from the lens centre, in the unturned lens.
+    Point(Vec3),
 }
 
 fn default_up() -> Vec3 {

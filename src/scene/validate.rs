@@ -9,8 +9,8 @@ use std::path::Path;
 use glam::{DVec3, Vec3};
 
 use super::format::{
-    CameraSection, DEFAULT_FILM, Exact, LightEntry, LightType, MaterialModel, Pair, RenderSection,
-    SamplerName, Scale, SceneFile, ShapeEntry, ShapeType, Vec3 as F3,
+    CameraSection, DEFAULT_FILM, Exact, LensPivot, LightEntry, LightType, MaterialModel, Pair,
+    RenderSection, SamplerName, Scale, SceneFile, ShapeEntry, ShapeType, Vec3 as F3,
 };
 use super::load::ParsedScene;
 use super::mesh::{
@@ -22,7 +22,8 @@ use super::surface::{CurvedSurface, Surface, load_bezier_patches, orient_outward
 use super::{CameraSpec, Integrator, Light, Material, RenderSettings, Scene, Shape};
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
 use crate::camera::lens::{LensSystem, Prescription};
-use crate::camera::optics::solve_focus_points;
+use crate::camera::lens_focus::refine_focus_points;
+use crate::camera::optics::{FocusSolution, solve_focus_points};
 use crate::camera::{Focus, FocusSurface, Movements, Projection};
 use crate::error::{Error, Result};
 use crate::layout;
@@ -35,6 +36,10 @@ pub const MAX_IMAGE_SIDE: i64 = 16384;
 pub const MAX_SPP: i64 = 1 << 20;
 pub const MAX_DEPTH: i64 = 1024;
 pub const MAX_LIGHT_SAMPLES: i64 = 4096;
+/// How far from the lens its pivot may lie (mm): a base tilt's axis sits a standard's height
+/// below it; farther, turning the lens mostly moves it.
+const MAX_PIVOT_MM: f64 = 1000.0;
+
 /// Film and lens rotations lie strictly inside +-90 degrees (at 90 a standard is edge-on).
 pub const MAX_MOVEMENT_DEG: f64 = 90.0;
 /// Edges sharper than this stay sharp when vertex normals are computed (Blender's default).
@@ -443,7 +448,7 @@ fn validate_camera(
     let units_per_mm = 0.001 / meters_per_unit;
     let focus = (f_number, focal_length_mm, units_per_mm, principal_gap);
     let focus_distance = focus_distance(check, c, focus)?;
-    let movements = movements(check, c)?;
+    let movements = movements(check, c, lens.as_ref())?;
     let aperture_blades = aperture_blades(check, c)?;
     let mut camera = CameraSpec {
         projection: Projection::Perspective,
@@ -507,11 +512,6 @@ fn real_lens(check: &Checker, c: &CameraSection) -> Result<Option<LensSystem>> {
             "aperture_rotation",
             c.aperture_rotation.is_some(),
             "a real lens's stop is round",
-        ),
-        (
-            "focus_points",
-            c.focus_points.is_some(),
-            "focus_points is not solved for a real lens yet",
         ),
         (
             "focus_surface",
@@ -620,8 +620,8 @@ fn focus_distance(
     })
 }
 
-/// The film's and the lens's tilt, swing and shift.
-fn movements(check: &Checker, c: &CameraSection) -> Result<Movements> {
+/// The film's and the lens's tilt, swing and shift, and the lens's pivot.
+fn movements(check: &Checker, c: &CameraSection, lens: Option<&LensSystem>) -> Result<Movements> {
     let angle = |field: &str, v: Option<f64>| movement_angle(check, field, v);
     let shift = |field: &str, v: Option<Pair>| movement_shift(check, field, v);
     Ok(Movements {
@@ -631,6 +631,44 @@ fn movements(check: &Checker, c: &CameraSection) -> Result<Movements> {
         lens_tilt: angle("camera.lens_tilt", c.lens_tilt)?,
         lens_swing: angle("camera.lens_swing", c.lens_swing)?,
         lens_shift: shift("camera.lens_shift", c.lens_shift)?,
+        lens_pivot: lens_pivot(check, c, lens)?,
+    })
+}
+
+/// `lens_pivot` (mm from the lens centre, unturned lens frame): a named point on the axis or a
+/// point within `MAX_PIVOT_MM`.
+fn lens_pivot(check: &Checker, c: &CameraSection, lens: Option<&LensSystem>) -> Result<[f64; 3]> {
+    let field = "camera.lens_pivot";
+    let on_axis = |z: f64| [0.0, 0.0, z];
+    Ok(match &c.lens_pivot {
+        None => on_axis(0.0),
+        Some(LensPivot::Named(name)) => match name.as_str() {
+            "rear_nodal" => on_axis(0.0),
+            "front_nodal" => on_axis(lens.map_or(0.0, |l| l.principal_gap())),
+            "stop" => on_axis(lens.map_or(0.0, |l| l.stop_z())),
+            _ => {
+                return Err(check.err(
+                    field,
+                    format!(
+                        "unknown pivot \"{name}\": use \"rear_nodal\", \"front_nodal\", \"stop\" \
+                         or a point [right, up, forward] in mm"
+                    ),
+                ));
+            }
+        },
+        Some(LensPivot::Point(p)) => {
+            let p = check.vector(field, *p)?;
+            if p.abs().max_element() > MAX_PIVOT_MM {
+                return Err(check.err(
+                    field,
+                    format!(
+                        "{} lies more than {MAX_PIVOT_MM} mm from the lens",
+                        nums(&p.to_array())
+                    ),
+                ));
+            }
+            p.to_array()
+        }
     })
 }
 
@@ -713,7 +751,11 @@ fn place_focus(
         for (i, p) in points.0.iter().enumerate() {
             world[i] = check.point(&format!("{field}[{i}]"), *p)?;
         }
-        let solution = solve_focus_points(camera, world).map_err(|e| check.err(field, e))?;
+        let mut solution = solve_focus_points(camera, world).map_err(|e| check.err(field, e))?;
+        if camera.lens.is_some() {
+            solution =
+                refine_by_tracing(camera, world, solution).map_err(|e| check.err(field, e))?;
+        }
         camera.movements.lens_tilt = solution.lens_tilt;
         camera.movements.lens_swing = solution.lens_swing;
         camera.film_distance_mm = solution.film_distance_mm;
@@ -728,6 +770,29 @@ fn place_focus(
     }
     Ok(())
 }
+
+/// A real lens's paraxial `focus_points` solution refined until the traced focus of each point
+/// lies on it (`lens_focus`), refused when the refinement leaves more than
+/// `MAX_TRACED_DEFOCUS` of a point's distance.
+fn refine_by_tracing(
+    camera: &CameraSpec,
+    points: [DVec3; 3],
+    paraxial: FocusSolution,
+) -> std::result::Result<FocusSolution, String> {
+    let refined = refine_focus_points(camera, &points, paraxial)?;
+    if refined.residual > MAX_TRACED_DEFOCUS {
+        return Err(format!(
+            "tracing leaves a focus point's best focus {:.3e} of its distance off it (at most \
+             {MAX_TRACED_DEFOCUS:e} is accepted)",
+            refined.residual
+        ));
+    }
+    Ok(refined.solution)
+}
+
+/// The largest traced defocus, as a fraction of the point's distance, a refined `focus_points`
+/// solution may leave: far below any depth of field.
+const MAX_TRACED_DEFOCUS: f64 = 1e-6;
 
 /// `camera.position`, `look_at` and `up`: a viewing direction, and an up not along it.
 fn view(check: &Checker, c: &CameraSection) -> Result<(DVec3, DVec3, DVec3)> {
@@ -826,6 +891,7 @@ fn validate_orthographic(
         ("lens_tilt", c.lens_tilt.is_some()),
         ("lens_swing", c.lens_swing.is_some()),
         ("lens_shift", c.lens_shift.is_some()),
+        ("lens_pivot", c.lens_pivot.is_some()),
         ("aperture_blades", c.aperture_blades.is_some()),
         ("aperture_rotation", c.aperture_rotation.is_some()),
         ("focus_surface", c.focus_surface.is_some()),
