@@ -448,13 +448,14 @@ fn a_stop_closed_to_f256_still_exposes_the_axis() {
 }
 
 /// The tabletop's board through a tilted double Gauss wide open (f/2), focused by
-/// `focus_points`: the thick lens's paraxial solution refined by tracing keeps the board as sharp
-/// as a pinhole at the same bellows extension from front to back, where the untilted lens
-/// focused on the middle blurs both ends. The refinement leaves each point's traced focus within
-/// 1e-9 of its distance, against the paraxial solution's visible defocus.
+/// `focus_points`: the thick lens's paraxial solution, refined by tracing to the least blur of
+/// the three points, keeps the board as sharp as the same lens stopped down to f/22 (deep
+/// focus) from front to back (within its own wide-open halo), where the untilted lens focused
+/// on the middle blurs both ends.
+/// The refinement leaves less traced blur than the paraxial solution.
 #[test]
 fn a_tilted_real_lens_focused_on_three_points_keeps_a_receding_board_sharp() {
-    use chambre::camera::lens_focus::traced_focus;
+    use chambre::camera::lens_focus::{TracedFocus, traced_focus, triangle_samples};
     use chambre::camera::optics::solve_focus_points;
     let path = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/tabletop.toml"));
     let points = "focus_points = [[-0.4, 0.0, -0.5], [0.4, 0.0, -0.5], [0.0, 0.0, -3.0]]";
@@ -470,108 +471,96 @@ fn a_tilted_real_lens_focused_on_three_points_keeps_a_receding_board_sharp() {
         .join("\n[[")
         .replace("ambient = [0.05, 0.05, 0.05]", "ambient = [1.0, 1.0, 1.0]")
         .replace("focal_length = 90.0", "lens = \"lenses/dgauss_50mm.dat\"")
-        .replace("f_number = 2.8\n", "")
         .replace("aperture_blades = 7\n", "");
-    let small = ["render.width=240", "render.height=160", "render.spp=16"].map(String::from);
-    let load = |text: &str| Scene::from_str(path, text, &small).unwrap_or_else(|e| panic!("{e}"));
-    let tilted = load(&text);
+    let small = ["render.width=240", "render.height=160", "render.spp=32"].map(String::from);
+    let load = |focus: &str, f_number: &str| {
+        let text = text
+            .replace(points, focus)
+            .replace("f_number = 2.8", &format!("f_number = {f_number}"));
+        Scene::from_str(path, &text, &small).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let tilted = load(points, "2.0302");
     let c = &tilted.camera;
-    assert!(
-        c.movements.lens_tilt.abs() > 1.0,
-        "{}",
-        c.movements.lens_tilt
-    );
     let world = [
         DVec3::new(-0.4, 0.0, -0.5),
         DVec3::new(0.4, 0.0, -0.5),
         DVec3::new(0.0, 0.0, -3.0),
     ];
-    for t in traced_focus(c, &world).unwrap() {
-        assert!((t.defocus / t.distance).abs() < 1e-9, "{t:?}");
-    }
-    // The paraxial thick-lens solution alone leaves the wide-open lens's best focus off the
-    // points (spherical aberration), by more than the refinement's tolerance.
+    let samples = triangle_samples(&world);
+    let blur = |t: Vec<TracedFocus>| t.iter().map(|t| t.blur_um).collect::<Vec<_>>();
+    let refined = blur(traced_focus(c, &samples).unwrap());
     let mut paraxial = c.clone();
     paraxial.movements.lens_tilt = 0.0;
     let solution = solve_focus_points(&paraxial, world).unwrap();
     paraxial.movements.lens_tilt = solution.lens_tilt;
     paraxial.movements.lens_swing = solution.lens_swing;
     paraxial.film_distance_mm = solution.film_distance_mm;
-    let off = traced_focus(&paraxial, &world)
-        .unwrap()
-        .map(|t| (t.defocus / t.distance).abs());
+    let before = blur(traced_focus(&paraxial, &samples).unwrap());
+    let sum = |b: &[f64]| b.iter().map(|v| v * v).sum::<f64>();
     eprintln!(
-        "paraxial defocus {off:?}; tilt {} paraxial, {} traced",
+        "traced blur (um): paraxial {before:.1?} at tilt {:.4}, refined {refined:.1?} at tilt {:.4}",
         solution.lens_tilt, c.movements.lens_tilt
     );
-    assert!(off.iter().any(|d| *d > 1e-6), "{off:?}");
+    assert!(sum(&refined) < sum(&before), "{refined:?} vs {before:?}");
+    assert!(
+        c.movements.lens_tilt.abs() > 1.0,
+        "{}",
+        c.movements.lens_tilt
+    );
 
-    let pinhole_of = |scene: &Scene, text: &str, focus: &str| {
-        let pinhole_text = text
-            .replace(
-                "lens = \"lenses/dgauss_50mm.dat\"",
-                &format!(
-                    "focal_length = {}\nf_number = 0.0",
-                    scene.camera.focal_length_mm
-                ),
-            )
-            .replace(
-                focus,
-                &format!("film_distance = {}", scene.camera.film_distance_mm),
-            );
-        load(&pinhole_text)
-    };
-    let plain_text = text.replace(points, "focus_distance = 1.5");
-    let plain = load(&plain_text);
-    let renders = [
-        (&tilted, pinhole_of(&tilted, &text, points)),
-        (
-            &plain,
-            pinhole_of(&plain, &plain_text, "focus_distance = 1.5"),
-        ),
-    ]
-    .map(|(scene, pinhole)| {
-        (
-            common::render_cpu(&chambre::pack::flatten(scene)),
-            common::render_cpu(&chambre::pack::flatten(&pinhole)),
-        )
-    });
-    for (name, rows) in [
+    let render = |scene: &Scene| common::render_cpu(&chambre::pack::flatten(scene));
+    let (tilted_image, tilted_deep) = (render(&tilted), render(&load(points, "22")));
+    let plain_focus = "focus_distance = 1.5";
+    let (plain_image, plain_deep) = (
+        render(&load(plain_focus, "2.0302")),
+        render(&load(plain_focus, "22")),
+    );
+    // The middle half of the columns: the corners' vignetting makes their pixels noisy.
+    let columns = (0.25, 0.75);
+    let bands = [
         ("far", (0.0, 0.3)),
         ("middle", (0.45, 0.6)),
         ("near", (0.8, 1.0)),
-    ] {
-        let t = sharpness(&renders[0].0, rows) / sharpness(&renders[0].1, rows);
-        let p = sharpness(&renders[1].0, rows) / sharpness(&renders[1].1, rows);
-        eprintln!("{name}: tilted real lens {t:.3}, untilted {p:.3} of the pinhole's sharpness");
+    ]
+    .map(|(name, rows)| {
+        let t = sharpness(&tilted_image, rows, columns) / sharpness(&tilted_deep, rows, columns);
+        let p = sharpness(&plain_image, rows, columns) / sharpness(&plain_deep, rows, columns);
+        eprintln!("{name}: tilted real lens {t:.3}, untilted {p:.3} of f/22's sharpness");
+        (name, t, p)
+    });
+    // Wide open, the double Gauss's halo (spherical aberration) lowers contrast even in focus:
+    // the untilted lens reaches about 0.85 of f/22's sharpness on the band it is focused on.
+    for (name, t, p) in bands {
         assert!(
-            t > 0.85,
+            t > 0.7,
             "{name}: the tilted real lens blurs the board ({t:.3})"
         );
         if name != "middle" {
             assert!(
-                p < 0.5,
+                p < 0.6,
                 "{name}: the untilted lens should blur here ({p:.3})"
+            );
+            assert!(
+                t > 1.5 * p,
+                "{name}: tilting should sharpen ({t:.3} vs {p:.3})"
             );
         }
     }
 }
 
-/// Gradient energy of rows `rows` (fractions of the height) of a luminance image: mean squared
-/// gradient over the squared mean (as `tests/view_camera.rs`'s): blur lowers it.
-fn sharpness(image: &chambre::render::Image, rows: (f64, f64)) -> f64 {
+/// Gradient energy of rows `rows` and columns `columns` (fractions of the height and width) of
+/// a luminance image: mean squared gradient over the squared mean (as
+/// `tests/view_camera.rs`'s): blur lowers it.
+fn sharpness(image: &chambre::render::Image, rows: (f64, f64), columns: (f64, f64)) -> f64 {
     let (w, h) = (image.width as usize, image.height as usize);
     let lum = |x: usize, y: usize| {
         let p = image.pixels[y * w + x];
         (0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z) as f64
     };
-    let (y0, y1) = (
-        (rows.0 * h as f64) as usize,
-        (rows.1 * h as f64) as usize - 1,
-    );
+    let span = |(a, b): (f64, f64), n: usize| (a * n as f64) as usize..(b * n as f64) as usize - 1;
     let (mut sum, mut grad2, mut n) = (0.0, 0.0, 0.0);
-    for y in y0..y1 {
-        for x in 0..w - 1 {
+    for y in span(rows, h) {
+        for x in span(columns, w) {
             let v = lum(x, y);
             sum += v;
             grad2 += (lum(x + 1, y) - v).powi(2) + (lum(x, y + 1) - v).powi(2);
@@ -579,4 +568,55 @@ fn sharpness(image: &chambre::render::Image, rows: (f64, f64)) -> f64 {
         }
     }
     grad2 / n / (sum / n).powi(2)
+}
+
+/// The thick lens's paraxial `focus_points` solution puts its plane of sharp focus (measured
+/// from H) through the three points to 1e-9 of their distance, whatever the lens turns about:
+/// its centre, its front nodal point, its stop, or a base tilt's axis 120 mm below it (which
+/// moves the lens as it turns, and so needs a different tilt).
+#[test]
+fn a_real_lens_focus_plane_passes_through_the_points_for_every_pivot() {
+    use chambre::camera::optics::solve_focus_points;
+    let world = [
+        DVec3::new(-1.0, 0.0, 2.0),
+        DVec3::new(1.2, 0.1, 1.0),
+        DVec3::new(0.0, 0.3, -4.0),
+    ];
+    let mut tilts = Vec::new();
+    for pivot in [
+        "\"rear_nodal\"",
+        "\"front_nodal\"",
+        "\"stop\"",
+        "[0.0, -120.0, 0.0]",
+    ] {
+        let scene = scene(
+            &format!(
+                "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"\nf_number = 8.0\n\
+                 lens_pivot = {pivot}"
+            ),
+            [36, 24],
+            1,
+            0,
+            "",
+        );
+        let mut c = scene.camera.clone();
+        let solution = solve_focus_points(&c, world).unwrap_or_else(|e| panic!("{pivot}: {e}"));
+        c.movements.lens_tilt = solution.lens_tilt;
+        c.movements.lens_swing = solution.lens_swing;
+        c.film_distance_mm = solution.film_distance_mm;
+        let plane = c.focus_plane().unwrap();
+        for p in world {
+            let distance = (p - c.position).length();
+            assert!(
+                plane.signed_distance(p).abs() < 1e-9 * distance,
+                "{pivot}: {} off the plane",
+                plane.signed_distance(p)
+            );
+        }
+        tilts.push(solution.lens_tilt);
+    }
+    eprintln!("lens tilts by pivot: {tilts:?}");
+    assert!(tilts.iter().all(|t| t.abs() > 1.0), "{tilts:?}");
+    // The base tilt moves the lens by about 120 mm x the tilt's angle: its solution differs.
+    assert!((tilts[3] - tilts[0]).abs() > 1e-3, "{tilts:?}");
 }

@@ -5,6 +5,7 @@ use std::fmt::Write;
 use glam::{DMat4, DVec3};
 
 use super::lens::LensSystem;
+use super::lens_focus::{traced_focus, triangle_samples};
 use super::optics::{Line, Plane};
 use super::{CameraSpec, Focus};
 
@@ -51,11 +52,29 @@ pub fn camera_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
     }
 }
 
+/// The traced blur `focus_points` leaves through a real lens (`lens_focus`), at the points and
+/// over their triangle.
+fn traced_blur_line(camera: &CameraSpec, points: &[DVec3; 3]) -> String {
+    match traced_focus(camera, &triangle_samples(points)) {
+        Ok(traced) => {
+            let um: Vec<String> = traced.iter().map(|t| format!("{:.1}", t.blur_um)).collect();
+            format!(
+                "  traced blur (RMS radius on the film): {} um at the points, {} um at their \
+                 triangle's side midpoints and centroid",
+                um[..3].join(", "),
+                um[3..].join(", ")
+            )
+        }
+        Err(e) => format!("  traced blur: {e}"),
+    }
+}
+
 /// A real lens's part of `chambre camera`: the prescription's report, the light at the film's
 /// corners and how far each movement may go inside the image circle.
 fn coverage_report(camera: &CameraSpec, lens: &LensSystem) -> String {
     let mut out = String::from(
-        "\nreal lens (paraxial and traced; the lines above take it as a thin lens at H'):\n",
+        "\nreal lens (paraxial and traced; the planes above are its paraxial ones, object \
+         distances from H):\n",
     );
     out += &lens_report(lens);
     if let Some(corners) = camera.corner_illumination() {
@@ -141,6 +160,16 @@ fn thin_lens_report(camera: &CameraSpec, coc_mm: f64, far: f64) -> String {
             m.lens_tilt,
             m.lens_swing,
             camera.film_distance_mm
+        );
+        if camera.lens.is_some() {
+            let _ = writeln!(w, "{}", traced_blur_line(camera, &points));
+        }
+    }
+    if m.lens_pivot != [0.0; 3] {
+        let _ = writeln!(
+            w,
+            "lens pivot: {:?} mm from the lens centre (unturned lens frame)",
+            m.lens_pivot
         );
     }
     let _ = writeln!(w, "field of view: {:.4} x {:.4} deg", fov[0], fov[1]);

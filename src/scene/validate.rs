@@ -771,28 +771,15 @@ fn place_focus(
     Ok(())
 }
 
-/// A real lens's paraxial `focus_points` solution refined until the traced focus of each point
-/// lies on it (`lens_focus`), refused when the refinement leaves more than
-/// `MAX_TRACED_DEFOCUS` of a point's distance.
+/// A real lens's paraxial `focus_points` solution refined by tracing to the least blur of the
+/// points (`lens_focus`).
 fn refine_by_tracing(
     camera: &CameraSpec,
     points: [DVec3; 3],
     paraxial: FocusSolution,
 ) -> std::result::Result<FocusSolution, String> {
-    let refined = refine_focus_points(camera, &points, paraxial)?;
-    if refined.residual > MAX_TRACED_DEFOCUS {
-        return Err(format!(
-            "tracing leaves a focus point's best focus {:.3e} of its distance off it (at most \
-             {MAX_TRACED_DEFOCUS:e} is accepted)",
-            refined.residual
-        ));
-    }
-    Ok(refined.solution)
+    Ok(refine_focus_points(camera, &points, paraxial)?.solution)
 }
-
-/// The largest traced defocus, as a fraction of the point's distance, a refined `focus_points`
-/// solution may leave: far below any depth of field.
-const MAX_TRACED_DEFOCUS: f64 = 1e-6;
 
 /// `camera.position`, `look_at` and `up`: a viewing direction, and an up not along it.
 fn view(check: &Checker, c: &CameraSection) -> Result<(DVec3, DVec3, DVec3)> {
