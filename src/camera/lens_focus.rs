@@ -225,7 +225,8 @@ pub fn refine_focus_points(
         |x: [f64; 3]| traced_focus(&apply(x), &samples).map_or(f64::INFINITY, |t| total_blur(&t));
     let steps = [0.05, 0.05, 2e-3 * solution.film_distance_mm];
     let best = nelder_mead(cost, start, steps, REFINE_EVALUATIONS);
-    if !(best.1 < total_blur(&paraxial)) {
+    // A NaN or an equal blur is no improvement either.
+    if best.1.partial_cmp(&total_blur(&paraxial)) != Some(std::cmp::Ordering::Less) {
         return Ok(RefinedFocus {
             solution,
             traced: paraxial,
