@@ -620,3 +620,96 @@ fn a_real_lens_focus_plane_passes_through_the_points_for_every_pivot() {
     // The base tilt moves the lens by about 120 mm x the tilt's angle: its solution differs.
     assert!((tilts[3] - tilts[0]).abs() > 1e-3, "{tilts:?}");
 }
+
+/// An out-of-focus point images as the exit pupil seen from its film point: a round disc on
+/// the axis, and near the corner of a double Gauss wide open, where the front and rear
+/// elements' rims both cut the bundle, a cat's eye narrower along the radius than across it.
+#[test]
+fn a_defocused_point_images_as_a_disc_on_the_axis_and_a_cats_eye_near_the_corner() {
+    let (width, height) = (360u32, 240u32);
+    // Two white spheres 100 m away (large enough that a pixel's samples find them often, small
+    // against the blur), lit by the ambient term alone against black, with the
+    // lens focused at 0.5 m: one on the axis, one towards the top right corner.
+    let text = format!(
+        "[render]\nwidth = {width}\nheight = {height}\nspp = 128\nseed = 5\nmax_depth = 0\n\
+         background = [0.0, 0.0, 0.0]\nambient = [1.0, 1.0, 1.0]\n\n\
+         [camera]\nposition = [0.0, 0.0, 0.0]\nlook_at = [0.0, 0.0, -1.0]\n\
+         film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"\nfocus_distance = 0.5\n\
+         lens_sampler = \"stratified\"\n\n\
+         [[materials]]\nname = \"white\"\nmodel = \"lambert\"\ndiffuse = [1.0, 1.0, 1.0]\n\n\
+         [[shapes]]\ntype = \"sphere\"\ncenter = [0.0, 0.0, -100.0]\nradius = 1.0\n\
+         material = \"white\"\n\n\
+         [[shapes]]\ntype = \"sphere\"\ncenter = [27.0, 18.0, -100.0]\nradius = 1.0\n\
+         material = \"white\"\n"
+    );
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(IN_SCENES);
+    let scene = Scene::from_str(&path, &text, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let image = common::render_cpu(&chambre::pack::flatten(&scene));
+    // Each blob's light-weighted second moments in its quadrant of the image (x right, y up):
+    // the ratio of the narrow to the wide axis, and the narrow axis's angle from the radius.
+    let blob = |x_range: std::ops::Range<u32>, y_range: std::ops::Range<u32>| {
+        let (mut sum, mut mx, mut my) = (0.0, 0.0, 0.0);
+        let mut pixels = Vec::new();
+        for y in y_range {
+            for x in x_range.clone() {
+                let v = image.pixels[(y * width + x) as usize].y as f64;
+                let (px, py) = (x as f64 + 0.5, height as f64 - (y as f64 + 0.5));
+                pixels.push((px, py, v));
+                sum += v;
+                mx += v * px;
+                my += v * py;
+            }
+        }
+        let (cx, cy) = (mx / sum, my / sum);
+        let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+        for (px, py, v) in pixels {
+            sxx += v * (px - cx).powi(2);
+            syy += v * (py - cy).powi(2);
+            sxy += v * (px - cx) * (py - cy);
+        }
+        let (sxx, syy, sxy) = (sxx / sum, syy / sum, sxy / sum);
+        let mean = 0.5 * (sxx + syy);
+        let spread = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
+        let (wide, narrow) = (mean + spread, mean - spread);
+        // The narrow axis's direction (eigenvector of the smaller eigenvalue).
+        let narrow_axis = glam::DVec2::new(sxy, narrow - sxx).normalize_or(glam::DVec2::X);
+        let radial = glam::DVec2::new(cx - 0.5 * width as f64, cy - 0.5 * height as f64);
+        let angle = if radial.length() > 1.0 {
+            narrow_axis
+                .dot(radial.normalize())
+                .abs()
+                .acos()
+                .to_degrees()
+        } else {
+            0.0
+        };
+        ((narrow / wide).sqrt(), angle, (cx, cy), wide.sqrt())
+    };
+    let centre = blob(
+        width / 2 - 40..width / 2 + 40,
+        height / 2 - 40..height / 2 + 40,
+    );
+    let corner = blob(width / 2 + 40..width, 0..height / 2 - 20);
+    eprintln!("centre blob {centre:?}, corner blob {corner:?}");
+    assert!(
+        centre.3 > 3.0,
+        "the axis's blob is {} px: not defocused",
+        centre.3
+    );
+    assert!(centre.0 > 0.9, "the axis's blob is not round: {centre:?}");
+    // Inside the frame, so that the border does not cut the blob into a false cat's eye.
+    let ((x, y), reach) = (corner.2, 2.5 * corner.3);
+    assert!(
+        x + reach < width as f64 && y + reach < height as f64,
+        "{corner:?}"
+    );
+    // The sphere's own 5 px image rounds both blobs a little (the ratio is 0.72 measured).
+    assert!(
+        corner.0 < 0.8,
+        "the corner's blob is not a cat's eye: {corner:?}"
+    );
+    assert!(
+        corner.1 < 20.0,
+        "the cat's eye's narrow axis is not radial: {corner:?}"
+    );
+}
