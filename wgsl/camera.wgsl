@@ -58,7 +58,7 @@ fn lens_entry(k: u32) -> vec2<f32> {
     return sample_table[camera.lens_table_offset + k];
 }
 
-// Distance along a ray to a real lens's surface at `z` of radius `radius` (0: the stop's plane),
+// Distance along a ray to a real lens's surface at `z` of radius `radius` (0: a plane),
 // on its cap about the vertex; negative when it is missed (Rust twin: lens::surface_distance).
 fn lens_surface_distance(z: f32, radius: f32, o: vec3<f32>, d: vec3<f32>) -> f32 {
     if (radius == 0.0) {
@@ -141,9 +141,13 @@ fn generate_lens_ray(film_mm: vec2<f32>, u: vec2<f32>) -> LensRay {
         if (o.x * o.x + o.y * o.y > glass.x * glass.x) {
             return chief;
         }
-        if (shape.y != 0.0) {
-            let centre = vec3<f32>(0.0, 0.0, shape.x - shape.y);
-            var n = normalize(o - centre);
+        // A sphere always refracts; a plane (radius 0) where the index changes: the stop, in
+        // air on both sides, only clips.
+        if (shape.y != 0.0 || glass.y != 1.0) {
+            var n = vec3<f32>(0.0, 0.0, 1.0);
+            if (shape.y != 0.0) {
+                n = normalize(o - vec3<f32>(0.0, 0.0, shape.x - shape.y));
+            }
             if (dot(n, d) > 0.0) {
                 n = -n;
             }

@@ -11,8 +11,14 @@
 //! curvature on the image side, `thickness` is the axial distance to the next surface, `index`
 //! is the refractive index of the medium after the surface (towards the image) and `aperture`
 //! the clear diameter. A radius of 0 is the aperture stop (its index 0 or 1: it sits in air), its
-//! diameter the stop's at the lens's widest f-number. The last thickness is ignored: the film's
-//! distance is the camera's focus, not the lens's. `#` starts a comment.
+//! diameter the stop's at the lens's widest f-number; a radius of `inf` (or `-inf`, `infinity`)
+//! is a plane refracting surface (a flat face or cemented interface). The last thickness is
+//! ignored: the film's distance is the camera's focus, not the lens's. `#` starts a comment.
+//!
+//! Placed in the lens frame, every plane (the stop and the plane glass surfaces) has radius 0
+//! ([`PlacedSurface`], and the kernels' table): a plane refracts where its index ratio is not 1,
+//! so the stop, in air on both sides, only clips. The stop is known by its index
+//! ([`LensSystem::stop`]), not by its shape.
 //!
 //! The surfaces are placed in the camera's *lens frame* (optical axis +z towards the object,
 //! lengths in mm) with the origin at the rear principal point H': the point the thin lens's
@@ -29,7 +35,8 @@ use crate::layout::LENS_PUPIL_CELLS;
 /// One surface of a prescription, as the file gives it (mm).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PrescriptionSurface {
-    /// Radius of curvature; positive: the centre lies on the image side. 0: the aperture stop.
+    /// Radius of curvature; positive: the centre lies on the image side. 0: the aperture stop;
+    /// infinite (either sign): a plane refracting surface.
     pub radius: f64,
     /// Axial distance to the next surface.
     pub thickness: f64,
@@ -43,6 +50,11 @@ impl PrescriptionSurface {
     /// Whether this is the aperture stop.
     pub fn is_stop(&self) -> bool {
         self.radius == 0.0
+    }
+
+    /// Whether this is a plane refracting surface (an infinite radius).
+    pub fn is_plane(&self) -> bool {
+        self.radius.is_infinite()
     }
 }
 
@@ -102,17 +114,7 @@ impl Prescription {
             }
             let mut values = [0.0; 4];
             for (k, word) in words.iter().enumerate() {
-                values[k] = word
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| {
-                        error(
-                            number,
-                            COLUMNS[k],
-                            format!("`{word}` is not a finite number"),
-                        )
-                    })?;
+                values[k] = parse_field(k, word).map_err(|m| error(number, COLUMNS[k], m))?;
             }
             let [radius, thickness, index, aperture] = values;
             let surface = PrescriptionSurface {
@@ -166,6 +168,27 @@ impl Prescription {
     /// The paraxial properties (ray-transfer matrices in f64).
     pub fn paraxial(&self) -> Paraxial {
         Paraxial::of(self)
+    }
+}
+
+/// Column `column`'s number from `word`: finite, or for a radius also `inf`, `-inf` or
+/// `infinity` (any case: a plane); the error's message otherwise.
+fn parse_field(column: usize, word: &str) -> std::result::Result<f64, String> {
+    let value = word.parse::<f64>().ok();
+    let infinity_word = matches!(
+        word.trim_start_matches(['+', '-'])
+            .to_ascii_lowercase()
+            .as_str(),
+        "inf" | "infinity"
+    );
+    match value {
+        Some(v) if v.is_finite() => Ok(v),
+        Some(v) if column == 0 && v.is_infinite() && infinity_word => Ok(v),
+        _ if column == 0 => Err(format!(
+            "`{word}` is not a radius: a finite number of mm (positive: centre on the image \
+             side), 0 for the aperture stop, or inf (-inf, infinity) for a plane surface"
+        )),
+        _ => Err(format!("`{word}` is not a finite number")),
     }
 }
 
@@ -228,9 +251,9 @@ impl Transfer {
     };
 
     /// Refraction at a sphere of radius `radius` from index `before` to `after`: power
-    /// (after - before) / radius; a plane (radius 0) has none.
+    /// (after - before) / radius; a plane (the stop's radius 0, or an infinite one) has none.
     fn refraction(radius: f64, before: f64, after: f64) -> Transfer {
-        let power = if radius == 0.0 {
+        let power = if radius == 0.0 || radius.is_infinite() {
             0.0
         } else {
             (after - before) / radius
@@ -361,7 +384,7 @@ pub struct PlacedSurface {
     /// The vertex's z.
     pub z: f64,
     /// Radius with the prescription's sign (positive: centre towards the image, at z - radius);
-    /// 0 for the stop, a plane.
+    /// 0 for a plane (the stop, or a plane glass surface: its normal is the axis).
     pub radius: f64,
     /// Clear aperture's radius (the stop's at the chosen f-number).
     pub aperture_radius: f64,
@@ -369,6 +392,15 @@ pub struct PlacedSurface {
     pub index_behind: f64,
     /// Index on the object side.
     pub index_in_front: f64,
+}
+
+impl PlacedSurface {
+    /// Whether a ray crossing the surface bends: a sphere always does (in one medium too, where
+    /// Snell's law leaves it as it was), a plane where the index changes. The stop, in air on
+    /// both sides, only clips; one written right behind glass is that glass's plane face.
+    fn refracts(&self) -> bool {
+        self.radius != 0.0 || self.index_behind != self.index_in_front
+    }
 }
 
 /// A lens placed in the lens frame at an f-number: its surfaces from the film side (the first
@@ -381,6 +413,8 @@ pub struct LensSystem {
     pub paraxial: Paraxial,
     /// The f-number the stop is set to.
     pub f_number: f64,
+    /// The stop's position in `surfaces` (rearmost 0).
+    pub stop: usize,
 }
 
 /// Why a ray from the film does not leave the lens.
@@ -425,7 +459,7 @@ impl LensSystem {
             };
             surfaces.push(PlacedSurface {
                 z: paraxial.rear_principal - axial,
-                radius: s.radius,
+                radius: if s.is_plane() { 0.0 } else { s.radius },
                 aperture_radius: 0.5 * s.aperture * if s.is_stop() { stop_scale } else { 1.0 },
                 index_behind: s.index,
                 index_in_front: in_front,
@@ -434,6 +468,7 @@ impl LensSystem {
         }
         surfaces.reverse();
         Ok(LensSystem {
+            stop: surfaces.len() - 1 - prescription.stop(),
             surfaces,
             paraxial,
             f_number,
@@ -448,11 +483,7 @@ impl LensSystem {
 
     /// The stop's z (mm, lens frame).
     pub fn stop_z(&self) -> f64 {
-        self.surfaces
-            .iter()
-            .find(|s| s.radius == 0.0)
-            .expect("a prescription has exactly one stop")
-            .z
+        self.surfaces[self.stop].z
     }
 
     /// The rear surface's vertex z (the lens's back, towards the film).
@@ -476,7 +507,7 @@ impl LensSystem {
                 return Err(Lost::Blocked(i));
             }
             o = p;
-            if s.radius != 0.0 {
+            if s.refracts() {
                 let normal = surface_normal(s, p, d);
                 d = refract(d, normal, s.index_behind / s.index_in_front)
                     .ok_or(Lost::TotalInternalReflection(i))?;
@@ -692,7 +723,8 @@ impl LensSystem {
     /// The lens as the kernels read it from the sample table (`GpuCamera::lens_table_offset`),
     /// in f32 pairs: the exposure (1 / the irradiance on the axis at `film_distance`, so a
     /// uniform radiance of 1 exposes the axis to 1), the surfaces rearmost first as (z, radius)
-    /// and (clear radius, index behind / index in front), then for each of the film's
+    /// (radius 0: a plane) and (clear radius, index behind / index in front: a plane refracts
+    /// where it is not 1), then for each of the film's
     /// `LENS_PUPIL_CELLS`^2 cells (rows from the bottom, image coordinates) the low and high
     /// corners of its `pupil_bounds`. `cell_points(i, j)` gives the film points (lens frame) whose
     /// rays bound cell (column i, row j).
@@ -779,9 +811,12 @@ pub fn lens_ray(
         if o.x * o.x + o.y * o.y > glass.x * glass.x {
             return chief;
         }
-        if shape.y != 0.0 {
-            let centre = Vec3::new(0.0, 0.0, shape.x - shape.y);
-            let mut n = (o - centre).normalize();
+        // As `PlacedSurface::refracts`: a plane refracts where the index changes.
+        if shape.y != 0.0 || glass.y != 1.0 {
+            let mut n = Vec3::Z;
+            if shape.y != 0.0 {
+                n = (o - Vec3::new(0.0, 0.0, shape.x - shape.y)).normalize();
+            }
             if n.dot(d) > 0.0 {
                 n = -n;
             }
@@ -834,7 +869,8 @@ fn refract_f32(d: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
 /// Distance along the ray to the surface (its cap about the vertex), if it is ahead.
 fn intersect(s: &PlacedSurface, o: DVec3, d: DVec3) -> Option<f64> {
     if s.radius == 0.0 {
-        // A stop in the plane of the vertex before it (no thickness between) is met at t = 0.
+        // A plane: the stop or a plane glass surface. One in the plane of the vertex before it
+        // (no thickness between) is met at t = 0.
         let t = (s.z - o.z) / d.z;
         return (t.is_finite() && t >= 0.0).then_some(t);
     }
@@ -856,10 +892,13 @@ fn intersect(s: &PlacedSurface, o: DVec3, d: DVec3) -> Option<f64> {
     (t > 0.0 && on_cap).then_some(t)
 }
 
-/// The unit normal at `p`, facing against the ray.
+/// The unit normal at `p`, facing against the ray (a plane's is the axis).
 fn surface_normal(s: &PlacedSurface, p: DVec3, d: DVec3) -> DVec3 {
-    let centre = DVec3::new(0.0, 0.0, s.z - s.radius);
-    let n = (p - centre).normalize();
+    let n = if s.radius == 0.0 {
+        DVec3::Z
+    } else {
+        (p - DVec3::new(0.0, 0.0, s.z - s.radius)).normalize()
+    };
     if n.dot(d) > 0.0 { -n } else { n }
 }
 
@@ -923,6 +962,13 @@ mod tests {
                 4,
                 "radius",
             ),
+            ("10 1 1.5 5\n0 1 0 4\nNaN 0 1 5\n", 3, "radius"),
+            ("10 1 1.5 5\n0 1 0 4\n-10 0 nan 5\n", 3, "index"),
+            ("inf inf 1.5 5\n0 1 0 4\n-10 0 1 5\n", 1, "thickness"),
+            ("10 1 1.5 -inf\n0 1 0 4\n-10 0 1 5\n", 1, "aperture"),
+            // Past f64's range: a typing slip, not a plane.
+            ("1e400 1 1.5 5\n0 1 0 4\n-10 0 1 5\n", 1, "radius"),
+            ("10 1 1.5 5\n0 1 0 4\ninfinite 0 1 5\n", 3, "radius"),
         ];
         for (text, line, field) in cases {
             match parse(text) {
@@ -937,6 +983,34 @@ mod tests {
             }
         }
         assert!(parse("10 1 1.5 5\n-10 0 1 5\n").is_err(), "no stop");
+        let message = parse("10 1 1.5 5\n0 1 0 4\nnan 0 1 5\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("0 for the aperture stop, or inf"),
+            "{message}"
+        );
+    }
+
+    /// `inf`, `-inf` and `infinity` in any case, signed or not, are a plane's radius: its power
+    /// is 0, and placed it has radius 0 like the stop, which the lens still knows by its index.
+    #[test]
+    fn an_infinite_radius_is_a_plane_surface() {
+        for word in ["inf", "-inf", "+inf", "Infinity", "-INFINITY"] {
+            let p = parse(&format!("0 0 1 10\n50 4 1.5 20\n{word} 0 1 20\n")).unwrap();
+            assert!(
+                p.surfaces[2].is_plane() && !p.surfaces[2].is_stop(),
+                "{word}"
+            );
+            let f = p.paraxial().focal_length;
+            assert!((f - 100.0).abs() < 1e-9, "{word}: f = {f}");
+            let lens = LensSystem::new(&p, None).unwrap();
+            assert_eq!(lens.surfaces[0].radius, 0.0, "{word}");
+            assert!(lens.surfaces[0].refracts() && !lens.surfaces[lens.stop].refracts());
+            // The stop is the first vertex: at t = 0, z = t_H'.
+            assert_eq!(lens.stop, 2);
+            assert_eq!(lens.stop_z(), lens.paraxial.rear_principal);
+        }
     }
 
     #[test]
@@ -944,7 +1018,7 @@ mod tests {
         let lens = thin(100.0);
         assert!(LensSystem::new(&lens, Some(5.0)).is_err());
         let stopped = LensSystem::new(&lens, Some(20.0)).unwrap();
-        let stop = stopped.surfaces.iter().find(|s| s.radius == 0.0).unwrap();
+        let stop = stopped.surfaces[stopped.stop];
         assert!((stop.aperture_radius - 2.5).abs() < 1e-12);
     }
 
