@@ -886,6 +886,24 @@ const REFUSED: &[(&str, &[&str])] = &[
     ),
     ("thin_lens.toml", &["shapes[1].material", "render.ambient"]),
     ("sponza.toml", &["camera.film_shift", "shapes[0].material"]),
+    (
+        "large_format.toml",
+        &[
+            "camera.lens",
+            "camera.film_shift",
+            "shapes[4].material",
+            "render.ambient",
+        ],
+    ),
+    (
+        "tabletop_real_lens.toml",
+        &[
+            "camera.lens",
+            "camera.focus_points",
+            "shapes[2].material",
+            "render.ambient",
+        ],
+    ),
 ];
 
 #[test]
