@@ -2,7 +2,9 @@
 # What a real lens costs against the thin lens: scenes/double_gauss.toml rendered through its
 # prescription and through the thin lens of the same focal length and f-number (the same scene
 # with `lens` replaced), side by side, RUNS times each on the CPU path; the median render times
-# (chambre's own report) and their ratio.
+# (chambre's own report) and their ratio; then `chambre converge` on both at 120 x 80 (Sobol,
+# up to 64 spp, each against its own 1024 spp reference): the error each reaches and the time it
+# takes, so that the trade (noise from rays the glass blocks against the thin lens) is measured.
 #   tools/bench_lens.sh [RUNS] [extra render args...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,3 +29,17 @@ t=$(printf '%s\n' "${thin_times[@]}" | median)
 echo "| real lens (double Gauss, f/$number) | thin lens (f = $focal mm) | real / thin |"
 echo "|---|---|---|"
 echo "| $r s | $t s | $(awk -v a="$r" -v b="$t" 'BEGIN {printf "%.2fx", a / b}') |"
+
+converge_row() {
+  "$bin" converge "$1" --set render.width=120 --set render.height=80 --samplers sobol \
+    --backends cpu --max-spp 64 --reference-spp 1024 --csv "/tmp/bench_lens_$2.csv" --no-plot 2>&1 |
+    awk -F'|' '/^\| cpu sobol \| -?[0-9]/ {gsub(/ /, "", $0); print $4 "|" $6 "|" $8; exit}'
+}
+echo
+echo "| camera | spp | relMSE | wall ms | relMSE x time (lower is better) |"
+echo "|---|---|---|---|---|"
+for pair in "real lens:scenes/double_gauss.toml" "thin lens:$thin"; do
+  name=${pair%%:*}; scene=${pair#*:}
+  IFS='|' read -r spp rel ms <<< "$(converge_row "$scene" "${name// /_}")"
+  echo "| $name | $spp | $rel | $ms | $(awk -v a="$rel" -v b="$ms" 'BEGIN {printf "%.3e", a * b}') |"
+done
