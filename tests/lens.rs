@@ -369,6 +369,9 @@ fn a_real_lens_renders_alike_on_gpu_and_cpu() {
         "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"\nfocus_distance = 6.0",
         "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"\nf_number = 4.0\n\
          focus_distance = 6.0\nlens_tilt = 6.0\nfilm_shift = [0.0, 4.0]",
+        // A base tilt: the lens turns about an axis 80 mm below it, which moves it as well.
+        "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"\nf_number = 4.0\n\
+         focus_distance = 6.0\nlens_tilt = 5.0\nlens_pivot = [0.0, -80.0, 0.0]",
         // Two plane cemented interfaces, refracting in the kernels where their index changes.
         "film = [120.0, 80.0]\nlens = \"lenses/sironar_n_150mm.dat\"\nf_number = 8.0\n\
          focus_distance = 6.0\nfilm_shift = [0.0, 12.0]",
