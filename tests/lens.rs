@@ -152,7 +152,7 @@ fn a_parallel_plate_traced_in_f32_agrees_with_f64() {
                 Vec2::from(table[bounds as usize]),
                 Vec2::from(table[bounds as usize + 1]),
             );
-            let aim = (lo + Vec2::from(U) * (hi - lo)).extend(table[1][0]);
+            let aim = (lo + Vec2::from(U) * (hi - lo)).extend(table[0][1]);
             let (o, d) = lens
                 .trace_from_film(film, (aim.as_dvec3() - film).normalize())
                 .unwrap();

@@ -125,7 +125,7 @@ fn generate_lens_ray(film_mm: vec2<f32>, u: vec2<f32>) -> LensRay {
     if (hi.x < lo.x) {
         return chief;
     }
-    let aim = vec3<f32>(lo + u * (hi - lo), lens_entry(1u).x);
+    let aim = vec3<f32>(lo + u * (hi - lo), lens_entry(0u).y);
     let to = aim - film_point;
     let distance2 = dot(to, to);
     var d = to / sqrt(distance2);

@@ -147,8 +147,8 @@ impl CameraSpec {
                 };
                 let centre = points[4];
                 lit += 1;
-                bounded += lens.passing_fraction(centre, bounds, 32);
-                whole += lens.passing_fraction(centre, square, 32);
+                bounded += lens.passing_fraction(centre, bounds, lens.aim_z(), 32);
+                whole += lens.passing_fraction(centre, square, lens.rear_z(), 32);
             }
         }
         (lit > 0).then(|| [bounded / lit as f64, whole / lit as f64])

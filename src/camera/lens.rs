@@ -542,9 +542,28 @@ impl LensSystem {
         REAR_DISK_MARGIN * self.surfaces[0].aperture_radius
     }
 
+    /// The plane (z, lens frame) camera rays are aimed through: the paraxial exit pupil's, where
+    /// the pupil seen from neighbouring film points barely moves, so that a film cell's bounds
+    /// stay tight; the rear vertex's when the exit pupil lies behind it (a ray would meet the
+    /// rear surface before the plane it is aimed through).
+    pub fn aim_z(&self) -> f64 {
+        (self.paraxial.rear_principal - self.paraxial.exit_pupil).max(self.rear_z())
+    }
+
+    /// Half the side of the square on the aim plane that every ray from `film_points` through the
+    /// lens crosses: the rear square seen from the film point that magnifies it most.
+    fn aim_square(&self, film_points: &[DVec3]) -> f64 {
+        let (rear, aim) = (self.rear_z(), self.aim_z());
+        let widest = film_points
+            .iter()
+            .map(|f| (aim - f.z) / (rear - f.z))
+            .fold(1.0, f64::max);
+        self.rear_square() * widest
+    }
+
     /// The irradiance at `film_point` (lens frame, mm) on a film square to the axis, under a
     /// uniform radiance of 1 beyond the lens: the sum over a `grid` x `grid` of points on the
-    /// rear vertex's plane of cos(theta)^2 / distance^2 times the cell's area, for the rays that
+    /// aim plane ([`Self::aim_z`]) of cos(theta)^2 / distance^2 times the cell's area, for the rays that
     /// pass (cos^4 falloff and vignetting by every aperture, the stop included). The grid spans
     /// the point's own `pupil_bounds`, so a small stop is resolved as finely as a wide one.
     pub fn irradiance(&self, film_point: DVec3, grid: usize) -> f64 {
@@ -557,7 +576,7 @@ impl LensSystem {
         let Some([lo, hi]) = self.pupil_bounds(&[film_point]) else {
             return 0.0;
         };
-        let z = self.rear_z();
+        let z = self.aim_z();
         let cell = (hi - lo) / grid as f64;
         let mut sum = 0.0;
         for i in 0..grid {
@@ -621,15 +640,15 @@ const PUPIL_SEARCH_GRID: usize = 32;
 const EMPTY_BOUNDS: [[f32; 2]; 2] = [[1.0, 1.0], [-1.0, -1.0]];
 
 impl LensSystem {
-    /// The rectangle (low and high corners) on the rear vertex's plane that holds every point a
+    /// The rectangle (low and high corners) on the aim plane ([`Self::aim_z`]) that holds every point a
     /// ray from one of `film_points` passes the lens through, or `None` when none passes. A first
-    /// search on a 33 x 33 grid over the rear square (or, when it finds nothing, the points
+    /// search on a 33 x 33 grid over the rear square as the film points see it on that plane (or, when it finds nothing, the points
     /// where the rays towards the paraxial exit pupil's centre cross the plane, for a stop too
     /// small for that grid) gives a rectangle; a second search on a 33 x 33 grid over it, widened
     /// by the first grid's step, refines it; the result is widened by the second grid's step
     /// (clamped to the square).
     pub fn pupil_bounds(&self, film_points: &[DVec3]) -> Option<[DVec2; 2]> {
-        let half = self.rear_square();
+        let half = self.aim_square(film_points);
         let square = [DVec2::splat(-half), DVec2::splat(half)];
         let coarse_step = 2.0 * half / PUPIL_SEARCH_GRID as f64;
         let (found, step) = match self.passing_within(film_points, square) {
@@ -653,7 +672,7 @@ impl LensSystem {
     /// The smallest rectangle holding the points of a 33 x 33 grid over `region` (on the rear
     /// vertex's plane) through which a ray from one of `film_points` passes.
     fn passing_within(&self, film_points: &[DVec3], region: [DVec2; 2]) -> Option<[DVec2; 2]> {
-        let z = self.rear_z();
+        let z = self.aim_z();
         let [lo, hi] = region;
         let mut bounds: Option<[DVec2; 2]> = None;
         for i in 0..=PUPIL_SEARCH_GRID {
@@ -678,7 +697,7 @@ impl LensSystem {
     /// Where the rays from `film_points` towards the paraxial exit pupil's centre cross the rear
     /// vertex's plane, for those that pass: the rectangle holding them.
     fn chief_crossings(&self, film_points: &[DVec3]) -> Option<[DVec2; 2]> {
-        let z = self.rear_z();
+        let z = self.aim_z();
         let pupil = DVec3::new(
             0.0,
             0.0,
@@ -699,11 +718,16 @@ impl LensSystem {
         bounds
     }
 
-    /// The fraction of rays from `film_point` aimed uniformly at the rectangle `bounds` (on the
-    /// rear vertex's plane) that pass the lens, on a `grid` x `grid` of aims.
-    pub fn passing_fraction(&self, film_point: DVec3, bounds: [DVec2; 2], grid: usize) -> f64 {
+    /// The fraction of rays from `film_point` aimed uniformly at the rectangle `bounds` on the
+    /// plane at `z` (lens frame) that pass the lens, on a `grid` x `grid` of aims.
+    pub fn passing_fraction(
+        &self,
+        film_point: DVec3,
+        bounds: [DVec2; 2],
+        z: f64,
+        grid: usize,
+    ) -> f64 {
         let [lo, hi] = bounds;
-        let z = self.rear_z();
         let mut passed = 0usize;
         for i in 0..grid {
             for j in 0..grid {
@@ -722,7 +746,8 @@ impl LensSystem {
 
     /// The lens as the kernels read it from the sample table (`GpuCamera::lens_table_offset`),
     /// in f32 pairs: the exposure (1 / the irradiance on the axis at `film_distance`, so a
-    /// uniform radiance of 1 exposes the axis to 1), the surfaces rearmost first as (z, radius)
+    /// uniform radiance of 1 exposes the axis to 1) with the aim plane's z ([`Self::aim_z`]),
+    /// the surfaces rearmost first as (z, radius)
     /// (radius 0: a plane) and (clear radius, index behind / index in front: a plane refracts
     /// where it is not 1), then for each of the film's
     /// `LENS_PUPIL_CELLS`^2 cells (rows from the bottom, image coordinates) the low and high
@@ -735,7 +760,7 @@ impl LensSystem {
     ) -> Vec<[f32; 2]> {
         use rayon::prelude::*;
         let axis = self.irradiance(DVec3::new(0.0, 0.0, -film_distance), ILLUMINATION_GRID);
-        let mut table = vec![[(1.0 / axis) as f32, 0.0]];
+        let mut table = vec![[(1.0 / axis) as f32, self.aim_z() as f32]];
         for s in &self.surfaces {
             table.push([s.z as f32, s.radius as f32]);
             table.push([
@@ -795,8 +820,7 @@ pub fn lens_ray(
     if hi.x < lo.x {
         return chief;
     }
-    let rear_z = at(1).x;
-    let aim = (lo + Vec2::from(u) * (hi - lo)).extend(rear_z);
+    let aim = (lo + Vec2::from(u) * (hi - lo)).extend(at(0).y);
     let to = aim - film_point;
     let distance2 = to.length_squared();
     let mut d = to / distance2.sqrt();
