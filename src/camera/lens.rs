@@ -551,14 +551,18 @@ impl LensSystem {
     }
 
     /// Half the side of the square on the aim plane that every ray from `film_points` through the
-    /// lens crosses: the rear square seen from the film point that magnifies it most.
+    /// lens crosses: the rear square projected from each film point onto the aim plane, which
+    /// magnifies it by k = (z_aim - z_film) / (z_rear - z_film) about the film point, moving its
+    /// centre outwards by |film_xy| (k - 1).
     fn aim_square(&self, film_points: &[DVec3]) -> f64 {
         let (rear, aim) = (self.rear_z(), self.aim_z());
-        let widest = film_points
+        film_points
             .iter()
-            .map(|f| (aim - f.z) / (rear - f.z))
-            .fold(1.0, f64::max);
-        self.rear_square() * widest
+            .map(|f| {
+                let k = (aim - f.z) / (rear - f.z);
+                f.truncate().abs().max_element() * (k - 1.0) + self.rear_square() * k
+            })
+            .fold(self.rear_square(), f64::max)
     }
 
     /// The irradiance at `film_point` (lens frame, mm) on a film square to the axis, under a
