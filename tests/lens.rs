@@ -653,8 +653,10 @@ fn a_tilted_real_lens_focused_on_three_points_keeps_a_receding_board_sharp() {
         ("near", (0.8, 1.0)),
     ]
     .map(|(name, rows)| {
-        let t = sharpness(&tilted_image, rows, columns) / sharpness(&tilted_deep, rows, columns);
-        let p = sharpness(&plain_image, rows, columns) / sharpness(&plain_deep, rows, columns);
+        let t = common::sharpness(&tilted_image, rows, columns)
+            / common::sharpness(&tilted_deep, rows, columns);
+        let p = common::sharpness(&plain_image, rows, columns)
+            / common::sharpness(&plain_deep, rows, columns);
         eprintln!("{name}: tilted real lens {t:.3}, untilted {p:.3} of f/22's sharpness");
         (name, t, p)
     });
@@ -676,28 +678,6 @@ fn a_tilted_real_lens_focused_on_three_points_keeps_a_receding_board_sharp() {
             );
         }
     }
-}
-
-/// Gradient energy of rows `rows` and columns `columns` (fractions of the height and width) of
-/// a luminance image: mean squared gradient over the squared mean (as
-/// `tests/view_camera.rs`'s): blur lowers it.
-fn sharpness(image: &chambre::render::Image, rows: (f64, f64), columns: (f64, f64)) -> f64 {
-    let (w, h) = (image.width as usize, image.height as usize);
-    let lum = |x: usize, y: usize| {
-        let p = image.pixels[y * w + x];
-        (0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z) as f64
-    };
-    let span = |(a, b): (f64, f64), n: usize| (a * n as f64) as usize..(b * n as f64) as usize - 1;
-    let (mut sum, mut grad2, mut n) = (0.0, 0.0, 0.0);
-    for y in span(rows, h) {
-        for x in span(columns, w) {
-            let v = lum(x, y);
-            sum += v;
-            grad2 += (lum(x + 1, y) - v).powi(2) + (lum(x, y + 1) - v).powi(2);
-            n += 1.0;
-        }
-    }
-    grad2 / n / (sum / n).powi(2)
 }
 
 /// The thick lens's paraxial `focus_points` solution puts its plane of sharp focus (measured

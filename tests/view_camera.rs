@@ -571,30 +571,8 @@ fn bokeh_behind_the_focus_shows_the_aperture_upright_and_rotation_turns_it_count
     assert!((angle(turned[1]) - angle(v[1]) - 10.0).abs() < 1e-4);
 }
 
-/// Gradient energy of rows `rows` (fractions of the height) of a luminance image: mean squared
-/// gradient over the squared mean. Blur lowers it (unlike total variation, which a blurred
-/// edge keeps, or gradient over variance, which a blurred periodic pattern keeps).
-fn sharpness(image: &chambre::render::Image, rows: (f64, f64)) -> f64 {
-    let (w, h) = (image.width as usize, image.height as usize);
-    let lum = |x: usize, y: usize| {
-        let p = image.pixels[y * w + x];
-        (0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z) as f64
-    };
-    let (y0, y1) = (
-        (rows.0 * h as f64) as usize,
-        (rows.1 * h as f64) as usize - 1,
-    );
-    let (mut sum, mut grad2, mut n) = (0.0, 0.0, 0.0);
-    for y in y0..y1 {
-        for x in 0..w - 1 {
-            let v = lum(x, y);
-            sum += v;
-            grad2 += (lum(x + 1, y) - v).powi(2) + (lum(x, y + 1) - v).powi(2);
-            n += 1.0;
-        }
-    }
-    grad2 / n / (sum / n).powi(2)
-}
+/// Every column of the image, for [`common::sharpness`].
+const WHOLE_WIDTH: (f64, f64) = (0.0, 1.0);
 
 #[test]
 fn tilted_lens_keeps_a_receding_checkerboard_sharp_from_front_to_back() {
@@ -642,8 +620,10 @@ fn tilted_lens_keeps_a_receding_checkerboard_sharp_from_front_to_back() {
         render_variant("focus_points = [[-0.4, 0.0, -0.5], [0.4, 0.0, -0.5], [0.0, 0.0, -3.0]]");
     let (plain, plain_pinhole) = render_variant("focus_distance = 1.5");
     for (name, rows) in bands {
-        let t = sharpness(&tilted, rows) / sharpness(&tilted_pinhole, rows);
-        let p = sharpness(&plain, rows) / sharpness(&plain_pinhole, rows);
+        let t = common::sharpness(&tilted, rows, WHOLE_WIDTH)
+            / common::sharpness(&tilted_pinhole, rows, WHOLE_WIDTH);
+        let p = common::sharpness(&plain, rows, WHOLE_WIDTH)
+            / common::sharpness(&plain_pinhole, rows, WHOLE_WIDTH);
         eprintln!("{name}: tilted lens {t:.3}, untilted {p:.3} of the pinhole's sharpness");
         assert!(t > 0.9, "{name}: the tilted lens blurs the board ({t:.3})");
         if name == "middle" {

@@ -165,16 +165,6 @@ pub fn traced_focus(camera: &CameraSpec, points: &[DVec3]) -> Result<Vec<TracedF
     Ok(out)
 }
 
-/// A refined focus and the blur it leaves.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RefinedFocus {
-    /// The lens tilt, swing and film distance.
-    pub solution: FocusSolution,
-    /// The traced images at the solution of the points, then of the midpoints of their
-    /// triangle's sides and of its centroid.
-    pub traced: Vec<TracedFocus>,
-}
-
 /// The three points, the midpoints of their triangle's sides, and its centroid: where the
 /// refinement weighs the blur, so that the plane the points span is sharp, not the points alone.
 pub fn triangle_samples(points: &[DVec3; 3]) -> [DVec3; 7] {
@@ -205,7 +195,7 @@ pub fn refine_focus_points(
     camera: &CameraSpec,
     points: &[DVec3; 3],
     solution: FocusSolution,
-) -> Result<RefinedFocus, String> {
+) -> Result<FocusSolution, String> {
     let apply = |x: [f64; 3]| {
         let mut c = camera.clone();
         c.movements.lens_tilt = x[0];
@@ -227,19 +217,13 @@ pub fn refine_focus_points(
     let best = nelder_mead(cost, start, steps, REFINE_EVALUATIONS);
     // A NaN or an equal blur is no improvement either.
     if best.1.partial_cmp(&total_blur(&paraxial)) != Some(std::cmp::Ordering::Less) {
-        return Ok(RefinedFocus {
-            solution,
-            traced: paraxial,
-        });
+        return Ok(solution);
     }
     let x = best.0;
-    Ok(RefinedFocus {
-        solution: FocusSolution {
-            lens_tilt: x[0],
-            lens_swing: x[1],
-            film_distance_mm: x[2],
-        },
-        traced: traced_focus(&apply(x), &samples)?,
+    Ok(FocusSolution {
+        lens_tilt: x[0],
+        lens_swing: x[1],
+        film_distance_mm: x[2],
     })
 }
 

@@ -23,7 +23,7 @@ use super::{CameraSpec, Integrator, Light, Material, RenderSettings, Scene, Shap
 use crate::adaptive::{AdaptiveSettings, DEFAULT_MIN_SPP};
 use crate::camera::lens::{LensSystem, Prescription};
 use crate::camera::lens_focus::refine_focus_points;
-use crate::camera::optics::{FocusSolution, solve_focus_points};
+use crate::camera::optics::solve_focus_points;
 use crate::camera::{Focus, FocusSurface, Movements, Projection};
 use crate::error::{Error, Result};
 use crate::layout;
@@ -754,7 +754,7 @@ fn place_focus(
         let mut solution = solve_focus_points(camera, world).map_err(|e| check.err(field, e))?;
         if camera.lens.is_some() {
             solution =
-                refine_by_tracing(camera, world, solution).map_err(|e| check.err(field, e))?;
+                refine_focus_points(camera, &world, solution).map_err(|e| check.err(field, e))?;
         }
         camera.movements.lens_tilt = solution.lens_tilt;
         camera.movements.lens_swing = solution.lens_swing;
@@ -769,16 +769,6 @@ fn place_focus(
         camera.focus = Focus::Distance(focus_distance);
     }
     Ok(())
-}
-
-/// A real lens's paraxial `focus_points` solution refined by tracing to the least blur of the
-/// points (`lens_focus`).
-fn refine_by_tracing(
-    camera: &CameraSpec,
-    points: [DVec3; 3],
-    paraxial: FocusSolution,
-) -> std::result::Result<FocusSolution, String> {
-    Ok(refine_focus_points(camera, &points, paraxial)?.solution)
 }
 
 /// `camera.position`, `look_at` and `up`: a viewing direction, and an up not along it.
