@@ -28,11 +28,14 @@ use crate::accel::intersect::{
     sphere_surface_point, triangle_point,
 };
 use crate::accel::wide::PACKET;
+use crate::camera::spectral::{film_response, sample_wavelength};
 use crate::camera::{Ray, film_position_mm, generate_lens_ray, generate_ray};
 use crate::layout::*;
 use crate::math::rng::Rng;
 use crate::pack::FlatScene;
-use crate::sampler::{PatternSource, light_sample_2d, pixel_hash, sample_2d, sample_aperture};
+use crate::sampler::{
+    PatternSource, light_sample_2d, permute, pixel_hash, sample_2d, sample_aperture,
+};
 
 mod batch;
 pub mod bsdf;
@@ -674,11 +677,70 @@ pub struct CameraRay {
     /// What the ray's radiance counts for: 1, or through a real lens the exit-pupil sample's
     /// weight (0: the ray was lost in the lens).
     pub weight: f32,
+    /// Its wavelength in the spectral mode (nm; 0 outside it).
+    pub wavelength_nm: f32,
+}
+
+impl CameraRay {
+    /// What its RGB radiance counts for in each channel: its weight, times the film's response
+    /// at its wavelength in the spectral mode.
+    pub fn counts_for(&self) -> Vec3 {
+        match self.wavelength_nm > 0.0 {
+            true => self.weight * film_response(self.wavelength_nm),
+            false => Vec3::splat(self.weight),
+        }
+    }
+}
+
+/// The wavelength of camera sample `sample` of pixel (x, y) in the spectral mode (0 outside
+/// it), drawn from random dimension `TIME_DIMENSION + 1` of its own stream (a pure function of
+/// the sample, so a wavefront path finds it again when it is accumulated). Under the
+/// stratified pattern each of the pixel's samples takes its own stratum of the range, one of
+/// spp (the second coordinate of the 2-D pattern would give only √spp strata, and the bands'
+/// crossovers then leave a colour noise of about 1% a pixel at 64 samples); the other patterns
+/// give the second coordinate of their point at `TIME_DIMENSION` (Sobol's is a (0,1)-sequence).
+/// Twin: `camera_wavelength` in wgsl/integrator.wgsl.
+pub fn camera_wavelength(scene: &FlatScene, x: u32, y: u32, sample: u32, flags: &mut u32) -> f32 {
+    let frame = &scene.frame;
+    if scene.camera.spectral == 0 {
+        return 0.0;
+    }
+    let pixel = y * frame.width + x;
+    let mut rng = Rng::new(frame.seed, pixel, sample);
+    rng.seek(TIME_DIMENSION);
+    let u = match frame.pixel_sampler == SAMPLER_STRATIFIED && frame.progressive == 0 {
+        true => {
+            let key = pixel_hash(frame.seed, pixel, TIME_DIMENSION + 1);
+            let stratum = permute(sample, frame.spp, key).unwrap_or_else(|| {
+                *flags |= STATUS_PERMUTE_CAP;
+                sample
+            });
+            (stratum as f32 + rng.next_2d()[1]) / frame.spp as f32
+        }
+        false => {
+            let source = PatternSource {
+                dim: TIME_DIMENSION,
+                ..PatternSource::pixel(frame)
+            };
+            sample_2d(
+                frame,
+                &scene.sample_table,
+                source,
+                x,
+                y,
+                sample,
+                &mut rng,
+                flags,
+            )[1]
+        }
+    };
+    sample_wavelength(u)
 }
 
 /// Camera sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1),
 /// lens point (2-3, drawn only by a lens), time (4, drawn only while the shutter is open a
-/// while; from the pixel pattern), drawn from `rng`, which the path then goes on drawing from.
+/// while; from the pixel pattern) and wavelength (5, [`camera_wavelength`]), drawn from `rng`,
+/// which the path then goes on drawing from.
 /// Twin: `camera_sample` in wgsl/integrator.wgsl.
 pub fn camera_sample<const F: u32>(
     scene: &FlatScene,
@@ -729,11 +791,23 @@ pub fn camera_sample<const F: u32>(
         let u = sample_2d(frame, &scene.sample_table, source, x, y, sample, rng, flags);
         time += u[0] * camera.shutter_span;
     }
+    let wavelength_nm = camera_wavelength(scene, x, y, sample, flags);
     let (ray, weight) = match camera.projection {
-        PROJECTION_LENS => generate_lens_ray(camera, &scene.sample_table, film, lens.to_array()),
+        PROJECTION_LENS => generate_lens_ray(
+            camera,
+            &scene.sample_table,
+            film,
+            lens.to_array(),
+            wavelength_nm,
+        ),
         _ => (generate_ray(camera, film, lens), 1.0),
     };
-    CameraRay { ray, time, weight }
+    CameraRay {
+        ray,
+        time,
+        weight,
+        wavelength_nm,
+    }
 }
 
 /// Radiance of sample `sample` of pixel (x, y): its camera ray ([`camera_sample`]), then the
@@ -760,7 +834,7 @@ pub fn trace_sample<const F: u32>(
         stats,
         first_hit,
     );
-    radiance * camera.weight
+    radiance * camera.counts_for()
 }
 
 /// [`trace_sample`] for samples `samples` of pixel (x, y), each sample's radiance and first
@@ -819,7 +893,7 @@ pub fn trace_pixel<const F: u32>(
                 stats,
                 &mut first_hit,
             );
-            add(radiance * camera.weight, &first_hit);
+            add(radiance * camera.counts_for(), &first_hit);
         }
         start += count as u32;
     }

@@ -121,6 +121,18 @@ pub const PROJECTION_ORTHOGRAPHIC: u32 = 1;
 pub const PROJECTION_LENS: u32 = 2;
 /// Cells across the film, in each direction, of a real lens's exit-pupil bounds table.
 pub const LENS_PUPIL_CELLS: u32 = 16;
+/// The spectral mode's wavelengths (nm, `camera.spectral`): a camera sample's wavelength is
+/// drawn uniformly from [SPECTRAL_MIN_NM, SPECTRAL_MAX_NM] (docs/lens.md, "Spectral mode").
+pub const SPECTRAL_MIN_NM: u32 = 380;
+/// The longest wavelength drawn (nm).
+pub const SPECTRAL_MAX_NM: u32 = 740;
+/// Where the film's blue and green bands cross (nm): each band is a third of the range, and
+/// neighbours cross over linearly across `SPECTRAL_CROSSOVER_NM` (camera::spectral).
+pub const SPECTRAL_BLUE_GREEN_NM: u32 = 500;
+/// Where the green and red bands cross (nm).
+pub const SPECTRAL_GREEN_RED_NM: u32 = 620;
+/// The width of each band's linear crossover (nm).
+pub const SPECTRAL_CROSSOVER_NM: u32 = 40;
 
 /// Light kinds (`GpuLight::kind`; fields per kind on [`GpuLight`]): a point light.
 pub const LIGHT_POINT: u32 = 0;
@@ -536,6 +548,16 @@ pub struct GpuCamera {
     /// Where a real lens's table starts in the sample table: its exposure, its surfaces
     /// rearmost first and its exit-pupil bounds (`camera::lens::LensSystem::kernel_table`).
     pub lens_table_offset: u32,
+    /// 1: the spectral mode (`camera.spectral`, a real lens only): each sample traced at its own
+    /// wavelength through the lens's dispersive glass and weighted by the film's response
+    /// (`camera::spectral`); 0: every sample at the prescription's reference line.
+    pub spectral: u32,
+    /// Padding to the WGSL struct's 16-byte alignment.
+    pub _pad0: u32,
+    /// Padding.
+    pub _pad1: u32,
+    /// Padding.
+    pub _pad2: u32,
 }
 
 /// Settings constant over one render.
@@ -914,7 +936,7 @@ const _: () = assert!(size_of::<GpuMaterial>() == 80);
 const _: () = assert!(size_of::<GpuTexture>() == 16);
 const _: () = assert!(size_of::<GpuTexCoords>() == 24);
 const _: () = assert!(size_of::<GpuLight>() == 64);
-const _: () = assert!(size_of::<GpuCamera>() == 144);
+const _: () = assert!(size_of::<GpuCamera>() == 160);
 const _: () = assert!(size_of::<GpuFrame>() == 112);
 const _: () = assert!(size_of::<GpuPass>() == 64);
 
@@ -1043,6 +1065,11 @@ pub fn wgsl_prelude() -> String {
         ("PROJECTION_ORTHOGRAPHIC", PROJECTION_ORTHOGRAPHIC),
         ("PROJECTION_LENS", PROJECTION_LENS),
         ("LENS_PUPIL_CELLS", LENS_PUPIL_CELLS),
+        ("SPECTRAL_MIN_NM", SPECTRAL_MIN_NM),
+        ("SPECTRAL_MAX_NM", SPECTRAL_MAX_NM),
+        ("SPECTRAL_BLUE_GREEN_NM", SPECTRAL_BLUE_GREEN_NM),
+        ("SPECTRAL_GREEN_RED_NM", SPECTRAL_GREEN_RED_NM),
+        ("SPECTRAL_CROSSOVER_NM", SPECTRAL_CROSSOVER_NM),
         ("LIGHT_AREA", LIGHT_AREA),
         ("LIGHT_TRIANGLE", LIGHT_TRIANGLE),
         ("SAMPLER_RANDOM", SAMPLER_RANDOM),

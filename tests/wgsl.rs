@@ -435,7 +435,11 @@ fn shared_structs_have_identical_layouts() {
             focus_radius_mm,
             projection,
             lens_surface_count,
-            lens_table_offset
+            lens_table_offset,
+            spectral,
+            _pad0,
+            _pad1,
+            _pad2
         }
     );
     layout!(

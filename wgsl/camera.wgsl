@@ -88,6 +88,34 @@ fn lens_surface_distance(z: f32, radius: f32, o: vec3<f32>, d: vec3<f32>) -> f32
     return -1.0;
 }
 
+// A glass's index at `nm` nanometres from its Sellmeier terms (B, C) at table entry `k` and the
+// two after it (Rust twin: lens::sellmeier_index).
+fn lens_sellmeier_index(k: u32, nm: f32) -> f32 {
+    let l2 = (nm * 1e-3) * (nm * 1e-3);
+    var sum = 0.0;
+    for (var term = 0u; term < 3u; term++) {
+        let t = lens_entry(k + term);
+        sum += t.x * l2 / (l2 - t.y);
+    }
+    return sqrt(1.0 + sum);
+}
+
+// The wavelength (nm) of a spectral sample whose pattern point is `u` (Rust twin:
+// camera::spectral::sample_wavelength).
+fn sample_wavelength(u: f32) -> f32 {
+    return f32(SPECTRAL_MIN_NM) + u * f32(SPECTRAL_MAX_NM - SPECTRAL_MIN_NM);
+}
+
+// What an RGB radiance counts for in each channel at wavelength `nm`: the film's three bands
+// (Rust twin: camera::spectral::film_response).
+fn film_response(nm: f32) -> vec3<f32> {
+    let half = 0.5 * f32(SPECTRAL_CROSSOVER_NM);
+    let width = f32(SPECTRAL_CROSSOVER_NM);
+    let blue = clamp((f32(SPECTRAL_BLUE_GREEN_NM) + half - nm) / width, 0.0, 1.0);
+    let red = clamp((nm - (f32(SPECTRAL_GREEN_RED_NM) - half)) / width, 0.0, 1.0);
+    return 3.0 * vec3<f32>(red, 1.0 - blue - red, blue);
+}
+
 // Snell's law for `d` through a surface of normal `n` facing against it, index ratio `eta`
 // (incident / transmitted); a zero vector on total internal reflection (Rust twin:
 // lens::refract_f32).
@@ -109,8 +137,9 @@ struct LensRay {
 }
 
 // The ray from image-plane point `film_mm` through a real lens, aimed at the point `u` of its
-// film cell's exit-pupil bounds (Rust twin: camera::generate_lens_ray and lens::lens_ray).
-fn generate_lens_ray(film_mm: vec2<f32>, u: vec2<f32>) -> LensRay {
+// film cell's exit-pupil bounds, at `wavelength` nm in the spectral mode (0: the reference
+// line's indices) (Rust twin: camera::generate_lens_ray and lens::lens_ray).
+fn generate_lens_ray(film_mm: vec2<f32>, u: vec2<f32>, wavelength: f32) -> LensRay {
     let film_point = camera.film_center + film_mm.x * camera.film_u + film_mm.y * camera.film_v;
     let cells = f32(LENS_PUPIL_CELLS);
     let cell = vec2<u32>(
@@ -130,6 +159,8 @@ fn generate_lens_ray(film_mm: vec2<f32>, u: vec2<f32>) -> LensRay {
     let distance2 = dot(to, to);
     var d = to / sqrt(distance2);
     var o = film_point;
+    let glasses = 1u + 2u * count + 2u * LENS_PUPIL_CELLS * LENS_PUPIL_CELLS;
+    var index_behind = 1.0;
     for (var i = 0u; i < count; i++) {
         let shape = lens_entry(1u + 2u * i);
         let glass = lens_entry(2u + 2u * i);
@@ -141,9 +172,15 @@ fn generate_lens_ray(film_mm: vec2<f32>, u: vec2<f32>) -> LensRay {
         if (o.x * o.x + o.y * o.y > glass.x * glass.x) {
             return chief;
         }
+        var eta = glass.y;
+        if (wavelength > 0.0) {
+            let index_in_front = lens_sellmeier_index(glasses + 3u * i, wavelength);
+            eta = index_behind / index_in_front;
+            index_behind = index_in_front;
+        }
         // A sphere always refracts; a plane (radius 0) where the index changes: the stop, in
         // air on both sides, only clips.
-        if (shape.y != 0.0 || glass.y != 1.0) {
+        if (shape.y != 0.0 || eta != 1.0) {
             var n = vec3<f32>(0.0, 0.0, 1.0);
             if (shape.y != 0.0) {
                 n = normalize(o - vec3<f32>(0.0, 0.0, shape.x - shape.y));
@@ -151,7 +188,7 @@ fn generate_lens_ray(film_mm: vec2<f32>, u: vec2<f32>) -> LensRay {
             if (dot(n, d) > 0.0) {
                 n = -n;
             }
-            d = lens_refract(d, n, glass.y);
+            d = lens_refract(d, n, eta);
             if (all(d == vec3<f32>(0.0))) {
                 return chief;
             }

@@ -439,18 +439,47 @@ fn trace_path(camera_ray: CameraRay, window: LightWindow, rng: ptr<function, Rng
 
 // A camera sample: the ray and the time it is traced at.
 // `weight`: what its radiance counts for (1, or through a real lens its exit-pupil sample's
-// weight, 0 when lost in the lens).
+// weight, 0 when lost in the lens); `wavelength`: nm in the spectral mode, 0 outside it.
 struct CameraRay {
     origin: vec3<f32>,
     direction: vec3<f32>,
     time: f32,
     weight: f32,
+    wavelength: f32,
+}
+
+// What a camera sample's RGB radiance counts for in each channel: its weight, times the film's
+// response at its wavelength in the spectral mode (Rust twin: CameraRay::counts_for).
+fn camera_counts_for(weight: f32, wavelength: f32) -> vec3<f32> {
+    if (wavelength > 0.0) {
+        return weight * film_response(wavelength);
+    }
+    return vec3<f32>(weight);
+}
+
+// The wavelength of camera sample `sample` of pixel (x, y) in the spectral mode (0 outside it),
+// from dimension TIME_DIMENSION + 1 of its own stream: under the stratified pattern one of spp
+// strata of the range per sample, else the second coordinate of the pattern's point at
+// TIME_DIMENSION. Twin: camera_wavelength in src/integrator.rs.
+fn camera_wavelength(x: u32, y: u32, sample: u32) -> f32 {
+    if (camera.spectral == 0u) {
+        return 0.0;
+    }
+    var rng = sample_rng(x, y, sample);
+    rng_seek(&rng, TIME_DIMENSION);
+    if (frame.pixel_sampler == SAMPLER_STRATIFIED && frame.progressive == 0u) {
+        let key = pixel_hash(frame.seed, y * frame.width + x, TIME_DIMENSION + 1u);
+        let stratum = permute(sample, frame.spp, key);
+        return sample_wavelength((f32(stratum) + rng_next_2d(&rng).y) / f32(frame.spp));
+    }
+    let source = PatternSource(frame.pixel_sampler, frame.pixel_strata_columns, frame.pixel_table_offset, TIME_DIMENSION);
+    return sample_wavelength(sample_2d(source, x, y, sample, &rng).y);
 }
 
 // Camera sample `sample` of pixel (x, y): position in the pixel (random dimensions 0-1), lens
 // point (2-3, drawn only by a lens), time (4, drawn only while the shutter is open a while),
-// drawn from `rng`, which the path then goes on drawing from. Twin: camera_sample in
-// src/integrator.rs.
+// wavelength (5, camera_wavelength), drawn from `rng`, which the path then goes on drawing
+// from. Twin: camera_sample in src/integrator.rs.
 fn camera_sample(x: u32, y: u32, sample: u32, rng: ptr<function, Rng>) -> CameraRay {
     let pixel_source = PatternSource(frame.pixel_sampler, frame.pixel_strata_columns, frame.pixel_table_offset, PIXEL_DIMENSION);
     let jitter = sample_2d(pixel_source, x, y, sample, rng);
@@ -472,12 +501,13 @@ fn camera_sample(x: u32, y: u32, sample: u32, rng: ptr<function, Rng>) -> Camera
         let time_source = PatternSource(frame.pixel_sampler, frame.pixel_strata_columns, frame.pixel_table_offset, TIME_DIMENSION);
         time += sample_2d(time_source, x, y, sample, rng).x * camera.shutter_span;
     }
+    let wavelength = camera_wavelength(x, y, sample);
     if (camera.projection == PROJECTION_LENS) {
-        let traced = generate_lens_ray(film, lens);
-        return CameraRay(traced.ray.origin, traced.ray.direction, time, traced.weight);
+        let traced = generate_lens_ray(film, lens, wavelength);
+        return CameraRay(traced.ray.origin, traced.ray.direction, time, traced.weight, wavelength);
     }
     let ray = generate_ray(camera, film, lens);
-    return CameraRay(ray.origin, ray.direction, time, 1.0);
+    return CameraRay(ray.origin, ray.direction, time, 1.0, wavelength);
 }
 
 // The random numbers of camera sample `sample` of pixel (x, y).
@@ -490,5 +520,6 @@ fn trace_sample(x: u32, y: u32, sample: u32, window: LightWindow,
                 counters: ptr<function, PathCounters>, first_hit: ptr<function, FirstHit>) -> vec3<f32> {
     var rng = sample_rng(x, y, sample);
     let camera_ray = camera_sample(x, y, sample, &rng);
-    return trace_path(camera_ray, window, &rng, counters, first_hit) * camera_ray.weight;
+    return trace_path(camera_ray, window, &rng, counters, first_hit)
+        * camera_counts_for(camera_ray.weight, camera_ray.wavelength);
 }

@@ -94,6 +94,10 @@ struct GpuCamera {
     projection: u32,
     lens_surface_count: u32,
     lens_table_offset: u32,
+    spectral: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 struct GpuFrame {

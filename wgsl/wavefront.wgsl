@@ -71,6 +71,7 @@ fn wf_camera(@builtin(global_invocation_id) id: vec3<u32>,
         wf_rays[p] = GpuPathRay(camera_ray.origin, camera_ray.time, camera_ray.direction, NONE);
         wf_paths[p] = GpuPath(vec3<f32>(1.0), pixel, vec3<f32>(0.0), sample, vec3<f32>(1.0),
                               0u, 0u, 0u, 0.0, camera_ray.weight);
+        // The wavelength is found again from the sample when the path is accumulated.
     }
     check_loop_limit();
 }
@@ -357,7 +358,8 @@ fn wf_accumulate(@builtin(global_invocation_id) id: vec3<u32>,
             let normal_depth = wf_aovs[2u * p];
             first_hit = FirstHit(normal_depth.w, normal_depth.xyz, wf_aovs[2u * p + 1u].xyz);
         }
-        add_sample(&sums, path.radiance * path.camera_weight, first_hit);
+        let wavelength = camera_wavelength(pixel % frame.width, pixel / frame.width, path.sample);
+        add_sample(&sums, path.radiance * camera_counts_for(path.camera_weight, wavelength), first_hit);
         counters.rays += path.rays;
         counters.truncated += path.truncated;
     }

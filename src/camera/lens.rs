@@ -10,7 +10,9 @@
 //! `radius thickness index aperture` in millimetres, where a positive radius has its centre of
 //! curvature on the image side, `thickness` is the axial distance to the next surface, `index`
 //! is the refractive index of the medium after the surface (towards the image) and `aperture`
-//! the clear diameter. A radius of 0 is the aperture stop (its index 0 or 1: it sits in air), its
+//! the clear diameter; a glass may add its dispersion (an Abbe number, or six Sellmeier terms:
+//! [`super::glass`]), and a line `line e` says the indices are given at the e line rather than
+//! d. A radius of 0 is the aperture stop (its index 0 or 1: it sits in air), its
 //! diameter the stop's at the lens's widest f-number; a radius of `inf` (or `-inf`, `infinity`)
 //! is a plane refracting surface (a flat face or cemented interface). The last thickness is
 //! ignored: the film's distance is the camera's focus, not the lens's. `#` starts a comment.
@@ -29,8 +31,9 @@ use std::path::Path;
 
 use glam::{DVec2, DVec3, Vec2, Vec3};
 
+use super::glass::{Glass, ReferenceLine};
 use crate::error::{Error, Location, Result};
-use crate::layout::LENS_PUPIL_CELLS;
+use crate::layout::{LENS_PUPIL_CELLS, SPECTRAL_MAX_NM, SPECTRAL_MIN_NM};
 
 /// One surface of a prescription, as the file gives it (mm).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,6 +47,9 @@ pub struct PrescriptionSurface {
     pub index: f64,
     /// Clear aperture's diameter (the stop's at the widest f-number).
     pub aperture: f64,
+    /// The medium after the surface against wavelength: its index at every wavelength when the
+    /// file gives no dispersion.
+    pub glass: Glass,
 }
 
 impl PrescriptionSurface {
@@ -64,10 +70,28 @@ impl PrescriptionSurface {
 pub struct Prescription {
     /// Surfaces, object side first.
     pub surfaces: Vec<PrescriptionSurface>,
+    /// The line the indices (and Abbe numbers) are given at.
+    pub line: ReferenceLine,
 }
 
-/// The column names of a prescription line, as errors name them.
-const COLUMNS: [&str; 4] = ["radius", "thickness", "index", "aperture"];
+/// The column names of a prescription line, as errors name them: four, then an Abbe number or
+/// six Sellmeier terms.
+const COLUMNS: [&str; 10] = [
+    "radius",
+    "thickness",
+    "index",
+    "aperture",
+    "B1",
+    "C1",
+    "B2",
+    "C2",
+    "B3",
+    "C3",
+];
+
+/// How far a glass's Sellmeier index at the reference line may lie from its `index` column: the
+/// paraxial properties come from the column, the spectral mode's rays from the terms.
+const SELLMEIER_INDEX_TOLERANCE: f64 = 1e-4;
 
 /// Indices above this are not glass (diamond is 2.42; the bound catches a column mistaken for
 /// another, such as a thickness in the index column).
@@ -95,39 +119,59 @@ impl Prescription {
             message,
         };
         let mut surfaces = Vec::new();
+        let mut surface_lines = Vec::new();
         let mut stop_line = None;
+        let mut reference = None;
         for (number, line) in text.lines().enumerate().map(|(i, l)| (i + 1, l)) {
             let content = line.split('#').next().unwrap_or("").trim();
             if content.is_empty() {
                 continue;
             }
             let words: Vec<&str> = content.split_whitespace().collect();
-            if words.len() != 4 {
+            if words[0] == "line" {
+                reference = Some(
+                    reference_line(&words, reference, !surfaces.is_empty())
+                        .map_err(|m| error(number, "line", m))?,
+                );
+                continue;
+            }
+            if ![4, 5, 10].contains(&words.len()) {
                 return Err(error(
                     number,
                     "",
                     format!(
-                        "{} numbers where a surface has 4: radius, thickness, index, aperture (mm)",
+                        "{} numbers where a surface has 4 (radius, thickness, index, aperture,                          in mm), 5 (and an Abbe number) or 10 (and Sellmeier's B1 C1 B2 C2 B3 C3)",
                         words.len()
                     ),
                 ));
             }
-            let mut values = [0.0; 4];
+            let mut values = [0.0; 10];
             for (k, word) in words.iter().enumerate() {
-                values[k] = parse_field(k, word).map_err(|m| error(number, COLUMNS[k], m))?;
+                let column = if words.len() == 5 && k == 4 {
+                    "abbe"
+                } else {
+                    COLUMNS[k]
+                };
+                values[k] = parse_field(k, word).map_err(|m| error(number, column, m))?;
             }
-            let [radius, thickness, index, aperture] = values;
-            let surface = PrescriptionSurface {
+            let [radius, thickness, index, aperture] = [values[0], values[1], values[2], values[3]];
+            let index = if radius == 0.0 && index == 0.0 {
+                1.0
+            } else {
+                index
+            };
+            let mut surface = PrescriptionSurface {
                 radius,
                 thickness,
-                index: if radius == 0.0 && index == 0.0 {
-                    1.0
-                } else {
-                    index
-                },
+                index,
                 aperture,
+                glass: Glass::constant(index),
             };
             check_surface(&surface, |field, message| error(number, field, message))?;
+            let line = reference.unwrap_or_default();
+            surface.glass = surface_glass(index, &values[4..words.len()], line)
+                .map_err(|(field, m)| error(number, field, m))?;
+            surface_lines.push(number);
             if surface.is_stop() {
                 if let Some(first) = stop_line {
                     return Err(error(
@@ -154,7 +198,41 @@ impl Prescription {
                 "the last surface must leave the lens into air (index 1)".to_string(),
             ));
         }
-        Ok(Prescription { surfaces })
+        let dispersive = surfaces.iter().position(|s| !s.glass.is_constant());
+        let plain = surfaces
+            .iter()
+            .position(|s| s.index != 1.0 && s.glass.is_constant());
+        if let (Some(dispersive), Some(plain)) = (dispersive, plain) {
+            return Err(error(
+                surface_lines[plain],
+                "abbe",
+                format!(
+                    "this glass has no dispersion while line {}'s has: give every glass an Abbe \
+                     number or Sellmeier terms, or none",
+                    surface_lines[dispersive]
+                ),
+            ));
+        }
+        Ok(Prescription {
+            surfaces,
+            line: reference.unwrap_or_default(),
+        })
+    }
+
+    /// Whether its glasses disperse (the file gives their Abbe numbers or Sellmeier terms).
+    pub fn is_dispersive(&self) -> bool {
+        self.surfaces.iter().any(|s| !s.glass.is_constant())
+    }
+
+    /// The prescription with every index at `nm` nanometres (its paraxial properties there).
+    pub fn at_wavelength(&self, nm: f64) -> Prescription {
+        let mut p = self.clone();
+        for s in &mut p.surfaces {
+            if !s.is_stop() {
+                s.index = s.glass.index(nm);
+            }
+        }
+        p
     }
 
     /// The stop's position in `surfaces`.
@@ -189,6 +267,65 @@ fn parse_field(column: usize, word: &str) -> std::result::Result<f64, String> {
              side), 0 for the aperture stop, or inf (-inf, infinity) for a plane surface"
         )),
         _ => Err(format!("`{word}` is not a finite number")),
+    }
+}
+
+/// The reference line a `line d` or `line e` directive names; refused when it repeats or comes
+/// after a surface (whose Abbe number would have been read at the other line).
+fn reference_line(
+    words: &[&str],
+    earlier: Option<ReferenceLine>,
+    after_surfaces: bool,
+) -> std::result::Result<ReferenceLine, String> {
+    let line = match words {
+        [_, name] => ReferenceLine::parse(name),
+        _ => None,
+    }
+    .ok_or_else(|| "write `line d` or `line e`: the line the indices are given at".to_string())?;
+    if earlier.is_some() || after_surfaces {
+        return Err("`line` comes once, before the first surface".to_string());
+    }
+    Ok(line)
+}
+
+/// The medium after a surface of index `index`, from the line's columns after the aperture:
+/// none (its index at every wavelength), an Abbe number (0 or none for air), or six Sellmeier
+/// terms (their index at `line` within `SELLMEIER_INDEX_TOLERANCE` of `index`). The error names
+/// its column.
+fn surface_glass(
+    index: f64,
+    dispersion: &[f64],
+    line: ReferenceLine,
+) -> std::result::Result<Glass, (&'static str, String)> {
+    match *dispersion {
+        [] => Ok(Glass::constant(index)),
+        [abbe] if index == 1.0 => match abbe {
+            0.0 => Ok(Glass::AIR),
+            _ => Err((
+                "abbe",
+                format!("{abbe}: air has no Abbe number here (write 0 or leave it out)"),
+            )),
+        },
+        [abbe] => Glass::from_abbe(index, abbe, line).map_err(|m| ("abbe", m)),
+        [b1, c1, b2, c2, b3, c3] => {
+            let glass = Glass::sellmeier([[b1, c1], [b2, c2], [b3, c3]]).map_err(|m| ("B1", m))?;
+            let at_line = glass.index(line.nm());
+            if (at_line - index).abs() > SELLMEIER_INDEX_TOLERANCE {
+                return Err((
+                    "B1",
+                    format!(
+                        "the Sellmeier terms give n = {at_line:.6} at the {line:?} line \
+                         ({:.2} nm), the index column {index}",
+                        line.nm()
+                    ),
+                ));
+            }
+            Ok(glass)
+        }
+        _ => Err((
+            "",
+            "after the aperture: an Abbe number or six Sellmeier terms".to_string(),
+        )),
     }
 }
 
@@ -392,6 +529,10 @@ pub struct PlacedSurface {
     pub index_behind: f64,
     /// Index on the object side.
     pub index_in_front: f64,
+    /// The medium on the image side against wavelength.
+    pub glass_behind: Glass,
+    /// The medium on the object side against wavelength.
+    pub glass_in_front: Glass,
 }
 
 impl PlacedSurface {
@@ -415,6 +556,8 @@ pub struct LensSystem {
     pub f_number: f64,
     /// The stop's position in `surfaces` (rearmost 0).
     pub stop: usize,
+    /// The prescription it was placed from (its paraxial properties at other wavelengths).
+    pub prescription: Prescription,
 }
 
 /// Why a ray from the film does not leave the lens.
@@ -452,17 +595,18 @@ impl LensSystem {
         let mut axial = 0.0;
         let mut surfaces = Vec::with_capacity(prescription.surfaces.len());
         for (i, s) in prescription.surfaces.iter().enumerate() {
-            let in_front = if i == 0 {
-                1.0
-            } else {
-                prescription.surfaces[i - 1].index
+            let in_front = match i {
+                0 => None,
+                _ => Some(&prescription.surfaces[i - 1]),
             };
             surfaces.push(PlacedSurface {
                 z: paraxial.rear_principal - axial,
                 radius: if s.is_plane() { 0.0 } else { s.radius },
                 aperture_radius: 0.5 * s.aperture * if s.is_stop() { stop_scale } else { 1.0 },
                 index_behind: s.index,
-                index_in_front: in_front,
+                index_in_front: in_front.map_or(1.0, |f| f.index),
+                glass_behind: s.glass,
+                glass_in_front: in_front.map_or(Glass::AIR, |f| f.glass),
             });
             axial += s.thickness;
         }
@@ -472,7 +616,25 @@ impl LensSystem {
             surfaces,
             paraxial,
             f_number,
+            prescription: prescription.clone(),
         })
+    }
+
+    /// The lens as it refracts light of `nm` nanometres: every index from its glass, the surfaces
+    /// where the reference line placed them (H' stays the origin: the focus is set at the
+    /// reference line, as a photographer focuses by eye).
+    pub fn at_wavelength(&self, nm: f64) -> LensSystem {
+        let mut lens = self.clone();
+        for s in &mut lens.surfaces {
+            s.index_behind = s.glass_behind.index(nm);
+            s.index_in_front = s.glass_in_front.index(nm);
+        }
+        lens
+    }
+
+    /// Whether its glasses disperse.
+    pub fn is_dispersive(&self) -> bool {
+        self.surfaces.iter().any(|s| !s.glass_behind.is_constant())
     }
 
     /// How far the front principal point H lies ahead of H' (mm, along +z): object distances
@@ -757,10 +919,16 @@ impl LensSystem {
     /// `LENS_PUPIL_CELLS`^2 cells (rows from the bottom, image coordinates) the low and high
     /// corners of its `pupil_bounds`. `cell_points(i, j)` gives the film points (lens frame) whose
     /// rays bound cell (column i, row j).
+    ///
+    /// `spectral` (the spectral mode): each cell's bounds hold the passing rays at the range's
+    /// two ends and at the reference line (dispersion moves the pupil a little with
+    /// wavelength), and the table ends with each surface's object-side glass, rearmost first,
+    /// as its three Sellmeier terms (B, C): the medium a ray from the film enters there.
     pub fn kernel_table(
         &self,
         film_distance: f64,
         cell_points: impl Fn(u32, u32) -> Vec<DVec3> + Sync,
+        spectral: bool,
     ) -> Vec<[f32; 2]> {
         use rayon::prelude::*;
         let axis = self.irradiance(DVec3::new(0.0, 0.0, -film_distance), ILLUMINATION_GRID);
@@ -772,17 +940,32 @@ impl LensSystem {
                 (s.index_behind / s.index_in_front) as f32,
             ]);
         }
+        let colours = match spectral {
+            true => vec![
+                self.at_wavelength(SPECTRAL_MIN_NM as f64),
+                self.clone(),
+                self.at_wavelength(SPECTRAL_MAX_NM as f64),
+            ],
+            false => vec![self.clone()],
+        };
         let cells = LENS_PUPIL_CELLS;
         let bounds: Vec<[[f32; 2]; 2]> = (0..cells * cells)
             .into_par_iter()
-            .map(
-                |c| match self.pupil_bounds(&cell_points(c % cells, c / cells)) {
+            .map(|c| {
+                let points = cell_points(c % cells, c / cells);
+                let found = colours.iter().filter_map(|lens| lens.pupil_bounds(&points));
+                match found.reduce(|[lo, hi], [l, h]| [lo.min(l), hi.max(h)]) {
                     Some([lo, hi]) => [lo.as_vec2().to_array(), hi.as_vec2().to_array()],
                     None => EMPTY_BOUNDS,
-                },
-            )
+                }
+            })
             .collect();
         table.extend(bounds.into_iter().flatten());
+        if spectral {
+            for s in &self.surfaces {
+                table.extend(s.glass_in_front.kernel_terms());
+            }
+        }
         table
     }
 }
@@ -803,7 +986,10 @@ pub struct LensRay {
 
 /// The ray from film point `film_point` (lens frame, mm) through the point `u` of its cell's
 /// exit-pupil bounds, traced through the lens in f32. `film_normal` is the film's unit normal
-/// (towards the lens); `cell` the film cell (column, row). Twin: `generate_lens_ray` in wgsl/camera.wgsl.
+/// (towards the lens); `cell` the film cell (column, row); `wavelength_nm` the sample's
+/// wavelength in the spectral mode (the indices then from the table's glasses), 0 for the
+/// reference line's indices. Twin: `generate_lens_ray` in wgsl/camera.wgsl.
+#[allow(clippy::too_many_arguments)]
 pub fn lens_ray(
     table: &[[f32; 2]],
     offset: u32,
@@ -812,6 +998,7 @@ pub fn lens_ray(
     film_normal: Vec3,
     cell: [u32; 2],
     u: [f32; 2],
+    wavelength_nm: f32,
 ) -> LensRay {
     let chief = LensRay {
         origin: Vec3::ZERO,
@@ -829,6 +1016,8 @@ pub fn lens_ray(
     let distance2 = to.length_squared();
     let mut d = to / distance2.sqrt();
     let mut o = film_point;
+    let glasses = 1 + 2 * count + 2 * LENS_PUPIL_CELLS * LENS_PUPIL_CELLS;
+    let mut index_behind = 1.0;
     for i in 0..count {
         let shape = at(1 + 2 * i);
         let glass = at(2 + 2 * i);
@@ -839,8 +1028,16 @@ pub fn lens_ray(
         if o.x * o.x + o.y * o.y > glass.x * glass.x {
             return chief;
         }
+        let mut eta = glass.y;
+        if wavelength_nm > 0.0 {
+            let terms = glasses + 3 * i;
+            let index_in_front =
+                sellmeier_index([at(terms), at(terms + 1), at(terms + 2)], wavelength_nm);
+            eta = index_behind / index_in_front;
+            index_behind = index_in_front;
+        }
         // As `PlacedSurface::refracts`: a plane refracts where the index changes.
-        if shape.y != 0.0 || glass.y != 1.0 {
+        if shape.y != 0.0 || eta != 1.0 {
             let mut n = Vec3::Z;
             if shape.y != 0.0 {
                 n = (o - Vec3::new(0.0, 0.0, shape.x - shape.y)).normalize();
@@ -848,7 +1045,7 @@ pub fn lens_ray(
             if n.dot(d) > 0.0 {
                 n = -n;
             }
-            let Some(refracted) = refract_f32(d, n, glass.y) else {
+            let Some(refracted) = refract_f32(d, n, eta) else {
                 return chief;
             };
             d = refracted;
@@ -861,6 +1058,14 @@ pub fn lens_ray(
         direction: d,
         weight: at(0).x * area * cosines,
     }
+}
+
+/// `Glass::index` in f32 from the table's terms (B, C) at `nm` nanometres. Twin:
+/// `lens_sellmeier_index` in wgsl/camera.wgsl.
+fn sellmeier_index(terms: [Vec2; 3], nm: f32) -> f32 {
+    let l2 = (nm * 1e-3) * (nm * 1e-3);
+    let sum: f32 = terms.iter().map(|t| t.x * l2 / (l2 - t.y)).sum();
+    (1.0 + sum).sqrt()
 }
 
 /// [`intersect`] in f32 for a surface at `z` of radius `radius` (0: a plane).
@@ -1020,6 +1225,59 @@ mod tests {
         );
     }
 
+    /// A glass's dispersion: an Abbe number (at the d line, or the e line after `line e`) or
+    /// Sellmeier terms; refusals name the line and the column.
+    #[test]
+    fn dispersion_columns_give_each_glass_its_index_against_wavelength() {
+        let abbe = parse("line e\n0 0 0 10 0\n50 4 1.6 20 40\n-50 0 1 20\n").unwrap();
+        assert_eq!(abbe.line, ReferenceLine::E);
+        let glass = abbe.surfaces[1].glass;
+        let (short, long) = ReferenceLine::E.abbe_span();
+        let nu =
+            (glass.index(ReferenceLine::E.nm()) - 1.0) / (glass.index(short) - glass.index(long));
+        assert!((nu - 40.0).abs() < 1e-9 && abbe.is_dispersive(), "{nu}");
+        assert!(abbe.at_wavelength(450.0).paraxial().focal_length < abbe.paraxial().focal_length);
+        let lens = LensSystem::new(&abbe, None).unwrap();
+        assert!(lens.is_dispersive());
+        let blue = lens.at_wavelength(450.0);
+        assert!(blue.surfaces[1].index_behind > lens.surfaces[1].index_behind);
+        assert_eq!(
+            blue.surfaces[1].index_in_front,
+            blue.surfaces[0].index_behind
+        );
+        let plain = parse("0 0 0 10\n50 4 1.6 20\n-50 0 1 20\n").unwrap();
+        assert!(!plain.is_dispersive() && plain.line == ReferenceLine::D);
+        let sellmeier = "0 0 0 10\n50 4 1.5168 20 1.03961212 0.00600069867 0.231792344 \
+                         0.0200179144 1.01046945 103.560653\n-50 0 1 20\n";
+        assert!(parse(sellmeier).unwrap().is_dispersive());
+        let cases = [
+            // A glass without dispersion beside one with it.
+            (
+                "0 0 0 10\n50 4 1.6 20 40\n-50 2 1.5 20\n30 0 1 20\n",
+                3,
+                "abbe",
+            ),
+            // An Abbe number on air.
+            ("0 0 0 10\n50 4 1.6 20 40\n-50 0 1 20 30\n", 3, "abbe"),
+            ("0 0 0 10\n50 4 1.6 20 -3\n-50 0 1 20\n", 2, "abbe"),
+            // Terms that miss the index column at the d line.
+            (&sellmeier.replace("1.5168", "1.52"), 2, "B1"),
+            ("0 0 0 10\n50 4 1.6 20 40 1\n-50 0 1 20\n", 2, ""),
+            ("0 0 0 10\nline e\n50 4 1.6 20 40\n-50 0 1 20\n", 2, "line"),
+            ("line f\n0 0 0 10\n50 4 1.6 20 40\n-50 0 1 20\n", 1, "line"),
+        ];
+        for (text, line, field) in cases {
+            match parse(text) {
+                Err(Error::Scene { location, .. }) => assert_eq!(
+                    (location.line, location.field.as_str()),
+                    (line, field),
+                    "{text}"
+                ),
+                other => panic!("{text}: {other:?}"),
+            }
+        }
+    }
+
     /// `inf`, `-inf` and `infinity` in any case, signed or not, are a plane's radius: its power
     /// is 0, and placed it has radius 0 like the stop, which the lens still knows by its index.
     #[test]
@@ -1064,6 +1322,8 @@ mod tests {
             aperture_radius: 100.0,
             index_behind: 1.5,
             index_in_front: 1.0,
+            glass_behind: Glass::constant(1.5),
+            glass_in_front: Glass::AIR,
         };
         let d = DVec3::new(60f64.to_radians().sin(), 0.0, 60f64.to_radians().cos());
         let n = surface_normal(&glass, DVec3::ZERO, d);

@@ -25,10 +25,12 @@
 //! projection oblique (docs/camera.md, "Orthographic camera").
 
 pub mod coverage;
+pub mod glass;
 pub mod lens;
 pub mod lens_focus;
 pub mod optics;
 pub mod report;
+pub mod spectral;
 
 use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
 
@@ -128,6 +130,9 @@ pub struct CameraSpec {
     /// A real lens's prescription placed at its f-number (`camera.lens`), traced in place of the
     /// thin lens: its H' is the lens centre (docs/lens.md).
     pub lens: Option<lens::LensSystem>,
+    /// The spectral mode (`camera.spectral`; a dispersive real lens only): each sample at its
+    /// own wavelength ([`spectral`]).
+    pub spectral: bool,
 }
 
 /// The surface a lens focuses on.
@@ -407,6 +412,7 @@ impl CameraSpec {
             },
             projection,
             lens_surface_count: self.lens.as_ref().map_or(0, |l| l.surfaces.len() as u32),
+            spectral: self.spectral as u32,
             ..Default::default()
         }
     }
@@ -417,7 +423,11 @@ impl CameraSpec {
         let Some(lens) = &self.lens else {
             return Vec::new();
         };
-        lens.kernel_table(self.film_distance_mm, |i, j| self.pupil_cell_points(i, j))
+        lens.kernel_table(
+            self.film_distance_mm,
+            |i, j| self.pupil_cell_points(i, j),
+            self.spectral,
+        )
     }
 
     /// The film points (lens frame, mm) whose rays bound the exit pupil of film cell (column i,
@@ -491,13 +501,14 @@ pub fn generate_ray(camera: &GpuCamera, film_mm: Vec2, lens_mm: Vec2) -> Ray {
 
 /// The ray from image-plane point `film_mm` through a real lens (`PROJECTION_LENS`), aimed at
 /// the point `u` (in [0, 1)^2) of its film cell's exit-pupil bounds, with its weight (0: lost in
-/// the lens, the ray then the chief ray through the lens centre). Twin: `generate_lens_ray` in
-/// wgsl/camera.wgsl.
+/// the lens, the ray then the chief ray through the lens centre), at `wavelength_nm` in the
+/// spectral mode (0: the reference line). Twin: `generate_lens_ray` in wgsl/camera.wgsl.
 pub fn generate_lens_ray(
     camera: &GpuCamera,
     table: &[[f32; 2]],
     film_mm: Vec2,
     u: [f32; 2],
+    wavelength_nm: f32,
 ) -> (Ray, f32) {
     let film_u = Vec3::from(camera.film_u);
     let film_v = Vec3::from(camera.film_v);
@@ -515,6 +526,7 @@ pub fn generate_lens_ray(
             cell(film_mm.y, camera.film_height_mm),
         ],
         u,
+        wavelength_nm,
     );
     let ray = Ray {
         origin: Vec3::from(camera.lens_center)

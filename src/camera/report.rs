@@ -4,6 +4,7 @@ use std::fmt::Write;
 
 use glam::{DMat4, DVec3};
 
+use super::glass::ReferenceLine;
 use super::lens::LensSystem;
 use super::lens_focus::{traced_focus, triangle_samples};
 use super::optics::{Line, Plane};
@@ -377,6 +378,35 @@ pub fn lens_report(lens: &LensSystem) -> String {
         "f-number",
         format!("f/{:.3} (widest f/{:.3})", lens.f_number, p.widest_f_number),
     );
+    if lens.is_dispersive() {
+        let names = match lens.prescription.line {
+            ReferenceLine::D => ["d", "F", "C"],
+            ReferenceLine::E => ["e", "F'", "C'"],
+        };
+        let (short, long) = lens.prescription.line.abbe_span();
+        let at = |nm: f64| lens.prescription.at_wavelength(nm).paraxial();
+        let (blue, red) = (at(short), at(long));
+        line(
+            "glass dispersion",
+            format!(
+                "indices at the {} line ({:.2} nm); spectral mode available",
+                names[0],
+                lens.prescription.line.nm()
+            ),
+        );
+        line(
+            "axial colour",
+            format!(
+                "back focal distance {:+.4} mm from {} ({short:.1} nm) to {} ({long:.1} nm); \
+                 focal length {:.4} to {:.4} mm",
+                red.back_focal_distance - blue.back_focal_distance,
+                names[1],
+                names[2],
+                blue.focal_length,
+                red.focal_length
+            ),
+        );
+    }
     line(
         "image circle at infinity",
         format!(

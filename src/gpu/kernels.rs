@@ -536,10 +536,12 @@ pub const WF_ACCUMULATE: Kernel = Kernel {
     modules: WAVEFRONT_MODULES,
     entry_point: "wf_accumulate",
     bindings: &[
+        CAMERA,
         FRAME,
         PASS_INFO,
         ACCUMULATION,
         STATUS,
+        SAMPLE_TABLE,
         PIXEL_LIST,
         WF_PATHS,
         WF_AOVS,

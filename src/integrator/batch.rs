@@ -222,6 +222,7 @@ fn rays_lanes<const LENS: bool>(
             },
             time: camera.shutter_open,
             weight: 1.0,
+            wavelength_nm: 0.0,
         };
     }
 }

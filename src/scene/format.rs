@@ -226,6 +226,10 @@ pub struct CameraSection {
     /// A real lens's prescription (pbrt's tabular format, relative to the scene file), traced
     /// in place of the thin lens: its focal length and widest f-number come from it.
     pub lens: Option<String>,
+    /// true: the spectral mode: each sample traced at its own wavelength through the lens's
+    /// dispersive glass (lateral and axial colour); a real lens whose file gives its glasses'
+    /// dispersion only (default false).
+    pub spectral: Option<bool>,
 }
 
 /// `camera.lens_pivot`: a named point on the optical axis, or a point in mm.

@@ -470,6 +470,7 @@ fn validate_camera(
         units_per_mm,
         shutter: shutter(check, c.shutter)?,
         focus_surface: c.focus_surface.unwrap_or_default(),
+        spectral: spectral(check, c, lens.as_ref())?,
         lens,
     };
     if f_number > 0.0 {
@@ -484,6 +485,26 @@ fn validate_camera(
     check_film_behind_lens(check, &camera)?;
     check_focus_surface(check, &camera)?;
     Ok(camera)
+}
+
+/// `camera.spectral`: only a real lens whose glasses disperse has colours to separate (a thin
+/// lens, or glass of one index at every wavelength, would only add colour noise).
+fn spectral(check: &Checker, c: &CameraSection, lens: Option<&LensSystem>) -> Result<bool> {
+    let field = "camera.spectral";
+    match (c.spectral.unwrap_or(false), lens) {
+        (false, _) => Ok(false),
+        (true, None) => Err(check.err(
+            field,
+            "the spectral mode traces a real lens's dispersion: give `lens` (a thin lens has \
+             none)",
+        )),
+        (true, Some(lens)) if !lens.is_dispersive() => Err(check.err(
+            field,
+            "the lens file gives no dispersion: add each glass's Abbe number (a fifth column) \
+             or Sellmeier terms (docs/lens.md)",
+        )),
+        (true, Some(_)) => Ok(true),
+    }
 }
 
 /// `camera.lens`: the prescription read and stopped to `f_number` (its widest when none is
@@ -873,6 +894,7 @@ fn validate_orthographic(
         ("aperture_rotation", c.aperture_rotation.is_some()),
         ("focus_surface", c.focus_surface.is_some()),
         ("lens", c.lens.is_some()),
+        ("spectral", c.spectral.is_some()),
     ];
     if let Some((name, _)) = lens_fields.iter().find(|(_, given)| *given) {
         let why = match *name {
@@ -925,6 +947,7 @@ fn validate_orthographic(
         shutter: shutter(check, c.shutter)?,
         focus_surface: FocusSurface::Plane,
         lens: None,
+        spectral: false,
     })
 }
 
