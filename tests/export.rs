@@ -830,6 +830,7 @@ const REFUSED: &[(&str, &[&str])] = &[
     ),
     ("bokeh.toml", &["camera.aperture_blades", "render.ambient"]),
     ("double_gauss.toml", &["camera.lens", "render.ambient"]),
+    ("spectral_singlet.toml", &["camera.lens", "render.ambient"]),
     ("bunny.toml", &["render.ambient"]),
     ("dragon.toml", &["render.ambient"]),
     ("interior.toml", &["camera.film_shift"]),

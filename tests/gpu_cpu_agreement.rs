@@ -132,6 +132,29 @@ fn reverse_tilt_with_swing_and_lens_shift_agrees() {
     );
 }
 
+/// Every sample scene through a real lens, and the spectral one under both ways of drawing its
+/// wavelengths (a stratum of its own under the stratified pattern, Sobol's second coordinate).
+#[test]
+fn every_real_lens_scene_agrees() {
+    let small = ["render.width=72", "render.height=48", "render.spp=8"];
+    for path in [
+        "scenes/double_gauss.toml",
+        "scenes/tabletop_real_lens.toml",
+        "scenes/spectral_singlet.toml",
+    ] {
+        check(path, &small);
+    }
+    // 4x5 inch film, upright.
+    check(
+        "scenes/large_format.toml",
+        &["render.width=48", "render.height=60", "render.spp=8"],
+    );
+    check(
+        "scenes/spectral_singlet.toml",
+        &[&small[..], &["render.pixel_sampler=\"sobol\""]].concat(),
+    );
+}
+
 #[test]
 fn hexagonal_bokeh_agrees() {
     check(

@@ -102,7 +102,7 @@ fn the_wavefront_render_renders_the_megakernels_image() {
         per_invocation: 4,
         ..RayBudgets::DEFAULT
     };
-    let cases: [(&str, &[&str], RayBudgets); 7] = [
+    let cases: [(&str, &[&str], RayBudgets); 8] = [
         // mirrors, a point light, a plane
         (
             "scenes/spheres.toml",
@@ -136,6 +136,13 @@ fn the_wavefront_render_renders_the_megakernels_image() {
         // a real lens: camera samples weighted by its exit-pupil bounds, some lost in the glass
         (
             "scenes/double_gauss.toml",
+            &["render.width=72", "render.height=48"],
+            RayBudgets::DEFAULT,
+        ),
+        // the spectral mode: the wavefront render finds each sample's wavelength again when it
+        // adds the sample
+        (
+            "scenes/spectral_singlet.toml",
             &["render.width=72", "render.height=48"],
             RayBudgets::DEFAULT,
         ),

@@ -103,6 +103,36 @@ fn traced_rays_at_each_wavelength_agree_with_the_paraxial_colours() {
     assert!(f(380.0) < f(486.1327) && f(656.2725) < f(740.0));
 }
 
+/// The chief ray (through the stop's centre, `LensSystem::chief_ray`) from a film point h off
+/// the axis in the rear focal plane at each wavelength leaves, in the paraxial limit, at the
+/// slope -h / f there (to 1e-6): the magnification's change with wavelength that lateral colour
+/// is. Far off the axis it still crosses the stop's centre (the singlet's stop is flush with its
+/// front vertex, where a ray's plane crossing falls a rounding error behind the vertex).
+#[test]
+fn chief_rays_leave_at_the_slope_of_each_wavelengths_focal_length() {
+    for path in DISPERSIVE {
+        let lens = lens(path);
+        for nm in WAVELENGTHS {
+            let paraxial = lens.prescription.at_wavelength(nm).paraxial();
+            let coloured = lens.at_wavelength(nm);
+            let f = paraxial.focal_length;
+            let h = 1e-5 * f;
+            let film = DVec3::new(0.0, h, lens.rear_z() - paraxial.back_focal_distance);
+            let (_, d) = coloured
+                .chief_ray(film)
+                .unwrap_or_else(|| panic!("{path} {nm} nm: no chief ray"));
+            let ratio = -d.y / d.z * f / h;
+            assert!((ratio - 1.0).abs() < 1e-6, "{path} {nm} nm: {ratio}");
+            assert!(
+                coloured
+                    .chief_ray(DVec3::new(0.0, 0.3 * f, film.z))
+                    .is_some(),
+                "{path} {nm} nm: no chief ray at 0.3 f"
+            );
+        }
+    }
+}
+
 /// The kernels' f32 trace at a wavelength (the table's Sellmeier terms) follows the f64 trace
 /// through the lens at that wavelength: the ray's end within 64 ulps of its distance from the
 /// origin and its direction within 64 ulps, across the film; and at the reference line with the

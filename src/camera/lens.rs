@@ -632,6 +632,58 @@ impl LensSystem {
         lens
     }
 
+    /// The chief ray from `film_point` (lens frame, mm): the ray through the stop's centre,
+    /// found by Newton's method on its aim until a step moves it by less than 1e-12 mm (then
+    /// crossing the stop within 1e-7 mm of its centre), as it leaves the front surface; `None`
+    /// when it does not pass or the search does not settle in 50 steps.
+    pub fn chief_ray(&self, film_point: DVec3) -> Option<(DVec3, DVec3)> {
+        // The surfaces behind the stop, and the ray's line carried on to the stop's plane (a stop
+        // flush with a vertex would meet the ray a rounding error behind it on the axis).
+        let behind_stop = LensSystem {
+            surfaces: self.surfaces[..self.stop].to_vec(),
+            ..self.clone()
+        };
+        let (z, stop_z) = (self.aim_z(), self.stop_z());
+        let aim = |p: DVec2| (p.extend(z) - film_point).normalize();
+        let crossing = |p: DVec2| {
+            let (o, d) = behind_stop.trace_from_film(film_point, aim(p)).ok()?;
+            Some((o + d * ((stop_z - o.z) / d.z)).truncate())
+        };
+        // Start where the straight line from the film point to the stop's centre crosses the
+        // aim plane.
+        let stop = DVec3::new(0.0, 0.0, stop_z);
+        let t = (z - film_point.z) / (stop.z - film_point.z);
+        let mut p = (film_point + t * (stop - film_point)).truncate();
+        let step = 1e-6 * self.surfaces[self.stop].aperture_radius.max(1.0);
+        for _ in 0..50 {
+            let at = crossing(p)?;
+            let dx = (crossing(p + DVec2::X * step)? - at) / step;
+            let dy = (crossing(p + DVec2::Y * step)? - at) / step;
+            let determinant = dx.x * dy.y - dy.x * dx.y;
+            if determinant.abs() < 1e-300 {
+                return None;
+            }
+            // Solve [dx dy] delta = -at.
+            let delta =
+                DVec2::new(at.x * dy.y - dy.x * at.y, dx.x * at.y - at.x * dx.y) / determinant;
+            p -= delta;
+            if delta.length() < 1e-12 {
+                let at = crossing(p)?;
+                if at.length() >= 1e-7 {
+                    return None;
+                }
+                // On from the stop's centre through the surfaces before it.
+                let in_front = LensSystem {
+                    surfaces: self.surfaces[self.stop + 1..].to_vec(),
+                    ..self.clone()
+                };
+                let (_, d) = behind_stop.trace_from_film(film_point, aim(p)).ok()?;
+                return in_front.trace_from_film(at.extend(stop_z), d).ok();
+            }
+        }
+        None
+    }
+
     /// Whether its glasses disperse.
     pub fn is_dispersive(&self) -> bool {
         self.surfaces.iter().any(|s| !s.glass_behind.is_constant())

@@ -327,6 +327,25 @@ pub fn camera_summary(camera: &CameraSpec) -> String {
     )
 }
 
+/// The lateral colour seen from a film point `height` mm off the axis on the film focused at
+/// infinity: the chief rays at `short` and `long` nm leave at different angles, and f times the
+/// difference of their slopes is how far apart the two colours of one distant point land.
+fn lateral_colour(lens: &LensSystem, height: f64, short: f64, long: f64) -> String {
+    let film = DVec3::new(0.0, height, -lens.paraxial.focal_length);
+    let slope = |nm: f64| {
+        lens.at_wavelength(nm)
+            .chief_ray(film)
+            .map(|(_, d)| d.y / d.z)
+    };
+    match (slope(short), slope(long)) {
+        (Some(a), Some(b)) => format!(
+            "{:+.2} µm between {short:.1} and {long:.1} nm, {height:.2} mm off the axis (chief rays)",
+            1e3 * lens.paraxial.focal_length * (a - b)
+        ),
+        _ => format!("the chief ray {height:.2} mm off the axis does not pass"),
+    }
+}
+
 /// What `chambre lens` prints: a prescription's paraxial properties (mm, along the axis from the
 /// first vertex towards the film) and its image circle at the f-number it is set to, for a film
 /// focused at infinity.
@@ -405,6 +424,10 @@ pub fn lens_report(lens: &LensSystem) -> String {
                 blue.focal_length,
                 red.focal_length
             ),
+        );
+        line(
+            "lateral colour",
+            lateral_colour(lens, 0.7 * circle.half_radius, short, long),
         );
     }
     line(
