@@ -852,6 +852,54 @@ fn a_stop_closed_to_f256_still_exposes_the_axis() {
     assert!((centre - 1.0).abs() < 0.06, "centre {centre}");
 }
 
+/// Movements far past the image circle and rays at grazing angles render finite pixels, alike on
+/// both paths: the double Gauss's film risen 60 mm (its circle is 56 mm across to dark: the
+/// frame goes black), the wide angle wide open on a film twice its circle's width with the lens
+/// tilted 12 degrees (rays meeting its steep surfaces at grazing angles, some totally
+/// reflected), and the spectral singlet shifted 40 mm and swung 25 degrees. Tilted 30 degrees,
+/// the wide angle's film would cross the lens plane: refused by name.
+#[test]
+fn far_past_the_image_circle_and_at_grazing_angles_pixels_stay_finite() {
+    let cameras = [
+        "film = [36.0, 24.0]\nlens = \"lenses/dgauss_50mm.dat\"\nfocus_distance = 6.0\n\
+         film_shift = [0.0, 60.0]",
+        "film = [72.0, 48.0]\nlens = \"lenses/wide_22mm.dat\"\nfocus_distance = 6.0\n\
+         lens_tilt = 12.0",
+        "film = [36.0, 24.0]\nlens = \"lenses/singlet_bk7_100mm.dat\"\nfocus_distance = 6.0\n\
+         spectral = true\nlens_shift = [40.0, 0.0]\nlens_swing = 25.0",
+    ];
+    for camera in cameras {
+        let images = common::both(&scene(camera, [36, 24], 16, 4, "max_depth = 1"));
+        for (name, image) in &images {
+            assert_eq!(image.non_finite_count(), 0, "{camera}: {name}");
+        }
+        let lit = images[0]
+            .1
+            .pixels
+            .iter()
+            .filter(|p| p.max_element() > 0.0)
+            .count();
+        eprintln!("{camera}: {lit} of {} pixels lit", images[0].1.pixels.len());
+        if let Some((_, gpu)) = images.get(1) {
+            let (within, mean) = common::agreement(&images[0].1, gpu, 1e-3);
+            assert!(
+                within >= 0.999,
+                "{camera}: {within} within 1e-3, mean {mean}"
+            );
+        }
+    }
+    let crossing = "film = [72.0, 48.0]\nlens = \"lenses/wide_22mm.dat\"\nlens_tilt = 30.0";
+    let text = format!(
+        "[render]\nwidth = 36\nheight = 24\n\n[camera]\nposition = [0, 0, 5]\n\
+         look_at = [0, 0, 0]\n{crossing}\n\n[[materials]]\nname = \"m\"\n\
+         model = \"lambert\"\ndiffuse = [0.5, 0.5, 0.5]\n\n[[shapes]]\n\
+         type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n"
+    );
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(IN_SCENES);
+    let refusal = Scene::from_str(&path, &text, &[]).unwrap_err().to_string();
+    assert!(refusal.contains("no image can form"), "{refusal}");
+}
+
 /// The tabletop's board through a tilted double Gauss wide open (f/2), focused by
 /// `focus_points`: the thick lens's paraxial solution, refined by tracing to the least blur of
 /// the three points, keeps the board as sharp as the same lens stopped down to f/22 (deep
