@@ -2,7 +2,8 @@
 //! exactly, on both integrators and both paths: furnaces (a convex Lambert object under a
 //! constant environment of radiance L shows albedo x L), an infinite plane under a constant sky
 //! (irradiance pi L), a plane facing a sun of any size (irradiance E cos theta), a map of one
-//! value against the constant light, the map's importance sampling (its density integrates to
+//! value against the constant light, a plane under a spotted map against a quadrature of its
+//! lookup, the map's importance sampling (its density integrates to
 //! 1, its samples follow it, a sample's density is the lookup's), and refusals by name.
 //!
 //! The renders are noisy: a test compares the mean of a block of pixels with the exact value
@@ -234,6 +235,69 @@ fn a_map_of_one_value_lights_as_the_constant_environment() {
             let what = format!("{integrator} {path}");
             assert_block(&what, &image, 10..22, 10..22, 0.5, 0.0);
             assert_eq!(image.pixels[0], Vec3::ONE, "{what}: corner");
+        }
+    }
+}
+
+/// An infinite Lambert plane under a map that is far from uniform (a bright spot above the
+/// horizon, a blue band below it), turned or not, shows albedo E / pi, where E = the integral of
+/// L(w) cos(theta) over the upper hemisphere, by a midpoint rule on the map's own lookup: the
+/// map's importance sampling (and the path tracer's MIS with it) is unbiased against the lookup,
+/// on both integrators and both paths.
+#[test]
+fn a_plane_under_a_map_shows_the_quadrature_of_its_irradiance() {
+    let (w, h) = (16u32, 8u32);
+    let dir = scratch("plane-map");
+    let file = dir.join("spotted.exr");
+    write_exr(&file, w, h, &spotted_map(w, h));
+    let map = EnvironmentMap::read(&file).unwrap();
+    let albedo = 0.5;
+    for degrees in [0.0f64, 50.0] {
+        let (light, data) = map_light(&map, (degrees / 360.0) as f32);
+        let (nu, nv) = (1024, 256);
+        let mut irradiance = [0f64; 3];
+        for j in 0..nv {
+            let theta = 0.5 * PI * (j as f64 + 0.5) / nv as f64;
+            for i in 0..nu {
+                let phi = 2.0 * PI * (i as f64 + 0.5) / nu as f64;
+                let d = Vec3::new(
+                    (theta.sin() * phi.cos()) as f32,
+                    theta.cos() as f32,
+                    (theta.sin() * phi.sin()) as f32,
+                );
+                let (radiance, _) = environment_radiance(&light, &data, d);
+                let weight =
+                    theta.cos() * theta.sin() * (0.5 * PI / nv as f64) * (2.0 * PI / nu as f64);
+                for c in 0..3 {
+                    irradiance[c] += radiance[c] as f64 * weight;
+                }
+            }
+        }
+        for integrator in ["whitted", "path"] {
+            let scene = build(
+                SceneBuilder::new(24, 24)
+                    .spp(16)
+                    .pinhole([0.0, 1.0, 0.0], [0.0, 0.0, -3.0], 40.0)
+                    .lambert("ground", [albedo; 3])
+                    .plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "ground")
+                    .environment_map(file.to_str().unwrap(), 1.0, degrees, 4),
+                integrator,
+            );
+            for (path, image) in common::both(&scene) {
+                for (c, e) in irradiance.iter().enumerate() {
+                    let expected = albedo * e / PI;
+                    let (mean, error) = block_mean(&image, 0..24, 16..24, c);
+                    eprintln!(
+                        "{degrees} deg {integrator} {path} channel {c}: {mean:.5} against \
+                         {expected:.5} ({:.1} standard errors)",
+                        (mean - expected) / error
+                    );
+                    assert!(
+                        (mean - expected).abs() <= 4.5 * error + 2e-3 * expected,
+                        "{degrees} deg {integrator} {path} channel {c}: {mean} against {expected}"
+                    );
+                }
+            }
         }
     }
 }
