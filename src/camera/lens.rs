@@ -820,7 +820,9 @@ impl LensSystem {
 
     /// The image circle on a film square to the axis at `film_distance` mm behind H', found by
     /// stepping out from the axis by `step` mm (to `limit` mm at most: then `dark_radius` is
-    /// `limit`, the circle reaching past it).
+    /// `limit`, the circle reaching past it). The dark edge is then found apart from the
+    /// illumination grids, which lose the last rays when they pass through a sliver of the
+    /// pupil ([`Self::last_lit_radius`]).
     pub fn image_circle(&self, film_distance: f64, step: f64, limit: f64) -> ImageCircle {
         let centre = self.irradiance(DVec3::new(0.0, 0.0, -film_distance), ILLUMINATION_GRID);
         let relative = |r: f64| {
@@ -837,7 +839,7 @@ impl LensSystem {
             if value == 0.0 {
                 return ImageCircle {
                     half_radius: half_radius.unwrap_or(r),
-                    dark_radius: r,
+                    dark_radius: self.last_lit_radius(film_distance, r - step, r, limit),
                 };
             }
             previous = value;
@@ -847,6 +849,87 @@ impl LensSystem {
             half_radius: half_radius.unwrap_or(limit),
             dark_radius: limit,
         }
+    }
+}
+
+/// Aims along the meridian a clearance search tries before refining the best.
+const CLEARANCE_GRID: usize = 400;
+
+impl LensSystem {
+    /// How far inside every clear aperture the ray from `origin` along `direction` passes (mm,
+    /// the least over the surfaces of aperture radius less the hit's distance from the axis;
+    /// negative where an aperture blocks it), traced on past the apertures so that it varies
+    /// continuously with the ray; `None` where a sphere is missed or the ray is totally
+    /// reflected.
+    pub fn clearance(&self, origin: DVec3, direction: DVec3) -> Option<f64> {
+        let (mut o, mut d) = (origin, direction);
+        let mut least = f64::INFINITY;
+        for s in &self.surfaces {
+            o += intersect(s, o, d)? * d;
+            least = least.min(s.aperture_radius - o.truncate().length());
+            if s.refracts() {
+                d = refract(
+                    d,
+                    surface_normal(s, o, d),
+                    s.index_behind / s.index_in_front,
+                )?;
+            }
+        }
+        Some(least)
+    }
+
+    /// The largest clearance of a ray from `film_point` (on the x axis of the film, lens frame)
+    /// aimed through the meridian y = 0 of the aim plane: a grid over the aim square, then a
+    /// golden-section search about its best point. The last rays to pass a film point far off
+    /// the axis cross the meridian: the lens and the point are symmetric about it.
+    fn meridional_clearance(&self, film_point: DVec3) -> f64 {
+        let (z, half) = (self.aim_z(), self.aim_square(&[film_point]));
+        let clearance = |x: f64| {
+            let direction = (DVec3::new(x, 0.0, z) - film_point).normalize();
+            self.clearance(film_point, direction)
+                .unwrap_or(f64::NEG_INFINITY)
+        };
+        let step = 2.0 * half / CLEARANCE_GRID as f64;
+        let best = (0..=CLEARANCE_GRID)
+            .map(|i| -half + i as f64 * step)
+            .max_by(|a, b| clearance(*a).total_cmp(&clearance(*b)))
+            .unwrap_or(0.0);
+        let (mut lo, mut hi) = (best - step, best + step);
+        let ratio = 0.5 * (5f64.sqrt() - 1.0);
+        for _ in 0..60 {
+            let (a, b) = (hi - ratio * (hi - lo), lo + ratio * (hi - lo));
+            if clearance(a) < clearance(b) {
+                lo = a;
+            } else {
+                hi = b;
+            }
+        }
+        clearance(best).max(clearance(0.5 * (lo + hi)))
+    }
+
+    /// The radius on a film square to the axis at `film_distance` mm beyond which no ray passes
+    /// the lens: from `lit` (where rays were found) and `dark` (where the grids found none),
+    /// outwards in steps of their gap while a ray still passes at `dark` (to `limit`), then by
+    /// bisection on whether any meridional ray passes, to 1e-9 of the radius.
+    fn last_lit_radius(&self, film_distance: f64, lit: f64, dark: f64, limit: f64) -> f64 {
+        let passes = |r: f64| self.meridional_clearance(DVec3::new(r, 0.0, -film_distance)) > 0.0;
+        let (mut lo, mut hi) = (lit, dark);
+        let step = dark - lit;
+        while passes(hi) {
+            if hi >= limit {
+                return limit;
+            }
+            (lo, hi) = (hi, hi + step);
+        }
+        while hi - lo > 1e-9 * hi {
+            let mid = 0.5 * (lo + hi);
+            if passes(mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
     }
 }
 
