@@ -9,6 +9,7 @@ use super::lens::LensSystem;
 use super::lens_focus::{traced_focus, triangle_samples};
 use super::optics::{Line, Plane};
 use super::{CameraSpec, Focus};
+use crate::layout::{SPECTRAL_MAX_NM, SPECTRAL_MIN_NM};
 
 fn v3(v: DVec3) -> String {
     format!("[{:.6}, {:.6}, {:.6}]", v.x, v.y, v.z)
@@ -78,6 +79,13 @@ fn coverage_report(camera: &CameraSpec, lens: &LensSystem) -> String {
          distances from H):\n",
     );
     out += &lens_report(lens);
+    if camera.spectral {
+        let _ = writeln!(
+            out,
+            "{:<28} on: each sample at its own wavelength, {SPECTRAL_MIN_NM}-{SPECTRAL_MAX_NM} nm",
+            "spectral mode"
+        );
+    }
     if let Some(corners) = camera.corner_illumination() {
         let percent: Vec<String> = corners
             .iter()
@@ -430,12 +438,18 @@ pub fn lens_report(lens: &LensSystem) -> String {
             lateral_colour(lens, 0.7 * circle.half_radius, short, long),
         );
     }
+    // The search stops at 4 f from the axis: a circle reaching that far is reported as such.
+    let reach = 4.0 * f;
+    let edge = |radius: f64, what: &str| match radius >= reach {
+        true => format!("beyond {:.2} mm {what}", 2.0 * reach),
+        false => format!("{:.2} mm {what}", 2.0 * radius),
+    };
     line(
         "image circle at infinity",
         format!(
-            "diameter {:.2} mm at half illumination, {:.2} mm to dark (cos^4 and vignetting)",
-            2.0 * circle.half_radius,
-            2.0 * circle.dark_radius
+            "diameter {}, {} (cos^4 and vignetting)",
+            edge(circle.half_radius, "at half illumination"),
+            edge(circle.dark_radius, "to dark")
         ),
     );
     out
