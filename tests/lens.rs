@@ -133,6 +133,55 @@ fn chief_rays_leave_at_the_slope_of_each_wavelengths_focal_length() {
     }
 }
 
+/// `chambre lens`'s report: the focal length and back focal distance it prints are the
+/// paraxial ones; a dispersive lens's axial colour is the back focal distance's change from F to
+/// C (F' to C' at the e line) that the matrices at those wavelengths give, and its lateral colour
+/// a finite figure in micrometres; a lens without glass data reports no colour.
+#[test]
+fn the_lens_report_gives_the_paraxial_figures_and_the_colours() {
+    use chambre::camera::glass::ReferenceLine;
+    use chambre::camera::report::lens_report;
+    let value = |report: &str, label: &str, word: usize| -> f64 {
+        let line = report
+            .lines()
+            .find(|l| l.starts_with(label))
+            .unwrap_or_else(|| panic!("no `{label}` in\n{report}"));
+        let words: Vec<&str> = line[label.len()..].split_whitespace().collect();
+        words[word].trim_start_matches('+').parse().unwrap()
+    };
+    for path in DISPERSIVE {
+        let lens = lens(path);
+        let report = lens_report(&lens);
+        let p = &lens.paraxial;
+        assert!((value(&report, "focal length", 0) - p.focal_length).abs() < 1e-4);
+        assert!((value(&report, "back focal distance", 0) - p.back_focal_distance).abs() < 1e-4);
+        let (short, long) = lens.prescription.line.abbe_span();
+        let at = |nm: f64| {
+            lens.prescription
+                .at_wavelength(nm)
+                .paraxial()
+                .back_focal_distance
+        };
+        let axial = value(&report, "axial colour", 3);
+        assert!(
+            (axial - (at(long) - at(short))).abs() < 1e-4,
+            "{path}: {axial}"
+        );
+        let lateral = value(&report, "lateral colour", 0);
+        assert!(
+            lateral.is_finite() && lateral.abs() < 1e3,
+            "{path}: {lateral} µm"
+        );
+        let line = match lens.prescription.line {
+            ReferenceLine::D => "the d line",
+            ReferenceLine::E => "the e line",
+        };
+        assert!(report.contains(line), "{path}: {report}");
+    }
+    let plain = lens_report(&lens(LENSES[0].0));
+    assert!(!plain.contains("colour"), "{plain}");
+}
+
 /// The kernels' f32 trace at a wavelength (the table's Sellmeier terms) follows the f64 trace
 /// through the lens at that wavelength: the ray's end within 64 ulps of its distance from the
 /// origin and its direction within 64 ulps, across the film; and at the reference line with the
