@@ -1,6 +1,7 @@
 //! Real lenses: the shipped prescriptions read, their paraxial properties (ray-transfer matrices)
-//! against exact rays traced through their surfaces in the paraxial limit, and rays lost to the
-//! stop and the barrel.
+//! against exact rays traced through their surfaces in the paraxial limit, rays lost to the
+//! stop and the barrel, the image circle, renders through the glass on both paths, focus, and
+//! the spectral mode (dispersion at each wavelength, the film's bands, axial colour rendered).
 
 use std::path::Path;
 
