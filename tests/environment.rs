@@ -123,6 +123,16 @@ fn a_convex_sphere_in_a_constant_environment_shows_its_albedo() {
     }
 }
 
+/// An infinite Lambert plane (y = 0, facing up) of `albedo`, seen from 1 above it towards the
+/// horizon (rows 16 to 23 of 24 show it), at 16 spp; the lights are the caller's.
+fn plane_scene(albedo: f64) -> SceneBuilder {
+    SceneBuilder::new(24, 24)
+        .spp(16)
+        .pinhole([0.0, 1.0, 0.0], [0.0, 0.0, -3.0], 40.0)
+        .lambert("ground", [albedo; 3])
+        .plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "ground")
+}
+
 /// An infinite Lambert plane under a constant environment of radiance L receives pi L from
 /// the hemisphere above it and shows albedo x L everywhere (the analytic check).
 #[test]
@@ -130,12 +140,7 @@ fn an_infinite_plane_under_a_constant_sky_shows_albedo_times_the_sky() {
     let (sky, albedo) = (2.0, 0.3);
     for integrator in ["whitted", "path"] {
         let scene = build(
-            SceneBuilder::new(24, 24)
-                .spp(16)
-                .pinhole([0.0, 1.0, 0.0], [0.0, 0.0, -3.0], 40.0)
-                .lambert("ground", [albedo; 3])
-                .plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "ground")
-                .environment_light([sky; 3], 2),
+            plane_scene(albedo).environment_light([sky; 3], 2),
             integrator,
         );
         for (path, image) in common::both(&scene) {
@@ -275,12 +280,7 @@ fn a_plane_under_a_map_shows_the_quadrature_of_its_irradiance() {
         }
         for integrator in ["whitted", "path"] {
             let scene = build(
-                SceneBuilder::new(24, 24)
-                    .spp(16)
-                    .pinhole([0.0, 1.0, 0.0], [0.0, 0.0, -3.0], 40.0)
-                    .lambert("ground", [albedo; 3])
-                    .plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], "ground")
-                    .environment_map(file.to_str().unwrap(), 1.0, degrees, 4),
+                plane_scene(albedo).environment_map(file.to_str().unwrap(), 1.0, degrees, 4),
                 integrator,
             );
             for (path, image) in common::both(&scene) {

@@ -1406,31 +1406,12 @@ fn converges_as_mitsuba(name: &str, scene: &Scene) -> Option<(f64, f64)> {
     let mut ours = scene.clone();
     ours.render.spp = 1024;
     ours.render.seed = 1;
-    let image: Vec<f64> = common::render_cpu(&flatten(&ours))
-        .pixels
-        .iter()
-        .flat_map(|p| p.to_array().map(f64::from))
-        .collect();
+    let image = pixel_values(&ours);
     // Unbiased: sixteen independent renders at 256 spp average to Mitsuba's converged image,
     // block by block, within Student's t (15 degrees of freedom: |t| > 5.5 once in 10^4; t^2
     // averages 1.15, and about 1.45 with the reference's own noise, a quarter of the mean's).
     // Fewer renders at fewer samples underestimate the spread of the glass's caustics.
-    let renders: Vec<Vec<f64>> = (11..27)
-        .map(|seed| {
-            let mut one = scene.clone();
-            one.render.spp = 256;
-            one.render.seed = seed;
-            let image = common::render_cpu(&flatten(&one));
-            image
-                .pixels
-                .iter()
-                .flat_map(|p| p.to_array().map(f64::from))
-                .collect()
-        })
-        .collect();
-    let t = block_t_values(&renders, &reference, scene.render.width as usize);
-    let worst = t.iter().fold(0.0f64, |w, t| w.max(t.abs()));
-    let mean_square = t.iter().map(|t| t * t).sum::<f64>() / t.len() as f64;
+    let (worst, mean_square) = sixteen_renders_against(scene, &reference);
     eprintln!("{name}: block t over 16 renders: worst |t| {worst:.2}, mean t^2 {mean_square:.2}");
     assert!(
         worst < 5.5 && mean_square < 3.0,
@@ -1910,21 +1891,26 @@ fn an_environment_map_is_written_so_that_mitsubas_bilinear_lookup_keeps_chambres
 /// measured). The sky map: `the_path_tracer_converges_under_the_sky_map_as_mitsuba_reads_it`.
 #[test]
 fn the_path_tracer_converges_under_a_constant_environment_as_mitsuba_does() {
+    let scene = clay_sky_scene("file = \"sky.exr\"", "radiance = [0.8, 0.9, 1.0]");
+    converges_as_mitsuba("converge_sky_constant", &scene);
+}
+
+/// `scenes/sky.toml` at 32 x 32 and `max_depth` 3 with its glass sphere turned clay and the
+/// light's line `light` replaced by `with`.
+fn clay_sky_scene(light: &str, with: &str) -> Scene {
     let text = std::fs::read_to_string(Path::new(ROOT).join("scenes/sky.toml")).unwrap();
     let text = text
         .replace("material = \"glass\"", "material = \"clay\"")
-        .replace("file = \"sky.exr\"", "radiance = [0.8, 0.9, 1.0]");
-    let overrides: Vec<String> = [
+        .replace(light, with);
+    let overrides = [
         "render.width=32",
         "render.height=32",
         "camera.film=[24.0,24.0]",
         "render.max_depth=3",
     ]
-    .map(String::from)
-    .to_vec();
+    .map(String::from);
     let path = Path::new(ROOT).join("scenes/sky.toml");
-    let scene = Scene::from_str(&path, &text, &overrides).unwrap_or_else(|e| panic!("{e}"));
-    converges_as_mitsuba("converge_sky_constant", &scene);
+    Scene::from_str(&path, &text, &overrides).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// `scenes/sky.toml` under its sky map (the glass sphere turned clay), path traced: Mitsuba reads
@@ -1937,18 +1923,8 @@ fn the_path_tracer_converges_under_a_constant_environment_as_mitsuba_does() {
 #[test]
 fn the_path_tracer_converges_under_the_sky_map_as_mitsuba_reads_it() {
     let Some(mitsuba) = mitsuba() else { return };
-    let text = std::fs::read_to_string(Path::new(ROOT).join("scenes/sky.toml")).unwrap();
-    let text = text.replace("material = \"glass\"", "material = \"clay\"");
-    let overrides: Vec<String> = [
-        "render.width=32",
-        "render.height=32",
-        "camera.film=[24.0,24.0]",
-        "render.max_depth=3",
-    ]
-    .map(String::from)
-    .to_vec();
-    let path = Path::new(ROOT).join("scenes/sky.toml");
-    let scene = Scene::from_str(&path, &text, &overrides).unwrap_or_else(|e| panic!("{e}"));
+    let sky = "file = \"sky.exr\"";
+    let scene = clay_sky_scene(sky, sky);
     let dir = folder("converge_sky_map");
     let reference = mitsuba_image(mitsuba, &dir, &scene, 16384, 7);
     let theirs = mitsuba_image(mitsuba, &dir, &scene, 1024, 1);
@@ -1959,27 +1935,9 @@ fn the_path_tracer_converges_under_the_sky_map_as_mitsuba_reads_it() {
         .expect("the exported bitmap");
     let fine = dir.join("as-mitsuba-reads-it.exr");
     write_bilinear_resampled(&bitmap, &fine);
-    let as_read = text.replace(
-        "file = \"sky.exr\"",
-        &format!("file = \"{}\"", fine.display()),
-    );
-    let read_so = Scene::from_str(&path, &as_read, &overrides).unwrap_or_else(|e| panic!("{e}"));
-    let t_check = |scene: &Scene| {
-        let renders: Vec<Vec<f64>> = (11..27)
-            .map(|seed| {
-                let mut one = scene.clone();
-                one.render.spp = 256;
-                one.render.seed = seed;
-                pixel_values(&one)
-            })
-            .collect();
-        let t = block_t_values(&renders, &reference, 32);
-        let worst = t.iter().fold(0.0f64, |w, t| w.max(t.abs()));
-        let mean_square = t.iter().map(|t| t * t).sum::<f64>() / t.len() as f64;
-        (worst, mean_square)
-    };
-    let (worst, mean_square) = t_check(&read_so);
-    let (apart, _) = t_check(&scene);
+    let read_so = clay_sky_scene(sky, &format!("file = \"{}\"", fine.display()));
+    let (worst, mean_square) = sixteen_renders_against(&read_so, &reference);
+    let (apart, _) = sixteen_renders_against(&scene, &reference);
     eprintln!(
         "sky map as Mitsuba reads it: worst |t| {worst:.2}, mean t^2 {mean_square:.2}; \
          chambre's own map: worst |t| {apart:.2}"
@@ -2006,6 +1964,23 @@ fn the_path_tracer_converges_under_the_sky_map_as_mitsuba_reads_it() {
         chambre <= 1.5 * peer,
         "chambre {chambre:.3e}, Mitsuba {peer:.3e}"
     );
+}
+
+/// Sixteen independent CPU renders of `scene` at 256 spp (seeds 11 to 26) against `reference`:
+/// the worst |t| of their 8 x 8 block means and the mean t^2 ([`block_t_values`]).
+fn sixteen_renders_against(scene: &Scene, reference: &[f64]) -> (f64, f64) {
+    let renders: Vec<Vec<f64>> = (11..27)
+        .map(|seed| {
+            let mut one = scene.clone();
+            one.render.spp = 256;
+            one.render.seed = seed;
+            pixel_values(&one)
+        })
+        .collect();
+    let t = block_t_values(&renders, reference, scene.render.width as usize);
+    let worst = t.iter().fold(0.0f64, |w, t| w.max(t.abs()));
+    let mean_square = t.iter().map(|t| t * t).sum::<f64>() / t.len() as f64;
+    (worst, mean_square)
 }
 
 /// A CPU render's pixels as one flat list of channels.

@@ -198,45 +198,49 @@ fn the_kernels_trace_at_a_wavelength_follows_the_f64_one() {
             .map(|&k| DVec3::new(0.3 * k * f, -k * f, -f).as_vec3().as_dvec3())
             .collect();
         let table = lens.kernel_table(f, |i, _| vec![films[i as usize % films.len()]], true);
-        let count = lens.surfaces.len() as u32;
-        let mut worst = (0.0_f64, 0.0_f64);
-        for nm in WAVELENGTHS {
-            let coloured = lens.at_wavelength(nm);
-            for (i, &film) in films.iter().enumerate() {
-                let cell = [i as u32, 0];
-                let ray = lens_ray(
-                    &table,
-                    0,
-                    count,
-                    film.as_vec3(),
-                    Vec3::Z,
-                    cell,
-                    U,
-                    nm as f32,
-                );
-                assert!(ray.weight > 0.0, "{path} {nm} nm: ray {i} lost in f32");
-                let bounds = 1 + 2 * count + 2 * (cell[1] * LENS_PUPIL_CELLS + cell[0]);
-                let (lo, hi) = (
-                    Vec2::from(table[bounds as usize]),
-                    Vec2::from(table[bounds as usize + 1]),
-                );
-                let aim = (lo + Vec2::from(U) * (hi - lo)).extend(table[0][1]);
-                let (o, d) = coloured
-                    .trace_from_film(film, (aim.as_dvec3() - film).normalize())
-                    .unwrap();
-                let ulp = f32::EPSILON as f64;
-                worst.0 = worst
-                    .0
-                    .max((ray.origin.as_dvec3() - o).length() / (o.length() * ulp));
-                worst.1 = worst.1.max((ray.direction.as_dvec3() - d).length() / ulp);
-            }
-        }
+        let worst = WAVELENGTHS
+            .iter()
+            .map(|&nm| f32_trace_error(&lens.at_wavelength(nm), &table, &films, U, nm as f32))
+            .fold((0.0_f64, 0.0_f64), |a, b| (a.0.max(b.0), a.1.max(b.1)));
         eprintln!(
             "{path}: worst {:.1} ulps in the end point, {:.1} in the direction",
             worst.0, worst.1
         );
         assert!(worst.0 < 64.0 && worst.1 < 64.0, "{path}: {worst:?}");
     }
+}
+
+/// The kernels' f32 trace (`lens_ray` from `table`, at `nm` nanometres; 0: the reference
+/// line) from each of `films`, film point i in cell (i, 0), aimed at the point `u` of its
+/// cell's bounds, against `lens`'s f64 trace of the same aim: the worst distance between their
+/// end points in ulps of the end's distance from the origin, and between their directions in
+/// ulps.
+fn f32_trace_error(
+    lens: &LensSystem,
+    table: &[[f32; 2]],
+    films: &[DVec3],
+    u: [f32; 2],
+    nm: f32,
+) -> (f64, f64) {
+    let count = lens.surfaces.len() as u32;
+    let ulp = f32::EPSILON as f64;
+    let mut worst = (0.0_f64, 0.0_f64);
+    for (i, &film) in films.iter().enumerate() {
+        let cell = [i as u32, 0];
+        let ray = lens_ray(table, 0, count, film.as_vec3(), Vec3::Z, cell, u, nm);
+        assert!(ray.weight > 0.0, "{nm} nm: ray {i} lost in f32");
+        let bounds = (1 + 2 * count + 2 * (cell[1] * LENS_PUPIL_CELLS + cell[0])) as usize;
+        let (lo, hi) = (Vec2::from(table[bounds]), Vec2::from(table[bounds + 1]));
+        let aim = (lo + Vec2::from(u) * (hi - lo)).extend(table[0][1]);
+        let (o, d) = lens
+            .trace_from_film(film, (aim.as_dvec3() - film).normalize())
+            .unwrap();
+        worst.0 = worst
+            .0
+            .max((ray.origin.as_dvec3() - o).length() / (o.length() * ulp));
+        worst.1 = worst.1.max((ray.direction.as_dvec3() - d).length() / ulp);
+    }
+    worst
 }
 
 /// The spectral mode through glass that does not disperse (an Abbe number of 1e6) renders the
@@ -454,27 +458,7 @@ fn a_parallel_plate_traced_in_f32_agrees_with_f64() {
             .map(|&h| DVec3::new(0.0, -h, -f).as_vec3().as_dvec3())
             .collect();
         let table = lens.kernel_table(f, |i, _| vec![films[i as usize % films.len()]], false);
-        let count = lens.surfaces.len() as u32;
-        let mut worst = (0.0_f64, 0.0_f64);
-        for (i, &film) in films.iter().enumerate() {
-            let cell = [i as u32, 0];
-            let ray = lens_ray(&table, 0, count, film.as_vec3(), Vec3::Z, cell, U, 0.0);
-            assert!(ray.weight > 0.0, "{plate}: ray {i} lost in f32");
-            let bounds = 1 + 2 * count + 2 * (cell[1] * LENS_PUPIL_CELLS + cell[0]);
-            let (lo, hi) = (
-                Vec2::from(table[bounds as usize]),
-                Vec2::from(table[bounds as usize + 1]),
-            );
-            let aim = (lo + Vec2::from(U) * (hi - lo)).extend(table[0][1]);
-            let (o, d) = lens
-                .trace_from_film(film, (aim.as_dvec3() - film).normalize())
-                .unwrap();
-            let ulp = f32::EPSILON as f64;
-            worst.0 = worst
-                .0
-                .max((ray.origin.as_dvec3() - o).length() / (o.length() * ulp));
-            worst.1 = worst.1.max((ray.direction.as_dvec3() - d).length() / ulp);
-        }
+        let worst = f32_trace_error(&lens, &table, &films, U, 0.0);
         eprintln!(
             "{plate}: worst error {:.1} ulps in the end point, {:.1} in the direction",
             worst.0, worst.1

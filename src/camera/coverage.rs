@@ -115,16 +115,10 @@ impl CameraSpec {
                 if at(range) {
                     return (movement, Some(range));
                 }
-                let (mut inside, mut outside) = (0.0, range);
-                while outside - inside > 1e-3 * range {
-                    let middle = 0.5 * (inside + outside);
-                    if at(middle) {
-                        inside = middle;
-                    } else {
-                        outside = middle;
-                    }
-                }
-                (movement, Some(inside))
+                (
+                    movement,
+                    Some(super::bisect_edge(0.0, range, 1e-3 * range, at)),
+                )
             })
             .collect()
     }

@@ -921,15 +921,7 @@ impl LensSystem {
             }
             (lo, hi) = (hi, hi + step);
         }
-        while hi - lo > 1e-9 * hi {
-            let mid = 0.5 * (lo + hi);
-            if passes(mid) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        0.5 * (lo + hi)
+        super::bisect_edge(lo, hi, 1e-9 * hi, passes)
     }
 }
 

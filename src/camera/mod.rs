@@ -171,6 +171,25 @@ impl CameraBasis {
     }
 }
 
+/// The edge between `inside`, where `holds`, and `outside`, where it does not, by bisection
+/// until the two are `tolerance` apart: the last point found to hold.
+pub(crate) fn bisect_edge(
+    mut inside: f64,
+    mut outside: f64,
+    tolerance: f64,
+    holds: impl Fn(f64) -> bool,
+) -> f64 {
+    while (outside - inside).abs() > tolerance {
+        let middle = 0.5 * (inside + outside);
+        if holds(middle) {
+            inside = middle;
+        } else {
+            outside = middle;
+        }
+    }
+    inside
+}
+
 /// How far turning the lens by `lens` about `pivot` (mm from its centre, unturned lens frame)
 /// moves its centre: p - L p.
 fn turned_about_pivot(lens: DMat3, pivot: [f64; 3]) -> DVec3 {
