@@ -5,7 +5,8 @@
 use std::mem::{offset_of, size_of};
 
 use chambre::gpu::kernels::{
-    Access, BINDINGS, KERNELS, MODULES, RENDER, feature_constants, kernel_source,
+    Access, BINDINGS, KERNELS, MODULES, RENDER, SCENE_BINDINGS, SCENE_GROUP, feature_constants,
+    group_of, kernel_source,
 };
 use chambre::layout::*;
 use naga::valid::{Capabilities, ValidationFlags, Validator};
@@ -104,8 +105,9 @@ fn access_of(module: &naga::Module, var: &naga::GlobalVariable) -> Access {
     }
 }
 
-/// The bindings wgsl/bindings.wgsl declares are exactly `BINDINGS`: numbers, names and
-/// access; and each kernel's binding list is a subset of them.
+/// The bindings wgsl/bindings.wgsl declares are exactly `BINDINGS`: numbers, names, access
+/// and groups (the scene's group holds exactly `SCENE_BINDINGS`); and each kernel's binding
+/// list is a subset of them.
 #[test]
 fn declared_bindings_are_the_rust_table() {
     let module = parse_and_validate(&render_kernel_source());
@@ -114,7 +116,9 @@ fn declared_bindings_are_the_rust_table() {
         .iter()
         .filter_map(|(_, var)| {
             let binding = var.binding.as_ref()?;
-            assert_eq!(binding.group, 0, "{:?}", var.name);
+            let table = BINDINGS.iter().find(|b| b.binding == binding.binding);
+            let group = table.map(group_of);
+            assert_eq!(Some(binding.group), group, "{:?}", var.name);
             Some((
                 binding.binding,
                 var.name.clone().unwrap(),
@@ -122,6 +126,9 @@ fn declared_bindings_are_the_rust_table() {
             ))
         })
         .collect();
+    let scene_group = BINDINGS.iter().filter(|b| group_of(b) == SCENE_GROUP);
+    assert_eq!(scene_group.count(), SCENE_BINDINGS.len());
+    assert!(SCENE_BINDINGS.iter().all(|b| b.dynamic_size == 0));
     declared.sort_by_key(|d| d.0);
     for kernel in KERNELS {
         assert!(

@@ -2,8 +2,11 @@
 //!
 //! A [`Kernel`] names its WGSL modules (composed after the generated constants of
 //! `layout::wgsl_prelude` and the bindings of `wgsl/bindings.wgsl`), its entry point and the
-//! bindings it reads. [`build_pipeline`] turns any kernel into a pipeline with an explicit bind
-//! group layout made from its entries of [`BINDINGS`], specialised to the scene's features through
+//! bindings it reads. The bindings fall in two groups: the scene's ([`SCENE_BINDINGS`], group
+//! [`SCENE_GROUP`]: camera, geometry, materials, lights, textures, made once for a render and
+//! shared by every kernel that reads any of it) and the kernel's own (group [`KERNEL_GROUP`]:
+//! its queues, sums and per-dispatch uniforms). [`build_pipeline`] turns any kernel into a
+//! pipeline with explicit bind group layouts made from those tables, specialised to the scene's features through
 //! WGSL's pipeline-overridable constants (`layout::FEATURES`): a scene without mirrors gets a
 //! kernel without the bounce, a pinhole one without lens sampling, and so on. Adding a kernel is
 //! adding an entry to [`KERNELS`], not copying set-up code. The preview's render pipelines
@@ -136,9 +139,9 @@ const fn entry(binding: u32, name: &'static str, access: Access) -> Binding {
     Binding::new(binding, name, access, wgpu::ShaderStages::COMPUTE)
 }
 
-/// Group 0's bindings by name, as `wgsl/bindings.wgsl` declares them (same numbers, names and
-/// access: tests/wgsl.rs checks). Kernels list theirs by these names, and buffers are handed to
-/// [`Pipeline::bind_group`] with them.
+/// The kernels' bindings by name, as `wgsl/bindings.wgsl` declares them (same numbers, names,
+/// access and groups: tests/wgsl.rs checks). Kernels list theirs by these names, and buffers
+/// are handed to [`Pipeline::scene_bind_group`] and [`Pipeline::bind_group`] with them.
 pub mod slot {
     use super::Access::{StorageRead, StorageReadWrite, Uniform};
     use super::{Binding, entry};
@@ -232,7 +235,39 @@ pub mod slot {
 
 use slot::*;
 
-/// Every binding of group 0, as `wgsl/bindings.wgsl` declares them.
+/// The bind group of the scene's bindings: `@group(0)` in `wgsl/bindings.wgsl`.
+pub const SCENE_GROUP: u32 = 0;
+
+/// The bind group of a kernel's own bindings: `@group(1)` in `wgsl/bindings.wgsl`.
+pub const KERNEL_GROUP: u32 = 1;
+
+/// The scene group's bindings, in binding order: what a render uploads once and every kernel
+/// of it may read. A kernel reading any of them takes the whole group (one layout, so one bind
+/// group serves every kernel); every other binding is a kernel's own.
+pub const SCENE_BINDINGS: [Binding; 12] = [
+    CAMERA,
+    FRAME,
+    PRIMS,
+    NORMALS,
+    MATERIALS,
+    LIGHTS,
+    SAMPLE_TABLE,
+    CW_NODES,
+    TEXCOORDS,
+    TEXTURES,
+    TEXELS,
+    ENVIRONMENT,
+];
+
+/// The bind group `binding` belongs to: [`SCENE_GROUP`] or [`KERNEL_GROUP`].
+pub fn group_of(binding: &Binding) -> u32 {
+    match SCENE_BINDINGS.contains(binding) {
+        true => SCENE_GROUP,
+        false => KERNEL_GROUP,
+    }
+}
+
+/// Every binding of the kernels, as `wgsl/bindings.wgsl` declares them.
 pub const BINDINGS: [Binding; 39] = [
     CAMERA,
     FRAME,
@@ -369,12 +404,31 @@ pub struct Kernel {
 }
 
 impl Kernel {
-    /// Storage buffers the kernel binds (adapters limit them per shader stage).
+    /// Whether it reads any of the scene group's bindings, and so takes that group.
+    pub fn reads_scene(&self) -> bool {
+        self.bindings.iter().any(|b| group_of(b) == SCENE_GROUP)
+    }
+
+    /// Its own bindings: those of its group [`KERNEL_GROUP`], in binding order.
+    pub fn own_bindings(&self) -> impl Iterator<Item = &'static Binding> {
+        self.bindings.iter().filter(|b| group_of(b) == KERNEL_GROUP)
+    }
+
+    /// Storage buffers its pipeline layout binds, the whole scene group's included (adapters
+    /// limit them per shader stage, counted over the layout, not over what the shader reads).
     pub fn storage_buffers(&self) -> u32 {
-        self.bindings
-            .iter()
-            .filter(|b| b.access.is_storage())
-            .count() as u32
+        let scene = match self.reads_scene() {
+            true => SCENE_BINDINGS
+                .iter()
+                .filter(|b| b.access.is_storage())
+                .count(),
+            false => 0,
+        };
+        (scene
+            + self
+                .own_bindings()
+                .filter(|b| b.access.is_storage())
+                .count()) as u32
     }
 }
 
@@ -663,12 +717,16 @@ pub fn feature_constants(features: u32) -> Vec<(&'static str, f64)> {
         .collect()
 }
 
-/// A pipeline and the layout of the bind group it takes.
+/// A pipeline and the layouts of the bind groups it takes.
 pub struct Pipeline {
     /// The kernel compiled for one feature set.
     pub pipeline: wgpu::ComputePipeline,
-    /// Made from the kernel's bindings: group 0 of the pipeline.
-    pub bind_group_layout: wgpu::BindGroupLayout,
+    /// The scene group's layout, made from [`SCENE_BINDINGS`], where the kernel reads the
+    /// scene: the same for every kernel (wgpu pools equal layouts), so one bind group made
+    /// with any kernel's serves them all.
+    pub scene_layout: Option<wgpu::BindGroupLayout>,
+    /// Made from the kernel's own bindings: group [`KERNEL_GROUP`] of the pipeline.
+    pub kernel_layout: wgpu::BindGroupLayout,
     /// The kernel it was built from.
     pub kernel: &'static Kernel,
 }
@@ -729,10 +787,14 @@ pub fn build_pipeline_with(
     // loops all end (the loop counters), and `ShaderChecks::None` only measures.
     let module =
         unsafe { device.create_shader_module_trusted(descriptor, checks.runtime_checks()) };
-    let bind_group_layout = bind_group_layout(device, kernel.name, kernel.bindings);
+    let scene_layout = kernel
+        .reads_scene()
+        .then(|| bind_group_layout(device, "scene", &SCENE_BINDINGS));
+    let own: Vec<Binding> = kernel.own_bindings().copied().collect();
+    let kernel_layout = bind_group_layout(device, kernel.name, &own);
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(kernel.name),
-        bind_group_layouts: &[Some(&bind_group_layout)],
+        bind_group_layouts: &[scene_layout.as_ref(), Some(&kernel_layout)],
         immediate_size: 0,
     });
     let mut constants = feature_constants(features);
@@ -750,56 +812,103 @@ pub fn build_pipeline_with(
     });
     Pipeline {
         pipeline,
-        bind_group_layout,
+        scene_layout,
+        kernel_layout,
         kernel,
     }
 }
 
+/// The entries of a bind group of `bindings`, each from `buffers` (binding, buffer; any order,
+/// more than needed allowed); `whose` names the bind group in the error for a missing one.
+fn bind_group_entries<'b, 'a>(
+    bindings: impl Iterator<Item = &'b Binding>,
+    buffers: &[(Binding, &'a wgpu::Buffer)],
+    whose: &str,
+) -> Result<Vec<wgpu::BindGroupEntry<'a>>> {
+    let mut entries = Vec::new();
+    for b in bindings {
+        let (_, buffer) = buffers
+            .iter()
+            .find(|(given, _)| given.binding == b.binding)
+            .ok_or_else(|| {
+                Error::Gpu(format!(
+                    "{whose}: no buffer for binding {} `{}`",
+                    b.binding, b.name
+                ))
+            })?;
+        let resource = match std::num::NonZeroU64::new(b.dynamic_size) {
+            None => buffer.as_entire_binding(),
+            Some(size) => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer,
+                offset: 0,
+                size: Some(size),
+            }),
+        };
+        entries.push(wgpu::BindGroupEntry {
+            binding: b.binding,
+            resource,
+        });
+    }
+    Ok(entries)
+}
+
 impl Pipeline {
-    /// A bind group with `buffers` (binding, buffer; any order, more than the kernel reads
-    /// allowed); every binding the kernel reads must be given.
+    /// The scene group of `buffers` (binding, buffer; any order, more than the group holds
+    /// allowed): every binding of [`SCENE_BINDINGS`] must be given, those the kernel does not
+    /// read too (the group serves every kernel). `None` for a kernel that reads no scene.
+    pub fn scene_bind_group(
+        &self,
+        device: &wgpu::Device,
+        buffers: &[(Binding, &wgpu::Buffer)],
+    ) -> Result<Option<wgpu::BindGroup>> {
+        let Some(layout) = &self.scene_layout else {
+            return Ok(None);
+        };
+        let entries = bind_group_entries(SCENE_BINDINGS.iter(), buffers, "the scene group")?;
+        Ok(Some(device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout,
+            entries: &entries,
+        })))
+    }
+
+    /// The kernel's own group of `buffers` (binding, buffer; any order, more than the kernel
+    /// reads allowed); every binding of it must be given.
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
         buffers: &[(Binding, &wgpu::Buffer)],
     ) -> Result<wgpu::BindGroup> {
-        let mut entries = Vec::with_capacity(self.kernel.bindings.len());
-        for b in self.kernel.bindings {
-            let (_, buffer) = buffers
-                .iter()
-                .find(|(given, _)| given.binding == b.binding)
-                .ok_or_else(|| {
-                    Error::Gpu(format!(
-                        "kernel {}: no buffer for binding {} `{}`",
-                        self.kernel.name, b.binding, b.name
-                    ))
-                })?;
-            let resource = match std::num::NonZeroU64::new(b.dynamic_size) {
-                None => buffer.as_entire_binding(),
-                Some(size) => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer,
-                    offset: 0,
-                    size: Some(size),
-                }),
-            };
-            entries.push(wgpu::BindGroupEntry {
-                binding: b.binding,
-                resource,
-            });
-        }
+        let whose = format!("kernel {}", self.kernel.name);
+        let entries = bind_group_entries(self.kernel.own_bindings(), buffers, &whose)?;
         Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some(self.kernel.name),
-            layout: &self.bind_group_layout,
+            layout: &self.kernel_layout,
             entries: &entries,
         }))
     }
 
-    /// The dynamic offsets of the kernel's bind group, in binding order: `offset` of each of
-    /// its bindings bound at a dynamic offset.
+    /// Binds `scene` (where the kernel reads it) and the kernel's own `group` at `offsets`
+    /// (`dynamic_offsets`) for the dispatches that follow on `compute`.
+    pub fn set_bind_groups(
+        &self,
+        compute: &mut wgpu::ComputePass<'_>,
+        scene: Option<&wgpu::BindGroup>,
+        group: &wgpu::BindGroup,
+        offsets: &[u32],
+    ) {
+        if self.scene_layout.is_some() {
+            let scene = scene.expect("a scene group for a kernel that reads the scene");
+            compute.set_bind_group(SCENE_GROUP, scene, &[]);
+        }
+        compute.set_bind_group(KERNEL_GROUP, group, offsets);
+    }
+
+    /// The dynamic offsets of the kernel's own bind group, in binding order: `offset` of each
+    /// of its bindings bound at a dynamic offset (the scene group has none).
     pub fn dynamic_offsets(&self, offset: impl Fn(&Binding) -> u32) -> Vec<u32> {
         self.kernel
-            .bindings
-            .iter()
+            .own_bindings()
             .filter(|b| b.dynamic_size > 0)
             .map(offset)
             .collect()

@@ -224,6 +224,17 @@ impl GpuContext {
         Ok((nodes, prims))
     }
 
+    /// A buffer for the scene group's bindings a kernel does not read (the ray queries read
+    /// its geometry only): uniform and storage, larger than any struct the group binds.
+    pub(crate) fn unread_buffer(&self) -> wgpu::Buffer {
+        self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("unread"),
+            size: 1024,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        })
+    }
+
     /// The status words a kernel reports through (`layout::STATUS_*`), readable back.
     pub(crate) fn status_buffer(&self) -> wgpu::Buffer {
         self.device.create_buffer(&wgpu::BufferDescriptor {

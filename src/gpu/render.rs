@@ -215,8 +215,11 @@ pub struct GpuRenderer {
     path_kernels: PathKernels,
     /// The wavefront render's sizes, when it runs.
     wavefront: Option<Wavefront>,
-    /// Every buffer the kernels bind but the per-batch uniforms and `status`.
-    scene_buffers: Vec<(Binding, wgpu::Buffer)>,
+    /// Every buffer the kernels bind but the per-batch uniforms and `status`: the scene
+    /// group's, and the kernels' own that live as long as the renderer.
+    buffers: Vec<(Binding, wgpu::Buffer)>,
+    /// The scene group, made once and bound by every kernel that reads the scene.
+    scene_group: Option<wgpu::BindGroup>,
     /// The `layout::FEATURE_*` bits the kernels were built with.
     features: u32,
     /// Where the accumulation buffer keeps what.
@@ -322,27 +325,34 @@ impl GpuRenderer {
             let storage_buffers = kernel.storage_buffers();
             if allowed < storage_buffers {
                 return Err(Error::Gpu(format!(
-                    "the {} kernel reads {storage_buffers} storage buffers; this adapter \
+                    "the {} kernel binds {storage_buffers} storage buffers; this adapter \
                      allows {allowed} per shader stage (use --backend cpu)",
                     kernel.name
                 )));
             }
         }
         let plan = plan_passes(scene, &budgets);
-        let mut scene_buffers = upload_scene(&context, scene, &plan.layout)?;
+        let mut buffers = upload_scene(&context, scene, &plan.layout)?;
         let wavefront = match path_kernels {
             PathKernels::Megakernel => None,
             PathKernels::Wavefront => {
                 let wavefront = plan_wavefront(scene, &plan)?;
-                scene_buffers.extend(wavefront_buffers(&context, &wavefront, &plan.layout)?);
+                buffers.extend(wavefront_buffers(&context, &wavefront, &plan.layout)?);
                 Some(wavefront)
             }
         };
-        let pipelines = path_kernels
+        let pipelines: Vec<Pipeline> = path_kernels
             .kernels()
             .iter()
             .map(|&kernel| kernels::build_pipeline_with(device, kernel, features, &[], checks))
             .collect();
+        let scene_group = match pipelines.iter().find(|p| p.scene_layout.is_some()) {
+            None => None,
+            Some(pipeline) => {
+                let given: Vec<_> = buffers.iter().map(|(b, buffer)| (*b, buffer)).collect();
+                pipeline.scene_bind_group(device, &given)?
+            }
+        };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
                 "creating the render pipelines: {}",
@@ -358,7 +368,8 @@ impl GpuRenderer {
             pipelines,
             path_kernels,
             wavefront,
-            scene_buffers,
+            buffers,
+            scene_group,
             features,
             layout: plan.layout,
             uniform_stride,
@@ -386,7 +397,7 @@ impl GpuRenderer {
 
     fn buffer(&self, binding: Binding) -> &wgpu::Buffer {
         &self
-            .scene_buffers
+            .buffers
             .iter()
             .find(|(b, _)| b.binding == binding.binding)
             .expect("uploaded with the scene")
@@ -733,7 +744,8 @@ impl GpuRenderer {
             (index * self.uniform_stride) as u32
         });
         compute.set_pipeline(&pipeline.pipeline);
-        compute.set_bind_group(0, &bind_groups[stage.kernel], &offsets);
+        let scene = self.scene_group.as_ref();
+        pipeline.set_bind_groups(compute, scene, &bind_groups[stage.kernel], &offsets);
         let args_size = size_of::<GpuWaveArgs>() as u64;
         match stage.grid {
             Grid::Tiles(width, height) => compute.dispatch_workgroups(
@@ -830,7 +842,7 @@ impl Backend for GpuRenderer {
         let wave_array = uniform_array(context, "waves", &waves, self.uniform_stride);
         let status = context.status_buffer();
         let mut buffers: Vec<(Binding, &wgpu::Buffer)> = self
-            .scene_buffers
+            .buffers
             .iter()
             .map(|(b, buffer)| (*b, buffer))
             .collect();
@@ -990,7 +1002,7 @@ impl Backend for GpuRenderer {
         };
         let buffer = self.context.storage_buffer(&label, bytes)?;
         let slot = self
-            .scene_buffers
+            .buffers
             .iter_mut()
             .find(|(b, _)| b.binding == slot::PIXEL_LIST.binding)
             .expect("uploaded with the scene");

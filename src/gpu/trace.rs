@@ -8,7 +8,7 @@
 use std::time::{Duration, Instant};
 
 use super::GpuContext;
-use super::kernels::{self, Pipeline, ShaderChecks, slot};
+use super::kernels::{self, Binding, Pipeline, SCENE_BINDINGS, ShaderChecks, slot};
 use crate::accel::cwbvh::CwGeometry;
 use crate::accel::ray::{Query, RaySet};
 use crate::error::{Error, Result};
@@ -27,12 +27,35 @@ struct Chunk {
     any: wgpu::BindGroup,
 }
 
+/// The scene group of the ray queries: the frame and the geometry they read (`nodes` as both
+/// BVHs' nodes: a kernel reads one), and `unread` for the shading's bindings.
+fn trace_scene_group(
+    device: &wgpu::Device,
+    pipeline: &Pipeline,
+    [frame, nodes, prims, unread]: [&wgpu::Buffer; 4],
+) -> Result<Option<wgpu::BindGroup>> {
+    let mut buffers: Vec<(Binding, &wgpu::Buffer)> = vec![
+        (slot::FRAME, frame),
+        (slot::CW_NODES, nodes),
+        (slot::PRIMS, prims),
+    ];
+    for b in SCENE_BINDINGS {
+        if buffers.iter().all(|(given, _)| given.binding != b.binding) {
+            debug_assert!(!pipeline.kernel.bindings.contains(&b), "{}", b.name);
+            buffers.push((b, unread));
+        }
+    }
+    pipeline.scene_bind_group(device, &buffers)
+}
+
 /// A scene's geometry and a ray set uploaded, ready to be traced many times.
 pub struct GpuTracer {
     context: GpuContext,
     closest: Pipeline,
     any: Pipeline,
     status: wgpu::Buffer,
+    /// The scene group, the same for both queries.
+    scene_group: Option<wgpu::BindGroup>,
     chunks: Vec<Chunk>,
 }
 
@@ -71,6 +94,8 @@ impl GpuTracer {
             Some(cw) => context.cwbvh_buffers(cw)?,
         };
         let status = context.status_buffer();
+        let unread = context.unread_buffer();
+        let scene_group = trace_scene_group(device, &closest, [&frame, &nodes, &prims, &unread])?;
         let mut chunks = Vec::new();
         for start in (0..rays.len()).step_by(RAYS_PER_CHUNK) {
             let end = (start + RAYS_PER_CHUNK).min(rays.len());
@@ -96,11 +121,8 @@ impl GpuTracer {
             };
             let pass_info = context.uniform_buffer("pass", bytemuck::bytes_of(&pass));
             let buffers = [
-                (slot::FRAME, &frame),
                 (slot::PASS_INFO, &pass_info),
                 (slot::NODES, &nodes),
-                (slot::CW_NODES, &nodes),
-                (slot::PRIMS, &prims),
                 (slot::STATUS, &status),
                 (slot::RAYS, &ray_buffer),
                 (slot::DISTANCES, &distances),
@@ -123,6 +145,7 @@ impl GpuTracer {
             closest,
             any,
             status,
+            scene_group,
             chunks,
         })
     }
@@ -145,7 +168,7 @@ impl GpuTracer {
                     Query::ClosestHit => &chunk.closest,
                     Query::AnyHit => &chunk.any,
                 };
-                compute.set_bind_group(0, bind_group, &[0]);
+                pipeline.set_bind_groups(&mut compute, self.scene_group.as_ref(), bind_group, &[0]);
                 compute.dispatch_workgroups(
                     (chunk.rays as u32).div_ceil(TRACE_WORKGROUP_SIZE),
                     1,

@@ -187,7 +187,7 @@ impl FermatPass {
             {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
                 pass.set_pipeline(&start.pipeline);
-                pass.set_bind_group(0, &bind_group, &[]);
+                pass.set_bind_group(kernels::KERNEL_GROUP, &bind_group, &[]);
                 pass.dispatch_workgroups(count.div_ceil(WORKGROUP), reflectors.len() as u32, 1);
             }
             context.queue.submit([encoder.finish()]);
@@ -228,7 +228,7 @@ impl FermatPass {
         let mut pass = encoder.begin_compute_pass(&Default::default());
         for (pipeline, bind_group) in &solve.bind_groups {
             pass.set_pipeline(&self.pipelines[*pipeline].1.pipeline);
-            pass.set_bind_group(0, bind_group, &[]);
+            pass.set_bind_group(kernels::KERNEL_GROUP, bind_group, &[]);
             pass.dispatch_workgroups(solve.count.div_ceil(WORKGROUP), solve.searches, 1);
         }
     }
@@ -289,7 +289,7 @@ impl FermatPass {
         encoder.clear_buffer(&cull.args, 0, None);
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(&self.cull.pipeline);
-        pass.set_bind_group(0, &cull.bind_group, &[]);
+        pass.set_bind_group(kernels::KERNEL_GROUP, &cull.bind_group, &[]);
         pass.dispatch_workgroups(cull.triangles.div_ceil(WORKGROUP), cull.searches, 1);
     }
 }
