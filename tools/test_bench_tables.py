@@ -145,7 +145,7 @@ class BenchmarksPage(unittest.TestCase):
             if name == "gpu-peers" and "|" not in body:
                 continue  # not measured yet: the block says which script fills it
             self.assertRegex(body.split("\n")[0], r"^`(chambre|CHAMBRE_BIN=\S+ )", name)
-            self.assertRegex(body, r"commit `[0-9a-f]{7}`", name)
+            self.assertRegex(body, r"[Cc]ommit `[0-9a-f]{7}`", name)
             self.assertRegex(body, r"\n\|", name)
 
 
