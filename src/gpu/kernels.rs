@@ -889,7 +889,8 @@ impl Pipeline {
     }
 
     /// Binds `scene` (where the kernel reads it) and the kernel's own `group` at `offsets`
-    /// (`dynamic_offsets`) for the dispatches that follow on `compute`.
+    /// (`dynamic_offsets`) for the dispatches that follow on `compute`. A kernel that reads the
+    /// scene dispatched without its group is a validation error wgpu reports, not a panic.
     pub fn set_bind_groups(
         &self,
         compute: &mut wgpu::ComputePass<'_>,
@@ -897,8 +898,7 @@ impl Pipeline {
         group: &wgpu::BindGroup,
         offsets: &[u32],
     ) {
-        if self.scene_layout.is_some() {
-            let scene = scene.expect("a scene group for a kernel that reads the scene");
+        if let (Some(_), Some(scene)) = (&self.scene_layout, scene) {
             compute.set_bind_group(SCENE_GROUP, scene, &[]);
         }
         compute.set_bind_group(KERNEL_GROUP, group, offsets);

@@ -28,23 +28,27 @@ struct Chunk {
 }
 
 /// The scene group of the ray queries: the frame and the geometry they read (`nodes` as both
-/// BVHs' nodes: a kernel reads one), and `unread` for the shading's bindings.
+/// BVHs' nodes: a kernel reads one), and `unread` in every other slot (the shading's).
 fn trace_scene_group(
     device: &wgpu::Device,
     pipeline: &Pipeline,
     [frame, nodes, prims, unread]: [&wgpu::Buffer; 4],
 ) -> Result<Option<wgpu::BindGroup>> {
-    let mut buffers: Vec<(Binding, &wgpu::Buffer)> = vec![
+    let read = [
         (slot::FRAME, frame),
         (slot::CW_NODES, nodes),
         (slot::PRIMS, prims),
     ];
-    for b in SCENE_BINDINGS {
-        if buffers.iter().all(|(given, _)| given.binding != b.binding) {
-            debug_assert!(!pipeline.kernel.bindings.contains(&b), "{}", b.name);
-            buffers.push((b, unread));
-        }
-    }
+    let buffers: Vec<(Binding, &wgpu::Buffer)> = SCENE_BINDINGS
+        .iter()
+        .map(|&b| match read.iter().find(|(given, _)| *given == b) {
+            Some(&(_, buffer)) => (b, buffer),
+            None => {
+                debug_assert!(!pipeline.kernel.bindings.contains(&b), "{}", b.name);
+                (b, unread)
+            }
+        })
+        .collect();
     pipeline.scene_bind_group(device, &buffers)
 }
 
