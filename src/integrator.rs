@@ -265,26 +265,83 @@ struct AreaLight {
 
 fn area_light_of(light: &GpuLight) -> AreaLight {
     let cross = Vec3::from(light.p1).cross(Vec3::from(light.p2));
-    let triangle = light.kind == LIGHT_TRIANGLE;
     AreaLight {
         normal: cross.normalize(),
-        area: if triangle { 0.5 } else { 1.0 } * cross.length(),
-        triangle,
+        area: light.area(),
+        triangle: light.kind == LIGHT_TRIANGLE,
     }
 }
 
+/// How a vertex came to sample a light: the probability it chose it with (1 for a light
+/// sampled at every vertex), and the samples a vertex takes of it on average, which the MIS
+/// weights count (its samples times its power's share, the same share an emitter hit finds).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct LightShare {
+    chosen: f32,
+    expected_samples: f32,
+}
+
+impl LightShare {
+    /// A light every vertex samples.
+    fn every_vertex(light: &GpuLight) -> LightShare {
+        LightShare {
+            chosen: 1.0,
+            expected_samples: light.samples as f32,
+        }
+    }
+}
+
+/// Entry `i` of the chosen lights' cumulative distribution (`GpuFrame::light_choice_offset`).
+fn choice_cdf(scene: &FlatScene, i: u32) -> f32 {
+    let point = scene.sample_table[(scene.frame.light_choice_offset + i / 2) as usize];
+    point[(i % 2) as usize]
+}
+
+/// The area light path vertex `depth` samples, chosen in proportion to power
+/// (`GpuFrame::light_choice_start`) by the first number of its `CHOICE_PAIR`: its index and its
+/// share. None where the frame chooses no light. Twin: `choose_light` in integrator.wgsl.
+fn choose_light(scene: &FlatScene, depth: u32, rng: &mut Rng) -> Option<(usize, LightShare)> {
+    let frame = &scene.frame;
+    if !frame.chooses_lights() {
+        return None;
+    }
+    rng.seek(path::choice_dimension(frame, depth));
+    let u = rng.next_2d()[0];
+    // The first entry above u: the last is 1, above every u.
+    let (mut low, mut high) = (0, frame.light_count - frame.light_choice_start - 1);
+    while low < high {
+        let middle = (low + high) / 2;
+        match choice_cdf(scene, middle) > u {
+            true => high = middle,
+            false => low = middle + 1,
+        }
+    }
+    let below = match low {
+        0 => 0.0,
+        _ => choice_cdf(scene, low - 1),
+    };
+    let index = (frame.light_choice_start + low) as usize;
+    let light = &scene.lights[index];
+    let share = frame.light_choice_probability(light.color, light.area());
+    let share = LightShare {
+        chosen: choice_cdf(scene, low) - below,
+        expected_samples: share * light.samples as f32,
+    };
+    Some((index, share))
+}
+
 /// The point `square` of the unit square on an area light (folded onto a triangle light's
-/// triangle), seen from `surface`; under the path tracer (`mis`), weighted against the BSDF's
-/// sample of the same direction.
+/// triangle), seen from `vertex`, over the probability the vertex chose the light with; under
+/// the path tracer (`mis`), weighted against the BSDF's sample of the same direction.
 fn area_light_sample(
     light: &GpuLight,
     shape: &AreaLight,
+    share: LightShare,
     square: [f32; 2],
-    surface: &Surface,
-    material: &GpuMaterial,
-    wo: Vec3,
+    vertex: &Vertex,
     mis: bool,
 ) -> LightSample {
+    let (surface, material, wo) = (vertex.surface, vertex.material, vertex.wo);
     let u = if shape.triangle && square[0] + square[1] > 1.0 {
         [1.0 - square[0], 1.0 - square[1]]
     } else {
@@ -305,13 +362,19 @@ fn area_light_sample(
     if mis && traced {
         let bsdf_pdf = bsdf::bsdf_pdf(material, &bsdf::lobes(material), n, wo, wi);
         let distance2 = distance * distance;
-        f *= bsdf::light_sample_weight(light.samples, distance2, cos_light, shape.area, bsdf_pdf);
+        f *= bsdf::light_sample_weight(
+            share.expected_samples,
+            distance2,
+            cos_light,
+            shape.area,
+            bsdf_pdf,
+        );
     }
     LightSample {
         wi,
         t_max: shadow_ray_length(distance),
         skip: light.prim,
-        f,
+        f: f / share.chosen,
         traced,
     }
 }
@@ -352,19 +415,17 @@ fn punctual_light_sample(
 }
 
 /// A direction drawn from sky light `light` (an environment or a sun) with the unit-square
-/// point `square`, seen from `surface`: its term is the BRDF times the cosine times the
+/// point `square`, seen from `vertex`: its term is the BRDF times the cosine times the
 /// radiance over the density (a sun's radiance over density is its `light_total` scale); under
 /// the path tracer (`mis`), weighted against the BSDF's sample of the same direction.
-#[allow(clippy::too_many_arguments)]
 fn sky_light_sample(
     light: &GpuLight,
     environment_data: &[f32],
     square: [f32; 2],
-    surface: &Surface,
-    material: &GpuMaterial,
-    wo: Vec3,
+    vertex: &Vertex,
     mis: bool,
 ) -> LightSample {
+    let (surface, material, wo) = (vertex.surface, vertex.material, vertex.wo);
     let sky = environment::sky_sample(light, environment_data, square);
     let n = surface.shading_normal;
     let cos_surface = n.dot(sky.wi);
@@ -428,10 +489,85 @@ fn light_total(light: &GpuLight, sum: Vec3) -> Vec3 {
     }
 }
 
-/// Light reflected towards `wo` from every light, with shadow rays (which skip primitive
-/// `own`): stratified points on the area lights in `window` (each sample draws its numbers
-/// first, so both paths consume the same dimensions whatever the visibility), and the point and
-/// directional lights in the first window.
+/// What a sampled light (an area or a sky light) adds at a vertex from its samples in
+/// `window`, whose dimensions start at `offset` among the vertex's light samples: each sample
+/// draws its numbers first, so both paths consume the same dimensions whatever the visibility.
+#[allow(clippy::too_many_arguments)]
+fn sampled_light<const F: u32>(
+    scene: &FlatScene,
+    light: &GpuLight,
+    share: LightShare,
+    offset: u32,
+    vertex: &Vertex,
+    window: LightWindow,
+    rng: &mut Rng,
+    stats: &mut SampleStats,
+) -> Vec3 {
+    let shape = area_light_of(light);
+    let samples = window.clip(light.samples);
+    let frame = &scene.frame;
+    let key = pixel_hash(
+        frame.seed,
+        rng.pixel,
+        light_dimension(frame, vertex.depth, offset, 0),
+    );
+    rng.seek(light_dimension(frame, vertex.depth, offset, samples.start));
+    let mis = path_traced::<F>(frame);
+    let mut sum = Vec3::ZERO;
+    for k in samples {
+        let square = light_sample_2d(
+            frame,
+            light.samples,
+            light.strata_columns,
+            rng.sample,
+            k,
+            key,
+            rng.next_2d(),
+            &mut stats.flags,
+        );
+        let s = match light.is_sky() {
+            true => sky_light_sample(light, &scene.environment, square, vertex, mis),
+            false => area_light_sample(light, &shape, share, square, vertex, mis),
+        };
+        if s.traced && vertex.visible::<F>(scene, &s, stats) {
+            sum += s.f;
+        }
+    }
+    light_total(light, sum)
+}
+
+/// A path vertex as its light samples see it: where its shadow rays start, at what time, and
+/// the primitive they skip.
+struct Vertex<'a> {
+    surface: &'a Surface,
+    material: &'a GpuMaterial,
+    wo: Vec3,
+    depth: u32,
+    origin: Vec3,
+    time: f32,
+    own: u32,
+}
+
+impl Vertex<'_> {
+    /// Whether light sample `s` reaches the vertex (a shadow ray, counted).
+    fn visible<const F: u32>(
+        &self,
+        scene: &FlatScene,
+        s: &LightSample,
+        stats: &mut SampleStats,
+    ) -> bool {
+        stats.rays += 1;
+        let ray = RayQuery::new(self.origin, s.wi).at_time(self.time);
+        !scene
+            .tracer()
+            .occluded::<F>(&ray, self.own, s.skip, s.t_max)
+    }
+}
+
+/// Light reflected towards `wo` with shadow rays (which skip primitive `own`): under the path
+/// tracer, the samples in `window` of the one area light the vertex chose
+/// (`GpuFrame::light_choice_start`); the samples in `window` of every other sampled light; and
+/// the point and directional lights in the first window.
 #[allow(clippy::too_many_arguments)]
 fn direct_light<const F: u32>(
     scene: &FlatScene,
@@ -450,59 +586,32 @@ fn direct_light<const F: u32>(
         surface.position_error,
         surface.geometric_normal,
     );
-    let visible = |s: &LightSample, stats: &mut SampleStats| {
-        stats.rays += 1;
-        let ray = RayQuery::new(origin, s.wi).at_time(time);
-        !scene.tracer().occluded::<F>(&ray, own, s.skip, s.t_max)
+    let vertex = Vertex {
+        surface,
+        material,
+        wo,
+        depth,
+        origin,
+        time,
+        own,
     };
-    let mis = path_traced::<F>(&scene.frame);
+    let frame = &scene.frame;
     let mut total = Vec3::ZERO;
-    let mut sample_offset = 0;
-    for light in &scene.lights[..scene.frame.light_count as usize] {
+    if has(F, FEATURE_AREA_LIGHTS)
+        && let Some((l, share)) = choose_light(scene, depth, rng)
+    {
+        let light = &scene.lights[l];
+        total += sampled_light::<F>(scene, light, share, 0, &vertex, window, rng, stats);
+    }
+    let mut offset = frame.light_choice_pairs;
+    for light in &scene.lights[..frame.light_choice_start as usize] {
         if has(F, FEATURE_AREA_LIGHTS) && light.is_sampled() {
-            let shape = area_light_of(light);
-            let samples = window.clip(light.samples);
-            let light_dim = light_dimension(&scene.frame, depth, sample_offset, 0);
-            let key = pixel_hash(scene.frame.seed, rng.pixel, light_dim);
-            rng.seek(light_dimension(
-                &scene.frame,
-                depth,
-                sample_offset,
-                samples.start,
-            ));
-            sample_offset += light.samples;
-            let mut sum = Vec3::ZERO;
-            for k in samples {
-                let square = light_sample_2d(
-                    &scene.frame,
-                    light.samples,
-                    light.strata_columns,
-                    rng.sample,
-                    k,
-                    key,
-                    rng.next_2d(),
-                    &mut stats.flags,
-                );
-                let s = match light.is_sky() {
-                    true => sky_light_sample(
-                        light,
-                        &scene.environment,
-                        square,
-                        surface,
-                        material,
-                        wo,
-                        mis,
-                    ),
-                    false => area_light_sample(light, &shape, square, surface, material, wo, mis),
-                };
-                if s.traced && visible(&s, stats) {
-                    sum += s.f;
-                }
-            }
-            total += light_total(light, sum);
+            let share = LightShare::every_vertex(light);
+            total += sampled_light::<F>(scene, light, share, offset, &vertex, window, rng, stats);
+            offset += light.samples;
         } else if has(F, FEATURE_PUNCTUAL_LIGHTS) && window.is_first() {
             let s = punctual_light_sample(light, surface, material, wo);
-            if s.traced && visible(&s, stats) {
+            if s.traced && vertex.visible::<F>(scene, &s, stats) {
                 total += s.f;
             }
         }

@@ -220,8 +220,8 @@ pub const TIME_DIMENSION: u32 = 4;
 /// samples start at `offset`, at path vertex `depth`, draws dimensions
 /// `LIGHT_DIMENSION + 2 * (depth * frame.vertex_dimension_pairs + offset + k)` and the next
 /// one: any window of light samples can then be evaluated on its own (`GpuPass`). The path
-/// tracer's BSDF sample at vertex `depth` takes the two pairs after the vertex's light samples
-/// (`BSDF_PAIR`, `ROULETTE_PAIR`).
+/// tracer's BSDF sample at vertex `depth` takes the pairs after the vertex's light samples
+/// (`BSDF_PAIR`, `ROULETTE_PAIR`), and its choice of a light the next (`CHOICE_PAIR`).
 pub const LIGHT_DIMENSION: u32 = 6;
 /// Poisson-disk sets in the sample table; a pixel picks one by hash and shifts it.
 pub const POISSON_SETS: u32 = 16;
@@ -230,8 +230,11 @@ pub const POISSON_SETS: u32 = 16;
 pub const BSDF_PAIR: u32 = 0;
 /// The pair after it: the BSDF's lobe (first) and Russian roulette's draw (second).
 pub const ROULETTE_PAIR: u32 = 1;
+/// The pair after it: the path tracer's choice of the area light a vertex samples (first;
+/// the second is not drawn).
+pub const CHOICE_PAIR: u32 = 2;
 /// Dimension pairs a path tracer's vertex draws besides its light samples.
-pub const PATH_VERTEX_PAIRS: u32 = 2;
+pub const PATH_VERTEX_PAIRS: u32 = 3;
 /// `GpuFrame::integrator`: Whitted's integrator.
 pub const INTEGRATOR_WHITTED: u32 = 0;
 /// `GpuFrame::integrator`: the path tracer.
@@ -615,6 +618,19 @@ pub struct GpuFrame {
     /// Random dimension pairs of one path vertex: its light samples
     /// (`light_samples_per_vertex`), and the path tracer's `PATH_VERTEX_PAIRS`.
     pub vertex_dimension_pairs: u32,
+    /// The lights from this index on are chosen among, one per path vertex in proportion to
+    /// its power (the path tracer's area lights); those before it are sampled at every vertex.
+    /// `light_count` where no light is chosen (Whitted's integrator).
+    pub light_choice_start: u32,
+    /// The dimension pairs a vertex keeps for the chosen light's samples, first among its
+    /// light samples: the most samples of a light chosen among.
+    pub light_choice_pairs: u32,
+    /// Where the chosen lights' cumulative distribution starts in the sample table: entry `i`
+    /// (of `light_count - light_choice_start`) is component `i % 2` of point `offset + i / 2`.
+    pub light_choice_offset: u32,
+    /// The lights chosen among's total power, luminance x area: a light is chosen with
+    /// probability `luminance(color) * area / light_power_total`.
+    pub light_power_total: f32,
 }
 
 /// What one dispatch renders: a rectangle of pixels (whole rows: a band), a range of sample
@@ -913,6 +929,16 @@ impl GpuLight {
         self.kind == LIGHT_AREA || self.kind == LIGHT_TRIANGLE
     }
 
+    /// An area light's area: its edges' parallelogram, half of it for a triangle. Twin:
+    /// `area_light_of` in integrator.wgsl.
+    pub fn area(&self) -> f32 {
+        let cross = glam::Vec3::from(self.p1).cross(glam::Vec3::from(self.p2));
+        match self.kind {
+            LIGHT_TRIANGLE => 0.5 * cross.length(),
+            _ => cross.length(),
+        }
+    }
+
     /// A light at infinity that escaping rays see: an environment or a sun.
     pub fn is_sky(&self) -> bool {
         self.kind == LIGHT_ENVIRONMENT || self.kind == LIGHT_SUN
@@ -922,6 +948,29 @@ impl GpuLight {
     /// dimensions (`integrator::light_dimension`): an area light or a sky light.
     pub fn is_sampled(&self) -> bool {
         self.is_area() || self.is_sky()
+    }
+}
+
+/// Rec. 709 luminance of linear RGB, in f32 as the kernels compute it.
+pub fn luminance_f32(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+impl GpuFrame {
+    /// Whether a path vertex chooses one area light to sample (`light_choice_start`).
+    pub fn chooses_lights(&self) -> bool {
+        self.light_choice_start < self.light_count
+    }
+
+    /// The probability a path vertex chooses the area light of radiance `color` and area
+    /// `area` (for an emitter hit, its material's emission and its primitive's area), in
+    /// proportion to its power; 1 where the frame chooses no light. Twin:
+    /// `light_choice_probability` in integrator.wgsl.
+    pub fn light_choice_probability(&self, color: [f32; 3], area: f32) -> f32 {
+        match self.chooses_lights() {
+            true => luminance_f32(color) * area / self.light_power_total,
+            false => 1.0,
+        }
     }
 }
 
@@ -937,7 +986,7 @@ const _: () = assert!(size_of::<GpuTexture>() == 16);
 const _: () = assert!(size_of::<GpuTexCoords>() == 24);
 const _: () = assert!(size_of::<GpuLight>() == 64);
 const _: () = assert!(size_of::<GpuCamera>() == 160);
-const _: () = assert!(size_of::<GpuFrame>() == 112);
+const _: () = assert!(size_of::<GpuFrame>() == 128);
 const _: () = assert!(size_of::<GpuPass>() == 64);
 
 /// The raster preview draws a vertex's Fermat reflection only where the law of reflection holds
@@ -1052,6 +1101,7 @@ pub fn wgsl_prelude() -> String {
         ("INTEGRATOR_PATH", INTEGRATOR_PATH),
         ("BSDF_PAIR", BSDF_PAIR),
         ("ROULETTE_PAIR", ROULETTE_PAIR),
+        ("CHOICE_PAIR", CHOICE_PAIR),
         ("PATH_VERTEX_PAIRS", PATH_VERTEX_PAIRS),
         ("LIGHT_POINT", LIGHT_POINT),
         ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),

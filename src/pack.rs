@@ -213,6 +213,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             light.prim = geometry.new_index[light.prim as usize];
         }
     }
+    let choice = choose_lights_by_power(&mut lights, scene.render.integrator == Integrator::Path);
     let render = &scene.render;
     let lens_sampler = (!camera.is_pinhole()).then_some(camera.lens_sampler);
     let table = SampleTable::build(
@@ -224,8 +225,10 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         camera.aperture_rotation_deg,
         render.adaptive.is_some(),
     );
+    let lens_table = camera.lens_table();
+    let choice_offset = (table.points.len() + lens_table.len()) as u32;
     FlatScene {
-        frame: frame_constants(scene, &lights, &geometry, &table),
+        frame: frame_constants(scene, &lights, &geometry, &table, &choice, choice_offset),
         bvh: geometry.bvh,
         nodes: geometry.nodes,
         prims: geometry.prims,
@@ -243,7 +246,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
             },
             ..camera.to_gpu(table.aperture_offset)
         },
-        sample_table: [table.points, camera.lens_table()].concat(),
+        sample_table: [table.points, lens_table, choice.table()].concat(),
         bvh_depth: geometry.bvh_depth,
         traversal_iterations: geometry.traversal_iterations,
         triangle_count,
@@ -585,6 +588,74 @@ pub fn sun_radiance_over_density(alpha_deg: f64) -> f32 {
     (1.0 / (0.5 * alpha_deg.to_radians()).cos().powi(2)) as f32
 }
 
+/// How the path tracer's vertices choose their area light (`GpuFrame::light_choice_start`).
+struct LightChoice {
+    /// The first light chosen among.
+    start: u32,
+    /// The most samples of a light chosen among.
+    pairs: u32,
+    /// The cumulative distribution of the lights chosen among, by power (the last entry 1).
+    cdf: Vec<f32>,
+    /// Their total power, luminance x area.
+    total: f32,
+}
+
+impl LightChoice {
+    /// The cumulative distribution as sample-table points, two entries a point.
+    fn table(&self) -> Vec<[f32; 2]> {
+        self.cdf
+            .chunks(2)
+            .map(|c| [c[0], c.get(1).copied().unwrap_or(1.0)])
+            .collect()
+    }
+}
+
+/// Orders `lights` for the path tracer's light choice: the lights sampled at every vertex
+/// (punctual and sky lights) first, then the area lights, one of which a vertex chooses in
+/// proportion to its power, luminance x area (an emitting mesh's triangles by their areas, as
+/// Mitsuba samples a mesh emitter): a vertex then traces one area light's samples however many
+/// emitting triangles the scene has. Whitted's integrator keeps the scene's order and samples
+/// every light. The distribution is summed in f64 and rounded once per entry: a vertex divides
+/// by the probability its entry gives, so the choice stays unbiased where rounding moved it
+/// from the power's share (a light below 2^-25 of the total power may have none).
+fn choose_lights_by_power(lights: &mut [GpuLight], path: bool) -> LightChoice {
+    let no_choice = |lights: &[GpuLight]| LightChoice {
+        start: lights.len() as u32,
+        pairs: 0,
+        cdf: Vec::new(),
+        total: 0.0,
+    };
+    if !path {
+        return no_choice(lights);
+    }
+    lights.sort_by_key(GpuLight::is_area);
+    let start = lights.partition_point(|l| !l.is_area());
+    let chosen = &lights[start..];
+    let power: Vec<f64> = chosen
+        .iter()
+        .map(|l| luminance_f32(l.color) as f64 * l.area() as f64)
+        .collect();
+    let total: f64 = power.iter().sum();
+    if chosen.is_empty() || !(total as f32 > 0.0 && (total as f32).is_finite()) {
+        return no_choice(lights);
+    }
+    let mut sum = 0.0;
+    let mut cdf: Vec<f32> = power
+        .iter()
+        .map(|p| {
+            sum += p;
+            (sum / total) as f32
+        })
+        .collect();
+    *cdf.last_mut().expect("at least one light is chosen among") = 1.0;
+    LightChoice {
+        start: start as u32,
+        pairs: chosen.iter().map(|l| l.samples).max().unwrap_or(0),
+        cdf,
+        total: total as f32,
+    }
+}
+
 /// The packed map of the scene's environment light, if it has one with a map.
 fn environment_data(scene: &Scene) -> Vec<f32> {
     scene
@@ -603,13 +674,16 @@ fn frame_constants(
     lights: &[GpuLight],
     geometry: &Geometry,
     table: &SampleTable,
+    choice: &LightChoice,
+    choice_offset: u32,
 ) -> GpuFrame {
     let (render, camera) = (&scene.render, &scene.camera);
-    let light_samples_per_vertex = lights
-        .iter()
-        .filter(|l| l.is_sampled())
-        .map(|l| l.samples)
-        .sum();
+    let light_samples_per_vertex = choice.pairs
+        + lights[..choice.start as usize]
+            .iter()
+            .filter(|l| l.is_sampled())
+            .map(|l| l.samples)
+            .sum::<u32>();
     let path = render.integrator == Integrator::Path;
     GpuFrame {
         width: render.width,
@@ -639,6 +713,10 @@ fn frame_constants(
         },
         rr_depth: render.rr_depth,
         vertex_dimension_pairs: light_samples_per_vertex + if path { PATH_VERTEX_PAIRS } else { 0 },
+        light_choice_start: choice.start,
+        light_choice_pairs: choice.pairs,
+        light_choice_offset: choice_offset,
+        light_power_total: choice.total,
     }
 }
 

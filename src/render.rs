@@ -497,7 +497,7 @@ pub fn plan_passes(scene: &FlatScene, budgets: &RayBudgets) -> RenderPlan {
     let per_pass = (rays_per_invocation / bound.per_sample()).clamp(1, spp as u64) as u32;
     let light_windows = light_windows(scene, bound, rays_per_invocation);
     let window_width = light_windows[0].1.min(frame.light_samples_per_vertex) as u64;
-    let area_lights = scene.lights.iter().filter(|l| l.is_sampled()).count() as u64;
+    let area_lights = sampled_lights_per_vertex(scene);
     let rays_per_sample_and_window = if light_windows.len() > 1 {
         bound.vertices * (1 + bound.punctual_per_vertex + window_width * area_lights)
     } else {
@@ -522,18 +522,29 @@ pub fn plan_passes(scene: &FlatScene, budgets: &RayBudgets) -> RenderPlan {
     }
 }
 
+/// The sampled lights a vertex draws samples of: every sky light and, under Whitted's
+/// integrator, every area light; under the path tracer, the one area light it chooses.
+fn sampled_lights_per_vertex(scene: &FlatScene) -> u64 {
+    let frame = &scene.frame;
+    let every_vertex = scene.lights[..frame.light_choice_start as usize]
+        .iter()
+        .filter(|l| l.is_sampled())
+        .count();
+    (every_vertex + frame.chooses_lights() as usize) as u64
+}
+
 /// One window with every light sample when a sample fits the per-invocation budget; else
 /// windows of equal width, sized so that one window's rays fit it (at least one sample wide:
 /// a scene whose path vertices alone exceed the budget is left to the loop-limit check).
 fn light_windows(scene: &FlatScene, bound: RayBound, per_invocation: u64) -> Vec<(u32, u32)> {
-    let area_lights = scene.lights.iter().filter(|l| l.is_sampled());
-    let most = area_lights.clone().map(|l| l.samples).max().unwrap_or(0);
+    let sampled = scene.lights.iter().filter(|l| l.is_sampled());
+    let most = sampled.map(|l| l.samples).max().unwrap_or(0);
     if bound.per_sample() <= per_invocation || most <= 1 {
         return vec![(0, u32::MAX)];
     }
     let per_vertex = per_invocation / bound.vertices;
     let for_light_samples = per_vertex.saturating_sub(1 + bound.punctual_per_vertex);
-    let width = (for_light_samples / area_lights.count() as u64).clamp(1, most as u64) as u32;
+    let width = (for_light_samples / sampled_lights_per_vertex(scene)).clamp(1, most as u64) as u32;
     (0..most.div_ceil(width))
         .map(|i| (i * width, width))
         .collect()

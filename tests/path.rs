@@ -344,6 +344,101 @@ fn direct_light_by_multiple_importance_sampling_matches_light_sampling_alone() {
     }
 }
 
+/// The direct-lighting box with lights of very unequal power beside its own: a small bright
+/// warm quad, a large dim blue one (each of several samples), and a point light, which every
+/// vertex samples.
+fn box_with_unequal_lights(dir: &Path) -> PathBuf {
+    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_direct.toml");
+    let mut toml = std::fs::read_to_string(base).unwrap();
+    toml += "\n[[lights]]\ntype = \"area\"\ncorner = [0.6, 1.99, 0.5]\n\
+             edge_u = [0.1, 0.0, 0.0]\nedge_v = [0.0, 0.0, 0.1]\nradiance = [60.0, 40.0, 20.0]\n\
+             samples = 3\n\
+             \n[[lights]]\ntype = \"point\"\nposition = [-0.5, 1.5, 0.5]\n\
+             intensity = [0.3, 0.3, 0.3]\n\
+             \n[[lights]]\ntype = \"area\"\ncorner = [-0.99, 0.3, -0.9]\n\
+             edge_u = [0.0, 1.2, 0.0]\nedge_v = [0.0, 0.0, 1.5]\nradiance = [0.2, 0.3, 0.9]\n\
+             samples = 2\n";
+    let file = dir.join("unequal_lights.toml");
+    std::fs::write(&file, toml).unwrap();
+    file
+}
+
+/// The path tracer samples one area light a vertex, chosen in proportion to its power, and
+/// divides by the probability it chose it with: with lights of very unequal power and sizes,
+/// its direct light (`max_depth = 0`) is still Whitted's, which samples every light at every
+/// vertex, block by block to sampling error. The lights are reordered for the choice (point
+/// light first, the area lights after it) and the distribution is the power's.
+#[test]
+fn lights_chosen_by_power_light_the_scene_as_every_light_sampled() {
+    let file = box_with_unequal_lights(&scratch());
+    let load = |integrator: &str| {
+        let overrides = [
+            "render.width=32".to_string(),
+            "render.height=32".to_string(),
+            "render.spp=512".to_string(),
+            "render.max_depth=0".to_string(),
+            "render.ambient=[0.0,0.0,0.0]".to_string(),
+            format!("render.integrator=\"{integrator}\""),
+        ];
+        flatten(&Scene::load(&file, &overrides).unwrap_or_else(|e| panic!("{e}")))
+    };
+    let (whitted, path) = (load("whitted"), load("path"));
+    assert!(!whitted.frame.chooses_lights());
+    let frame = &path.frame;
+    assert_eq!((frame.light_choice_start, frame.light_count), (1, 4));
+    assert_eq!(
+        frame.light_choice_pairs, 3,
+        "the most samples of a light chosen among"
+    );
+    let power: Vec<f64> = path.lights[1..]
+        .iter()
+        .map(|l| chambre::layout::luminance_f32(l.color) as f64 * l.area() as f64)
+        .collect();
+    let total: f64 = power.iter().sum();
+    let offset = frame.light_choice_offset as usize;
+    let cdf = [
+        path.sample_table[offset][0],
+        path.sample_table[offset][1],
+        path.sample_table[offset + 1][0],
+    ];
+    let mut sum = 0.0;
+    for (i, p) in power.iter().enumerate() {
+        sum += p;
+        assert!(
+            (cdf[i] as f64 - sum / total).abs() < 1e-6,
+            "entry {i}: {cdf:?}"
+        );
+    }
+    assert_eq!(cdf[2], 1.0);
+    let (a, b) = (common::render_cpu(&whitted), common::render_cpu(&path));
+    let block_mean = |image: &Image, bx: u32, by: u32| {
+        let mut sum = 0.0f64;
+        for y in by * 8..by * 8 + 8 {
+            for x in bx * 8..bx * 8 + 8 {
+                sum += pixel(image, x, y).iter().map(|&c| c as f64).sum::<f64>();
+            }
+        }
+        sum / 192.0
+    };
+    for by in 0..4 {
+        for bx in 0..4 {
+            let (w, p) = (block_mean(&a, bx, by), block_mean(&b, bx, by));
+            assert!(
+                (w - p).abs() <= 0.03 * w.max(p) + 1e-3,
+                "block ({bx}, {by}): Whitted {w:.5}, path tracer {p:.5}"
+            );
+        }
+    }
+    if let Some(gpu) = common::render_gpu(&path) {
+        let (within, _) = common::agreement(&b, &gpu, 1e-3);
+        assert!(
+            within >= 0.97,
+            "only {:.3}% of pixels agree",
+            within * 100.0
+        );
+    }
+}
+
 /// The GPU's wavefront render and the CPU path trace the same paths with the same random
 /// numbers: the images agree pixel for pixel but where rounding sends a path another way.
 #[test]

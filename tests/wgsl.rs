@@ -475,7 +475,11 @@ fn shared_structs_have_identical_layouts() {
             progressive,
             integrator,
             rr_depth,
-            vertex_dimension_pairs
+            vertex_dimension_pairs,
+            light_choice_start,
+            light_choice_pairs,
+            light_choice_offset,
+            light_power_total
         }
     );
     layout!(

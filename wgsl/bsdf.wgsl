@@ -228,16 +228,16 @@ fn sample_bsdf(material: GpuMaterial, n: vec3<f32>, ng: vec3<f32>, wo: vec3<f32>
     return BsdfSample(wi, eval_brdf(material, n, wo, wi) * (cos_theta / pdf), pdf, true, false);
 }
 
-fn light_sample_weight(samples: u32, distance2: f32, cos_light: f32, area: f32, pdf: f32) -> f32 {
-    let ratio = pdf * cos_light * area / (f32(samples) * distance2);
+fn light_sample_weight(samples: f32, distance2: f32, cos_light: f32, area: f32, pdf: f32) -> f32 {
+    let ratio = pdf * cos_light * area / (samples * distance2);
     return 1.0 / (1.0 + ratio * ratio);
 }
 
-fn emitter_hit_weight(samples: u32, distance2: f32, cos_light: f32, area: f32, pdf: f32) -> f32 {
-    if (samples == 0u || pdf <= 0.0) {
+fn emitter_hit_weight(samples: f32, distance2: f32, cos_light: f32, area: f32, pdf: f32) -> f32 {
+    if (samples <= 0.0 || pdf <= 0.0) {
         return 1.0;
     }
-    let ratio = f32(samples) * distance2 / (pdf * cos_light * area);
+    let ratio = samples * distance2 / (pdf * cos_light * area);
     return 1.0 / (1.0 + ratio * ratio);
 }
 

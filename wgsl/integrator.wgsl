@@ -137,6 +137,73 @@ fn area_light_of(light: GpuLight) -> AreaLight {
     return AreaLight(normalize(c), select(1.0, 0.5, triangle) * length(c), triangle);
 }
 
+// How a vertex came to sample a light (see the Rust twin): the probability it chose it with,
+// and the samples a vertex takes of it on average, which the MIS weights count.
+struct LightShare {
+    chosen: f32,
+    expected_samples: f32,
+}
+
+fn every_vertex_share(light: GpuLight) -> LightShare {
+    return LightShare(1.0, f32(light.samples));
+}
+
+fn chooses_lights() -> bool {
+    return frame.light_choice_start < frame.light_count;
+}
+
+// The probability a path vertex chooses the area light of radiance `color` and area `area`.
+fn light_choice_probability(color: vec3<f32>, area: f32) -> f32 {
+    if (!chooses_lights()) {
+        return 1.0;
+    }
+    return (0.2126 * color.x + 0.7152 * color.y + 0.0722 * color.z) * area / frame.light_power_total;
+}
+
+// Entry `i` of the chosen lights' cumulative distribution.
+fn choice_cdf(i: u32) -> f32 {
+    return sample_table[frame.light_choice_offset + i / 2u][i % 2u];
+}
+
+// The path tracer's choice of a light at vertex `depth` (`CHOICE_PAIR`, after the BSDF's pairs).
+fn choice_dimension(depth: u32) -> u32 {
+    return LIGHT_DIMENSION
+        + 2u * (depth * frame.vertex_dimension_pairs + frame.light_samples_per_vertex + CHOICE_PAIR);
+}
+
+// The area light path vertex `depth` samples, chosen in proportion to power: its index (NONE
+// where the frame chooses no light) and its share.
+struct LightChoice {
+    light: u32,
+    share: LightShare,
+}
+
+fn choose_light(depth: u32, rng: ptr<function, Rng>) -> LightChoice {
+    if (!chooses_lights()) {
+        return LightChoice(NONE, LightShare(1.0, 0.0));
+    }
+    rng_seek(rng, choice_dimension(depth));
+    let u = rng_next_2d(rng).x;
+    var low = 0u;
+    var high = frame.light_count - frame.light_choice_start - 1u;
+    while (low < high) {
+        let middle = (low + high) / 2u;
+        if (choice_cdf(middle) > u) {
+            high = middle;
+        } else {
+            low = middle + 1u;
+        }
+    }
+    var below = 0.0;
+    if (low > 0u) {
+        below = choice_cdf(low - 1u);
+    }
+    let index = frame.light_choice_start + low;
+    let light = lights[index];
+    let share = light_choice_probability(light.color, area_light_of(light).area);
+    return LightChoice(index, LightShare(choice_cdf(low) - below, share * f32(light.samples)));
+}
+
 fn is_area_light(light: GpuLight) -> bool {
     return light.kind == LIGHT_AREA || light.kind == LIGHT_TRIANGLE;
 }
@@ -147,10 +214,10 @@ fn path_traced() -> bool {
 }
 
 // The point `u` of the unit square on an area light (folded onto a triangle light's triangle),
-// seen from `surface`; under the path tracer (`mis`), weighted against the BSDF's sample of the
+// seen from `surface`, over the probability the vertex chose the light with; under the path tracer (`mis`), weighted against the BSDF's sample of the
 // same direction.
-fn area_light_sample(light: GpuLight, shape: AreaLight, square: vec2<f32>, surface: Surface,
-                     material: GpuMaterial, wo: vec3<f32>, mis: bool) -> LightSample {
+fn area_light_sample(light: GpuLight, shape: AreaLight, share: LightShare, square: vec2<f32>,
+                     surface: Surface, material: GpuMaterial, wo: vec3<f32>, mis: bool) -> LightSample {
     var u = square;
     if (shape.triangle && u.x + u.y > 1.0) {
         u = vec2<f32>(1.0) - u;
@@ -168,9 +235,9 @@ fn area_light_sample(light: GpuLight, shape: AreaLight, square: vec2<f32>, surfa
     }
     if (mis && traced) {
         let pdf = bsdf_pdf(material, material_lobes(material), n, wo, wi);
-        f *= light_sample_weight(light.samples, distance * distance, cos_light, shape.area, pdf);
+        f *= light_sample_weight(share.expected_samples, distance * distance, cos_light, shape.area, pdf);
     }
-    return LightSample(wi, shadow_ray_length(distance), light.prim, f, traced);
+    return LightSample(wi, shadow_ray_length(distance), light.prim, f / share.chosen, traced);
 }
 
 // A point, spot or directional light seen from `surface`: its whole contribution.
@@ -222,12 +289,12 @@ fn sky_light_sample(light: GpuLight, square: vec2<f32>, surface: Surface, materi
 }
 
 // A sampled light's sample: a sky light's or an area light's.
-fn sampled_light_sample(light: GpuLight, shape: AreaLight, square: vec2<f32>, surface: Surface,
-                        material: GpuMaterial, wo: vec3<f32>, mis: bool) -> LightSample {
+fn sampled_light_sample(light: GpuLight, shape: AreaLight, share: LightShare, square: vec2<f32>,
+                        surface: Surface, material: GpuMaterial, wo: vec3<f32>, mis: bool) -> LightSample {
     if (is_sky_light(light)) {
         return sky_light_sample(light, square, surface, material, wo, mis);
     }
-    return area_light_sample(light, shape, square, surface, material, wo, mis);
+    return area_light_sample(light, shape, share, square, surface, material, wo, mis);
 }
 
 // The radiance a ray escaping along `direction` sees of the lights at infinity, weighted against
@@ -285,41 +352,69 @@ fn seek_light_samples(rng: ptr<function, Rng>, depth: u32, offset: u32, first: u
     return key;
 }
 
-// Stratified points on the area lights (numbers drawn before any test, so both paths consume
-// the same dimensions whatever the visibility) and one shadow ray per punctual light.
+// A path vertex as its light samples see it (see the Rust twin `Vertex`).
+struct Vertex {
+    surface: Surface,
+    material: GpuMaterial,
+    wo: vec3<f32>,
+    depth: u32,
+    origin: vec3<f32>,
+    time: f32,
+    own: u32,
+}
+
+// Whether light sample `s` reaches the vertex (a shadow ray, counted).
+fn vertex_sees(vertex: Vertex, s: LightSample, counters: ptr<function, PathCounters>) -> bool {
+    (*counters).rays += 1u;
+    return !cw_occluded(ray_at_time(ray_query_new(vertex.origin, s.wi), vertex.time), vertex.own,
+                        s.skip, s.t_max);
+}
+
+// What a sampled light adds from its samples in `window`, its dimensions from `offset` (numbers
+// drawn before any test, so both paths consume the same dimensions whatever the visibility).
+fn sampled_light(l: u32, share: LightShare, offset: u32, vertex: Vertex, window: LightWindow,
+                 rng: ptr<function, Rng>, counters: ptr<function, PathCounters>) -> vec3<f32> {
+    let light = lights[l];
+    let shape = area_light_of(light);
+    let range = window_samples(window, light.samples);
+    let key = seek_light_samples(rng, vertex.depth, offset, range.x);
+    var sum = vec3<f32>(0.0);
+    for (var k = range.x; k < range.y; k += 1u) {
+        let square = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
+                                     rng_next_2d(rng));
+        let s = sampled_light_sample(light, shape, share, square, vertex.surface, vertex.material,
+                                     vertex.wo, path_traced());
+        if (s.traced && vertex_sees(vertex, s, counters)) {
+            sum += s.f;
+        }
+    }
+    return light_total(light, sum);
+}
+
+// The chosen area light's samples (under the path tracer), every other sampled light's, and one
+// shadow ray per punctual light (see the Rust twin).
 fn direct_light(time: f32, surface: Surface, material: GpuMaterial, own: u32, wo: vec3<f32>,
                 depth: u32, window: LightWindow,
                 rng: ptr<function, Rng>, counters: ptr<function, PathCounters>) -> vec3<f32> {
     let origin = offset_ray_origin(surface.position, surface.position_error, surface.geometric_normal);
+    let vertex = Vertex(surface, material, wo, depth, origin, time, own);
     var total = vec3<f32>(0.0);
-    var sample_offset = 0u;
-    for (var l = 0u; l < frame.light_count; l += 1u) {
+    if (FEATURE_AREA_LIGHTS) {
+        let choice = choose_light(depth, rng);
+        if (choice.light != NONE) {
+            total += sampled_light(choice.light, choice.share, 0u, vertex, window, rng, counters);
+        }
+    }
+    var offset = frame.light_choice_pairs;
+    for (var l = 0u; l < frame.light_choice_start; l += 1u) {
         let light = lights[l];
         if (FEATURE_AREA_LIGHTS && is_sampled_light(light)) {
-            let shape = area_light_of(light);
-            let range = window_samples(window, light.samples);
-            let key = seek_light_samples(rng, depth, sample_offset, range.x);
-            sample_offset += light.samples;
-            var sum = vec3<f32>(0.0);
-            for (var k = range.x; k < range.y; k += 1u) {
-                let square = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
-                                             rng_next_2d(rng));
-                let s = sampled_light_sample(light, shape, square, surface, material, wo, path_traced());
-                if (s.traced) {
-                    (*counters).rays += 1u;
-                    if (!cw_occluded(ray_at_time(ray_query_new(origin, s.wi), time), own, s.skip, s.t_max)) {
-                        sum += s.f;
-                    }
-                }
-            }
-            total += light_total(light, sum);
+            total += sampled_light(l, every_vertex_share(light), offset, vertex, window, rng, counters);
+            offset += light.samples;
         } else if (FEATURE_PUNCTUAL_LIGHTS && window_is_first(window)) {
             let s = punctual_light_sample(light, surface, material, wo);
-            if (s.traced) {
-                (*counters).rays += 1u;
-                if (!cw_occluded(ray_at_time(ray_query_new(origin, s.wi), time), own, s.skip, s.t_max)) {
-                    total += s.f;
-                }
+            if (s.traced && vertex_sees(vertex, s, counters)) {
+                total += s.f;
             }
         }
     }

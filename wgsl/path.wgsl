@@ -24,7 +24,9 @@ fn emission_weight(prim: GpuPrimitive, material: GpuMaterial, surface: Surface, 
     let to_surface = surface.position - origin;
     let distance2 = dot(to_surface, to_surface);
     let cos_light = -dot(surface.geometric_normal, direction);
-    return emitter_hit_weight(material.light_samples, distance2, cos_light, emitter_area(prim), pdf);
+    let area = emitter_area(prim);
+    let share = light_choice_probability(material.emission, area);
+    return emitter_hit_weight(share * f32(material.light_samples), distance2, cos_light, area, pdf);
 }
 
 // Where a bounce's ray starts and the primitive it skips (see the Rust twin).

@@ -125,6 +125,10 @@ struct GpuFrame {
     integrator: u32,
     rr_depth: u32,
     vertex_dimension_pairs: u32,
+    light_choice_start: u32,
+    light_choice_pairs: u32,
+    light_choice_offset: u32,
+    light_power_total: f32,
 }
 
 struct GpuPass {

@@ -104,40 +104,64 @@ fn store_shadow_ray(slot: u32, origin: vec3<f32>, time: f32, own: u32, s: LightS
     wf_shadow_terms[slot] = GpuShadowTerm(s.f, light);
 }
 
-// The shadow rays of path `p`'s vertex, in the order direct_light traces them (light by light,
-// sample by sample), in the path's slots; queued for `wf_occluded`. Returns how many.
+// Queues the shadow rays of sampled light `l`'s samples in `window` (see `sampled_light`) from
+// slot `base + count` on; returns the new count.
+fn emit_light_samples(l: u32, share: LightShare, offset: u32, vertex: Vertex, window: LightWindow,
+                      base: u32, count: u32, rng: ptr<function, Rng>) -> u32 {
+    let light = lights[l];
+    let shape = area_light_of(light);
+    let range = window_samples(window, light.samples);
+    let key = seek_light_samples(rng, vertex.depth, offset, range.x);
+    var n = count;
+    for (var k = range.x; k < range.y; k += 1u) {
+        let square = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
+                                     rng_next_2d(rng));
+        let s = sampled_light_sample(light, shape, share, square, vertex.surface, vertex.material,
+                                     vertex.wo, path_traced());
+        n = store_traced_shadow_ray(base, n, vertex, s, l);
+    }
+    return n;
+}
+
+// Stores a traced light sample's shadow ray in slot `base + count` if the path has one left
+// (else flags the overflow); returns the new count.
+fn store_traced_shadow_ray(base: u32, count: u32, vertex: Vertex, s: LightSample, l: u32) -> u32 {
+    if (!s.traced) {
+        return count;
+    }
+    if (count >= wave.shadow_stride) {
+        flag_status(STATUS_WAVE_OVERFLOW);
+        return count;
+    }
+    store_shadow_ray(base + count, vertex.origin, vertex.time, vertex.own, s, l);
+    return count + 1u;
+}
+
+// The shadow rays of path `p`'s vertex, in the order direct_light traces them (the chosen light,
+// then light by light, sample by sample), in the path's slots; queued for `wf_occluded`. Returns
+// how many.
 fn emit_shadow_rays(p: u32, time: f32, surface: Surface, material: GpuMaterial, own: u32,
                     wo: vec3<f32>, depth: u32, window: LightWindow, rng: ptr<function, Rng>) -> u32 {
     let origin = offset_ray_origin(surface.position, surface.position_error, surface.geometric_normal);
+    let vertex = Vertex(surface, material, wo, depth, origin, time, own);
     let base = p * wave.shadow_stride;
     var count = 0u;
-    var sample_offset = 0u;
-    for (var l = 0u; l < frame.light_count; l += 1u) {
+    if (FEATURE_AREA_LIGHTS) {
+        let choice = choose_light(depth, rng);
+        if (choice.light != NONE) {
+            count = emit_light_samples(choice.light, choice.share, 0u, vertex, window, base, count, rng);
+        }
+    }
+    var offset = frame.light_choice_pairs;
+    for (var l = 0u; l < frame.light_choice_start; l += 1u) {
         let light = lights[l];
         if (FEATURE_AREA_LIGHTS && is_sampled_light(light)) {
-            let shape = area_light_of(light);
-            let range = window_samples(window, light.samples);
-            let key = seek_light_samples(rng, depth, sample_offset, range.x);
-            sample_offset += light.samples;
-            for (var k = range.x; k < range.y; k += 1u) {
-                let square = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
-                                             rng_next_2d(rng));
-                let s = sampled_light_sample(light, shape, square, surface, material, wo, path_traced());
-                if (s.traced && count < wave.shadow_stride) {
-                    store_shadow_ray(base + count, origin, time, own, s, l);
-                    count += 1u;
-                } else if (s.traced) {
-                    flag_status(STATUS_WAVE_OVERFLOW);
-                }
-            }
+            count = emit_light_samples(l, every_vertex_share(light), offset, vertex, window, base,
+                                       count, rng);
+            offset += light.samples;
         } else if (FEATURE_PUNCTUAL_LIGHTS && window_is_first(window)) {
-            let s = punctual_light_sample(light, surface, material, wo);
-            if (s.traced && count < wave.shadow_stride) {
-                store_shadow_ray(base + count, origin, time, own, s, l);
-                count += 1u;
-            } else if (s.traced) {
-                flag_status(STATUS_WAVE_OVERFLOW);
-            }
+            count = store_traced_shadow_ray(base, count, vertex,
+                                            punctual_light_sample(light, surface, material, wo), l);
         }
     }
     if (count > 0u) {

@@ -187,7 +187,8 @@ struct Wavefront {
     shadow_capacity: u64,
     /// Path vertices a sample may reach (`RayBound::vertices`): the depths the host runs.
     vertices: u32,
-    /// Per light: whether it is an area light, and its samples.
+    /// What may emit shadow rays at a vertex (`shadow_ray_sources`): whether it is a sampled
+    /// light, and its samples.
     lights: Vec<(bool, u32)>,
 }
 
@@ -405,6 +406,22 @@ impl GpuRenderer {
     }
 }
 
+/// What may emit shadow rays at a path vertex, each as (sampled, samples): the lights sampled
+/// at every vertex, and the one a vertex chooses among the rest (`GpuFrame::light_choice_start`)
+/// with the most samples any of them has.
+fn shadow_ray_sources(scene: &FlatScene) -> Vec<(bool, u32)> {
+    let frame = &scene.frame;
+    let every_vertex = &scene.lights[..frame.light_choice_start as usize];
+    let chosen = frame
+        .chooses_lights()
+        .then_some((true, frame.light_choice_pairs));
+    every_vertex
+        .iter()
+        .map(|l| (l.is_sampled(), l.samples))
+        .chain(chosen)
+        .collect()
+}
+
 /// The wavefront render's sizes for `plan`: paths for its largest dispatch, shadow-ray slots
 /// for its widest light window.
 fn plan_wavefront(scene: &FlatScene, plan: &RenderPlan) -> Result<Wavefront> {
@@ -415,11 +432,7 @@ fn plan_wavefront(scene: &FlatScene, plan: &RenderPlan) -> Result<Wavefront> {
         path_capacity,
         shadow_capacity: 0,
         vertices: RayBound::of(scene).vertices as u32,
-        lights: scene
-            .lights
-            .iter()
-            .map(|l| (l.is_sampled(), l.samples))
-            .collect(),
+        lights: shadow_ray_sources(scene),
     };
     let widest = plan
         .dispatches(0)

@@ -320,17 +320,18 @@ pub fn sample_bsdf(
 }
 
 /// The power heuristic's weight (Veach, exponent 2) of a light sample, one of `samples` drawn
-/// with solid-angle density `light_pdf`, against the BSDF's one sample with `bsdf_pdf`. The
+/// a vertex on average (a chosen light's samples times its choice's probability) with
+/// solid-angle density `light_pdf`, against the BSDF's one sample with `bsdf_pdf`. The
 /// light's density is passed as its parts, `distance^2 / (cos_light area)`, so neither ratio
 /// overflows: the weight is `1 / (1 + (bsdf_pdf cos_light area / (samples distance^2))^2)`.
 pub fn light_sample_weight(
-    samples: u32,
+    samples: f32,
     distance2: f32,
     cos_light: f32,
     area: f32,
     bsdf_pdf: f32,
 ) -> f32 {
-    let ratio = bsdf_pdf * cos_light * area / (samples as f32 * distance2);
+    let ratio = bsdf_pdf * cos_light * area / (samples * distance2);
     1.0 / (1.0 + ratio * ratio)
 }
 
@@ -338,16 +339,16 @@ pub fn light_sample_weight(
 /// whose light draws `samples` points a vertex: 1 where no light sample could have drawn it (a
 /// mirror's or camera ray, `bsdf_pdf` 0; an emitter no light samples).
 pub fn emitter_hit_weight(
-    samples: u32,
+    samples: f32,
     distance2: f32,
     cos_light: f32,
     area: f32,
     bsdf_pdf: f32,
 ) -> f32 {
-    if samples == 0 || bsdf_pdf <= 0.0 {
+    if samples <= 0.0 || bsdf_pdf <= 0.0 {
         return 1.0;
     }
-    let ratio = samples as f32 * distance2 / (bsdf_pdf * cos_light * area);
+    let ratio = samples * distance2 / (bsdf_pdf * cos_light * area);
     1.0 / (1.0 + ratio * ratio)
 }
 
@@ -575,21 +576,24 @@ mod tests {
     }
 
     /// The two weights of one direction sum to 1 (the power heuristic is a partition of
-    /// unity), and stay finite at the extremes of distance and density.
+    /// unity), and stay finite at the extremes of distance, density and of the samples a vertex
+    /// takes on average (a light chosen once in ten million vertices).
     #[test]
     fn the_two_strategies_weights_partition_unity_at_the_extremes() {
         for (samples, d2, cos, area, pdf) in [
-            (1, 1.0, 1.0, 1.0, 1.0),
-            (4, 1e-12, 1e-6, 1e6, 1e4),
-            (16, 1e12, 1.0, 1e-6, 1e-4),
-            (1, 3.0, 0.2, 0.5, 7.0),
+            (1.0, 1.0, 1.0, 1.0, 1.0),
+            (4.0, 1e-12, 1e-6, 1e6, 1e4),
+            (16.0, 1e12, 1.0, 1e-6, 1e-4),
+            (1.0, 3.0, 0.2, 0.5, 7.0),
+            (1e-7, 1e-12, 1e-6, 1e6, 1e4),
+            (2.7e-4, 1e6, 1e-3, 1e-6, 1e3),
         ] {
             let a = light_sample_weight(samples, d2, cos, area, pdf);
             let b = emitter_hit_weight(samples, d2, cos, area, pdf);
             assert!(a.is_finite() && b.is_finite());
             assert!((a + b - 1.0).abs() < 1e-5, "{a} + {b}");
         }
-        assert_eq!(emitter_hit_weight(4, 1.0, 1.0, 1.0, 0.0), 1.0);
-        assert_eq!(emitter_hit_weight(0, 1.0, 1.0, 1.0, 3.0), 1.0);
+        assert_eq!(emitter_hit_weight(4.0, 1.0, 1.0, 1.0, 0.0), 1.0);
+        assert_eq!(emitter_hit_weight(0.0, 1.0, 1.0, 1.0, 3.0), 1.0);
     }
 }

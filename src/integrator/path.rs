@@ -40,6 +40,12 @@ pub(super) fn bsdf_dimension(frame: &GpuFrame, depth: u32) -> u32 {
     LIGHT_DIMENSION.wrapping_add(pair.wrapping_mul(2))
 }
 
+/// The dimension whose number chooses the area light path vertex `depth` samples
+/// (`layout::CHOICE_PAIR`).
+pub(super) fn choice_dimension(frame: &GpuFrame, depth: u32) -> u32 {
+    bsdf_dimension(frame, depth).wrapping_add(2 * (CHOICE_PAIR - BSDF_PAIR))
+}
+
 /// An emitting primitive's area, as its light's samples see it (a triangle light's is half
 /// the parallelogram of its edges).
 pub(super) fn emitter_area(prim: &GpuPrimitive) -> f32 {
@@ -55,8 +61,10 @@ pub(super) fn emitter_area(prim: &GpuPrimitive) -> f32 {
 }
 
 /// The weight of the emission a ray from `origin` sees at `surface` of primitive `prim`, drawn
-/// with density `bsdf_pdf` (0: a camera or mirror ray).
+/// with density `bsdf_pdf` (0: a camera or mirror ray), against the samples a vertex takes of
+/// its light on average: the light's samples times the probability a vertex chooses it.
 pub(super) fn emission_weight(
+    frame: &GpuFrame,
     prim: &GpuPrimitive,
     material: &GpuMaterial,
     surface: &Surface,
@@ -69,11 +77,13 @@ pub(super) fn emission_weight(
     }
     let distance2 = (surface.position - origin).length_squared();
     let cos_light = -surface.geometric_normal.dot(direction);
+    let area = emitter_area(prim);
+    let share = frame.light_choice_probability(material.emission, area);
     emitter_hit_weight(
-        material.light_samples,
+        share * material.light_samples as f32,
         distance2,
         cos_light,
-        emitter_area(prim),
+        area,
         bsdf_pdf,
     )
 }
@@ -186,6 +196,7 @@ pub(super) fn trace_path<const F: u32>(
         let emission = Vec3::from(material.emission);
         if first && surface.front_facing && emission.max_element() > 0.0 {
             let weight = emission_weight(
+                frame,
                 prim,
                 material,
                 &surface,
