@@ -40,13 +40,20 @@ def time_renders(args):
     if len(args) != 3:
         sys.exit("time takes SCENE.xml RUNS OUT.pfm")
     xml, runs, out = args[0], int(args[1]), args[2]
+    import drjit as dr
     scene = mi.load_file(xml)
-    mi.render(scene, seed=0).numpy()
+
+    def finished(image):
+        # The render is lazy until evaluated; wait for the kernels, without numpy.
+        dr.eval(image)
+        dr.sync_thread()
+        return image
+
+    finished(mi.render(scene, seed=0))
     seconds = []
     for seed in range(1, runs + 1):
         start = time.perf_counter()
-        image = mi.render(scene, seed=seed)
-        image.numpy()  # the render is lazy until its values are read
+        image = finished(mi.render(scene, seed=seed))
         seconds.append(time.perf_counter() - start)
     mi.Bitmap(image).write(out)
     print(json.dumps({"scene": xml, "seconds": seconds}), flush=True)
