@@ -214,10 +214,13 @@ fn path_traced() -> bool {
 }
 
 // The point `u` of the unit square on an area light (folded onto a triangle light's triangle),
-// seen from `surface`, over the probability the vertex chose the light with; under the path tracer (`mis`), weighted against the BSDF's sample of the
+// seen from `vertex`, over the probability the vertex chose the light with; under the path tracer (`mis`), weighted against the BSDF's sample of the
 // same direction.
 fn area_light_sample(light: GpuLight, shape: AreaLight, share: LightShare, square: vec2<f32>,
-                     surface: Surface, material: GpuMaterial, wo: vec3<f32>, mis: bool) -> LightSample {
+                     vertex: Vertex, mis: bool) -> LightSample {
+    let surface = vertex.surface;
+    let material = vertex.material;
+    let wo = vertex.wo;
     var u = square;
     if (shape.triangle && u.x + u.y > 1.0) {
         u = vec2<f32>(1.0) - u;
@@ -267,8 +270,10 @@ fn punctual_light_sample(light: GpuLight, surface: Surface, material: GpuMateria
 }
 
 // A direction drawn from sky light `light` with `square`, seen from `surface` (see the Rust twin).
-fn sky_light_sample(light: GpuLight, square: vec2<f32>, surface: Surface, material: GpuMaterial,
-                    wo: vec3<f32>, mis: bool) -> LightSample {
+fn sky_light_sample(light: GpuLight, square: vec2<f32>, vertex: Vertex, mis: bool) -> LightSample {
+    let surface = vertex.surface;
+    let material = vertex.material;
+    let wo = vertex.wo;
     let sky = sky_sample(light, square);
     let n = surface.shading_normal;
     let cos_surface = dot(n, sky.wi);
@@ -290,11 +295,11 @@ fn sky_light_sample(light: GpuLight, square: vec2<f32>, surface: Surface, materi
 
 // A sampled light's sample: a sky light's or an area light's.
 fn sampled_light_sample(light: GpuLight, shape: AreaLight, share: LightShare, square: vec2<f32>,
-                        surface: Surface, material: GpuMaterial, wo: vec3<f32>, mis: bool) -> LightSample {
+                        vertex: Vertex, mis: bool) -> LightSample {
     if (is_sky_light(light)) {
-        return sky_light_sample(light, square, surface, material, wo, mis);
+        return sky_light_sample(light, square, vertex, mis);
     }
-    return area_light_sample(light, shape, share, square, surface, material, wo, mis);
+    return area_light_sample(light, shape, share, square, vertex, mis);
 }
 
 // The radiance a ray escaping along `direction` sees of the lights at infinity, weighted against
@@ -382,8 +387,7 @@ fn sampled_light(l: u32, share: LightShare, offset: u32, vertex: Vertex, window:
     for (var k = range.x; k < range.y; k += 1u) {
         let square = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
                                      rng_next_2d(rng));
-        let s = sampled_light_sample(light, shape, share, square, vertex.surface, vertex.material,
-                                     vertex.wo, path_traced());
+        let s = sampled_light_sample(light, shape, share, square, vertex, path_traced());
         if (s.traced && vertex_sees(vertex, s, counters)) {
             sum += s.f;
         }

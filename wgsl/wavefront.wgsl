@@ -116,8 +116,7 @@ fn emit_light_samples(l: u32, share: LightShare, offset: u32, vertex: Vertex, wi
     for (var k = range.x; k < range.y; k += 1u) {
         let square = light_sample_2d(light.samples, light.strata_columns, (*rng).sample, k, key,
                                      rng_next_2d(rng));
-        let s = sampled_light_sample(light, shape, share, square, vertex.surface, vertex.material,
-                                     vertex.wo, path_traced());
+        let s = sampled_light_sample(light, shape, share, square, vertex, path_traced());
         n = store_traced_shadow_ray(base, n, vertex, s, l);
     }
     return n;
