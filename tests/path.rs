@@ -439,6 +439,70 @@ fn lights_chosen_by_power_light_the_scene_as_every_light_sampled() {
     }
 }
 
+/// A chosen light whose samples exceed one invocation's budget splits into light windows as
+/// any light does: every window chooses the same light (from the same random dimension), the
+/// windows add up to the unsplit estimate on the CPU path, and the GPU's wavefront render, which
+/// sizes its shadow-ray slots for the window of the chosen light, agrees with it.
+#[test]
+fn a_chosen_lights_samples_split_into_windows_sum_to_the_unsplit_estimate() {
+    let file = box_with_unequal_lights(&scratch());
+    let overrides = [
+        "render.width=12",
+        "render.height=12",
+        "render.spp=2",
+        "render.max_depth=1",
+        "render.ambient=[0.0,0.0,0.0]",
+        "render.integrator=\"path\"",
+        "lights[0].samples=1500",
+    ]
+    .map(String::from);
+    let flat = flatten(&Scene::load(&file, &overrides).unwrap_or_else(|e| panic!("{e}")));
+    assert!(flat.frame.chooses_lights());
+    let plan = chambre::render::plan_passes(&flat, &chambre::render::RayBudgets::DEFAULT);
+    assert!(plan.light_windows.len() > 1, "1,500 samples must be split");
+    let windowed = common::render_cpu(&flat);
+    let whole = Image {
+        width: 12,
+        height: 12,
+        pixels: (0..12 * 12)
+            .map(|i| {
+                let mut stats = Default::default();
+                let sum: glam::Vec3 = (0..2)
+                    .map(|s| {
+                        chambre::integrator::trace_sample::<{ chambre::layout::FEATURES_ALL }>(
+                            &flat,
+                            i % 12,
+                            i / 12,
+                            s,
+                            chambre::integrator::LightWindow::ALL,
+                            &mut stats,
+                            &mut Default::default(),
+                        )
+                    })
+                    .sum();
+                sum / 2.0
+            })
+            .collect(),
+    };
+    let (within, mean_abs) = common::agreement(&windowed, &whole, 1e-5);
+    assert!(
+        within == 1.0,
+        "{within} of pixels within 1e-5, mean |diff| {mean_abs:.2e}"
+    );
+    if let Some(gpu) = common::render_gpu(&flat) {
+        let (within, mean_abs) = common::agreement(&windowed, &gpu, 1e-3);
+        eprintln!(
+            "GPU: {:.2}% within 1e-3, mean |diff| {mean_abs:.2e}",
+            within * 100.0
+        );
+        assert!(
+            within >= 0.97,
+            "only {:.3}% of pixels agree",
+            within * 100.0
+        );
+    }
+}
+
 /// The GPU's wavefront render and the CPU path trace the same paths with the same random
 /// numbers: the images agree pixel for pixel but where rounding sends a path another way.
 #[test]
