@@ -238,9 +238,11 @@ fn area_light_sample(light: GpuLight, shape: AreaLight, share: LightShare, squar
     }
     if (mis && traced) {
         let pdf = bsdf_pdf(material, material_lobes(material), n, wo, wi);
-        f *= light_sample_weight(share.expected_samples, distance * distance, cos_light, shape.area, pdf);
+        // A light is chosen only under the path tracer: Whitted's samples skip the division.
+        f *= light_sample_weight(share.expected_samples, distance * distance, cos_light, shape.area, pdf)
+            / share.chosen;
     }
-    return LightSample(wi, shadow_ray_length(distance), light.prim, f / share.chosen, traced);
+    return LightSample(wi, shadow_ray_length(distance), light.prim, f, traced);
 }
 
 // A point, spot or directional light seen from `surface`: its whole contribution.
