@@ -951,9 +951,12 @@ impl GpuLight {
     }
 }
 
+/// Rec. 709 luminance weights of linear RGB (`LUMINANCE_WEIGHTS` in WGSL).
+pub const LUMINANCE_WEIGHTS: [f32; 3] = [0.2126, 0.7152, 0.0722];
+
 /// Rec. 709 luminance of linear RGB, in f32 as the kernels compute it.
 pub fn luminance_f32(c: [f32; 3]) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+    glam::Vec3::from(c).dot(glam::Vec3::from(LUMINANCE_WEIGHTS))
 }
 
 impl GpuFrame {
@@ -1167,6 +1170,8 @@ pub fn wgsl_prelude() -> String {
     ] {
         out += &format!("const {name}: f32 = {value:e};\n");
     }
+    let [r, g, b] = LUMINANCE_WEIGHTS;
+    out += &format!("const LUMINANCE_WEIGHTS: vec3<f32> = vec3<f32>({r:e}, {g:e}, {b:e});\n");
     for (name, _) in FEATURES {
         out += &format!("override {name}: bool = true;\n");
     }

@@ -59,29 +59,7 @@ fn light_windows_sum_to_the_unsplit_estimate() {
     assert!(plan_passes(&flat, &RayBudgets::DEFAULT).light_windows.len() > 1);
     let windowed = common::render_cpu(&flat);
     // The same estimate, every light sample in one call per camera sample.
-    let whole = chambre::render::Image {
-        width: 16,
-        height: 16,
-        pixels: (0..16 * 16)
-            .map(|i| {
-                let mut stats = Default::default();
-                let sum: glam::Vec3 = (0..2)
-                    .map(|s| {
-                        chambre::integrator::trace_sample::<{ chambre::layout::FEATURES_ALL }>(
-                            &flat,
-                            i % 16,
-                            i / 16,
-                            s,
-                            chambre::integrator::LightWindow::ALL,
-                            &mut stats,
-                            &mut Default::default(),
-                        )
-                    })
-                    .sum();
-                sum / 2.0
-            })
-            .collect(),
-    };
+    let whole = common::render_unsplit(&flat);
     let (within, mean_abs) = common::agreement(&windowed, &whole, 1e-5);
     assert!(
         within == 1.0,

@@ -324,24 +324,7 @@ fn direct_light_by_multiple_importance_sampling_matches_light_sampling_alone() {
         common::render_cpu(&flatten(&scene))
     };
     let (whitted, path) = (render("whitted"), render("path"));
-    let block_mean = |image: &Image, bx: u32, by: u32| {
-        let mut sum = 0.0f64;
-        for y in by * 8..by * 8 + 8 {
-            for x in bx * 8..bx * 8 + 8 {
-                sum += pixel(image, x, y).iter().map(|&c| c as f64).sum::<f64>();
-            }
-        }
-        sum / 192.0
-    };
-    for by in 0..4 {
-        for bx in 0..4 {
-            let (a, b) = (block_mean(&whitted, bx, by), block_mean(&path, bx, by));
-            assert!(
-                (a - b).abs() <= 0.03 * a.max(b) + 1e-3,
-                "block ({bx}, {by}): Whitted {a:.5}, path tracer {b:.5}"
-            );
-        }
-    }
+    common::assert_blocks_agree(&whitted, &path, 0.03, ["Whitted", "path tracer"]);
 }
 
 /// The direct-lighting box with lights of very unequal power beside its own: a small bright
@@ -411,24 +394,7 @@ fn lights_chosen_by_power_light_the_scene_as_every_light_sampled() {
     }
     assert_eq!(cdf[2], 1.0);
     let (a, b) = (common::render_cpu(&whitted), common::render_cpu(&path));
-    let block_mean = |image: &Image, bx: u32, by: u32| {
-        let mut sum = 0.0f64;
-        for y in by * 8..by * 8 + 8 {
-            for x in bx * 8..bx * 8 + 8 {
-                sum += pixel(image, x, y).iter().map(|&c| c as f64).sum::<f64>();
-            }
-        }
-        sum / 192.0
-    };
-    for by in 0..4 {
-        for bx in 0..4 {
-            let (w, p) = (block_mean(&a, bx, by), block_mean(&b, bx, by));
-            assert!(
-                (w - p).abs() <= 0.03 * w.max(p) + 1e-3,
-                "block ({bx}, {by}): Whitted {w:.5}, path tracer {p:.5}"
-            );
-        }
-    }
+    common::assert_blocks_agree(&a, &b, 0.03, ["Whitted", "path tracer"]);
     if let Some(gpu) = common::render_gpu(&path) {
         let (within, _) = common::agreement(&b, &gpu, 1e-3);
         assert!(
@@ -461,29 +427,7 @@ fn a_chosen_lights_samples_split_into_windows_sum_to_the_unsplit_estimate() {
     let plan = chambre::render::plan_passes(&flat, &chambre::render::RayBudgets::DEFAULT);
     assert!(plan.light_windows.len() > 1, "1,500 samples must be split");
     let windowed = common::render_cpu(&flat);
-    let whole = Image {
-        width: 12,
-        height: 12,
-        pixels: (0..12 * 12)
-            .map(|i| {
-                let mut stats = Default::default();
-                let sum: glam::Vec3 = (0..2)
-                    .map(|s| {
-                        chambre::integrator::trace_sample::<{ chambre::layout::FEATURES_ALL }>(
-                            &flat,
-                            i % 12,
-                            i / 12,
-                            s,
-                            chambre::integrator::LightWindow::ALL,
-                            &mut stats,
-                            &mut Default::default(),
-                        )
-                    })
-                    .sum();
-                sum / 2.0
-            })
-            .collect(),
-    };
+    let whole = common::render_unsplit(&flat);
     let (within, mean_abs) = common::agreement(&windowed, &whole, 1e-5);
     assert!(
         within == 1.0,

@@ -157,7 +157,7 @@ fn light_choice_probability(color: vec3<f32>, area: f32) -> f32 {
     if (!chooses_lights()) {
         return 1.0;
     }
-    return (0.2126 * color.x + 0.7152 * color.y + 0.0722 * color.z) * area / frame.light_power_total;
+    return dot(color, LUMINANCE_WEIGHTS) * area / frame.light_power_total;
 }
 
 // Entry `i` of the chosen lights' cumulative distribution.

@@ -213,3 +213,62 @@ pub fn sharpness(image: &Image, rows: (f64, f64), columns: (f64, f64)) -> f64 {
     }
     grad2 / n / (sum / n).powi(2)
 }
+
+/// The mean of all channels over the 8 x 8 block (`bx`, `by`) of `image`.
+pub fn block_mean(image: &Image, bx: u32, by: u32) -> f64 {
+    let mut sum = 0.0f64;
+    for y in by * 8..by * 8 + 8 {
+        for x in bx * 8..bx * 8 + 8 {
+            let p = image.pixels[(y * image.width + x) as usize];
+            sum += p.x as f64 + p.y as f64 + p.z as f64;
+        }
+    }
+    sum / 192.0
+}
+
+/// Two unbiased estimates of one image agree block by block (8 x 8 blocks) to sampling error:
+/// within `relative` of the larger block mean, plus 1e-3.
+pub fn assert_blocks_agree(a: &Image, b: &Image, relative: f64, names: [&str; 2]) {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    for by in 0..a.height / 8 {
+        for bx in 0..a.width / 8 {
+            let (p, q) = (block_mean(a, bx, by), block_mean(b, bx, by));
+            assert!(
+                (p - q).abs() <= relative * p.max(q) + 1e-3,
+                "block ({bx}, {by}): {} {p:.5}, {} {q:.5}",
+                names[0],
+                names[1]
+            );
+        }
+    }
+}
+
+/// `flat`'s image on the CPU path with every light sample of a camera sample in one call
+/// (`LightWindow::ALL`), whatever light windows the render's plan would split them into.
+pub fn render_unsplit(flat: &FlatScene) -> Image {
+    let (width, height, spp) = (flat.frame.width, flat.frame.height, flat.frame.spp);
+    let pixels = (0..width * height)
+        .map(|i| {
+            let mut stats = Default::default();
+            let sum: glam::Vec3 = (0..spp)
+                .map(|s| {
+                    chambre::integrator::trace_sample::<{ chambre::layout::FEATURES_ALL }>(
+                        flat,
+                        i % width,
+                        i / width,
+                        s,
+                        chambre::integrator::LightWindow::ALL,
+                        &mut stats,
+                        &mut Default::default(),
+                    )
+                })
+                .sum();
+            sum / spp as f32
+        })
+        .collect();
+    Image {
+        width,
+        height,
+        pixels,
+    }
+}
