@@ -543,10 +543,9 @@ fn sampled_light<const F: u32>(
     light_total(light, sum)
 }
 
-/// What the area light vertex chooses adds (`choose_light`). Kept out of `direct_light`, which
-/// then holds one copy of `sampled_light`: Whitted's frames, which choose no light, ran 5%
-/// slower with a second one inlined there.
-#[inline(never)]
+/// What the area light vertex chooses adds (`choose_light`): only the path tracer chooses, so
+/// only the integrators compiled with it (`FEATURE_PATH`) hold this code.
+#[inline(always)]
 fn chosen_light<const F: u32>(
     scene: &FlatScene,
     vertex: &Vertex,
@@ -627,7 +626,7 @@ fn direct_light<const F: u32>(
     };
     let frame = &scene.frame;
     let mut total = Vec3::ZERO;
-    if has(F, FEATURE_AREA_LIGHTS) && frame.chooses_lights() {
+    if has(F, FEATURE_AREA_LIGHTS) && has(F, FEATURE_PATH) && frame.chooses_lights() {
         total += chosen_light::<F>(scene, &vertex, window, rng, stats);
     }
     let mut offset = frame.light_choice_pairs;
