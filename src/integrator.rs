@@ -19,6 +19,7 @@
 //! order.
 
 use std::f32::consts::PI;
+use std::mem::MaybeUninit;
 
 use glam::{Vec2, Vec3};
 
@@ -668,8 +669,8 @@ fn vertex_hit<const F: u32>(
     }
 }
 
-/// The primitive, material and surface a path's ray hit; the camera ray's hit also goes to
-/// `first_hit`.
+/// The primitive, material (a textured one written to `textured`) and surface a path's ray
+/// hit; the camera ray's hit also goes to `first_hit`.
 #[inline(always)]
 fn vertex_at<'a>(
     scene: &'a FlatScene,
@@ -678,31 +679,43 @@ fn vertex_at<'a>(
     hit: Hit,
     depth: u32,
     first_hit: &mut FirstHit,
-) -> (&'a GpuPrimitive, GpuMaterial, Surface) {
+    textured: &'a mut MaybeUninit<GpuMaterial>,
+) -> (&'a GpuPrimitive, &'a GpuMaterial, Surface) {
     let prim = &scene.prims[prim_id as usize];
     let surface = moved_surface_at(scene, prim_id, ray, hit);
-    let material = material_at(scene, prim, hit, &surface);
+    let material = material_at(scene, prim, hit, &surface, textured);
     if depth == 0 {
-        *first_hit = FirstHit::of(hit.t, &surface, &material);
+        *first_hit = FirstHit::of(hit.t, &surface, material);
     }
     (prim, material, surface)
 }
 
-/// The material of `prim` at `surface`, its diffuse reflectance multiplied by its texture's
-/// colour there where it has one. Twin: `material_at` in integrator.wgsl.
-fn material_at(scene: &FlatScene, prim: &GpuPrimitive, hit: Hit, surface: &Surface) -> GpuMaterial {
-    let mut material = scene.materials[prim.material as usize];
-    if material.texture != 0 {
-        let outward = match surface.front_facing {
-            true => surface.geometric_normal,
-            false => -surface.geometric_normal,
-        };
-        let uv = texture::texture_coordinates(prim, hit, outward, &scene.texcoords);
-        let texture = &scene.textures[material.texture as usize - 1];
-        let colour = texture::texture_lookup(texture, &scene.texels, uv);
-        material.diffuse = (Vec3::from(material.diffuse) * colour).to_array();
+/// The material of `prim` at `surface`: the scene's own, or where it has a texture, a copy in
+/// `textured` whose diffuse reflectance is multiplied by the texture's colour there. (Copying
+/// the material at every vertex, textured or not, cost untextured frames 2% of their
+/// instructions.) Twin: `material_at` in integrator.wgsl.
+fn material_at<'a>(
+    scene: &'a FlatScene,
+    prim: &GpuPrimitive,
+    hit: Hit,
+    surface: &Surface,
+    textured: &'a mut MaybeUninit<GpuMaterial>,
+) -> &'a GpuMaterial {
+    let material = &scene.materials[prim.material as usize];
+    if material.texture == 0 {
+        return material;
     }
-    material
+    let outward = match surface.front_facing {
+        true => surface.geometric_normal,
+        false => -surface.geometric_normal,
+    };
+    let uv = texture::texture_coordinates(prim, hit, outward, &scene.texcoords);
+    let texture = &scene.textures[material.texture as usize - 1];
+    let colour = texture::texture_lookup(texture, &scene.texels, uv);
+    textured.write(GpuMaterial {
+        diffuse: (Vec3::from(material.diffuse) * colour).to_array(),
+        ..*material
+    })
 }
 
 /// The camera ray's closest hit, as a path starts: traced by the path itself, or already
@@ -751,8 +764,9 @@ pub fn trace_path<const F: u32>(
             }
             break;
         };
-        let (prim, material, surface) = vertex_at(scene, prim_id, &ray, hit, depth, first_hit);
-        let material = &material;
+        let mut textured = MaybeUninit::uninit();
+        let (prim, material, surface) =
+            vertex_at(scene, prim_id, &ray, hit, depth, first_hit, &mut textured);
         // An area light shows its radiance from the front, is black from behind, reflects nothing.
         if material.model == MODEL_EMITTER {
             if surface.front_facing && first {

@@ -16,6 +16,8 @@
 //! the GPU's wavefront render must keep it (its shadow rays are resolved after the bounce is
 //! drawn, with the throughput they were cast with): the same products in the same order.
 
+use std::mem::MaybeUninit;
+
 use glam::Vec3;
 
 use super::bsdf::{BsdfSample, emitter_hit_weight, has_smooth_lobes, reflects, sample_bsdf};
@@ -191,8 +193,9 @@ pub(super) fn trace_path<const F: u32>(
             }
             break;
         };
-        let (prim, material, surface) = vertex_at(scene, prim_id, &ray, hit, depth, first_hit);
-        let material = &material;
+        let mut textured = MaybeUninit::uninit();
+        let (prim, material, surface) =
+            vertex_at(scene, prim_id, &ray, hit, depth, first_hit, &mut textured);
         let emission = Vec3::from(material.emission);
         if first && surface.front_facing && emission.max_element() > 0.0 {
             let weight = emission_weight(
