@@ -13,7 +13,7 @@
 use glam::Vec3;
 
 use super::intersect::{Hit, MISS, RayQuery, gamma, intersect_quad, intersect_triangle};
-use crate::layout::GpuPrimitive;
+use crate::layout::{GpuPrimitive, NONE};
 
 /// Lanes of an octet.
 pub const LANES: usize = 8;
@@ -72,14 +72,35 @@ impl<R: Rows> Octet<R> {
         octet
     }
 
-    /// Bit per lane holding primitive slot `skip` (none for `NONE`).
+    /// Bit per lane holding primitive slot `skip` (none for `NONE`): one vector comparison
+    /// where `avx2` says the CPU has AVX2 (the lane loop compiles to eight scalar ones).
     #[inline(always)]
-    pub fn skipping(&self, skip: u32) -> u32 {
+    pub fn skipping(&self, skip: u32, avx2: bool) -> u32 {
+        // No slot is `NONE`: camera rays skip nothing and need not look.
+        if skip == NONE {
+            return 0;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if avx2 {
+            // SAFETY: `avx2` is true only where the CPU has AVX2.
+            return unsafe { self.skipping_avx2(skip) };
+        }
+        let _ = avx2;
         let mut mask = 0;
         for (lane, &slot) in self.slot.iter().enumerate() {
             mask |= ((slot == skip) as u32) << lane;
         }
         mask
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn skipping_avx2(&self, skip: u32) -> u32 {
+        use std::arch::x86_64::*;
+        // SAFETY: `slot` is eight u32s.
+        let slots = unsafe { _mm256_loadu_si256(self.slot.as_ptr().cast()) };
+        let equal = _mm256_cmpeq_epi32(slots, _mm256_set1_epi32(skip as i32));
+        _mm256_movemask_ps(_mm256_castsi256_ps(equal)) as u32
     }
 
     /// The scalar test on the lanes of `lanes` (lanes holding a primitive): a bit per lane hit
@@ -155,9 +176,10 @@ impl Rows for TriangleRows {
             // SAFETY: a row is eight f32s.
             unsafe { _mm256_loadu_ps(row.as_ptr()) }
         };
+        // The origin as an array: a `Vec3` indexed by a run-time axis is a three-way branch.
+        let o = ray.origin.to_array();
         // One vertex translated to the ray origin and sheared: (x, y, scaled z).
         let shear = |vertex: usize| {
-            let o = ray.origin;
             let v = &self.v[vertex];
             let a_kx = _mm256_sub_ps(load(&v[kx]), _mm256_set1_ps(o[kx]));
             let a_ky = _mm256_sub_ps(load(&v[ky]), _mm256_set1_ps(o[ky]));

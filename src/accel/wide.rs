@@ -519,7 +519,7 @@ fn nearest_in<R: Rows>(
     avx2: bool,
 ) {
     for octet in octets.iter().filter(|octet| octet.leaves & mask != 0) {
-        let lanes = octet.lanes & !octet.skipping(skip);
+        let lanes = octet.lanes & !octet.skipping(skip, avx2);
         let (mut hits, found) = octet.hits(ray, best.t, lanes, avx2);
         while hits != 0 {
             let lane = hits.trailing_zeros() as usize;
@@ -544,7 +544,8 @@ fn any_in<R: Rows>(
     avx2: bool,
 ) -> bool {
     for octet in octets.iter().filter(|octet| octet.leaves & mask != 0) {
-        let lanes = octet.lanes & !(octet.skipping(skip[0]) | octet.skipping(skip[1]));
+        let skipped = octet.skipping(skip[0], avx2) | octet.skipping(skip[1], avx2);
+        let lanes = octet.lanes & !skipped;
         if octet.hits(ray, t_max, lanes, avx2).0 != 0 {
             return true;
         }
