@@ -595,9 +595,9 @@ impl Vertex<'_> {
 /// tracer, the samples in `window` of the one area light the vertex chose
 /// (`GpuFrame::light_choice_start`); the samples in `window` of every other sampled light; and
 /// the point and directional lights in the first window.
-#[allow(clippy::too_many_arguments)]
 // Inlined into both integrators' vertex loops: called out of line, passing the surface and
-// material through memory cost Whitted frames 19% of their time (cornell_direct, 2 cores).
+// material through memory cost Whitted frames about 15% of their time (cornell_direct).
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn direct_light<const F: u32>(
     scene: &FlatScene,
