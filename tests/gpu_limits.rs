@@ -55,16 +55,7 @@ fn light_windows_sum_to_the_unsplit_estimate() {
         "scenes/area_light.toml",
         &[&small[..], &["lights[0].samples=400"]].concat(),
     );
-    let flat = flatten(&split);
-    assert!(plan_passes(&flat, &RayBudgets::DEFAULT).light_windows.len() > 1);
-    let windowed = common::render_cpu(&flat);
-    // The same estimate, every light sample in one call per camera sample.
-    let whole = common::render_unsplit(&flat);
-    let (within, mean_abs) = common::agreement(&windowed, &whole, 1e-5);
-    assert!(
-        within == 1.0,
-        "{within} of pixels within 1e-5, mean |diff| {mean_abs:.2e}"
-    );
+    common::assert_windows_sum_to_unsplit(&flatten(&split));
 }
 
 /// Two facing mirrors and 64 point lights at max_depth 1024: one sample traces ~66,000 rays in

@@ -243,9 +243,28 @@ pub fn assert_blocks_agree(a: &Image, b: &Image, relative: f64, names: [&str; 2]
     }
 }
 
+/// Asserts that `flat`'s area-light samples are split into several light windows and that the
+/// CPU render, window by window, equals [`render_unsplit`]'s to 1e-5 in every pixel; returns the
+/// windowed render.
+pub fn assert_windows_sum_to_unsplit(flat: &FlatScene) -> Image {
+    let plan = chambre::render::plan_passes(flat, &chambre::render::RayBudgets::DEFAULT);
+    assert!(
+        plan.light_windows.len() > 1,
+        "the light samples must be split"
+    );
+    let windowed = render_cpu(flat);
+    let whole = render_unsplit(flat);
+    let (within, mean_abs) = agreement(&windowed, &whole, 1e-5);
+    assert!(
+        within == 1.0,
+        "{within} of pixels within 1e-5, mean |diff| {mean_abs:.2e}"
+    );
+    windowed
+}
+
 /// `flat`'s image on the CPU path with every light sample of a camera sample in one call
 /// (`LightWindow::ALL`), whatever light windows the render's plan would split them into.
-pub fn render_unsplit(flat: &FlatScene) -> Image {
+fn render_unsplit(flat: &FlatScene) -> Image {
     let (width, height, spp) = (flat.frame.width, flat.frame.height, flat.frame.spp);
     let pixels = (0..width * height)
         .map(|i| {
