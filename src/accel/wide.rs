@@ -39,13 +39,13 @@ const LEAF_FIRST: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
 /// Entries the traversal stack can hold: each level of the tree pushes at most seven siblings.
 const STACK_ENTRIES: usize = (LANES - 1) * CWBVH_STACK_SIZE as usize + 1;
 
-/// One node: its children's boxes as planes (`lo[axis][lane]`), what each child is, and the
-/// octets that hold its leaves' static triangles and quads.
+/// One node: its children's boxes as planes (`planes[axis][lane]` their lower bounds,
+/// `planes[3 + axis][lane]` their upper ones), what each child is, and the octets that hold its
+/// leaves' static triangles and quads.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
 struct WideNode {
-    lo: [[f32; LANES]; 3],
-    hi: [[f32; LANES]; 3],
+    planes: [[f32; LANES]; 6],
     /// Per lane: an inner child's node index, or a leaf's `LEAF` code.
     child: [u32; LANES],
     /// Bit per lane: the lane holds a child.
@@ -232,8 +232,8 @@ fn wide_node(node: &GpuCwNode) -> WideNode {
         let lo = p + e * Vec3::new(q(node.q_lo_x), q(node.q_lo_y), q(node.q_lo_z));
         let hi = p + e * Vec3::new(q(node.q_hi_x), q(node.q_hi_y), q(node.q_hi_z));
         for axis in 0..3 {
-            wide.lo[axis][lane] = lo[axis];
-            wide.hi[axis][lane] = hi[axis];
+            wide.planes[axis][lane] = lo[axis];
+            wide.planes[3 + axis][lane] = hi[axis];
         }
         wide.valid |= 1 << lane;
         wide.child[lane] = if meta & (meta << 1) & 0x10 != 0 {
@@ -329,8 +329,8 @@ fn node_hits(node: &WideNode, origin: [f32; 3], inv: [f32; 3], t_max: f32) -> (u
         let mut t_near = f32::NEG_INFINITY;
         let mut t_far = f32::INFINITY;
         for axis in 0..3 {
-            let t1 = (node.lo[axis][lane] - origin[axis]) * inv[axis];
-            let t2 = (node.hi[axis][lane] - origin[axis]) * inv[axis];
+            let t1 = (node.planes[axis][lane] - origin[axis]) * inv[axis];
+            let t2 = (node.planes[3 + axis][lane] - origin[axis]) * inv[axis];
             t_near = max(t_near, min(t1, t2));
             t_far = min(t_far, max(t1, t2));
         }
@@ -340,37 +340,55 @@ fn node_hits(node: &WideNode, origin: [f32; 3], inv: [f32; 3], t_max: f32) -> (u
     (mask & node.valid, near)
 }
 
-/// [`node_hits`] in AVX2 intrinsics: the same operations in the same order (the results are
-/// identical), with the hit bits taken by one `movemask` where the compiler's version of the
-/// lane loop reduced them by shuffles.
+/// The rows of a node's planes a ray enters and leaves each axis's slab by: the lower
+/// bounds' rows where its direction is positive on that axis, the upper ones' where negative.
+#[derive(Clone, Copy)]
+struct Slabs {
+    near: [usize; 3],
+    far: [usize; 3],
+}
+
+impl Slabs {
+    #[inline(always)]
+    fn of(inv: [f32; 3]) -> Slabs {
+        let near = [0, 1, 2].map(|axis| if inv[axis] < 0.0 { 3 + axis } else { axis });
+        Slabs {
+            near,
+            far: near.map(|row| (row + 3) % 6),
+        }
+    }
+}
+
+/// [`node_hits`] in AVX2 intrinsics, with the same results: where the direction is positive
+/// on an axis, `(lo - o) * inv <= (hi - o) * inv` (rounding is monotonic), so the lane
+/// loop's `min` and `max` of the two are the near and far planes' distances, which `slabs`
+/// names once per ray instead of sorting them at every node; `max` and `min` of the three
+/// axes are exact in any order. The hit bits are taken by one `movemask` where the
+/// compiler's version of the lane loop reduced them by shuffles.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
+#[inline]
 fn node_hits_avx2(
     node: &WideNode,
     origin: [f32; 3],
     inv: [f32; 3],
+    slabs: Slabs,
     t_max: f32,
 ) -> (u32, [f32; LANES]) {
     use std::arch::x86_64::*;
-    let mut t_near = _mm256_set1_ps(f32::NEG_INFINITY);
-    let mut t_far = _mm256_set1_ps(f32::INFINITY);
-    for axis in 0..3 {
-        let o = _mm256_set1_ps(origin[axis]);
-        let i = _mm256_set1_ps(inv[axis]);
-        // SAFETY: `lo` and `hi` rows are eight f32s each.
-        let (lo, hi) = unsafe {
-            (
-                _mm256_loadu_ps(node.lo[axis].as_ptr()),
-                _mm256_loadu_ps(node.hi[axis].as_ptr()),
-            )
-        };
-        let t1 = _mm256_mul_ps(_mm256_sub_ps(lo, o), i);
-        let t2 = _mm256_mul_ps(_mm256_sub_ps(hi, o), i);
-        // `min(a, b)` of the generic version is `a < b ? a : b`: `_mm256_min_ps(t1, t2)`
-        // returns t2 when not t1 < t2, the same value.
-        t_near = _mm256_max_ps(_mm256_min_ps(t1, t2), t_near);
-        t_far = _mm256_min_ps(_mm256_max_ps(t1, t2), t_far);
-    }
+    let distance = |row: usize, axis: usize| {
+        // SAFETY: `Slabs::of` names rows 0 to 5 only (checking them cost 6 branches a node);
+        // a row is eight f32s.
+        let plane = unsafe { _mm256_loadu_ps(node.planes.get_unchecked(row).as_ptr()) };
+        _mm256_mul_ps(
+            _mm256_sub_ps(plane, _mm256_set1_ps(origin[axis])),
+            _mm256_set1_ps(inv[axis]),
+        )
+    };
+    let near = |axis| distance(slabs.near[axis], axis);
+    let far = |axis| distance(slabs.far[axis], axis);
+    let t_near = _mm256_max_ps(_mm256_max_ps(near(0), near(1)), near(2));
+    let t_far = _mm256_min_ps(_mm256_min_ps(far(0), far(1)), far(2));
     slab_hits_avx2(t_near, t_far, t_max, node.valid)
 }
 
@@ -379,6 +397,7 @@ fn node_hits_avx2(
 /// nor behind the ray and whose entry is before `t_max`, and the entry distances.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
+#[inline]
 fn slab_hits_avx2(
     t_near: std::arch::x86_64::__m256,
     t_far: std::arch::x86_64::__m256,
@@ -406,15 +425,16 @@ fn test_node(
     node: &WideNode,
     origin: [f32; 3],
     inv: [f32; 3],
+    slabs: Slabs,
     t_max: f32,
     avx2: bool,
 ) -> (u32, [f32; LANES]) {
     #[cfg(target_arch = "x86_64")]
     if avx2 {
         // SAFETY: `avx2` is true only where the CPU has AVX2.
-        return unsafe { node_hits_avx2(node, origin, inv, t_max) };
+        return unsafe { node_hits_avx2(node, origin, inv, slabs, t_max) };
     }
-    let _ = avx2;
+    let _ = (avx2, slabs);
     node_hits(node, origin, inv, t_max)
 }
 
@@ -443,13 +463,18 @@ struct Stack {
 }
 
 impl Stack {
+    #[inline(always)]
+    fn empty() -> Stack {
+        Stack {
+            entries: [const { MaybeUninit::uninit() }; STACK_ENTRIES],
+            len: 0,
+        }
+    }
+
     /// A stack holding the root of `nodes`, unless it is empty (a scene of planes only).
     #[inline(always)]
     fn at_root(nodes: &[WideNode]) -> Stack {
-        let mut stack = Stack {
-            entries: [const { MaybeUninit::uninit() }; STACK_ENTRIES],
-            len: 0,
-        };
+        let mut stack = Stack::empty();
         if nodes[0].valid != 0 {
             stack.push((0, f32::NEG_INFINITY));
         }
@@ -502,6 +527,110 @@ impl Stack {
             self.entries[at] = MaybeUninit::new(entry);
             self.len += 1;
         }
+    }
+}
+
+/// For each 8-bit mask, the lanes of its set bits in ascending order, three bits a lane: the
+/// permutation that packs those lanes of a vector to its front.
+const PACK_LANES: [u32; 256] = {
+    let mut table = [0; 256];
+    let mut mask = 0;
+    while mask < 256 {
+        let (mut lanes, mut at, mut lane) = (0, 0, 0);
+        while lane < LANES {
+            if mask & (1 << lane) != 0 {
+                lanes |= (lane as u32) << (3 * at);
+                at += 1;
+            }
+            lane += 1;
+        }
+        table[mask] = lanes;
+        mask += 1;
+    }
+    table
+};
+
+/// The stack of an any-hit traversal: child codes only (the order does not matter, so no
+/// distances), pushed eight lanes at a time and kept with eight spare slots for it.
+struct CodeStack {
+    codes: [MaybeUninit<u32>; STACK_ENTRIES + LANES],
+    len: usize,
+}
+
+impl CodeStack {
+    /// A stack holding the root of `nodes`, unless it is empty (a scene of planes only).
+    #[inline(always)]
+    fn at_root(nodes: &[WideNode]) -> CodeStack {
+        let mut stack = CodeStack {
+            codes: [const { MaybeUninit::uninit() }; STACK_ENTRIES + LANES],
+            len: 0,
+        };
+        if nodes[0].valid != 0 {
+            stack.codes[0] = MaybeUninit::new(0);
+            stack.len = 1;
+        }
+        stack
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<u32> {
+        self.len = self.len.checked_sub(1)?;
+        // SAFETY: the slot was below the length before, so it has been written.
+        Some(unsafe { self.codes[self.len].assume_init() })
+    }
+
+    /// Pushes the children of `mask` in lane order but the last, which it returns: the child
+    /// popped next anyway, visited without a trip through the stack (reading one lane of the
+    /// eight just stored would wait for the store). With AVX2, one permutation and one store
+    /// of all eight lanes, the length then raised by the count: a loop over the set bits
+    /// mispredicted its exit at a third of the any-hit traversal's mispredicted branches.
+    #[inline(always)]
+    fn push_children(&mut self, node: &WideNode, mask: u32, avx2: bool) -> Option<u32> {
+        if mask == 0 {
+            return None;
+        }
+        let last = 31 - mask.leading_zeros() as usize;
+        let mask = mask & !(1 << last);
+        // The depth bound (`cwbvh::build`) keeps the stack within `STACK_ENTRIES`; the eight
+        // lanes written at once need the spare slots above that.
+        assert!(self.len <= STACK_ENTRIES, "the traversal stack overflowed");
+        #[cfg(target_arch = "x86_64")]
+        if avx2 && mask & (mask.wrapping_sub(1)) != 0 {
+            // SAFETY: `avx2` is true only where the CPU has AVX2.
+            unsafe { self.push_children_avx2(node, mask) };
+            return Some(node.child[last]);
+        }
+        let _ = avx2;
+        let mut mask = mask;
+        while mask != 0 {
+            let lane = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            self.codes[self.len] = MaybeUninit::new(node.child[lane]);
+            self.len += 1;
+        }
+        Some(node.child[last])
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn push_children_avx2(&mut self, node: &WideNode, mask: u32) {
+        use std::arch::x86_64::*;
+        let lanes = _mm256_and_si256(
+            _mm256_srlv_epi32(
+                _mm256_set1_epi32(PACK_LANES[mask as usize & 0xff] as i32),
+                _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21),
+            ),
+            _mm256_set1_epi32(7),
+        );
+        // SAFETY: `child` is eight u32s; `len <= STACK_ENTRIES` (asserted by the caller)
+        // leaves eight slots from `len` on.
+        unsafe {
+            let children = _mm256_loadu_si256(node.child.as_ptr().cast());
+            let packed = _mm256_permutevar8x32_epi32(children, lanes);
+            _mm256_storeu_si256(self.codes.as_mut_ptr().add(self.len).cast(), packed);
+        }
+        self.len += mask.count_ones() as usize;
     }
 }
 
@@ -562,17 +691,20 @@ fn closest_hit_inline<const F: u32>(
 ) -> Option<(u32, Hit)> {
     let origin = ray.origin.to_array();
     let inv = ray.inv_direction.to_array();
+    let slabs = Slabs::of(inv);
     let mut best = Hit {
         t: t_max,
         b1: 0.0,
         b2: 0.0,
     };
     let mut best_slot = NONE;
-    let mut stack = Stack::at_root(&bvh.nodes);
-    while let Some((code, t_near)) = stack.pop() {
-        if t_near >= best.t {
-            continue;
-        }
+    let mut stack = Stack::empty();
+    // The code being visited; a scene of planes only has an empty root.
+    let mut code = 0;
+    if bvh.nodes[0].valid == 0 {
+        code = NONE;
+    }
+    'visit: while code != NONE {
         if code & LEAF != 0 {
             for slot in leaf_slots(code) {
                 if slot == skip {
@@ -586,19 +718,56 @@ fn closest_hit_inline<const F: u32>(
                     best_slot = slot;
                 }
             }
-            continue;
-        }
-        let node = &bvh.nodes[code as usize];
-        let (mask, near) = test_node(node, origin, inv, best.t, bvh.avx2);
-        if mask & node.packed != 0 {
-            let (best, best_slot, avx2) = (&mut best, &mut best_slot, bvh.avx2);
-            if has(F, FEATURE_TRIANGLES) {
-                let triangles = bvh.triangles_of(node);
-                nearest_in(triangles, mask, ray, skip, best, best_slot, avx2);
+        } else {
+            let node = &bvh.nodes[code as usize];
+            let (mask, near) = test_node(node, origin, inv, slabs, best.t, bvh.avx2);
+            if mask & node.packed != 0 {
+                let (best, best_slot, avx2) = (&mut best, &mut best_slot, bvh.avx2);
+                if has(F, FEATURE_TRIANGLES) {
+                    let triangles = bvh.triangles_of(node);
+                    nearest_in(triangles, mask, ray, skip, best, best_slot, avx2);
+                }
+                nearest_in(bvh.quads_of(node), mask, ray, skip, best, best_slot, avx2);
             }
-            nearest_in(bvh.quads_of(node), mask, ray, skip, best, best_slot, avx2);
+            // The nearest child is visited next without a trip through the stack; the
+            // others wait there, farthest first.
+            let inner = mask & !node.packed;
+            if inner != 0 {
+                let first = inner.trailing_zeros() as usize;
+                let rest = inner & (inner - 1);
+                if rest == 0 {
+                    if near[first] < best.t {
+                        code = node.child[first];
+                        prefetch(&bvh.nodes, code);
+                        continue 'visit;
+                    }
+                } else if rest & (rest - 1) == 0 {
+                    let second = rest.trailing_zeros() as usize;
+                    // The order `push_nearest_last` gives two: the later lane first at a tie.
+                    let (nearer, farther) = if near[first] < near[second] {
+                        (first, second)
+                    } else {
+                        (second, first)
+                    };
+                    prefetch(&bvh.nodes, node.child[farther]);
+                    stack.push((node.child[farther], near[farther]));
+                    if near[nearer] < best.t {
+                        code = node.child[nearer];
+                        prefetch(&bvh.nodes, code);
+                        continue 'visit;
+                    }
+                } else {
+                    stack.push_nearest_last(&bvh.nodes, node, inner, &near);
+                }
+            }
         }
-        stack.push_nearest_last(&bvh.nodes, node, mask & !node.packed, &near);
+        code = NONE;
+        while let Some((next, t_near)) = stack.pop() {
+            if t_near < best.t {
+                code = next;
+                break;
+            }
+        }
     }
     closest_plane::<F>(
         &bvh.prims,
@@ -620,8 +789,10 @@ fn occluded_inline<const F: u32>(
 ) -> bool {
     let origin = ray.origin.to_array();
     let inv = ray.inv_direction.to_array();
-    let mut stack = Stack::at_root(&bvh.nodes);
-    while let Some((code, _)) = stack.pop() {
+    let slabs = Slabs::of(inv);
+    let mut stack = CodeStack::at_root(&bvh.nodes);
+    let mut visit = stack.pop();
+    while let Some(code) = visit {
         if code & LEAF != 0 {
             for slot in leaf_slots(code) {
                 if skip.contains(&slot) {
@@ -633,10 +804,11 @@ fn occluded_inline<const F: u32>(
                     return true;
                 }
             }
+            visit = stack.pop();
             continue;
         }
         let node = &bvh.nodes[code as usize];
-        let (mut mask, near) = test_node(node, origin, inv, t_max, bvh.avx2);
+        let (mask, _) = test_node(node, origin, inv, slabs, t_max, bvh.avx2);
         if mask & node.packed != 0 {
             let triangles = has(F, FEATURE_TRIANGLES)
                 && any_in(bvh.triangles_of(node), mask, ray, skip, t_max, bvh.avx2);
@@ -644,12 +816,9 @@ fn occluded_inline<const F: u32>(
                 return true;
             }
         }
-        mask &= !node.packed;
-        while mask != 0 {
-            let lane = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            stack.push((node.child[lane], near[lane]));
-        }
+        visit = stack
+            .push_children(node, mask & !node.packed, bvh.avx2)
+            .or_else(|| stack.pop());
     }
     plane_occludes::<F>(&bvh.prims, bvh.planes(), ray, skip[0], skip[1], t_max)
 }
@@ -738,6 +907,72 @@ mod tests {
             "{name}: {hits} hits"
         );
         assert!(ties <= 4, "{name}: {ties} ties");
+    }
+
+    /// The AVX2 node test, which takes each axis's near and far planes by the ray's direction
+    /// instead of sorting the two, finds the portable test's hit bits and entry distances
+    /// (equal as numbers: a zero's sign may differ, which no comparison sees) on random nodes
+    /// of boxes from 1e-6 to 1e6 wide, flat ones (a plane's two bounds equal) among them, and
+    /// rays with components at the smallest direction kept, inside and outside the boxes.
+    #[test]
+    fn the_avx2_node_test_equals_the_portable_one() {
+        if !avx2_available() {
+            eprintln!("no AVX2 on this CPU: only the portable node test runs");
+            return;
+        }
+        let mut rng = crate::math::rng::Rng::new(3, 0, 0);
+        let mut unit = move || rng.next_f32() * 2.0 - 1.0;
+        let (mut hits, mut compared) = (0, 0);
+        for round in 0..20_000u32 {
+            let scale = 10f32.powi((round % 13) as i32 - 6);
+            let mut node = WideNode::default();
+            for lane in 0..LANES {
+                for axis in 0..3 {
+                    let (a, b) = (unit() * scale, unit() * scale);
+                    let (lo, hi) = if (round + lane as u32).is_multiple_of(5) {
+                        (a, a)
+                    } else {
+                        (a.min(b), a.max(b))
+                    };
+                    node.planes[axis][lane] = lo;
+                    node.planes[3 + axis][lane] = hi;
+                }
+            }
+            node.valid = [0xff, 0b1010_0111][round as usize / 3 % 2];
+            let origin = Vec3::new(unit(), unit(), unit()) * scale * 2.0;
+            // Every other ray is aimed near the centre of one lane's box.
+            let lane = round as usize / 2 % LANES;
+            let centre = Vec3::from_array(std::array::from_fn(|axis| {
+                0.5 * (node.planes[axis][lane] + node.planes[3 + axis][lane])
+            }));
+            let aimed = centre + Vec3::new(unit(), unit(), unit()) * 0.1 * scale - origin;
+            let mut direction = match round % 2 {
+                0 => aimed,
+                _ => Vec3::new(unit(), unit(), unit()),
+            };
+            match round % 7 {
+                0 => direction.x = 0.0,
+                1 => direction.y = -0.0,
+                2 => direction.z = 1e-30,
+                _ => {}
+            }
+            let ray = RayQuery::new(origin, direction);
+            let (origin, inv) = (ray.origin.to_array(), ray.inv_direction.to_array());
+            let t_max = [T_FAR, scale, 0.1 * scale][round as usize % 3];
+            let expected = node_hits(&node, origin, inv, t_max);
+            // SAFETY: the CPU has AVX2 (checked above).
+            let found = unsafe { node_hits_avx2(&node, origin, inv, Slabs::of(inv), t_max) };
+            assert_eq!(found.0, expected.0, "round {round}: hit bits");
+            for lane in 0..LANES {
+                if expected.0 & (1 << lane) != 0 {
+                    assert_eq!(found.1[lane], expected.1[lane], "round {round} lane {lane}");
+                    compared += 1;
+                }
+            }
+            hits += (expected.0 != 0) as usize;
+        }
+        assert!(hits > 2000 && hits < 19_000, "{hits} rounds with a hit");
+        assert!(compared > 5000, "{compared} entry distances compared");
     }
 
     #[test]

@@ -91,8 +91,8 @@ fn interval_hits(node: &WideNode, interval: &Interval, t_max: f32) -> (u32, [f32
                     interval.inv_hi[axis],
                 )
             };
-            let (lo_min, lo_max) = ends(node.lo[axis][lane]);
-            let (hi_min, hi_max) = ends(node.hi[axis][lane]);
+            let (lo_min, lo_max) = ends(node.planes[axis][lane]);
+            let (hi_min, hi_max) = ends(node.planes[3 + axis][lane]);
             // A ray's min(t1, t2) is at least the least of both; its max(t1, t2) at most the
             // greatest.
             t_near = max(t_near, min(lo_min, hi_min));
@@ -137,8 +137,8 @@ fn interval_hits_avx2<const SHARED: bool>(
         // SAFETY: `lo` and `hi` rows are eight f32s each.
         let (lo, hi) = unsafe {
             (
-                _mm256_loadu_ps(node.lo[axis].as_ptr()),
-                _mm256_loadu_ps(node.hi[axis].as_ptr()),
+                _mm256_loadu_ps(node.planes[axis].as_ptr()),
+                _mm256_loadu_ps(node.planes[3 + axis].as_ptr()),
             )
         };
         let (lo_min, lo_max) = ends(lo);
@@ -305,9 +305,10 @@ fn occluded_packet_inline<const F: u32>(
     let all = (1u32 << rays.len()) - 1;
     // Bit per ray: something lies along it.
     let mut done = 0u32;
-    let mut stack = Stack::at_root(&bvh.nodes);
+    let mut stack = CodeStack::at_root(&bvh.nodes);
+    let mut visit = stack.pop();
     while done != all {
-        let Some((code, _)) = stack.pop() else {
+        let Some(code) = visit else {
             break;
         };
         if code & LEAF != 0 {
@@ -321,10 +322,11 @@ fn occluded_packet_inline<const F: u32>(
                 });
                 done |= (hits as u32) << r;
             }
+            visit = stack.pop();
             continue;
         }
         let node = &bvh.nodes[code as usize];
-        let (mut mask, near) = test_interval(node, &interval, t_max, bvh.avx2);
+        let (mask, _) = test_interval(node, &interval, t_max, bvh.avx2);
         if mask & node.packed != 0 {
             let leaves = mask & node.packed;
             for (r, ray) in rays.iter().enumerate() {
@@ -345,12 +347,9 @@ fn occluded_packet_inline<const F: u32>(
                 done |= (hits as u32) << r;
             }
         }
-        mask &= !node.packed;
-        while mask != 0 {
-            let lane = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            stack.push((node.child[lane], near[lane]));
-        }
+        visit = stack
+            .push_children(node, mask & !node.packed, bvh.avx2)
+            .or_else(|| stack.pop());
     }
     for (r, ray) in rays.iter().enumerate() {
         blocked[r] = done & (1 << r) != 0
