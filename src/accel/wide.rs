@@ -351,10 +351,11 @@ struct Slabs {
 impl Slabs {
     #[inline(always)]
     fn of(inv: [f32; 3]) -> Slabs {
-        let near = [0, 1, 2].map(|axis| if inv[axis] < 0.0 { 3 + axis } else { axis });
+        // Arithmetic on the signs, not a branch or a remainder: this runs for every ray.
+        let backward = inv.map(|i| 3 * (i < 0.0) as usize);
         Slabs {
-            near,
-            far: near.map(|row| (row + 3) % 6),
+            near: [backward[0], 1 + backward[1], 2 + backward[2]],
+            far: [3 - backward[0], 4 - backward[1], 5 - backward[2]],
         }
     }
 }
