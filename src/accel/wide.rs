@@ -6,8 +6,9 @@
 //! static triangles and quads of a node's leaves tested eight at a time (`octet`: the same
 //! tests, lane by lane), so the hits are the BVH2's: the boxes are the CWBVH's, dequantised
 //! with the very arithmetic of `cwbvh::child_hits` (`p + e * q`) and tested with
-//! `intersect::intersect_box`'s slab test (the same operations in the same order), so a child
-//! this traversal skips is one the GPU's CWBVH skips too. Coherent rays can also go through
+//! `intersect::intersect_box`'s slab test (the same distances: the AVX2 test picks each axis's
+//! near and far planes by the ray's direction instead of sorting the two), so a child this
+//! traversal skips is one the GPU's CWBVH skips too. Coherent rays can also go through
 //! in packets of eight (`packet`), each node tested once for the packet.
 //!
 //! No GPU twin: the GPU traverses the compressed nodes (`wgsl/traverse_cwbvh.wgsl`), 80 bytes

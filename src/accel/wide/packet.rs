@@ -134,7 +134,7 @@ fn interval_hits_avx2<const SHARED: bool>(
                 _mm256_max_ps(_mm256_max_ps(a, b), _mm256_max_ps(c, d)),
             )
         };
-        // SAFETY: `lo` and `hi` rows are eight f32s each.
+        // SAFETY: the planes' rows are eight f32s each.
         let (lo, hi) = unsafe {
             (
                 _mm256_loadu_ps(node.planes[axis].as_ptr()),
