@@ -702,7 +702,9 @@ fn closest_hit_inline<const F: u32>(
     };
     let mut best_slot = NONE;
     let mut stack = Stack::empty();
-    // The code being visited; a scene of planes only has an empty root.
+    // The code being visited, `NONE` for none: no child's code is `NONE` (a leaf's first
+    // slot is below `LEAF_FIRST`, which `build` checks). A scene of planes only has an empty
+    // root.
     let mut code = 0;
     if bvh.nodes[0].valid == 0 {
         code = NONE;
