@@ -28,7 +28,9 @@ use crate::layout::{
 };
 
 mod packet;
+mod stream;
 pub use packet::PACKET;
+pub use stream::IN_FLIGHT;
 
 /// Lanes of a node: the CWBVH's eight children.
 const LANES: usize = 8;
@@ -456,6 +458,30 @@ fn prefetch(nodes: &[WideNode], code: u32) {
     }
 }
 
+/// Asks the cache for every line of a node's octets (which of them hold a hit leaf is known
+/// only once they are read).
+#[inline(always)]
+fn prefetch_octets(bvh: &WideBvh, node: &WideNode) {
+    prefetch_lines(bvh.triangles_of(node));
+    prefetch_lines(bvh.quads_of(node));
+}
+
+/// Asks the cache for every line of `items`.
+#[inline(always)]
+fn prefetch_lines<T>(items: &[T]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let start = items.as_ptr().cast::<i8>();
+        for offset in (0..std::mem::size_of_val(items)).step_by(64) {
+            // SAFETY: prefetching is a hint; the addresses are within the items.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(start.add(offset)) };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = items;
+}
+
 /// The traversal stack: (child code, entry distance) pairs. The array is left uninitialised
 /// and only entries below `len` are ever read: zeroing its 1.8 KB for every ray cost 4% of a
 /// frame of a few primitives (`cornell_direct`, where two traversals a sample are short).
@@ -560,13 +586,18 @@ struct CodeStack {
 }
 
 impl CodeStack {
+    #[inline(always)]
+    fn empty() -> CodeStack {
+        CodeStack {
+            codes: [const { MaybeUninit::uninit() }; STACK_ENTRIES + LANES],
+            len: 0,
+        }
+    }
+
     /// A stack holding the root of `nodes`, unless it is empty (a scene of planes only).
     #[inline(always)]
     fn at_root(nodes: &[WideNode]) -> CodeStack {
-        let mut stack = CodeStack {
-            codes: [const { MaybeUninit::uninit() }; STACK_ENTRIES + LANES],
-            len: 0,
-        };
+        let mut stack = CodeStack::empty();
         if nodes[0].valid != 0 {
             stack.codes[0] = MaybeUninit::new(0);
             stack.len = 1;
@@ -685,6 +716,203 @@ fn any_in<R: Rows>(
     false
 }
 
+/// A node's children's box test: a bit per child hit, and each child's entry distance.
+#[derive(Clone, Copy)]
+struct Opened {
+    mask: u32,
+    near: [f32; LANES],
+}
+
+/// One ray's closest-hit traversal, one visit (a node, or a leaf of other primitives) a
+/// [`step`](Self::step): the one-ray query steps it to its end; a stream (`stream`) steps
+/// several in turn, so that while one ray's next node comes from memory the others work.
+/// Its stack is kept apart: in one struct with it, the ray's fields were reloaded from memory
+/// at every step (12 instructions a visit).
+struct ClosestSearch<'r> {
+    ray: &'r RayQuery,
+    origin: [f32; 3],
+    inv: [f32; 3],
+    slabs: Slabs,
+    skip: u32,
+    best: Hit,
+    best_slot: u32,
+    /// The code visited next, `NONE` once the search is over: no child's code is `NONE` (a
+    /// leaf's first slot is below `LEAF_FIRST`, which `build` checks).
+    code: u32,
+}
+
+impl<'r> ClosestSearch<'r> {
+    /// The search for `ray`'s closest hit before `t_max` but slot `skip`, at the root (over at
+    /// once in a scene of planes only, whose root is empty).
+    #[inline(always)]
+    fn new(bvh: &WideBvh, ray: &'r RayQuery, skip: u32, t_max: f32) -> Self {
+        let inv = ray.inv_direction.to_array();
+        ClosestSearch {
+            ray,
+            origin: ray.origin.to_array(),
+            inv,
+            slabs: Slabs::of(inv),
+            skip,
+            best: Hit {
+                t: t_max,
+                b1: 0.0,
+                b2: 0.0,
+            },
+            best_slot: NONE,
+            code: if bvh.nodes[0].valid == 0 { NONE } else { 0 },
+        }
+    }
+
+    fn running(&self) -> bool {
+        self.code != NONE
+    }
+
+    /// Visits the code in hand (the search must be running) and takes the next: the nearest
+    /// hit child directly, else the nearest entry of the stack nearer than the best hit.
+    /// Whether the search goes on.
+    #[inline(always)]
+    fn step<const F: u32>(&mut self, bvh: &WideBvh, stack: &mut Stack) -> bool {
+        let code = self.code;
+        if code & LEAF != 0 {
+            self.test_leaf::<F>(bvh, code);
+            return self.pop(stack);
+        }
+        let node = &bvh.nodes[code as usize];
+        let opened = self.open(bvh, node);
+        self.test_octets::<F>(bvh, node, opened.mask);
+        self.descend(bvh, node, &opened, stack)
+    }
+
+    /// The node's children's box test.
+    #[inline(always)]
+    fn open(&self, bvh: &WideBvh, node: &WideNode) -> Opened {
+        let (origin, inv, slabs) = (self.origin, self.inv, self.slabs);
+        let (mask, near) = test_node(node, origin, inv, slabs, self.best.t, bvh.avx2);
+        Opened { mask, near }
+    }
+
+    /// Takes the nearest of the stack's entries nearer than the best hit, if any.
+    #[inline(always)]
+    fn pop(&mut self, stack: &mut Stack) -> bool {
+        self.code = NONE;
+        while let Some((next, t_near)) = stack.pop() {
+            if t_near < self.best.t {
+                self.code = next;
+                break;
+            }
+        }
+        self.running()
+    }
+
+    /// Goes on from a node whose octets are tested: to the child [`Self::descend_to`] names,
+    /// else to the stack's next entry.
+    #[inline(always)]
+    fn descend(
+        &mut self,
+        bvh: &WideBvh,
+        node: &WideNode,
+        opened: &Opened,
+        stack: &mut Stack,
+    ) -> bool {
+        match self.descend_to(bvh, node, opened, stack) {
+            Some(next) => {
+                self.code = next;
+                true
+            }
+            None => self.pop(stack),
+        }
+    }
+
+    /// The primitives of a leaf that is not packed, one by one.
+    #[inline(always)]
+    fn test_leaf<const F: u32>(&mut self, bvh: &WideBvh, code: u32) {
+        for slot in leaf_slots(code) {
+            if slot == self.skip {
+                continue;
+            }
+            let moved = bvh.ray_for(self.ray, slot);
+            let prim = &bvh.prims[slot as usize];
+            let hit = intersect_primitive::<F>(&moved, prim, self.best.t);
+            if hit.t < self.best.t {
+                self.best = hit;
+                self.best_slot = slot;
+            }
+        }
+    }
+
+    /// The octets of `node`'s packed leaves among the hit children `mask`.
+    #[inline(always)]
+    fn test_octets<const F: u32>(&mut self, bvh: &WideBvh, node: &WideNode, mask: u32) {
+        if mask & node.packed != 0 {
+            let (ray, skip, avx2) = (self.ray, self.skip, bvh.avx2);
+            let (best, best_slot) = (&mut self.best, &mut self.best_slot);
+            if has(F, FEATURE_TRIANGLES) {
+                let triangles = bvh.triangles_of(node);
+                nearest_in(triangles, mask, ray, skip, best, best_slot, avx2);
+            }
+            nearest_in(bvh.quads_of(node), mask, ray, skip, best, best_slot, avx2);
+        }
+    }
+
+    /// The hit inner child of an opened node to visit next without a trip through the
+    /// stack, if any (the others wait there, farthest first).
+    #[inline(always)]
+    fn descend_to(
+        &mut self,
+        bvh: &WideBvh,
+        node: &WideNode,
+        opened: &Opened,
+        stack: &mut Stack,
+    ) -> Option<u32> {
+        let (mask, near) = (opened.mask, &opened.near);
+        let inner = mask & !node.packed;
+        if inner == 0 {
+            return None;
+        }
+        let first = inner.trailing_zeros() as usize;
+        let rest = inner & (inner - 1);
+        let nearer = if rest == 0 {
+            first
+        } else if rest & (rest - 1) == 0 {
+            let second = rest.trailing_zeros() as usize;
+            // The order `push_nearest_last` gives two: the later lane first at a tie.
+            let (nearer, farther) = if near[first] < near[second] {
+                (first, second)
+            } else {
+                (second, first)
+            };
+            prefetch(&bvh.nodes, node.child[farther]);
+            stack.push((node.child[farther], near[farther]));
+            nearer
+        } else {
+            stack.push_nearest_last(&bvh.nodes, node, inner, near);
+            return None;
+        };
+        if near[nearer] >= self.best.t {
+            return None;
+        }
+        let code = node.child[nearer];
+        prefetch(&bvh.nodes, code);
+        Some(code)
+    }
+
+    /// The search's result once it is over: the planes tested, the slot named as the scene's
+    /// primitive.
+    #[inline(always)]
+    fn finish<const F: u32>(mut self, bvh: &WideBvh) -> Option<(u32, Hit)> {
+        let (best, best_slot) = (&mut self.best, &mut self.best_slot);
+        closest_plane::<F>(
+            &bvh.prims,
+            bvh.planes(),
+            self.ray,
+            self.skip,
+            best,
+            best_slot,
+        );
+        (self.best_slot != NONE).then(|| (bvh.ids[self.best_slot as usize], self.best))
+    }
+}
+
 #[inline(always)]
 fn closest_hit_inline<const F: u32>(
     bvh: &WideBvh,
@@ -692,112 +920,53 @@ fn closest_hit_inline<const F: u32>(
     skip: u32,
     t_max: f32,
 ) -> Option<(u32, Hit)> {
-    let origin = ray.origin.to_array();
-    let inv = ray.inv_direction.to_array();
-    let slabs = Slabs::of(inv);
-    let mut best = Hit {
-        t: t_max,
-        b1: 0.0,
-        b2: 0.0,
-    };
-    let mut best_slot = NONE;
+    let mut search = ClosestSearch::new(bvh, ray, skip, t_max);
     let mut stack = Stack::empty();
-    // The code being visited, `NONE` for none: no child's code is `NONE` (a leaf's first
-    // slot is below `LEAF_FIRST`, which `build` checks). A scene of planes only has an empty
-    // root.
-    let mut code = 0;
-    if bvh.nodes[0].valid == 0 {
-        code = NONE;
+    if search.running() {
+        while search.step::<F>(bvh, &mut stack) {}
     }
-    'visit: while code != NONE {
-        if code & LEAF != 0 {
-            for slot in leaf_slots(code) {
-                if slot == skip {
-                    continue;
-                }
-                let moved = bvh.ray_for(ray, slot);
-                let prim = &bvh.prims[slot as usize];
-                let hit = intersect_primitive::<F>(&moved, prim, best.t);
-                if hit.t < best.t {
-                    best = hit;
-                    best_slot = slot;
-                }
-            }
-        } else {
-            let node = &bvh.nodes[code as usize];
-            let (mask, near) = test_node(node, origin, inv, slabs, best.t, bvh.avx2);
-            if mask & node.packed != 0 {
-                let (best, best_slot, avx2) = (&mut best, &mut best_slot, bvh.avx2);
-                if has(F, FEATURE_TRIANGLES) {
-                    let triangles = bvh.triangles_of(node);
-                    nearest_in(triangles, mask, ray, skip, best, best_slot, avx2);
-                }
-                nearest_in(bvh.quads_of(node), mask, ray, skip, best, best_slot, avx2);
-            }
-            // The nearest child is visited next without a trip through the stack; the
-            // others wait there, farthest first.
-            let inner = mask & !node.packed;
-            if inner != 0 {
-                let first = inner.trailing_zeros() as usize;
-                let rest = inner & (inner - 1);
-                if rest == 0 {
-                    if near[first] < best.t {
-                        code = node.child[first];
-                        prefetch(&bvh.nodes, code);
-                        continue 'visit;
-                    }
-                } else if rest & (rest - 1) == 0 {
-                    let second = rest.trailing_zeros() as usize;
-                    // The order `push_nearest_last` gives two: the later lane first at a tie.
-                    let (nearer, farther) = if near[first] < near[second] {
-                        (first, second)
-                    } else {
-                        (second, first)
-                    };
-                    prefetch(&bvh.nodes, node.child[farther]);
-                    stack.push((node.child[farther], near[farther]));
-                    if near[nearer] < best.t {
-                        code = node.child[nearer];
-                        prefetch(&bvh.nodes, code);
-                        continue 'visit;
-                    }
-                } else {
-                    stack.push_nearest_last(&bvh.nodes, node, inner, &near);
-                }
-            }
-        }
-        code = NONE;
-        while let Some((next, t_near)) = stack.pop() {
-            if t_near < best.t {
-                code = next;
-                break;
-            }
-        }
-    }
-    closest_plane::<F>(
-        &bvh.prims,
-        bvh.planes(),
-        ray,
-        skip,
-        &mut best,
-        &mut best_slot,
-    );
-    (best_slot != NONE).then(|| (bvh.ids[best_slot as usize], best))
+    search.finish::<F>(bvh)
 }
 
-#[inline(always)]
-fn occluded_inline<const F: u32>(
-    bvh: &WideBvh,
-    ray: &RayQuery,
+/// One ray's any-hit traversal, one visit a [`step`](Self::step), its stack kept apart, as
+/// [`ClosestSearch`].
+struct AnySearch<'r> {
+    ray: &'r RayQuery,
+    origin: [f32; 3],
+    inv: [f32; 3],
+    slabs: Slabs,
     skip: [u32; 2],
     t_max: f32,
-) -> bool {
-    let origin = ray.origin.to_array();
-    let inv = ray.inv_direction.to_array();
-    let slabs = Slabs::of(inv);
-    let mut stack = CodeStack::at_root(&bvh.nodes);
-    let mut visit = stack.pop();
-    while let Some(code) = visit {
+    /// The code visited next; none once the search is over.
+    visit: Option<u32>,
+    /// Something was found (kept for a stream, which finishes the search later).
+    found: bool,
+}
+
+impl<'r> AnySearch<'r> {
+    /// The search for anything but slots `skip` along `ray` before `t_max`, at the root of
+    /// `nodes`, with `stack` empty.
+    #[inline(always)]
+    fn new(nodes: &[WideNode], ray: &'r RayQuery, skip: [u32; 2], t_max: f32) -> Self {
+        let inv = ray.inv_direction.to_array();
+        AnySearch {
+            ray,
+            origin: ray.origin.to_array(),
+            inv,
+            slabs: Slabs::of(inv),
+            skip,
+            t_max,
+            visit: (nodes[0].valid != 0).then_some(0),
+            found: false,
+        }
+    }
+
+    /// Visits `code`, the one `visit` held, and puts the next in `visit` (none when the BVH
+    /// has nothing left to visit): whether something lies along the ray (the search is then
+    /// over).
+    #[inline(always)]
+    fn step<const F: u32>(&mut self, bvh: &WideBvh, code: u32, stack: &mut CodeStack) -> bool {
+        let (ray, skip, t_max) = (self.ray, self.skip, self.t_max);
         if code & LEAF != 0 {
             for slot in leaf_slots(code) {
                 if skip.contains(&slot) {
@@ -809,23 +978,80 @@ fn occluded_inline<const F: u32>(
                     return true;
                 }
             }
-            visit = stack.pop();
-            continue;
+            self.visit = stack.pop();
+            return false;
         }
         let node = &bvh.nodes[code as usize];
-        let (mask, _) = test_node(node, origin, inv, slabs, t_max, bvh.avx2);
-        if mask & node.packed != 0 {
-            let triangles = has(F, FEATURE_TRIANGLES)
-                && any_in(bvh.triangles_of(node), mask, ray, skip, t_max, bvh.avx2);
-            if triangles || any_in(bvh.quads_of(node), mask, ray, skip, t_max, bvh.avx2) {
-                return true;
-            }
+        let mask = self.open(bvh, node);
+        self.any_in_octets::<F>(bvh, node, mask) || self.descend(bvh, node, mask, stack)
+    }
+
+    /// The node's children's box test: a bit per child hit.
+    #[inline(always)]
+    fn open(&self, bvh: &WideBvh, node: &WideNode) -> u32 {
+        let (origin, inv, slabs) = (self.origin, self.inv, self.slabs);
+        test_node(node, origin, inv, slabs, self.t_max, bvh.avx2).0
+    }
+
+    /// Whether something in the octets of `node`'s packed leaves among the hit children
+    /// `mask` lies along the ray.
+    #[inline(always)]
+    fn any_in_octets<const F: u32>(&self, bvh: &WideBvh, node: &WideNode, mask: u32) -> bool {
+        if mask & node.packed == 0 {
+            return false;
         }
-        visit = stack
+        let (ray, skip, t_max, avx2) = (self.ray, self.skip, self.t_max, bvh.avx2);
+        let triangles = has(F, FEATURE_TRIANGLES)
+            && any_in(bvh.triangles_of(node), mask, ray, skip, t_max, avx2);
+        triangles || any_in(bvh.quads_of(node), mask, ray, skip, t_max, avx2)
+    }
+
+    /// Goes on from a node whose octets held nothing: to its last hit inner child, the
+    /// others pushed, else to the stack's top. Never finds anything (the `false` of `step`).
+    #[inline(always)]
+    fn descend(
+        &mut self,
+        bvh: &WideBvh,
+        node: &WideNode,
+        mask: u32,
+        stack: &mut CodeStack,
+    ) -> bool {
+        self.visit = stack
             .push_children(node, mask & !node.packed, bvh.avx2)
             .or_else(|| stack.pop());
+        false
     }
-    plane_occludes::<F>(&bvh.prims, bvh.planes(), ray, skip[0], skip[1], t_max)
+
+    /// Whether one of the planes lies along the ray, once the BVH held nothing.
+    #[inline(always)]
+    fn planes_occlude<const F: u32>(&self, bvh: &WideBvh) -> bool {
+        let [skip_a, skip_b] = self.skip;
+        plane_occludes::<F>(
+            &bvh.prims,
+            bvh.planes(),
+            self.ray,
+            skip_a,
+            skip_b,
+            self.t_max,
+        )
+    }
+}
+
+#[inline(always)]
+fn occluded_inline<const F: u32>(
+    bvh: &WideBvh,
+    ray: &RayQuery,
+    skip: [u32; 2],
+    t_max: f32,
+) -> bool {
+    let mut search = AnySearch::new(&bvh.nodes, ray, skip, t_max);
+    let mut stack = CodeStack::empty();
+    while let Some(code) = search.visit {
+        if search.step::<F>(bvh, code, &mut stack) {
+            return true;
+        }
+    }
+    search.planes_occlude::<F>(bvh)
 }
 
 #[cfg(target_arch = "x86_64")]

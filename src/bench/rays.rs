@@ -104,6 +104,9 @@ named_enum! {
         /// The wide BVH traced in packets of eight rays (`accel::wide::packet`; the CPU only):
         /// 4x2 pixels of a frame for the camera's rays, eight consecutive rays otherwise.
         Packets = "packets",
+        /// The wide BVH traced by streams of rays, eight of them at once a node each in turn
+        /// (`accel::wide::stream`; the CPU only).
+        Stream = "stream",
     }
 }
 
@@ -115,6 +118,7 @@ impl Bvh {
             Bvh::Cwbvh => "CWBVH",
             Bvh::Wide => "wide (CPU)",
             Bvh::Packets => "wide, packets of 8 (CPU)",
+            Bvh::Stream => "wide, streams of 8 in flight (CPU)",
         }
     }
 }
@@ -216,8 +220,10 @@ impl Checksum {
 /// Per ray: the closest-hit distance (`T_FAR` on a miss), or 0 / `T_FAR` for occluded / free;
 /// through `bvh`.
 pub fn trace_cpu(scene: &FlatScene, bvh: Bvh, rays: &RaySet, query: Query) -> Result<Vec<f32>> {
-    if bvh == Bvh::Packets {
-        return trace_packets(scene.wide().map_err(Error::Gpu)?, rays, query);
+    match bvh {
+        Bvh::Packets => return trace_packets(scene.wide().map_err(Error::Gpu)?, rays, query),
+        Bvh::Stream => return trace_stream(scene.wide().map_err(Error::Gpu)?, rays, query),
+        _ => {}
     }
     let cw = match bvh {
         Bvh::Cwbvh => Some(scene.cwbvh().map_err(Error::Gpu)?),
@@ -296,6 +302,38 @@ fn trace_packets(wide: &WideBvh, rays: &RaySet, query: Query) -> Result<Vec<f32>
             distances[i as usize] = d;
         }
     }
+    Ok(distances)
+}
+
+/// [`trace_cpu`] through the wide BVH in streams of the rays' order, 1024 rays a stream (the
+/// one-ray queries' share of work a thread takes at once).
+fn trace_stream(wide: &WideBvh, rays: &RaySet, query: Query) -> Result<Vec<f32>> {
+    let mut distances = vec![T_FAR; rays.len()];
+    distances
+        .par_chunks_mut(1024)
+        .enumerate()
+        .for_each(|(chunk, distances)| {
+            let first = chunk * 1024;
+            let queries: Vec<RayQuery> = (first..first + distances.len())
+                .map(|i| RayQuery::new(rays.origins[i], rays.directions[i]))
+                .collect();
+            match query {
+                Query::ClosestHit => {
+                    let mut hits = vec![None; queries.len()];
+                    wide.closest_hit_stream::<FEATURES_ALL>(&queries, T_FAR, &mut hits);
+                    for (d, hit) in distances.iter_mut().zip(&hits) {
+                        *d = hit.map_or(T_FAR, |(_, hit)| hit.t);
+                    }
+                }
+                Query::AnyHit => {
+                    let mut blocked = vec![false; queries.len()];
+                    wide.occluded_stream::<FEATURES_ALL>(&queries, T_FAR, &mut blocked);
+                    for (d, &b) in distances.iter_mut().zip(&blocked) {
+                        *d = if b { 0.0 } else { T_FAR };
+                    }
+                }
+            }
+        });
     Ok(distances)
 }
 
@@ -625,7 +663,8 @@ pub fn run(
         }
         for &backend in backends {
             for &bvh in &config.bvhs {
-                if matches!(bvh, Bvh::Wide | Bvh::Packets) && backend == Backend::Gpu {
+                if matches!(bvh, Bvh::Wide | Bvh::Packets | Bvh::Stream) && backend == Backend::Gpu
+                {
                     continue;
                 }
                 let cwbvh = (bvh == Bvh::Cwbvh).then_some(cw);
