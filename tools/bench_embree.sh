@@ -20,7 +20,7 @@ rounds="${1:-2}"
 runs="${2:-5}"
 frames="${FRAMES:-8}"
 size="${SIZE:-1024}"
-bvh="${BVH:-bvh2,cwbvh,wide,packets}"
+bvh="${BVH:-bvh2,cwbvh,wide,packets,stream}"
 SUDO=""
 [ "$(id -u)" -ne 0 ] && SUDO="sudo"
 
@@ -80,8 +80,8 @@ model = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo")
 flags = next((l.split(":", 1)[1].split() for l in open("/proc/cpuinfo")
               if l.startswith("flags")), [])
 isa = "AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags else "SSE"
-bvh_label = {"bvh2": "BVH2", "cwbvh": "CWBVH", "wide": "wide (CPU)",
-             "packets": "wide, packets of 8 (CPU)"}
+sys.path.insert(0, "tools")
+from bench_tables import BVH_LABELS as bvh_label
 
 def rows(report, key):
     return {key(r): r for r in report}

@@ -382,7 +382,7 @@ pub struct RaysArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u32,
     /// Acceleration structures to traverse, side by side (`wide` on the CPU only).
-    #[arg(long, value_parser = named::<Bvh>(), value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh, Bvh::Wide, Bvh::Packets])]
+    #[arg(long, value_parser = named::<Bvh>(), value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh, Bvh::Wide, Bvh::Packets, Bvh::Stream])]
     pub bvh: Vec<Bvh>,
     /// wgpu's run-time checks of the GPU kernels, side by side (default: chambre's).
     #[arg(long, value_parser = named::<ShaderChecks>(), value_delimiter = ',')]
