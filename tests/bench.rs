@@ -87,9 +87,9 @@ fn bench_rays_reports_the_same_checksum_on_every_backend() {
     let results = body["results"].as_array().unwrap();
     assert_eq!(
         results.len(),
-        24,
-        "2 sets x 2 queries x (2 backends x 2 BVH layouts + the CPU's wide BVH, one ray and \
-         packets at a time)"
+        28,
+        "2 sets x 2 queries x (2 backends x 2 BVH layouts + the CPU's wide BVH, one ray, \
+         packets and streams at a time)"
     );
     for r in results {
         assert_eq!(r["rays"].as_u64(), Some(48 * 32 * 2));
@@ -109,7 +109,7 @@ fn bench_rays_reports_the_same_checksum_on_every_backend() {
                 && o["query"] == r["query"]
                 && (o["backend"] != r["backend"] || o["bvh"] != r["bvh"])
         });
-        assert_eq!(twins.clone().count(), 5);
+        assert_eq!(twins.clone().count(), 6);
         let a = r["checksum"]["sum_t"].as_f64().unwrap();
         for twin in twins {
             assert_eq!(
