@@ -1058,12 +1058,30 @@ mod tests {
 
     /// Each sample [`trace_pixel`] traces (camera rays in packets) has the radiance and first
     /// hit [`trace_sample`] gives it alone, bit for bit but at a tie: on triangles (packed
-    /// octets), quads and spheres, through a lens, and with motion blur (one ray at a time in
-    /// leaves that are not packed), over ranges that do not start at 0 or fill the last packet.
+    /// octets), quads and spheres, through a lens, with motion blur (one ray at a time in
+    /// leaves that are not packed), and path traced, over ranges that do not start at 0 or
+    /// fill the last packet.
     #[test]
     fn a_pixels_samples_traced_in_packets_are_those_traced_alone() {
-        let cases: [(&str, &[&str]); 4] = [
+        let cases: [(&str, &[&str]); 6] = [
             ("bunny.toml", &[]),
+            // Path traced: bounces, Russian roulette, multiple importance sampling.
+            (
+                "cornell_box.toml",
+                &[
+                    "render.integrator=\"path\"",
+                    "render.max_depth=4",
+                    "render.rr_depth=2",
+                ],
+            ),
+            (
+                "tabletop.toml",
+                &[
+                    "render.integrator=\"path\"",
+                    "render.ambient=[0,0,0]",
+                    "render.max_depth=3",
+                ],
+            ),
             ("cornell_direct.toml", &[]),
             ("thin_lens.toml", &[]),
             (
