@@ -68,6 +68,7 @@ struct WideNode {
 }
 
 /// The wide BVH of a scene and the primitives its leaves index.
+#[derive(Clone)]
 pub struct WideBvh {
     nodes: Vec<WideNode>,
     /// The static triangles of the nodes' leaves, node by node.
@@ -1090,15 +1091,8 @@ mod tests {
     fn check(name: &str, flat: &FlatScene) {
         let wide = flat.wide().unwrap();
         let portable = WideBvh {
-            nodes: wide.nodes.clone(),
-            octets: wide.octets.clone(),
-            quads: wide.quads.clone(),
-            prims: wide.prims.clone(),
-            ids: wide.ids.clone(),
-            slot_of: wide.slot_of.clone(),
-            velocities: wide.velocities.clone(),
             avx2: false,
-            ..*wide
+            ..wide.clone()
         };
         let (lo, hi) = bounds(flat);
         let rays = incoherent_rays(lo, hi, 3000, 11);

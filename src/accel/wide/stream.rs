@@ -320,15 +320,8 @@ mod tests {
             assert!(hits > 50 && hits < rays.len(), "{name}: {hits} hits");
             check(name, wide, &rays);
             let portable = WideBvh {
-                nodes: wide.nodes.clone(),
-                octets: wide.octets.clone(),
-                quads: wide.quads.clone(),
-                prims: wide.prims.clone(),
-                ids: wide.ids.clone(),
-                slot_of: wide.slot_of.clone(),
-                velocities: wide.velocities.clone(),
                 avx2: false,
-                ..*wide
+                ..wide.clone()
             };
             check(&format!("{name}, portable"), &portable, &rays);
             // A root with nothing in it (a scene of planes only): every search is over at
