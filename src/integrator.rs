@@ -335,7 +335,8 @@ fn choose_light(scene: &FlatScene, depth: u32, rng: &mut Rng) -> Option<(usize, 
 
 /// The point `square` of the unit square on an area light (folded onto a triangle light's
 /// triangle), seen from `vertex`, over the probability the vertex chose the light with; under
-/// the path tracer (`mis`), weighted against the BSDF's sample of the same direction.
+/// the path tracer (a vertex with its lobes), weighted against the BSDF's sample of the same
+/// direction.
 // Inlined as it was before the light choice gave its caller two call sites: a call per
 // sample cost Whitted's CPU frames about 4% of their instructions.
 #[inline(always)]
@@ -345,7 +346,6 @@ fn area_light_sample(
     share: LightShare,
     square: [f32; 2],
     vertex: &Vertex,
-    mis: bool,
 ) -> LightSample {
     let (surface, material, wo) = (vertex.surface, vertex.material, vertex.wo);
     let u = if shape.triangle && square[0] + square[1] > 1.0 {
@@ -365,8 +365,8 @@ fn area_light_sample(
         true => eval_brdf(material, n, wo, wi) * cos_surface * cos_light / (distance * distance),
         false => Vec3::ZERO,
     };
-    if mis && traced {
-        let bsdf_pdf = bsdf::bsdf_pdf(material, &bsdf::lobes(material), n, wo, wi);
+    if let (Some(lobes), true) = (&vertex.lobes, traced) {
+        let bsdf_pdf = bsdf::bsdf_pdf(material, lobes, n, wo, wi);
         let distance2 = distance * distance;
         // A light is chosen only under the path tracer: Whitted's samples skip the division.
         f *= bsdf::light_sample_weight(
@@ -424,13 +424,13 @@ fn punctual_light_sample(
 /// A direction drawn from sky light `light` (an environment or a sun) with the unit-square
 /// point `square`, seen from `vertex`: its term is the BRDF times the cosine times the
 /// radiance over the density (a sun's radiance over density is its `light_total` scale); under
-/// the path tracer (`mis`), weighted against the BSDF's sample of the same direction.
+/// the path tracer (a vertex with its lobes), weighted against the BSDF's sample of the same
+/// direction.
 fn sky_light_sample(
     light: &GpuLight,
     environment_data: &[f32],
     square: [f32; 2],
     vertex: &Vertex,
-    mis: bool,
 ) -> LightSample {
     let (surface, material, wo) = (vertex.surface, vertex.material, vertex.wo);
     let sky = environment::sky_sample(light, environment_data, square);
@@ -445,8 +445,8 @@ fn sky_light_sample(
         true => eval_brdf(material, n, wo, sky.wi) * radiance_over_pdf * cos_surface,
         false => Vec3::ZERO,
     };
-    if mis && traced {
-        let bsdf_pdf = bsdf::bsdf_pdf(material, &bsdf::lobes(material), n, wo, sky.wi);
+    if let (Some(lobes), true) = (&vertex.lobes, traced) {
+        let bsdf_pdf = bsdf::bsdf_pdf(material, lobes, n, wo, sky.wi);
         f *= bsdf::sky_sample_weight(light.samples, sky.pdf, bsdf_pdf);
     }
     LightSample {
@@ -520,7 +520,6 @@ fn sampled_light<const F: u32>(
         light_dimension(frame, vertex.depth, offset, 0),
     );
     rng.seek(light_dimension(frame, vertex.depth, offset, samples.start));
-    let mis = path_traced::<F>(frame);
     let mut sum = Vec3::ZERO;
     for k in samples {
         let square = light_sample_2d(
@@ -534,8 +533,8 @@ fn sampled_light<const F: u32>(
             &mut stats.flags,
         );
         let s = match light.is_sky() {
-            true => sky_light_sample(light, &scene.environment, square, vertex, mis),
-            false => area_light_sample(light, &shape, share, square, vertex, mis),
+            true => sky_light_sample(light, &scene.environment, square, vertex),
+            false => area_light_sample(light, &shape, share, square, vertex),
         };
         if s.traced && vertex.visible::<F>(scene, &s, stats) {
             sum += s.f;
@@ -568,11 +567,48 @@ fn chosen_light<const F: u32>(
 struct Vertex<'a> {
     surface: &'a Surface,
     material: &'a GpuMaterial,
+    /// The material's lobes under the path tracer, whose light samples they weigh against the
+    /// BSDF's (multiple importance sampling); none under Whitted's integrator, which has none.
+    lobes: Option<bsdf::Lobes>,
     wo: Vec3,
     depth: u32,
+    /// Where the shadow rays start: the surface point offset along its geometric normal
+    /// (the reflected bounce leaves from there too).
     origin: Vec3,
     time: f32,
     own: u32,
+}
+
+impl<'a> Vertex<'a> {
+    /// The vertex at `surface` (of `material`, whose lobes the path tracer passes), seen
+    /// along `wo` at path vertex `depth` and `time`; its rays skip primitive `own`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn new(
+        surface: &'a Surface,
+        material: &'a GpuMaterial,
+        lobes: Option<bsdf::Lobes>,
+        wo: Vec3,
+        depth: u32,
+        time: f32,
+        own: u32,
+    ) -> Vertex<'a> {
+        let origin = offset_ray_origin(
+            surface.position,
+            surface.position_error,
+            surface.geometric_normal,
+        );
+        Vertex {
+            surface,
+            material,
+            lobes,
+            wo,
+            depth,
+            origin,
+            time,
+            own,
+        }
+    }
 }
 
 impl Vertex<'_> {
@@ -591,50 +627,31 @@ impl Vertex<'_> {
     }
 }
 
-/// Light reflected towards `wo` with shadow rays (which skip primitive `own`): under the path
-/// tracer, the samples in `window` of the one area light the vertex chose
-/// (`GpuFrame::light_choice_start`); the samples in `window` of every other sampled light; and
-/// the point and directional lights in the first window.
+/// Light reflected towards `vertex.wo` with shadow rays: under the path tracer, the samples
+/// in `window` of the one area light the vertex chose (`GpuFrame::light_choice_start`); the
+/// samples in `window` of every other sampled light; and the point and directional lights in
+/// the first window.
 // Inlined into both integrators' vertex loops: called out of line, passing the surface and
 // material through memory cost Whitted frames about 15% of their time (cornell_direct).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn direct_light<const F: u32>(
     scene: &FlatScene,
-    time: f32,
-    surface: &Surface,
-    material: &GpuMaterial,
-    own: u32,
-    wo: Vec3,
-    depth: u32,
+    vertex: &Vertex,
     window: LightWindow,
     rng: &mut Rng,
     stats: &mut SampleStats,
 ) -> Vec3 {
-    let origin = offset_ray_origin(
-        surface.position,
-        surface.position_error,
-        surface.geometric_normal,
-    );
-    let vertex = Vertex {
-        surface,
-        material,
-        wo,
-        depth,
-        origin,
-        time,
-        own,
-    };
+    let (surface, material, wo) = (vertex.surface, vertex.material, vertex.wo);
     let frame = &scene.frame;
     let mut total = Vec3::ZERO;
     if has(F, FEATURE_AREA_LIGHTS) && has(F, FEATURE_PATH) && frame.chooses_lights() {
-        total += chosen_light::<F>(scene, &vertex, window, rng, stats);
+        total += chosen_light::<F>(scene, vertex, window, rng, stats);
     }
     let mut offset = frame.light_choice_pairs;
     for light in &scene.lights[..frame.light_choice_start as usize] {
         if has(F, FEATURE_AREA_LIGHTS) && light.is_sampled() {
             let share = LightShare::every_vertex(light);
-            total += sampled_light::<F>(scene, light, share, offset, &vertex, window, rng, stats);
+            total += sampled_light::<F>(scene, light, share, offset, vertex, window, rng, stats);
             offset += light.samples;
         } else if has(F, FEATURE_PUNCTUAL_LIGHTS) && window.is_first() {
             let s = punctual_light_sample(light, surface, material, wo);
@@ -783,10 +800,8 @@ pub fn trace_path<const F: u32>(
             true => prim_id,
             false => NONE,
         };
-        radiance += throughput
-            * direct_light::<F>(
-                scene, time, &surface, material, own, wo, depth, window, rng, stats,
-            );
+        let vertex = Vertex::new(&surface, material, None, wo, depth, time, own);
+        radiance += throughput * direct_light::<F>(scene, &vertex, window, rng, stats);
         // Perfect mirror bounce.
         let mirror = Vec3::from(material.mirror);
         if !has(F, FEATURE_MIRRORS) || mirror.max_element() <= 0.0 {
@@ -804,15 +819,7 @@ pub fn trace_path<const F: u32>(
             break;
         }
         throughput *= mirror;
-        ray = RayQuery::new(
-            offset_ray_origin(
-                surface.position,
-                surface.position_error,
-                surface.geometric_normal,
-            ),
-            reflected.normalize(),
-        )
-        .at_time(time);
+        ray = RayQuery::new(vertex.origin, reflected.normalize()).at_time(time);
         skip = own;
     }
     radiance

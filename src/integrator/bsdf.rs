@@ -57,17 +57,17 @@ pub fn lobes(material: &GpuMaterial) -> Lobes {
     }
 }
 
-/// Whether a material reflects (or refracts) any light.
-pub fn reflects(material: &GpuMaterial) -> bool {
-    let lobes = lobes(material);
-    material.model == MODEL_DIELECTRIC || lobes.diffuse + lobes.glossy + lobes.mirror > 0.0
-}
+impl Lobes {
+    /// Whether the material whose lobes these are (of `model`) reflects or refracts any light.
+    pub fn reflect(&self, model: u32) -> bool {
+        model == MODEL_DIELECTRIC || self.diffuse + self.glossy + self.mirror > 0.0
+    }
 
-/// Whether a material has a lobe that light samples can meet (not only deltas): where it has
-/// none, the path tracer casts no shadow ray.
-pub fn has_smooth_lobes(material: &GpuMaterial) -> bool {
-    let lobes = lobes(material);
-    lobes.diffuse + lobes.glossy > 0.0
+    /// Whether a lobe is one light samples can meet (not only deltas): where none is, the
+    /// path tracer casts no shadow ray.
+    pub fn smooth(&self) -> bool {
+        self.diffuse + self.glossy > 0.0
+    }
 }
 
 /// Fresnel's reflectance of unpolarised light at a smooth interface, for the cosine `cos_i`
@@ -268,10 +268,12 @@ pub struct BsdfSample {
 
 /// A direction from `material` at a surface with shading normal `n` and geometric normal
 /// `ng` (both towards `wo`; `front`: on the side the outward normal leaves from), drawn with
-/// `u` (its direction) and `u_lobe` (its lobe); none where the material reflects nothing or the
-/// direction would leave on the wrong side of the surface.
+/// `u` (its direction) and `u_lobe` (its lobe among `lobes`, the material's); none where the
+/// material reflects nothing or the direction would leave on the wrong side of the surface.
+#[allow(clippy::too_many_arguments)]
 pub fn sample_bsdf(
     material: &GpuMaterial,
+    lobes: &Lobes,
     n: Vec3,
     ng: Vec3,
     wo: Vec3,
@@ -282,7 +284,6 @@ pub fn sample_bsdf(
     if material.model == MODEL_DIELECTRIC {
         return sample_dielectric(material, n, ng, wo, front, u_lobe);
     }
-    let lobes = lobes(material);
     if lobes.mirror > 0.0 && u_lobe >= lobes.diffuse + lobes.glossy {
         let wi = reflect(wo, n).normalize();
         return (wi.dot(ng) > 0.0).then(|| BsdfSample {
@@ -310,7 +311,7 @@ pub fn sample_bsdf(
     if cos <= 0.0 || wi.dot(ng) <= 0.0 {
         return None;
     }
-    let pdf = bsdf_pdf(material, &lobes, n, wo, wi);
+    let pdf = bsdf_pdf(material, lobes, n, wo, wi);
     (pdf > 0.0).then(|| BsdfSample {
         wi,
         weight: eval_brdf(material, n, wo, wi) * (cos / pdf),
@@ -416,7 +417,7 @@ mod tests {
             let count = 1_000_000;
             for _ in 0..count {
                 let [a, b] = rng.next_2d();
-                if let Some(s) = sample_bsdf(&m, n, n, wo, true, [a, b], rng.next_f32()) {
+                if let Some(s) = sample_bsdf(&m, &lobes, n, n, wo, true, [a, b], rng.next_f32()) {
                     let pdf = bsdf_pdf(&m, &lobes, n, wo, s.wi);
                     assert!(
                         (pdf - s.pdf).abs() <= 1e-4 * pdf,
@@ -475,7 +476,8 @@ mod tests {
                 let count = 200_000;
                 let mut albedo = 0.0f64;
                 for _ in 0..count {
-                    if let Some(s) = sample_bsdf(&m, n, n, wo, true, rng.next_2d(), 0.5) {
+                    if let Some(s) = sample_bsdf(&m, &lobes(&m), n, n, wo, true, rng.next_2d(), 0.5)
+                    {
                         assert!(
                             s.weight.is_finite() && s.pdf.is_finite(),
                             "{alpha} {cos_o}: {s:?}"
@@ -506,7 +508,7 @@ mod tests {
         let m = material(MODEL_LAMBERT, 0.0, 0.0, 1.0, 0.7);
         let n = Vec3::Z;
         let wo = Vec3::new(0.6, 0.0, 0.8);
-        let s = sample_bsdf(&m, n, n, wo, true, [0.3, 0.9], 0.5).unwrap();
+        let s = sample_bsdf(&m, &lobes(&m), n, n, wo, true, [0.3, 0.9], 0.5).unwrap();
         assert!((s.wi - Vec3::new(-0.6, 0.0, 0.8)).length() < 1e-6);
         assert_eq!((s.weight, s.pdf), (Vec3::splat(0.7), 0.0));
     }

@@ -20,10 +20,10 @@ use std::mem::MaybeUninit;
 
 use glam::Vec3;
 
-use super::bsdf::{BsdfSample, emitter_hit_weight, has_smooth_lobes, reflects, sample_bsdf};
+use super::bsdf::{BsdfSample, Lobes, emitter_hit_weight, lobes, sample_bsdf};
 use super::{
-    CameraHit, FirstHit, LightWindow, SampleStats, Surface, direct_light, sky_seen, vertex_at,
-    vertex_hit,
+    CameraHit, FirstHit, LightWindow, SampleStats, Surface, Vertex, direct_light, sky_seen,
+    vertex_at, vertex_hit,
 };
 use crate::accel::intersect::{RayQuery, offset_ray_origin};
 use crate::camera::Ray;
@@ -90,19 +90,24 @@ pub(super) fn emission_weight(
     )
 }
 
-/// Where a bounce's ray starts (offset to the side it leaves on) and the primitive it skips:
-/// a ray refracted into a sphere or an ellipsoid must meet it again from inside.
+/// Where a bounce's ray starts (offset to the side it leaves on: a reflected ray from the
+/// vertex's own `origin`) and the primitive it skips: a ray refracted into a sphere or an
+/// ellipsoid must meet it again from inside.
 pub(super) fn leaving(
     prim: &GpuPrimitive,
     prim_id: u32,
-    surface: &Surface,
+    vertex: &Vertex,
     transmitted: bool,
 ) -> (Vec3, u32) {
-    let (normal, outside) = match transmitted {
-        true => (-surface.geometric_normal, !surface.front_facing),
-        false => (surface.geometric_normal, surface.front_facing),
+    let surface = vertex.surface;
+    let (origin, outside) = match transmitted {
+        true => {
+            let inside = -surface.geometric_normal;
+            let origin = offset_ray_origin(surface.position, surface.position_error, inside);
+            (origin, !surface.front_facing)
+        }
+        false => (vertex.origin, surface.front_facing),
     };
-    let origin = offset_ray_origin(surface.position, surface.position_error, normal);
     let skip = match leaving_rays_skip(prim.kind, outside) {
         true => prim_id,
         false => NONE,
@@ -129,6 +134,7 @@ pub(super) fn first_bounce_pattern(frame: &GpuFrame) -> Option<PatternSource> {
 pub(super) fn bounce(
     scene: &FlatScene,
     material: &GpuMaterial,
+    lobes: &Lobes,
     surface: &Surface,
     wo: Vec3,
     depth: u32,
@@ -151,7 +157,7 @@ pub(super) fn bounce(
     let [u_lobe, u_roulette] = rng.next_2d();
     let n = surface.shading_normal;
     let ng = surface.geometric_normal;
-    let mut sample = sample_bsdf(material, n, ng, wo, surface.front_facing, u, u_lobe)?;
+    let mut sample = sample_bsdf(material, lobes, n, ng, wo, surface.front_facing, u, u_lobe)?;
     if depth >= frame.rr_depth {
         let survival = (throughput * sample.weight).max_element().min(0.95);
         if u_roulette >= survival {
@@ -212,8 +218,9 @@ pub(super) fn trace_path<const F: u32>(
         if material.model == MODEL_EMITTER {
             break;
         }
+        let lobes = lobes(material);
         if depth > frame.max_depth {
-            if first && reflects(material) {
+            if first && lobes.reflect(material.model) {
                 stats.truncated += 1;
             }
             break;
@@ -223,21 +230,21 @@ pub(super) fn trace_path<const F: u32>(
             true => prim_id,
             false => NONE,
         };
+        let vertex = Vertex::new(&surface, material, Some(lobes), wo, depth, time, own);
         // A material of deltas alone (a mirror, glass) meets no light sample.
-        if has_smooth_lobes(material) {
-            radiance += throughput
-                * direct_light::<F>(
-                    scene, time, &surface, material, own, wo, depth, window, rng, stats,
-                );
+        if lobes.smooth() {
+            radiance += throughput * direct_light::<F>(scene, &vertex, window, rng, stats);
         }
         let flags = &mut stats.flags;
-        let sample = bounce(scene, material, &surface, wo, depth, throughput, rng, flags);
+        let sample = bounce(
+            scene, material, &lobes, &surface, wo, depth, throughput, rng, flags,
+        );
         let Some(sample) = sample else {
             break;
         };
         bounce_weight = sample.weight;
         bsdf_pdf = sample.pdf;
-        let (origin, skipped) = leaving(prim, prim_id, &surface, sample.transmitted);
+        let (origin, skipped) = leaving(prim, prim_id, &vertex, sample.transmitted);
         ray = RayQuery::new(origin, sample.wi).at_time(time);
         skip = skipped;
     }
