@@ -47,12 +47,68 @@ pub trait Rows: Copy + Default {
     /// The scalar test of lane `lane`.
     fn test(&self, lane: usize, ray: &RayQuery, t_max: f32) -> Hit;
     /// The scalar test's operations on the lanes of `lanes`, eight at once: a bit per lane
-    /// hit before `t_max`, and the hits.
+    /// hit before `t_max`, and what `H` keeps of the hits.
     ///
     /// # Safety
     /// The CPU must have AVX2.
     #[cfg(target_arch = "x86_64")]
-    unsafe fn test_avx2(&self, ray: &RayQuery, t_max: f32, lanes: u32) -> (u32, [Hit; LANES]);
+    unsafe fn test_avx2<H: LaneHits>(&self, ray: &RayQuery, t_max: f32, lanes: u32) -> (u32, H);
+}
+
+/// What an octet's test reports besides its bit per hit lane: each lane's hit (a closest-hit
+/// query), or nothing (an any-hit query needs the bits alone; writing eight hits it never
+/// reads cost each of its octet tests about a fifth of its instructions).
+pub trait LaneHits: Copy {
+    /// What a test that hit no lane reports.
+    const MISSES: Self;
+
+    /// What the scalar tests' hits report.
+    fn from_hits(hits: [Hit; LANES]) -> Self;
+
+    /// What the AVX2 test's lanes report, from their t, b1 and b2 vectors.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn from_lanes(
+        t: std::arch::x86_64::__m256,
+        b1: std::arch::x86_64::__m256,
+        b2: std::arch::x86_64::__m256,
+    ) -> Self;
+}
+
+impl LaneHits for [Hit; LANES] {
+    const MISSES: Self = [MISS; LANES];
+
+    fn from_hits(hits: [Hit; LANES]) -> Self {
+        hits
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn from_lanes(
+        t: std::arch::x86_64::__m256,
+        b1: std::arch::x86_64::__m256,
+        b2: std::arch::x86_64::__m256,
+    ) -> Self {
+        hit_lanes(t, b1, b2)
+    }
+}
+
+impl LaneHits for () {
+    const MISSES: Self = ();
+
+    fn from_hits(_: [Hit; LANES]) -> Self {}
+
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn from_lanes(
+        _: std::arch::x86_64::__m256,
+        _: std::arch::x86_64::__m256,
+        _: std::arch::x86_64::__m256,
+    ) -> Self {
+    }
 }
 
 impl<R: Rows> Octet<R> {
@@ -104,11 +160,18 @@ impl<R: Rows> Octet<R> {
     }
 
     /// The scalar test on the lanes of `lanes` (lanes holding a primitive): a bit per lane hit
-    /// before `t_max` (at most `T_FAR`, the distance of a miss), and the hits; in AVX2 where
-    /// `avx2` says the CPU has it. The lanes of leaves whose boxes the ray missed may be asked
-    /// too: a hit there is a true hit, and leaving them out costs more than it saves.
+    /// before `t_max` (at most `T_FAR`, the distance of a miss), and what `H` keeps of the
+    /// hits; in AVX2 where `avx2` says the CPU has it. The lanes of leaves whose boxes the ray
+    /// missed may be asked too: a hit there is a true hit, and leaving them out costs more than
+    /// it saves.
     #[inline(always)]
-    pub fn hits(&self, ray: &RayQuery, t_max: f32, lanes: u32, avx2: bool) -> (u32, [Hit; LANES]) {
+    pub fn hits<H: LaneHits>(
+        &self,
+        ray: &RayQuery,
+        t_max: f32,
+        lanes: u32,
+        avx2: bool,
+    ) -> (u32, H) {
         #[cfg(target_arch = "x86_64")]
         if avx2 {
             // SAFETY: `avx2` is true only where the CPU has AVX2.
@@ -120,7 +183,7 @@ impl<R: Rows> Octet<R> {
 
     /// The scalar test lane by lane: what the AVX2 test must equal.
     #[inline(always)]
-    fn hits_scalar(&self, ray: &RayQuery, t_max: f32, mut lanes: u32) -> (u32, [Hit; LANES]) {
+    fn hits_scalar<H: LaneHits>(&self, ray: &RayQuery, t_max: f32, mut lanes: u32) -> (u32, H) {
         let mut hits = [MISS; LANES];
         let mut mask = 0;
         while lanes != 0 {
@@ -129,7 +192,7 @@ impl<R: Rows> Octet<R> {
             hits[lane] = self.rows.test(lane, ray, t_max);
             mask |= ((hits[lane].t < t_max) as u32) << lane;
         }
-        (mask, hits)
+        (mask, H::from_hits(hits))
     }
 }
 
@@ -163,7 +226,7 @@ impl Rows for TriangleRows {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn test_avx2(&self, ray: &RayQuery, t_max: f32, lanes: u32) -> (u32, [Hit; LANES]) {
+    unsafe fn test_avx2<H: LaneHits>(&self, ray: &RayQuery, t_max: f32, lanes: u32) -> (u32, H) {
         use std::arch::x86_64::*;
         let (kx, ky, kz) = (ray.kx, ray.ky, ray.kz);
         let s = ray.shear;
@@ -210,7 +273,7 @@ impl Rows for TriangleRows {
         let flat = _mm256_cmp_ps::<_CMP_EQ_OQ>(det, zero);
         // Most octets a ray tests miss here, in every lane: stop before the division.
         if _mm256_movemask_ps(_mm256_or_ps(mixed_signs, flat)) as u32 & lanes == lanes {
-            return (0, [super::intersect::MISS; LANES]);
+            return (0, H::MISSES);
         }
         let t_scaled = _mm256_add_ps(
             _mm256_add_ps(_mm256_mul_ps(e0, z0), _mm256_mul_ps(e1, z1)),
@@ -270,7 +333,10 @@ impl Rows for TriangleRows {
         let missed = or3(mixed_signs, flat, _mm256_or_ps(behind_or_far, too_near));
         let hit = _mm256_andnot_ps(missed, lt(t, _mm256_set1_ps(t_max)));
         let mask = _mm256_movemask_ps(hit) as u32 & lanes;
-        (mask, hit_lanes(t, mul(e1, inv_det), mul(e2, inv_det)))
+        // SAFETY: the CPU has AVX2, as this function's caller must check.
+        (mask, unsafe {
+            H::from_lanes(t, mul(e1, inv_det), mul(e2, inv_det))
+        })
     }
 }
 
@@ -308,7 +374,7 @@ impl Rows for QuadRows {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn test_avx2(&self, ray: &RayQuery, t_max: f32, lanes: u32) -> (u32, [Hit; LANES]) {
+    unsafe fn test_avx2<H: LaneHits>(&self, ray: &RayQuery, t_max: f32, lanes: u32) -> (u32, H) {
         use std::arch::x86_64::*;
         type V3 = [__m256; 3];
         let load = |row: &[f32; LANES]| {
@@ -341,7 +407,7 @@ impl Rows for QuadRows {
         );
         // Most quads a ray tests miss their plane's span here: stop before the rest.
         if _mm256_movemask_ps(in_range) as u32 & lanes == 0 {
-            return (0, [super::intersect::MISS; LANES]);
+            return (0, H::MISSES);
         }
         let q: V3 = std::array::from_fn(|axis| {
             sub(add(origin[axis], mul(t, direction[axis])), corner[axis])
@@ -358,7 +424,8 @@ impl Rows for QuadRows {
         };
         let hit = _mm256_and_ps(in_range, _mm256_and_ps(inside(u), inside(v)));
         let mask = _mm256_movemask_ps(hit) as u32 & lanes;
-        (mask, hit_lanes(t, u, v))
+        // SAFETY: the CPU has AVX2, as this function's caller must check.
+        (mask, unsafe { H::from_lanes(t, u, v) })
     }
 }
 
@@ -455,9 +522,15 @@ mod tests {
             let t_max = [T_FAR, 2.0, 1.0, 0.5][round as usize / 4 % 4];
             let lanes = octet.lanes & [u32::MAX, 0b1011_0101][round as usize / 16 % 2];
             // SAFETY: the CPU has AVX2 (checked above).
-            let (mask, found) = unsafe { octet.rows.test_avx2(&ray, t_max, lanes) };
-            let (expected_mask, expected) = octet.hits_scalar(&ray, t_max, lanes);
+            let (mask, found) = unsafe { octet.rows.test_avx2::<[Hit; LANES]>(&ray, t_max, lanes) };
+            let (expected_mask, expected) = octet.hits_scalar::<[Hit; LANES]>(&ray, t_max, lanes);
             assert_eq!(mask, expected_mask, "round {round}: hit lanes");
+            // SAFETY: as above.
+            let (any_mask, ()) = unsafe { octet.rows.test_avx2::<()>(&ray, t_max, lanes) };
+            assert_eq!(
+                any_mask, expected_mask,
+                "round {round}: hit lanes, mask alone"
+            );
             for lane in 0..LANES {
                 if expected_mask & (1 << lane) != 0 {
                     compared += 1;

@@ -684,7 +684,7 @@ fn nearest_in<R: Rows>(
 ) {
     for octet in octets.iter().filter(|octet| octet.leaves & mask != 0) {
         let lanes = octet.lanes & !octet.skipping(skip, avx2);
-        let (mut hits, found) = octet.hits(ray, best.t, lanes, avx2);
+        let (mut hits, found) = octet.hits::<[Hit; LANES]>(ray, best.t, lanes, avx2);
         while hits != 0 {
             let lane = hits.trailing_zeros() as usize;
             hits &= hits - 1;
@@ -710,7 +710,7 @@ fn any_in<R: Rows>(
     for octet in octets.iter().filter(|octet| octet.leaves & mask != 0) {
         let skipped = octet.skipping(skip[0], avx2) | octet.skipping(skip[1], avx2);
         let lanes = octet.lanes & !skipped;
-        if octet.hits(ray, t_max, lanes, avx2).0 != 0 {
+        if octet.hits::<()>(ray, t_max, lanes, avx2).0 != 0 {
             return true;
         }
     }
