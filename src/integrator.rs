@@ -159,6 +159,7 @@ fn surface_at(scene: &FlatScene, prim: &GpuPrimitive, ray: &RayQuery, hit: Hit) 
 /// The surface of primitive `id` hit by `ray` at the ray's time: found in the primitive's own
 /// frame (where it was built), then moved to where it is. Twin: `moved_surface_at` in
 /// integrator.wgsl.
+#[inline]
 fn moved_surface_at(scene: &FlatScene, id: u32, ray: &RayQuery, hit: Hit) -> Surface {
     let prim = &scene.prims[id as usize];
     let offset = scene.primitives().offset(id, ray.time);
@@ -173,6 +174,7 @@ fn moved_surface_at(scene: &FlatScene, id: u32, ray: &RayQuery, hit: Hit) -> Sur
 }
 
 /// BRDF value for light arriving along `wi` and leaving along `wo` (both unit, away from p).
+#[inline]
 pub fn eval_brdf(material: &GpuMaterial, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
     let mut f = Vec3::from(material.diffuse) / PI;
     let specular = Vec3::from(material.specular);

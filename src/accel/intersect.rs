@@ -352,6 +352,7 @@ pub fn sphere_surface_point(
 /// pbrt-v4's `OffsetRayOrigin`: move `position` off its surface along `n` (unit, pointing to
 /// the side the new ray leaves on) by the projection of its per-component `error` bound on `n`,
 /// then one more ULP away, so that the rounding of the addition cannot undo the offset.
+#[inline]
 pub fn offset_ray_origin(position: Vec3, error: Vec3, n: Vec3) -> Vec3 {
     let offset = n.abs().dot(error) * n;
     let moved = position + offset;

@@ -242,6 +242,7 @@ fn glossy_pdf(material: &GpuMaterial, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
 
 /// The solid-angle density with which [`sample_bsdf`] draws `wi` (not by the mirror, which
 /// draws one direction).
+#[inline]
 pub fn bsdf_pdf(material: &GpuMaterial, lobes: &Lobes, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
     let mut pdf = 0.0;
     if lobes.diffuse > 0.0 {
@@ -271,6 +272,7 @@ pub struct BsdfSample {
 /// `u` (its direction) and `u_lobe` (its lobe among `lobes`, the material's); none where the
 /// material reflects nothing or the direction would leave on the wrong side of the surface.
 #[allow(clippy::too_many_arguments)]
+#[inline]
 pub fn sample_bsdf(
     material: &GpuMaterial,
     lobes: &Lobes,
