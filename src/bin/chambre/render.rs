@@ -636,10 +636,10 @@ fn finish(
         target.write_with_channels(&output.image, channels)?;
     }
     let kernel = output.kernel_time.map_or(String::new(), |k| {
-        format!(" (kernels {:.2} s)", k.as_secs_f64())
+        format!(" (kernels {:.3} s)", k.as_secs_f64())
     });
     note!(
-        "{path}: {}x{}, {} in {:.2} s{kernel}, {:.2} Mrays/s ({} rays) on {backend}",
+        "{path}: {}x{}, {} in {:.3} s{kernel}, {:.2} Mrays/s ({} rays) on {backend}",
         output.image.width,
         output.image.height,
         describe_samples(&output),
