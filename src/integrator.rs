@@ -615,6 +615,7 @@ impl<'a> Vertex<'a> {
 
 impl Vertex<'_> {
     /// Whether light sample `s` reaches the vertex (a shadow ray, counted).
+    #[inline]
     fn visible<const F: u32>(
         &self,
         scene: &FlatScene,

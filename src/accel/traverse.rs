@@ -21,6 +21,7 @@ pub enum Tracer<'a> {
 
 impl Tracer<'_> {
     /// [`closest_hit`] through the tracer's BVH.
+    #[inline]
     pub fn closest_hit<const F: u32>(
         &self,
         ray: &RayQuery,
@@ -53,6 +54,7 @@ impl Tracer<'_> {
     }
 
     /// [`occluded`] through the tracer's BVH.
+    #[inline]
     pub fn occluded<const F: u32>(
         &self,
         ray: &RayQuery,
