@@ -2,14 +2,16 @@
 """What each bounce of chambre's path tracer costs and buys, against Mitsuba 3's `path`
 integrator on the same scene (llvm_ad_rgb on the CPU; Python's standard library only).
 
-  python3 tools/bench_path.py [--chambre BIN] [--runs N] [--out DIR]
+  python3 tools/bench_path.py [--chambre BIN] [--runs N] [--rounds R] [--out DIR]
 
 On the path-traced Cornell box (`scenes/cornell_box.toml`, its light's triangles reflecting
 too) at 64 x 64 and 256 spp: a reference from chambre at max_depth 32 and 4096 spp; then for each
 max_depth, chambre's render time (its own report: the render, not the scene's loading) and
-relMSE against the reference, medians of N runs after a warm-up, and the same for Mitsuba
-(`chambre export --mitsuba`, then tools/mitsuba_render.py time: kernels compiled once, each
-render waited for; the relMSE of its last run). Writes DIR/path.json and prints the table
+relMSE against the reference, and the same for Mitsuba (`chambre export --mitsuba`, then
+tools/mitsuba_render.py time: kernels compiled once, each render waited for; the relMSE of its
+last run). R rounds alternate the two, N runs each after a warm-up, so that a shared machine's
+load falls on both: the seconds are the medians of all runs, the ratio the median of the
+rounds' ratios (their range beside it). Writes DIR/path.json and prints the table
 BENCHMARKS.md shows. Mitsuba comes from CHAMBRE_MITSUBA_SITE (`eval "$(tools/install_mitsuba.sh)"`)
 or PYTHONPATH; without it the Mitsuba columns say so.
 """
@@ -102,6 +104,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--chambre", default="target/release/chambre")
     parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--out", default="bench")
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
@@ -114,20 +117,28 @@ def main():
     for depth in DEPTHS:
         pfm = os.path.join(args.out, f"path_chambre_{depth}.pfm")
         chambre_render(args.chambre, pfm, SPP, depth, 100)  # warm-up
-        seconds, errors = [], []
-        for run in range(args.runs):
-            seconds.append(chambre_render(args.chambre, pfm, SPP, depth, 2 + run))
-            errors.append(rel_mse(read_pfm(pfm)[2], reference))
+        seconds, errors, m_seconds, ratios = [], [], [], []
+        for round in range(args.rounds):
+            ours = []
+            for run in range(args.runs):
+                ours.append(chambre_render(args.chambre, pfm, SPP, depth, 2 + len(seconds)))
+                seconds.append(ours[-1])
+                errors.append(rel_mse(read_pfm(pfm)[2], reference))
+            if peer:
+                theirs, image = mitsuba_render(args.chambre, args.out, depth, args.runs)
+                m_seconds += theirs
+                ratios.append(statistics.median(ours) / statistics.median(theirs))
         row = {"max_depth": depth, "chambre_s": statistics.median(seconds),
                "chambre_rel_mse": statistics.median(errors)}
         if peer:
-            m_seconds, image = mitsuba_render(args.chambre, args.out, depth, args.runs)
             row["mitsuba_s"] = statistics.median(m_seconds)
             row["mitsuba_rel_mse"] = rel_mse(image, reference)
+            row["ratio"] = statistics.median(ratios)
+            row["ratio_range"] = [min(ratios), max(ratios)]
         rows.append(row)
         print(json.dumps(row), file=sys.stderr, flush=True)
     report = {"scene": SCENE, "overrides": FRAMING, "spp": SPP, "reference": REFERENCE,
-              "runs": args.runs, "rows": rows, "mitsuba": peer,
+              "runs": args.runs, "rounds": args.rounds, "rows": rows, "mitsuba": peer,
               "seconds": time.time() - started}
     with open(os.path.join(args.out, "path.json"), "w") as f:
         json.dump(report, f, indent=1)
@@ -135,12 +146,13 @@ def main():
 
 
 def table(report):
-    lines = ["| max_depth | chambre (s) | relMSE | Mitsuba 3 (s) | relMSE | time, chambre / Mitsuba |",
+    lines = ["| max_depth | chambre (s) | relMSE | Mitsuba 3 (s) | relMSE | time, chambre / Mitsuba (rounds) |",
              "|---|---|---|---|---|---|"]
     for r in report["rows"]:
         if "mitsuba_s" in r:
+            low, high = r["ratio_range"]
             peer = (f"{r['mitsuba_s']:.3f} | {r['mitsuba_rel_mse']:.2e} | "
-                    f"{r['chambre_s'] / r['mitsuba_s']:.2f}x")
+                    f"{r['ratio']:.2f}x ({low:.2f}–{high:.2f})")
         else:
             peer = "- | - | Mitsuba not installed"
         lines.append(f"| {r['max_depth']} | {r['chambre_s']:.3f} | "
