@@ -584,7 +584,6 @@ struct Vertex<'a> {
 impl<'a> Vertex<'a> {
     /// The vertex at `surface` (of `material`, whose lobes the path tracer passes), seen
     /// along `wo` at path vertex `depth` and `time`; its rays skip primitive `own`.
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn new(
         surface: &'a Surface,
