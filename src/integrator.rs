@@ -28,7 +28,6 @@ use crate::accel::intersect::{
     Hit, RayQuery, offset_ray_origin, plane_point, quad_point, shadow_ray_length,
     sphere_surface_point, triangle_point,
 };
-use crate::accel::wide::PACKET;
 use crate::camera::spectral::{film_response, sample_wavelength};
 use crate::camera::{Ray, film_position_mm, generate_lens_ray, generate_ray};
 use crate::layout::*;
@@ -37,6 +36,8 @@ use crate::pack::FlatScene;
 use crate::sampler::{
     PatternSource, light_sample_2d, permute, pixel_hash, sample_2d, sample_aperture,
 };
+
+use batch::BATCH;
 
 mod batch;
 pub mod bsdf;
@@ -999,7 +1000,7 @@ pub fn trace_sample<const F: u32>(
 
 /// [`trace_sample`] for samples `samples` of pixel (x, y), each sample's radiance and first
 /// hit given to `add` in order: the same paths, their camera rays traced in packets of
-/// `PACKET` (a pixel's samples are nearly one ray; packets trace them about twice as fast
+/// `BATCH` (a pixel's samples are nearly one ray; packets trace them about twice as fast
 /// through the wide BVH). Only at an exact tie (a camera ray through the edge two triangles
 /// share) may a sample see the other primitive than [`trace_sample`] does, at the same
 /// distance.
@@ -1017,11 +1018,11 @@ pub fn trace_pixel<const F: u32>(
     let batches = batch::batches::<F>(scene);
     let mut start = samples.start;
     while start < samples.end {
-        let count = (samples.end - start).min(PACKET as u32) as usize;
+        let count = (samples.end - start).min(BATCH as u32) as usize;
         // Placeholders, each set below (hashing a stream here would be wasted).
-        let mut rngs = [Rng::with_key(0, 0, pixel, start); PACKET];
-        let mut cameras = [CameraRay::default(); PACKET];
-        if batches && count == PACKET {
+        let mut rngs = [Rng::with_key(0, 0, pixel, start); BATCH];
+        let mut cameras = [CameraRay::default(); BATCH];
+        if batches && count == BATCH {
             batch::camera_samples::<F>(scene, x, y, start, &mut rngs, &mut cameras);
         } else {
             for k in 0..count {
@@ -1031,12 +1032,12 @@ pub fn trace_pixel<const F: u32>(
                     camera_sample::<F>(scene, x, y, sample, &mut rngs[k], &mut stats.flags);
             }
         }
-        let mut queries = [RayQuery::default(); PACKET];
+        let mut queries = [RayQuery::default(); BATCH];
         for k in 0..count {
             let ray = cameras[k].ray;
             queries[k] = RayQuery::new(ray.origin, ray.direction).at_time(cameras[k].time);
         }
-        let mut hits = [None; PACKET];
+        let mut hits = [None; BATCH];
         scene
             .tracer()
             .closest_hits::<F>(&queries[..count], T_FAR, &mut hits[..count]);

@@ -101,8 +101,9 @@ named_enum! {
         Cwbvh = "cwbvh",
         /// The CWBVH's tree with f32 child boxes, tested eight at a time (the CPU only).
         Wide = "wide",
-        /// The wide BVH traced in packets of eight rays (`accel::wide::packet`; the CPU only):
-        /// 4x2 pixels of a frame for the camera's rays, eight consecutive rays otherwise.
+        /// The wide BVH traced in packets of sixteen rays (`accel::wide::packet`; the CPU
+        /// only): 4x4 pixels of a frame for the camera's rays, sixteen consecutive rays
+        /// otherwise.
         Packets = "packets",
         /// The wide BVH traced by streams of rays, eight of them at once a node each in turn
         /// (`accel::wide::stream`; the CPU only).
@@ -117,7 +118,7 @@ impl Bvh {
             Bvh::Bvh2 => "BVH2",
             Bvh::Cwbvh => "CWBVH",
             Bvh::Wide => "wide (CPU)",
-            Bvh::Packets => "wide, packets of 8 (CPU)",
+            Bvh::Packets => "wide, packets of 16 (CPU)",
             Bvh::Stream => "wide, streams of 8 in flight (CPU)",
         }
     }
@@ -174,10 +175,16 @@ pub fn incoherent_rays(lo: Vec3, hi: Vec3, count: usize, seed: u32) -> RaySet {
     set
 }
 
-/// The rays of `rays` in the order packets take them, [`PACKET`] at a time: blocks of 4x2
-/// pixels (the frames' rows one after another; the last blocks of a row or column cut short
-/// where the width or the rows are not a multiple), or the set's order when its rays are no
-/// image's.
+/// Columns of a packet's block of camera rays.
+const BLOCK_COLUMNS: usize = 4;
+
+/// Rows of a packet's block of camera rays: as many as fill a packet.
+const BLOCK_ROWS: usize = PACKET / BLOCK_COLUMNS;
+
+/// The rays of `rays` in the order packets take them, [`PACKET`] at a time: blocks of
+/// [`BLOCK_COLUMNS`] x [`BLOCK_ROWS`] pixels (the frames' rows one after another; the last
+/// blocks of a row or column cut short where the width or the rows are not a multiple), or
+/// the set's order when its rays are no image's.
 pub fn packet_order(rays: &RaySet) -> Vec<u32> {
     let width = rays.image_width as usize;
     if width == 0 {
@@ -185,10 +192,10 @@ pub fn packet_order(rays: &RaySet) -> Vec<u32> {
     }
     let rows = rays.len() / width;
     let mut order = Vec::with_capacity(rays.len());
-    for block_y in (0..rows).step_by(2) {
-        for block_x in (0..width).step_by(4) {
-            for y in block_y..(block_y + 2).min(rows) {
-                for x in block_x..(block_x + 4).min(width) {
+    for block_y in (0..rows).step_by(BLOCK_ROWS) {
+        for block_x in (0..width).step_by(BLOCK_COLUMNS) {
+            for y in block_y..(block_y + BLOCK_ROWS).min(rows) {
+                for x in block_x..(block_x + BLOCK_COLUMNS).min(width) {
                     order.push((y * width + x) as u32);
                 }
             }
@@ -968,33 +975,37 @@ mod tests {
     }
 
     #[test]
-    fn packets_take_every_ray_once_in_blocks_of_four_by_two_pixels() {
-        // A frame of 10x3: blocks cut short at the right edge and, the rows being odd, at
-        // the last row.
+    fn packets_take_every_ray_once_in_blocks_of_four_by_four_pixels() {
+        assert_eq!(BLOCK_COLUMNS * BLOCK_ROWS, PACKET);
+        // A frame of 10x6: blocks cut short at the right edge and, the rows not a multiple
+        // of four, at the last rows.
         let set = RaySet {
-            origins: vec![Vec3::ZERO; 30],
-            directions: vec![Vec3::Z; 30],
+            origins: vec![Vec3::ZERO; 60],
+            directions: vec![Vec3::Z; 60],
             image_width: 10,
         };
         let order = packet_order(&set);
         let mut sorted = order.clone();
         sorted.sort_unstable();
-        assert_eq!(sorted, (0..30).collect::<Vec<u32>>());
-        assert_eq!(&order[..8], &[0, 1, 2, 3, 10, 11, 12, 13]);
-        assert_eq!(&order[16..20], &[8, 9, 18, 19]);
-        assert_eq!(&order[20..24], &[20, 21, 22, 23]);
-        // Every block's pixels lie within 4 columns and 2 rows of each other.
+        assert_eq!(sorted, (0..60).collect::<Vec<u32>>());
+        assert_eq!(
+            &order[..16],
+            &[0, 1, 2, 3, 10, 11, 12, 13, 20, 21, 22, 23, 30, 31, 32, 33]
+        );
+        assert_eq!(&order[32..40], &[8, 9, 18, 19, 28, 29, 38, 39]);
+        assert_eq!(&order[40..48], &[40, 41, 42, 43, 50, 51, 52, 53]);
+        // Every block's pixels lie within 4 columns and 4 rows of each other.
         let blocks: Vec<&[u32]> = order.chunks(PACKET).collect();
         for block in &blocks[..2] {
             let (xs, ys): (Vec<u32>, Vec<u32>) = block.iter().map(|&i| (i % 10, i / 10)).unzip();
             assert!(xs.iter().max().unwrap() - xs.iter().min().unwrap() < 4);
-            assert!(ys.iter().max().unwrap() - ys.iter().min().unwrap() < 2);
+            assert!(ys.iter().max().unwrap() - ys.iter().min().unwrap() < 4);
         }
         // Rays of no image keep their order.
         let plain = RaySet {
             image_width: 0,
             ..set
         };
-        assert_eq!(packet_order(&plain), (0..30).collect::<Vec<u32>>());
+        assert_eq!(packet_order(&plain), (0..60).collect::<Vec<u32>>());
     }
 }

@@ -11,7 +11,6 @@
 use glam::Vec3;
 
 use super::CameraRay;
-use crate::accel::wide::PACKET;
 use crate::camera::Ray;
 use crate::layout::{
     FEATURE_LENS, FOCUS_PLANE, LENS_DIMENSION, PIXEL_DIMENSION, PROJECTION_PERSPECTIVE,
@@ -22,6 +21,9 @@ use crate::pack::FlatScene;
 use crate::sampler::{
     permute_round, pixel_hash, progressive_stratified, sample_aperture, unit_float,
 };
+
+/// Camera samples drawn together: one per lane of an AVX2 vector.
+pub const BATCH: usize = 8;
 
 /// Whether [`camera_samples`] takes the scene's camera samples eight at a time (else they are
 /// drawn one by one).
@@ -42,7 +44,7 @@ pub fn batches<const F: u32>(scene: &FlatScene) -> bool {
         && camera.projection == PROJECTION_PERSPECTIVE
 }
 
-/// Camera samples `first..first + PACKET` of pixel (x, y) and their random streams, as
+/// Camera samples `first..first + BATCH` of pixel (x, y) and their random streams, as
 /// [`camera_sample`](super::camera_sample) draws each (the streams left where it leaves
 /// them); the scene must be one that [`batches`].
 pub fn camera_samples<const F: u32>(
@@ -50,8 +52,8 @@ pub fn camera_samples<const F: u32>(
     x: u32,
     y: u32,
     first: u32,
-    rngs: &mut [Rng; PACKET],
-    cameras: &mut [CameraRay; PACKET],
+    rngs: &mut [Rng; BATCH],
+    cameras: &mut [CameraRay; BATCH],
 ) {
     // The lens's code is compiled in only where there is a lens.
     let lens = has(F, FEATURE_LENS) && scene.camera.lens_radius_mm > 0.0;
@@ -78,8 +80,8 @@ fn camera_samples_avx2<const LENS: bool>(
     x: u32,
     y: u32,
     first: u32,
-    rngs: &mut [Rng; PACKET],
-    cameras: &mut [CameraRay; PACKET],
+    rngs: &mut [Rng; BATCH],
+    cameras: &mut [CameraRay; BATCH],
 ) {
     camera_samples_lanes::<LENS>(scene, x, y, first, rngs, cameras)
 }
@@ -93,12 +95,12 @@ fn pattern_lanes(
     scene: &FlatScene,
     pixel: u32,
     (sampler, columns, dim): (u32, u32, u32),
-    keys: &[u32; PACKET],
-    samples: &[u32; PACKET],
-) -> [[f32; 2]; PACKET] {
+    keys: &[u32; BATCH],
+    samples: &[u32; BATCH],
+) -> [[f32; 2]; BATCH] {
     let frame = &scene.frame;
-    let mut u = [[0.0f32; 2]; PACKET];
-    for k in 0..PACKET {
+    let mut u = [[0.0f32; 2]; BATCH];
+    for k in 0..BATCH {
         u[k] = [
             unit_float(draw_bits(keys[k], dim)),
             unit_float(draw_bits(keys[k], dim + 1)),
@@ -106,7 +108,7 @@ fn pattern_lanes(
     }
     if sampler == SAMPLER_STRATIFIED && frame.progressive != 0 {
         let key = pixel_hash(frame.seed, pixel, dim);
-        for k in 0..PACKET {
+        for k in 0..BATCH {
             u[k] = progressive_stratified(samples[k], frame.spp, key, u[k]);
         }
     } else if sampler == SAMPLER_STRATIFIED {
@@ -114,7 +116,7 @@ fn pattern_lanes(
         let w = frame.spp - 1;
         let shift = columns.trailing_zeros();
         let rows = frame.spp >> shift;
-        for k in 0..PACKET {
+        for k in 0..BATCH {
             let stratum = permute_round(samples[k], w, key).wrapping_add(key) & w;
             let (cy, cx) = (stratum >> shift, stratum & (columns - 1));
             u[k] = [
@@ -132,12 +134,12 @@ fn camera_samples_lanes<const LENS: bool>(
     x: u32,
     y: u32,
     first: u32,
-    rngs: &mut [Rng; PACKET],
-    cameras: &mut [CameraRay; PACKET],
+    rngs: &mut [Rng; BATCH],
+    cameras: &mut [CameraRay; BATCH],
 ) {
     let (frame, camera) = (&scene.frame, &scene.camera);
     let pixel = y * frame.width + x;
-    let samples = std::array::from_fn::<u32, PACKET, _>(|k| first + k as u32);
+    let samples = std::array::from_fn::<u32, BATCH, _>(|k| first + k as u32);
     let keys = samples.map(|sample| stream_key(frame.seed, pixel, sample));
     // `Rng::new`, then the pixel's point (dimensions 0 and 1) and the lens's (2 and 3).
     let pixel_pattern = (
@@ -155,12 +157,12 @@ fn camera_samples_lanes<const LENS: bool>(
         let points = pattern_lanes(scene, pixel, lens_pattern, &keys, &samples);
         let lens = points.map(|u| sample_aperture(camera, &scene.sample_table, u));
         rays_lanes::<true>(scene, x, y, &u, &lens, cameras);
-        for k in 0..PACKET {
+        for k in 0..BATCH {
             rngs[k] = Rng::with_key(keys[k], LENS_DIMENSION + 2, pixel, samples[k]);
         }
     } else {
-        rays_lanes::<false>(scene, x, y, &u, &[[0.0; 2]; PACKET], cameras);
-        for k in 0..PACKET {
+        rays_lanes::<false>(scene, x, y, &u, &[[0.0; 2]; BATCH], cameras);
+        for k in 0..BATCH {
             rngs[k] = Rng::with_key(keys[k], LENS_DIMENSION, pixel, samples[k]);
         }
     }
@@ -174,9 +176,9 @@ fn rays_lanes<const LENS: bool>(
     scene: &FlatScene,
     x: u32,
     y: u32,
-    u: &[[f32; 2]; PACKET],
-    lens: &[[f32; 2]; PACKET],
-    cameras: &mut [CameraRay; PACKET],
+    u: &[[f32; 2]; BATCH],
+    lens: &[[f32; 2]; BATCH],
+    cameras: &mut [CameraRay; BATCH],
 ) {
     let (frame, camera) = (&scene.frame, &scene.camera);
     let centre = Vec3::from(camera.film_center);
@@ -197,7 +199,7 @@ fn rays_lanes<const LENS: bool>(
     };
     let bend = |lens: f32| lens * camera.inv_focal_length_mm;
     let (centre_origin, centre_bend) = (origin_of([0.0; 2]), bend(0.0));
-    for k in 0..PACKET {
+    for k in 0..BATCH {
         let raster = [x as f32 + u[k][0], y as f32 + u[k][1]];
         let film = [
             (raster[0] / frame.width as f32 - 0.5) * camera.film_width_mm,
@@ -271,9 +273,9 @@ mod tests {
                 (17, 5),
                 (flat.frame.width - 1, flat.frame.height - 1),
             ] {
-                for first in (0..flat.frame.spp).step_by(PACKET) {
-                    let mut rngs = [Rng::new(0, 0, 0); PACKET];
-                    let mut cameras = [CameraRay::default(); PACKET];
+                for first in (0..flat.frame.spp).step_by(BATCH) {
+                    let mut rngs = [Rng::new(0, 0, 0); BATCH];
+                    let mut cameras = [CameraRay::default(); BATCH];
                     let mut lanes_rngs = rngs;
                     let mut lanes_cameras = cameras;
                     camera_samples::<FEATURES_ALL>(&flat, x, y, first, &mut rngs, &mut cameras);
@@ -296,7 +298,7 @@ mod tests {
                             lanes_cameras_ref,
                         ),
                     }
-                    for k in 0..PACKET {
+                    for k in 0..BATCH {
                         let sample = first + k as u32;
                         let mut rng = Rng::new(flat.frame.seed, y * flat.frame.width + x, sample);
                         let mut flags = 0;
