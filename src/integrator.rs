@@ -32,7 +32,7 @@ use crate::camera::spectral::{film_response, sample_wavelength};
 use crate::camera::{Ray, film_position_mm, generate_lens_ray, generate_ray};
 use crate::layout::*;
 use crate::math::rng::Rng;
-use crate::pack::FlatScene;
+use crate::pack::{FlatScene, LightShape};
 use crate::sampler::{
     PatternSource, light_sample_2d, permute, pixel_hash, sample_2d, sample_aperture,
 };
@@ -260,24 +260,6 @@ struct LightSample {
     traced: bool,
 }
 
-/// An area light's shape, as its samples need it.
-struct AreaLight {
-    normal: Vec3,
-    area: f32,
-    triangle: bool,
-}
-
-fn area_light_of(light: &GpuLight) -> AreaLight {
-    let cross = Vec3::from(light.p1).cross(Vec3::from(light.p2));
-    let triangle = light.kind == LIGHT_TRIANGLE;
-    // `GpuLight::area`, from the cross product at hand.
-    AreaLight {
-        normal: cross.normalize(),
-        area: if triangle { 0.5 } else { 1.0 } * cross.length(),
-        triangle,
-    }
-}
-
 /// How a vertex came to sample a light: the probability it chose it with (1 for a light
 /// sampled at every vertex), and the samples a vertex takes of it on average, which the MIS
 /// weights count (its samples times its power's share, the same share an emitter hit finds).
@@ -327,11 +309,9 @@ fn choose_light(scene: &FlatScene, depth: u32, rng: &mut Rng) -> Option<(usize, 
         _ => choice_cdf(scene, low - 1),
     };
     let index = (frame.light_choice_start + low) as usize;
-    let light = &scene.lights[index];
-    let share = frame.light_choice_probability(light.color, light.area());
     let share = LightShare {
         chosen: choice_cdf(scene, low) - below,
-        expected_samples: share * light.samples as f32,
+        expected_samples: scene.light_shapes[index].chosen_samples,
     };
     Some((index, share))
 }
@@ -345,13 +325,13 @@ fn choose_light(scene: &FlatScene, depth: u32, rng: &mut Rng) -> Option<(usize, 
 #[inline(always)]
 fn area_light_sample(
     light: &GpuLight,
-    shape: &AreaLight,
+    shape: &LightShape,
     share: LightShare,
     square: [f32; 2],
     vertex: &Vertex,
 ) -> LightSample {
     let (surface, material, wo) = (vertex.surface, vertex.material, vertex.wo);
-    let u = if shape.triangle && square[0] + square[1] > 1.0 {
+    let u = if light.kind == LIGHT_TRIANGLE && square[0] + square[1] > 1.0 {
         [1.0 - square[0], 1.0 - square[1]]
     } else {
         square
@@ -482,18 +462,18 @@ fn sky_seen<const F: u32>(scene: &FlatScene, direction: Vec3, bsdf_pdf: f32) -> 
 /// A sampled light's scale of its samples' sum besides `color / samples`: an area light's
 /// area, a sun's radiance over density per irradiance (`layout::LIGHT_SUN`), 1 for an
 /// environment, whose terms carry their radiance over density.
-fn light_scale(light: &GpuLight) -> f32 {
+fn light_scale(light: &GpuLight, shape: &LightShape) -> f32 {
     match light.kind {
         LIGHT_SUN => light.p2[0],
         LIGHT_ENVIRONMENT => 1.0,
-        _ => area_light_of(light).area,
+        _ => shape.area,
     }
 }
 
-/// What a light adds from `sum`, the sum of its visible samples' terms.
-fn light_total(light: &GpuLight, sum: Vec3) -> Vec3 {
+/// What a light of shape `shape` adds from `sum`, the sum of its visible samples' terms.
+fn light_total(light: &GpuLight, shape: &LightShape, sum: Vec3) -> Vec3 {
     if light.is_sampled() {
-        Vec3::from(light.color) * sum * (light_scale(light) / light.samples as f32)
+        Vec3::from(light.color) * sum * (light_scale(light, shape) / light.samples as f32)
     } else {
         sum
     }
@@ -506,7 +486,7 @@ fn light_total(light: &GpuLight, sum: Vec3) -> Vec3 {
 #[inline(always)]
 fn sampled_light<const F: u32>(
     scene: &FlatScene,
-    light: &GpuLight,
+    (light, shape): (&GpuLight, &LightShape),
     share: LightShare,
     offset: u32,
     vertex: &Vertex,
@@ -514,7 +494,6 @@ fn sampled_light<const F: u32>(
     rng: &mut Rng,
     stats: &mut SampleStats,
 ) -> Vec3 {
-    let shape = area_light_of(light);
     let samples = window.clip(light.samples);
     let frame = &scene.frame;
     let key = pixel_hash(
@@ -537,13 +516,13 @@ fn sampled_light<const F: u32>(
         );
         let s = match light.is_sky() {
             true => sky_light_sample(light, &scene.environment, square, vertex),
-            false => area_light_sample(light, &shape, share, square, vertex),
+            false => area_light_sample(light, shape, share, square, vertex),
         };
         if s.traced && vertex.visible::<F>(scene, &s, stats) {
             sum += s.f;
         }
     }
-    light_total(light, sum)
+    light_total(light, shape, sum)
 }
 
 /// What the area light vertex chooses adds (`choose_light`): only the path tracer chooses, so
@@ -558,7 +537,7 @@ fn chosen_light<const F: u32>(
 ) -> Vec3 {
     match choose_light(scene, vertex.depth, rng) {
         Some((l, share)) => {
-            let light = &scene.lights[l];
+            let light = (&scene.lights[l], &scene.light_shapes[l]);
             sampled_light::<F>(scene, light, share, 0, vertex, window, rng, stats)
         }
         None => Vec3::ZERO,
@@ -651,10 +630,15 @@ fn direct_light<const F: u32>(
         total += chosen_light::<F>(scene, vertex, window, rng, stats);
     }
     let mut offset = frame.light_choice_pairs;
-    for light in &scene.lights[..frame.light_choice_start as usize] {
+    let unchosen = ..frame.light_choice_start as usize;
+    for (light, shape) in scene.lights[unchosen]
+        .iter()
+        .zip(&scene.light_shapes[unchosen])
+    {
         if has(F, FEATURE_AREA_LIGHTS) && light.is_sampled() {
             let share = LightShare::every_vertex(light);
-            total += sampled_light::<F>(scene, light, share, offset, vertex, window, rng, stats);
+            let sampled = (light, shape);
+            total += sampled_light::<F>(scene, sampled, share, offset, vertex, window, rng, stats);
             offset += light.samples;
         } else if has(F, FEATURE_PUNCTUAL_LIGHTS) && window.is_first() {
             let s = punctual_light_sample(light, surface, material, wo);

@@ -43,6 +43,9 @@ pub struct FlatScene {
     pub environment: Vec<f32>,
     /// The scene's lights in order, then one per emitting triangle.
     pub lights: Vec<GpuLight>,
+    /// What the CPU path's light samples need of each of `lights`, computed once here rather
+    /// than at every path vertex.
+    pub light_shapes: Vec<LightShape>,
     /// The camera as the kernels see it; its aperture polygon's vertices are in `sample_table`.
     pub camera: GpuCamera,
     /// Per-render constants: image size, samples, depth, samplers, light sample counts.
@@ -74,6 +77,33 @@ pub struct FlatScene {
     cwbvh: std::sync::OnceLock<Result<CwGeometry, String>>,
     /// The CPU's wide BVH (`accel::wide`), made from the CWBVH on first use.
     wide: std::sync::OnceLock<Result<WideBvh, String>>,
+}
+
+/// An area light's shape as its samples see it, and its share of the samples when the path
+/// tracer chooses one light a vertex: the same numbers the kernels compute at each sample
+/// (`area_light_of` and `choose_light` in integrator.wgsl), by the same operations.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LightShape {
+    /// The unit normal of its edges' cross product (a light of another kind: of its fields').
+    pub normal: Vec3,
+    /// Its area ([`GpuLight::area`]).
+    pub area: f32,
+    /// The samples a vertex takes of it on average where the vertex chooses one light by
+    /// power: its samples times its share of the power (1 where the frame chooses none).
+    pub chosen_samples: f32,
+}
+
+impl LightShape {
+    fn of(light: &GpuLight, frame: &GpuFrame) -> LightShape {
+        let cross = Vec3::from(light.p1).cross(Vec3::from(light.p2));
+        let area = light.area();
+        LightShape {
+            normal: cross.normalize(),
+            area,
+            chosen_samples: frame.light_choice_probability(light.color, area)
+                * light.samples as f32,
+        }
+    }
 }
 
 /// A parametric surface of the scene and its mesh's primitives in `FlatScene::prims`.
@@ -227,8 +257,13 @@ pub fn flatten(scene: &Scene) -> FlatScene {
     );
     let lens_table = camera.lens_table();
     let choice_offset = (table.points.len() + lens_table.len()) as u32;
+    let frame = frame_constants(scene, &lights, &geometry, &table, &choice, choice_offset);
     FlatScene {
-        frame: frame_constants(scene, &lights, &geometry, &table, &choice, choice_offset),
+        light_shapes: lights
+            .iter()
+            .map(|light| LightShape::of(light, &frame))
+            .collect(),
+        frame,
         bvh: geometry.bvh,
         nodes: geometry.nodes,
         prims: geometry.prims,

@@ -18,7 +18,7 @@ import sys
 import bench_gpu_table
 
 BVH_LABELS = {"bvh2": "BVH2", "cwbvh": "CWBVH", "wide": "wide (CPU)",
-              "packets": "wide, packets of 8 (CPU)",
+              "packets": "wide, packets of 16 (CPU)",
               "stream": "wide, streams of 8 in flight (CPU)"}
 QUERIES = {"closest_hit": "closest", "any_hit": "any"}
 FERMAT_SCENES = ["sphere", "torus", "ellipsoid", "cylinder", "teapot"]

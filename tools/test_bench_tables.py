@@ -56,7 +56,7 @@ class Tables(unittest.TestCase):
         lines = block("rays")
         self.assertIn("| coherent | closest | cpu (2 threads) | CWBVH | 0.59 (0.59–0.59) | 1 "
                       "| 79 | 9.424558e1 |", lines)
-        self.assertIn("| incoherent | any | cpu (2 threads) | wide, packets of 8 (CPU) | "
+        self.assertIn("| incoherent | any | cpu (2 threads) | wide, packets of 16 (CPU) | "
                       "7.73 (7.73–7.73) | - | 128 | 0.000000e0 |", lines)
         # Every backend and layout agrees on the hits of each set.
         hits = {}

@@ -968,6 +968,21 @@ mod tests {
         assert!(err.contains("primitive 1"), "{err}");
     }
 
+    /// `tools/bench_tables.py` (and `tools/bench_embree.sh`, which takes its labels) name each
+    /// BVH in their tables as the reports here do.
+    #[test]
+    fn the_table_script_labels_the_bvhs_as_the_reports_do() {
+        use crate::named::Named;
+        let script = include_str!("../../tools/bench_tables.py");
+        for value in Bvh::VALUES {
+            let entry = format!("\"{}\": \"{}\"", value.name, value.value.label());
+            assert!(
+                script.contains(&entry),
+                "tools/bench_tables.py lacks {entry}"
+            );
+        }
+    }
+
     #[test]
     fn the_checksum_counts_hits_and_sums_their_distances() {
         let c = Checksum::of(&[1.0, T_FAR, 2.5, T_FAR]);
