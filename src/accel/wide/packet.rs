@@ -25,6 +25,9 @@ use super::*;
 /// faster, closest hits 8%: docs/embree.md).
 pub const PACKET: usize = 16;
 
+// The any-hit query keeps a bit per ray in a `u32`, its full mask `(1 << rays) - 1`.
+const _: () = assert!(PACKET < u32::BITS as usize);
+
 /// The interval holding every ray of a packet: per axis, the origins' range and the
 /// reciprocal directions' range.
 #[derive(Clone, Copy, Debug)]
