@@ -118,7 +118,7 @@ def main():
         pfm = os.path.join(args.out, f"path_chambre_{depth}.pfm")
         chambre_render(args.chambre, pfm, SPP, depth, 100)  # warm-up
         seconds, errors, m_seconds, ratios = [], [], [], []
-        for round in range(args.rounds):
+        for _ in range(args.rounds):
             ours = []
             for run in range(args.runs):
                 ours.append(chambre_render(args.chambre, pfm, SPP, depth, 2 + len(seconds)))

@@ -968,11 +968,17 @@ mod tests {
         assert!(err.contains("primitive 1"), "{err}");
     }
 
-    /// `tools/bench_tables.py` (and `tools/bench_embree.sh`, which takes its labels) name each
-    /// BVH in their tables as the reports here do.
+    /// The labels give the traversals' own sizes, and `tools/bench_tables.py` (and
+    /// `tools/bench_embree.sh`, which takes its labels) name each BVH in their tables as the
+    /// reports here do.
     #[test]
     fn the_table_script_labels_the_bvhs_as_the_reports_do() {
+        use crate::accel::wide::IN_FLIGHT;
         use crate::named::Named;
+        let packets = format!("packets of {PACKET} ");
+        assert!(Bvh::Packets.label().contains(&packets));
+        let streams = format!("streams of {IN_FLIGHT} ");
+        assert!(Bvh::Stream.label().contains(&streams));
         let script = include_str!("../../tools/bench_tables.py");
         for value in Bvh::VALUES {
             let entry = format!("\"{}\": \"{}\"", value.name, value.value.label());
