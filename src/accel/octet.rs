@@ -5,10 +5,15 @@
 //! octets and tests them when the node's test finds one of those leaves hit, instead of pushing
 //! each leaf and testing its one to three primitives one by one.
 //!
-//! The AVX2 tests perform the scalar tests' operations in the scalar tests' order, lane by lane
-//! (no fused multiply-add: neither is compiled with FMA), so each lane's result is the scalar
-//! test's, bit for bit; `tests` checks it on random rays and primitives, edges and extremes
-//! included. No GPU twin: the GPU tests a leaf's primitives one by one (its lanes are rays).
+//! A packet's any-hit query turns the lanes around where the CPU has AVX-512: one triangle of
+//! an octet against sixteen rays ([`RayLanes`]), only the triangles of the leaves its interval
+//! reached, as Embree's 16-wide packets test theirs.
+//!
+//! The AVX2 and AVX-512 tests perform the scalar tests' operations in the scalar tests' order,
+//! lane by lane (no fused multiply-add: none is compiled with FMA), so each lane's result is
+//! the scalar test's, bit for bit; `tests` checks it on random rays and primitives, edges and
+//! extremes included. No GPU twin: the GPU tests a leaf's primitives one by one (its lanes are
+//! rays).
 
 use glam::Vec3;
 
@@ -32,6 +37,8 @@ pub struct Octet<R> {
     /// Bit per lane of the node whose leaves the primitives come from: the leaves in this
     /// octet.
     pub leaves: u32,
+    /// Per lane of that node: the bits of this octet's lanes that hold its leaf's primitives.
+    leaf_lanes: [u8; LANES],
 }
 
 /// Eight triangles for the watertight test.
@@ -123,6 +130,7 @@ impl<R: Rows> Octet<R> {
             if lane < prims.len() {
                 octet.lanes |= 1 << lane;
                 octet.leaves |= 1 << leaf_lane;
+                octet.leaf_lanes[leaf_lane as usize] |= 1 << lane;
             }
         }
         octet
@@ -193,6 +201,85 @@ impl<R: Rows> Octet<R> {
             mask |= ((hits[lane].t < t_max) as u32) << lane;
         }
         (mask, H::from_hits(hits))
+    }
+}
+
+/// Rays a packet tests against one triangle at once, in AVX-512's sixteen lanes.
+pub const RAY_LANES: usize = 16;
+
+/// Up to sixteen rays that share the watertight test's axes (`kx`, `ky`, `kz`), stored lane by
+/// lane: a packet's rays as [`TriangleOctet::blocked_rays`] tests them against one triangle
+/// at a time (Embree's packets' way: a lane per ray), where the octet tests take one ray
+/// against eight triangles. Lanes past the rays repeat the first ray, so they stay finite.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct RayLanes {
+    /// The origins' coordinates along `kx`, `ky` and `kz`.
+    origin: [[f32; RAY_LANES]; 3],
+    /// The shear constants (`RayQuery::shear`).
+    shear: [[f32; RAY_LANES]; 3],
+    axes: [usize; 3],
+}
+
+impl RayLanes {
+    /// The lanes of `rays`, or `None` when there are more than sixteen or their axes differ
+    /// (a packet across a diagonal of the directions, where the largest component changes).
+    pub fn of(rays: &[RayQuery]) -> Option<RayLanes> {
+        let first = rays.first()?;
+        let axes = [first.kx, first.ky, first.kz];
+        let shared = rays.iter().all(|ray| [ray.kx, ray.ky, ray.kz] == axes);
+        if rays.len() > RAY_LANES || !shared {
+            return None;
+        }
+        let mut lanes = RayLanes {
+            origin: [[0.0; RAY_LANES]; 3],
+            shear: [[0.0; RAY_LANES]; 3],
+            axes,
+        };
+        for lane in 0..RAY_LANES {
+            let ray = rays.get(lane).unwrap_or(first);
+            for (row, &axis) in axes.iter().enumerate() {
+                lanes.origin[row][lane] = ray.origin[axis];
+                lanes.shear[row][lane] = ray.shear[row];
+            }
+        }
+        Some(lanes)
+    }
+}
+
+impl TriangleOctet {
+    /// The rays of `active` (a bit per ray of `rays`) that the triangles of this octet's
+    /// leaves in `leaves` (bits of the node's lanes) block before `t_max`, a triangle at a
+    /// time against every ray; only the leaves asked are tested.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub unsafe fn blocked_rays(
+        &self,
+        leaves: u32,
+        rays: &RayLanes,
+        mut active: u32,
+        t_max: f32,
+    ) -> u32 {
+        let mut asked = 0u32;
+        let mut wanted = leaves & self.leaves;
+        while wanted != 0 {
+            asked |= u32::from(self.leaf_lanes[wanted.trailing_zeros() as usize]);
+            wanted &= wanted - 1;
+        }
+        let mut blocked = 0;
+        while asked != 0 && active != 0 {
+            let lane = asked.trailing_zeros() as usize;
+            asked &= asked - 1;
+            // SAFETY: the CPU has AVX-512F, as this function's caller must check.
+            let hit = unsafe { self.rows.blocks_rays(lane, rays, active, t_max) };
+            blocked |= hit;
+            active &= !hit;
+        }
+        blocked
     }
 }
 
@@ -337,6 +424,101 @@ impl Rows for TriangleRows {
         (mask, unsafe {
             H::from_lanes(t, mul(e1, inv_det), mul(e2, inv_det))
         })
+    }
+}
+
+impl TriangleRows {
+    /// The watertight test of the triangle in lane `lane` on sixteen rays at once, each
+    /// operation the scalar test's (the AVX2 test's, lanes being rays instead of triangles):
+    /// a bit per ray of `active` hit before `t_max`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    unsafe fn blocks_rays(&self, lane: usize, rays: &RayLanes, active: u32, t_max: f32) -> u32 {
+        use std::arch::x86_64::*;
+        let load = |row: &[f32; RAY_LANES]| {
+            // SAFETY: a row is sixteen f32s.
+            unsafe { _mm512_loadu_ps(row.as_ptr()) }
+        };
+        let [ox, oy, oz] = rays.origin.each_ref().map(load);
+        let [sx, sy, sz] = rays.shear.each_ref().map(load);
+        let [kx, ky, kz] = rays.axes;
+        let (mul, add, sub) = (_mm512_mul_ps, _mm512_add_ps, _mm512_sub_ps);
+        let splat = |x| _mm512_set1_ps(x);
+        // One vertex translated to each ray's origin and sheared: (x, y, scaled z).
+        let shear = |vertex: usize| {
+            let v = &self.v[vertex];
+            let a_kx = sub(splat(v[kx][lane]), ox);
+            let a_ky = sub(splat(v[ky][lane]), oy);
+            let a_kz = sub(splat(v[kz][lane]), oz);
+            (
+                add(a_kx, mul(sx, a_kz)),
+                add(a_ky, mul(sy, a_kz)),
+                mul(sz, a_kz),
+            )
+        };
+        let (p0x, p0y, z0) = shear(0);
+        let (p1x, p1y, z1) = shear(1);
+        let (p2x, p2y, z2) = shear(2);
+        let cross = |ax, ay, bx, by| sub(mul(ax, by), mul(ay, bx));
+        let e0 = cross(p1x, p1y, p2x, p2y);
+        // The sign flipped as an integer: AVX-512F has no float xor.
+        let negate = |a| {
+            _mm512_castsi512_ps(_mm512_xor_si512(
+                _mm512_castps_si512(a),
+                _mm512_set1_epi32(i32::MIN),
+            ))
+        };
+        let e1 = negate(cross(p0x, p0y, p2x, p2y));
+        let e2 = cross(p0x, p0y, p1x, p1y);
+        let zero = _mm512_setzero_ps();
+        let lt = |a, b| u32::from(_mm512_cmp_ps_mask::<_CMP_LT_OQ>(a, b));
+        let gt = |a, b| u32::from(_mm512_cmp_ps_mask::<_CMP_GT_OQ>(a, b));
+        let le = |a, b| u32::from(_mm512_cmp_ps_mask::<_CMP_LE_OQ>(a, b));
+        let ge = |a, b| u32::from(_mm512_cmp_ps_mask::<_CMP_GE_OQ>(a, b));
+        let mixed_signs = (lt(e0, zero) | lt(e1, zero) | lt(e2, zero))
+            & (gt(e0, zero) | gt(e1, zero) | gt(e2, zero));
+        let det = add(add(e0, e1), e2);
+        let flat = u32::from(_mm512_cmp_ps_mask::<_CMP_EQ_OQ>(det, zero));
+        // Most triangles a packet tests miss every ray here: stop before the division.
+        if (mixed_signs | flat) & active == active {
+            return 0;
+        }
+        let t_scaled = add(add(mul(e0, z0), mul(e1, z1)), mul(e2, z2));
+        let t_max_det = mul(splat(t_max), det);
+        let behind_or_far = (lt(det, zero) & (ge(t_scaled, zero) | lt(t_scaled, t_max_det)))
+            | (gt(det, zero) & (le(t_scaled, zero) | gt(t_scaled, t_max_det)));
+        let inv_det = _mm512_div_ps(splat(1.0), det);
+        let t = mul(t_scaled, inv_det);
+        // `triangle_t_error`, as in `test_avx2`.
+        let abs = _mm512_abs_ps;
+        let max3 = |a, b, c| _mm512_max_ps(_mm512_max_ps(abs(a), abs(b)), abs(c));
+        let max_x = max3(p0x, p1x, p2x);
+        let max_y = max3(p0y, p1y, p2y);
+        let max_z = max3(z0, z1, z2);
+        let max_e = max3(e0, e1, e2);
+        let delta_x = mul(splat(gamma(5)), add(max_x, max_z));
+        let delta_y = mul(splat(gamma(5)), add(max_y, max_z));
+        let delta_z = mul(splat(gamma(3)), max_z);
+        let delta_e = mul(
+            splat(2.0),
+            add(
+                add(mul(mul(splat(gamma(2)), max_x), max_y), mul(delta_y, max_x)),
+                mul(delta_x, max_y),
+            ),
+        );
+        let error = mul(
+            mul(
+                splat(3.0),
+                add(
+                    add(mul(mul(splat(gamma(3)), max_e), max_z), mul(delta_e, max_z)),
+                    mul(delta_z, max_e),
+                ),
+            ),
+            abs(inv_det),
+        );
+        let missed = mixed_signs | flat | behind_or_far | le(t, error);
+        lt(t, splat(t_max)) & !missed & active
     }
 }
 
@@ -549,38 +731,119 @@ mod tests {
         assert!(compared > min_compared, "{compared} hits compared");
     }
 
-    /// Triangles near and far, thin, degenerate (a repeated vertex, a line), seen edge on,
-    /// with an edge shared by two lanes (rays through it meet both); rays aimed inside a lane's
-    /// triangle, on its edge, at its vertex, and just beside it.
+    /// Eight triangles near and far, thin, degenerate (a repeated vertex, a line), seen edge
+    /// on, with an edge shared by two lanes (rays through it meet both).
+    fn triangles(point: &mut dyn FnMut() -> Vec3, scale: f32) -> Vec<GpuPrimitive> {
+        let shared = [point() * scale, point() * scale];
+        (0..LANES)
+            .map(|lane| {
+                let mut v = [point() * scale, point() * scale, point() * scale];
+                match lane {
+                    0 | 1 => (v[0], v[1]) = (shared[0], shared[1]),
+                    2 => v[2] = v[1],
+                    3 => v[2] = v[0] + (v[1] - v[0]) * 0.5,
+                    4 => v[2] = v[0] + (v[1] - v[0]) * 1e-7 + v[2] * 1e-7,
+                    _ => {}
+                }
+                triangle(v)
+            })
+            .collect()
+    }
+
+    /// A point inside lane `lane`'s triangle, on its edge, at its vertex, or just beside it,
+    /// by `round`.
+    fn aim_at_triangle(rows: &TriangleRows, lane: usize, round: u32, a: f32, b: f32) -> Vec3 {
+        let [v0, v1, v2] = [0, 1, 2].map(|vertex| rows.vertex(vertex, lane));
+        let (a, b) = match round % 4 {
+            0 => (a * (1.0 - b), b),
+            1 => (a, 0.0),
+            2 => (0.0, 0.0),
+            _ => (a * (1.0 - b), b + 1e-6),
+        };
+        v0 + (v1 - v0) * a + (v2 - v0) * b
+    }
+
     #[test]
     fn the_avx2_triangle_test_equals_the_scalar_test_lane_by_lane() {
-        let primitives = |point: &mut dyn FnMut() -> Vec3, scale: f32| {
-            let shared = [point() * scale, point() * scale];
-            (0..LANES)
-                .map(|lane| {
-                    let mut v = [point() * scale, point() * scale, point() * scale];
-                    match lane {
-                        0 | 1 => (v[0], v[1]) = (shared[0], shared[1]),
-                        2 => v[2] = v[1],
-                        3 => v[2] = v[0] + (v[1] - v[0]) * 0.5,
-                        4 => v[2] = v[0] + (v[1] - v[0]) * 1e-7 + v[2] * 1e-7,
-                        _ => {}
-                    }
-                    triangle(v)
+        avx2_equals_scalar(5, triangles, aim_at_triangle, 2000);
+    }
+
+    /// The AVX-512 test of one triangle against up to sixteen rays (`RayLanes`), on 6,000
+    /// octets drawn as in the AVX2 test: rays aimed at points of one lane's triangle from
+    /// origins one to twenty-one scales away, apart or shared, some rays not asked, hit limits
+    /// beyond, at and before the aimed points. Each ray's bit must be the scalar test's, for
+    /// every lane, and `blocked_rays` must report the rays some asked leaf blocks.
+    #[test]
+    fn the_avx512_ray_lanes_equal_the_scalar_test_ray_by_ray() {
+        if !std::arch::is_x86_feature_detected!("avx512f") {
+            eprintln!("no AVX-512F on this CPU: packets test their rays against octets");
+            return;
+        }
+        let mut rng = Rng::new(11, 0, 0);
+        let mut unit = move || rng.next_f32();
+        let mut point = move || Vec3::new(unit(), unit(), unit()) * 2.0 - 1.0;
+        let (mut blocked_rays, mut compared, mut shared_axes) = (0, 0, 0);
+        for round in 0..6000u32 {
+            let scale = 10f32.powi((round % 13) as i32 - 6);
+            let prims = triangles(&mut point, scale);
+            // Lane i holds leaf i % 3 of its node: leaves of one to three triangles.
+            let packed: Vec<_> = (0..LANES)
+                .map(|i| (i as u32, &prims[i], i as u32 % 3))
+                .collect();
+            let octet = TriangleOctet::pack(&packed[..1 + round as usize % LANES]);
+            let aimed = round as usize / 8 % octet.lanes.count_ones() as usize;
+            let count = 1 + round as usize % RAY_LANES;
+            let origin = aim_at_triangle(&octet.rows, aimed, round, 0.5, 0.25)
+                + point().normalize_or(Vec3::X) * scale * (1.0 + 10.0 * (point().x + 1.0));
+            let rays: Vec<RayQuery> = (0..count as u32)
+                .map(|k| {
+                    let (a, b) = (0.5 * (point().x + 1.0), 0.5 * (point().y + 1.0));
+                    let target = aim_at_triangle(&octet.rows, aimed, round + k, a, b);
+                    let apart = if round % 3 == 0 {
+                        Vec3::ZERO
+                    } else {
+                        point() * scale * 0.05
+                    };
+                    RayQuery::new(origin + apart, target - origin - apart)
                 })
-                .collect()
-        };
-        let aim = |rows: &TriangleRows, lane: usize, round: u32, a: f32, b: f32| {
-            let [v0, v1, v2] = [0, 1, 2].map(|vertex| rows.vertex(vertex, lane));
-            let (a, b) = match round % 4 {
-                0 => (a * (1.0 - b), b),
-                1 => (a, 0.0),
-                2 => (0.0, 0.0),
-                _ => (a * (1.0 - b), b + 1e-6),
+                .collect();
+            let Some(lanes) = RayLanes::of(&rays) else {
+                continue;
             };
-            v0 + (v1 - v0) * a + (v2 - v0) * b
-        };
-        avx2_equals_scalar(5, primitives, aim, 2000);
+            shared_axes += 1;
+            let t_max = [T_FAR, 2.0, 1.0, 0.5][round as usize / 4 % 4];
+            let all = (1u32 << count) - 1;
+            let active = all & [u32::MAX, 0b1011_0101_1100_1110][round as usize / 16 % 2];
+            let mut expected_blocked = 0;
+            for lane in 0..LANES {
+                if octet.lanes & (1 << lane) == 0 {
+                    continue;
+                }
+                let expected = rays.iter().enumerate().fold(0, |bits, (k, ray)| {
+                    let hit = octet.rows.test(lane, ray, t_max).t < t_max;
+                    bits | (((active >> k) & 1 == 1 && hit) as u32) << k
+                });
+                // SAFETY: the CPU has AVX-512F (checked above).
+                let found = unsafe { octet.rows.blocks_rays(lane, &lanes, active, t_max) };
+                assert_eq!(found, expected, "round {round} lane {lane}");
+                compared += count;
+                if octet.leaf_lanes[1] & (1 << lane) != 0 {
+                    expected_blocked |= expected;
+                }
+            }
+            // SAFETY: as above.
+            let blocked = unsafe { octet.blocked_rays(0b10, &lanes, active, t_max) };
+            assert_eq!(blocked, expected_blocked, "round {round}: leaf 1");
+            blocked_rays += blocked.count_ones();
+        }
+        // Most rounds' rays share their axes (some aim across a diagonal), and the draws
+        // must exercise hits and misses alike.
+        assert!(shared_axes > 4500, "{shared_axes} rounds with shared axes");
+        assert!(compared > 150_000, "{compared} rays compared");
+        assert!(
+            blocked_rays > 2000 && blocked_rays < 30_000,
+            "{blocked_rays} rays blocked by leaf 1"
+        );
     }
 
     /// Quads, flat ones too (parallel edges, a zero edge, nearly parallel); rays aimed inside

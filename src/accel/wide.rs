@@ -65,7 +65,13 @@ struct WideNode {
     quad_start: u32,
     /// The node's quad octets.
     quad_count: u32,
+    /// Per octet of the node's triangles: the bits of the leaves it holds, so that the
+    /// octets of the leaves a test missed are passed over without reading them.
+    octet_leaves: [u8; LANES],
 }
+
+// Four cache lines a node.
+const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
 
 /// The wide BVH of a scene and the primitives its leaves index.
 #[derive(Clone)]
@@ -87,6 +93,8 @@ pub struct WideBvh {
     plane_count: u32,
     /// The CPU runs the AVX2 build of the traversal.
     avx2: bool,
+    /// The CPU has AVX-512F too: packets test a triangle against all their rays at once.
+    avx512: bool,
 }
 
 impl WideBvh {
@@ -131,6 +139,7 @@ impl WideBvh {
             plane_start: cw.plane_start,
             plane_count: cw.plane_count,
             avx2: avx2_available(),
+            avx512: avx512_available(),
         })
     }
 
@@ -184,6 +193,33 @@ impl WideBvh {
         &self.octets[start..start + node.octet_count as usize]
     }
 
+    /// The triangle octets of `node` that hold a leaf of `mask`, chosen by the node's
+    /// `octet_leaves`.
+    #[inline(always)]
+    fn triangles_in<'a>(
+        &'a self,
+        node: &'a WideNode,
+        mask: u32,
+    ) -> impl Iterator<Item = &'a TriangleOctet> + 'a {
+        self.triangles_of(node)
+            .iter()
+            .zip(node.octet_leaves)
+            .filter(move |&(_, leaves)| u32::from(leaves) & mask != 0)
+            .map(|(octet, _)| octet)
+    }
+
+    /// The quad octets of `node` that hold a leaf of `mask`.
+    #[inline(always)]
+    fn quads_in<'a>(
+        &'a self,
+        node: &'a WideNode,
+        mask: u32,
+    ) -> impl Iterator<Item = &'a QuadOctet> + 'a {
+        self.quads_of(node)
+            .iter()
+            .filter(move |octet| octet.leaves & mask != 0)
+    }
+
     /// The quad octets of `node`.
     #[inline(always)]
     fn quads_of(&self, node: &WideNode) -> &[QuadOctet] {
@@ -208,6 +244,17 @@ fn avx2_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+fn avx512_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        avx2_available() && std::arch::is_x86_feature_detected!("avx512f")
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -292,6 +339,13 @@ fn pack_octets(
                 .map(TriangleOctet::pack),
         );
         node.octet_count = octets.len() as u32 - node.octet_start;
+        for (leaves, octet) in node
+            .octet_leaves
+            .iter_mut()
+            .zip(&octets[node.octet_start as usize..])
+        {
+            *leaves = octet.leaves as u8;
+        }
         node.quad_start = quad_octets.len() as u32;
         quad_octets.extend(quads.chunks(super::octet::LANES).map(QuadOctet::pack));
         node.quad_count = quad_octets.len() as u32 - node.quad_start;
@@ -669,20 +723,18 @@ impl CodeStack {
     }
 }
 
-/// The nearest hit nearer than `best` in those of `octets` that hold a leaf of `mask`, but in
-/// slot `skip`, taken in lane order (as the leaves' own loop would take them: the first of
-/// equal distances).
+/// The nearest hit nearer than `best` in `octets`, but in slot `skip`, taken in lane order (as
+/// the leaves' own loop would take them: the first of equal distances).
 #[inline(always)]
-fn nearest_in<R: Rows>(
-    octets: &[Octet<R>],
-    mask: u32,
+fn nearest_in<'a, R: Rows + 'a>(
+    octets: impl Iterator<Item = &'a Octet<R>>,
     ray: &RayQuery,
     skip: u32,
     best: &mut Hit,
     best_slot: &mut u32,
     avx2: bool,
 ) {
-    for octet in octets.iter().filter(|octet| octet.leaves & mask != 0) {
+    for octet in octets {
         let lanes = octet.lanes & !octet.skipping(skip, avx2);
         let (mut hits, found) = octet.hits::<[Hit; LANES]>(ray, best.t, lanes, avx2);
         while hits != 0 {
@@ -696,18 +748,18 @@ fn nearest_in<R: Rows>(
     }
 }
 
-/// Whether anything but slots `skip` in those of `octets` that hold a leaf of `mask` lies
-/// along `ray` before `t_max`.
+/// Whether anything but slots `skip` in `octets` lies along `ray` before `t_max`.
 #[inline(always)]
-fn any_in<R: Rows>(
-    octets: &[Octet<R>],
-    mask: u32,
+fn any_in<'a, R: Rows + 'a>(
+    octets: impl Iterator<Item = &'a Octet<R>>,
     ray: &RayQuery,
     skip: [u32; 2],
     t_max: f32,
     avx2: bool,
 ) -> bool {
-    for octet in octets.iter().filter(|octet| octet.leaves & mask != 0) {
+    // A `for` loop: `Iterator::any` went through a `try_fold` the compiler kept out of line,
+    // compiled without AVX2.
+    for octet in octets {
         let skipped = octet.skipping(skip[0], avx2) | octet.skipping(skip[1], avx2);
         let lanes = octet.lanes & !skipped;
         if octet.hits::<()>(ray, t_max, lanes, avx2).0 != 0 {
@@ -848,10 +900,10 @@ impl<'r> ClosestSearch<'r> {
             let (ray, skip, avx2) = (self.ray, self.skip, bvh.avx2);
             let (best, best_slot) = (&mut self.best, &mut self.best_slot);
             if has(F, FEATURE_TRIANGLES) {
-                let triangles = bvh.triangles_of(node);
-                nearest_in(triangles, mask, ray, skip, best, best_slot, avx2);
+                let triangles = bvh.triangles_in(node, mask);
+                nearest_in(triangles, ray, skip, best, best_slot, avx2);
             }
-            nearest_in(bvh.quads_of(node), mask, ray, skip, best, best_slot, avx2);
+            nearest_in(bvh.quads_in(node, mask), ray, skip, best, best_slot, avx2);
         }
     }
 
@@ -1003,8 +1055,8 @@ impl<'r> AnySearch<'r> {
         }
         let (ray, skip, t_max, avx2) = (self.ray, self.skip, self.t_max, bvh.avx2);
         let triangles = has(F, FEATURE_TRIANGLES)
-            && any_in(bvh.triangles_of(node), mask, ray, skip, t_max, avx2);
-        triangles || any_in(bvh.quads_of(node), mask, ray, skip, t_max, avx2)
+            && any_in(bvh.triangles_in(node, mask), ray, skip, t_max, avx2);
+        triangles || any_in(bvh.quads_in(node, mask), ray, skip, t_max, avx2)
     }
 
     /// Goes on from a node whose octets held nothing: to its last hit inner child, the

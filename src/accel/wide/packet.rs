@@ -4,7 +4,10 @@
 //! of their origins, the range of their reciprocal directions per axis), instead of once per
 //! ray. Where the interval hits a node's packed leaves, each ray tests their octets (a few more
 //! leaves than its own box test would have let through: the octet test rejects a missed
-//! triangle about as fast as the box test would have), with its own nearest hit so far.
+//! triangle about as fast as the box test would have), with its own nearest hit so far. An
+//! any-hit packet on a CPU with AVX-512 tests the triangles of the leaves reached instead, one
+//! at a time against every ray still looking (`RayLanes`): the rays' bits are the same, and a
+//! triangle takes one test where sixteen rays took sixteen.
 //!
 //! Each ray's result is the one-ray traversal's: the interval test is conservative in f32 (the
 //! slab test's subtractions and products round monotonically, so the products at the
@@ -18,6 +21,7 @@
 //! no useful interval: its rays are traced one by one.
 
 use super::*;
+use crate::accel::octet::RayLanes;
 
 /// Rays in a packet at most: a 4x4 block of camera rays, as Embree's 16-wide packets take
 /// them. The interval test costs the same for any count, so more rays share each node's test;
@@ -205,11 +209,16 @@ impl WideBvh {
     ) {
         assert!(rays.len() <= PACKET && blocked.len() == rays.len());
         #[cfg(target_arch = "x86_64")]
+        if self.avx512 {
+            // SAFETY: `avx512` is set only where the CPU reports AVX2 and AVX-512F.
+            return unsafe { occluded_packet_avx512::<F>(self, rays, t_max, blocked) };
+        }
+        #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: as in `closest_hits`.
             return unsafe { occluded_packet_avx2::<F>(self, rays, t_max, blocked) };
         }
-        occluded_packet_inline::<F>(self, rays, t_max, blocked)
+        occluded_packet_inline::<F, false>(self, rays, t_max, blocked)
     }
 }
 
@@ -265,18 +274,11 @@ fn closest_hits_inline<const F: u32>(
             for (r, ray) in rays.iter().enumerate() {
                 let (best, best_slot) = (&mut best[r], &mut best_slot[r]);
                 if has(F, FEATURE_TRIANGLES) {
-                    let triangles = bvh.triangles_of(node);
-                    nearest_in(triangles, leaves, ray, NONE, best, best_slot, bvh.avx2);
+                    let triangles = bvh.triangles_in(node, leaves);
+                    nearest_in(triangles, ray, NONE, best, best_slot, bvh.avx2);
                 }
-                nearest_in(
-                    bvh.quads_of(node),
-                    leaves,
-                    ray,
-                    NONE,
-                    best,
-                    best_slot,
-                    bvh.avx2,
-                );
+                let quads = bvh.quads_in(node, leaves);
+                nearest_in(quads, ray, NONE, best, best_slot, bvh.avx2);
             }
             reach = farthest(&best[..rays.len()]);
         }
@@ -295,8 +297,11 @@ fn farthest(best: &[Hit]) -> f32 {
         .fold(f32::NEG_INFINITY, |far, hit| max(far, hit.t))
 }
 
+/// The any-hit query of a packet. With `RAY_LANES` (compiled for AVX-512F only) a packed
+/// leaf's triangles are tested one at a time against every ray still looking, where its rays
+/// share the watertight test's axes; otherwise each ray tests the octets.
 #[inline(always)]
-fn occluded_packet_inline<const F: u32>(
+fn occluded_packet_inline<const F: u32, const RAY_LANES: bool>(
     bvh: &WideBvh,
     rays: &[RayQuery],
     t_max: f32,
@@ -308,6 +313,7 @@ fn occluded_packet_inline<const F: u32>(
         }
         return;
     };
+    let lanes = if RAY_LANES { RayLanes::of(rays) } else { None };
     let all = (1u32 << rays.len()) - 1;
     // Bit per ray: something lies along it.
     let mut done = 0u32;
@@ -335,21 +341,30 @@ fn occluded_packet_inline<const F: u32>(
         let (mask, _) = test_interval(node, &interval, t_max, bvh.avx2);
         if mask & node.packed != 0 {
             let leaves = mask & node.packed;
+            #[cfg(target_arch = "x86_64")]
+            if let Some(lanes) = &lanes
+                && has(F, FEATURE_TRIANGLES)
+            {
+                for octet in bvh.triangles_in(node, leaves) {
+                    // SAFETY: `RAY_LANES` is set only where the CPU has AVX-512F.
+                    done |= unsafe { octet.blocked_rays(leaves, lanes, all & !done, t_max) };
+                }
+            }
             for (r, ray) in rays.iter().enumerate() {
                 if done & (1 << r) != 0 {
                     continue;
                 }
                 let triangles = has(F, FEATURE_TRIANGLES)
+                    && lanes.is_none()
                     && any_in(
-                        bvh.triangles_of(node),
-                        leaves,
+                        bvh.triangles_in(node, leaves),
                         ray,
                         [NONE; 2],
                         t_max,
                         bvh.avx2,
                     );
-                let hits = triangles
-                    || any_in(bvh.quads_of(node), leaves, ray, [NONE; 2], t_max, bvh.avx2);
+                let quads = bvh.quads_in(node, leaves);
+                let hits = triangles || any_in(quads, ray, [NONE; 2], t_max, bvh.avx2);
                 done |= (hits as u32) << r;
             }
         }
@@ -382,7 +397,18 @@ fn occluded_packet_avx2<const F: u32>(
     t_max: f32,
     blocked: &mut [bool],
 ) {
-    occluded_packet_inline::<F>(bvh, rays, t_max, blocked)
+    occluded_packet_inline::<F, false>(bvh, rays, t_max, blocked)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f")]
+fn occluded_packet_avx512<const F: u32>(
+    bvh: &WideBvh,
+    rays: &[RayQuery],
+    t_max: f32,
+    blocked: &mut [bool],
+) {
+    occluded_packet_inline::<F, true>(bvh, rays, t_max, blocked)
 }
 
 #[cfg(test)]
@@ -473,13 +499,18 @@ mod tests {
         (hits, one_way)
     }
 
-    /// Both builds of the traversal: AVX2 where the CPU has it, and the portable one.
+    /// Every build of the traversal the CPU has: AVX-512's ray lanes, AVX2's octets, and the
+    /// portable one.
     fn check_builds(name: &str, flat: &FlatScene, rays: &RaySet) -> (usize, usize) {
         let wide = flat.wide().unwrap();
-        let mut portable =
-            WideBvh::build(flat.cwbvh().unwrap(), &flat.prims, flat.frame.motion_base).unwrap();
-        portable.avx2 = false;
+        let build =
+            || WideBvh::build(flat.cwbvh().unwrap(), &flat.prims, flat.frame.motion_base).unwrap();
         let found = check(name, wide, rays);
+        let mut octets = build();
+        octets.avx512 = false;
+        assert_eq!(check(name, &octets, rays), found, "{name}: AVX2");
+        let mut portable = build();
+        (portable.avx2, portable.avx512) = (false, false);
         assert_eq!(check(name, &portable, rays), found, "{name}: portable");
         found
     }
