@@ -339,6 +339,7 @@ fn pack_octets(
                 .map(TriangleOctet::pack),
         );
         node.octet_count = octets.len() as u32 - node.octet_start;
+        // Eight leaves of at most three triangles fill three octets: within `octet_leaves`.
         for (leaves, octet) in node
             .octet_leaves
             .iter_mut()
