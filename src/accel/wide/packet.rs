@@ -350,8 +350,10 @@ fn occluded_packet_inline<const F: u32, const RAY_LANES: bool>(
                     done |= unsafe { octet.blocked_rays(leaves, lanes, all & !done, t_max) };
                 }
             }
+            // With the triangles tested in lanes, only quads are left for the rays one by one.
+            let one_by_one = lanes.is_none() || node.quad_count != 0;
             for (r, ray) in rays.iter().enumerate() {
-                if done & (1 << r) != 0 {
+                if !one_by_one || done & (1 << r) != 0 {
                     continue;
                 }
                 let triangles = has(F, FEATURE_TRIANGLES)
