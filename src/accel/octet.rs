@@ -218,6 +218,7 @@ pub struct RayLanes {
     origin: [[f32; RAY_LANES]; 3],
     /// The shear constants (`RayQuery::shear`).
     shear: [[f32; RAY_LANES]; 3],
+    /// The rays' `kx`, `ky` and `kz`, shared.
     axes: [usize; 3],
 }
 
@@ -394,28 +395,8 @@ impl Rows for TriangleRows {
         let max_z = max3(z0, z1, z2);
         let max_e = max3(e0, e1, e2);
         let mul = |a, b| _mm256_mul_ps(a, b);
-        let add = |a, b| _mm256_add_ps(a, b);
-        let splat = |x| _mm256_set1_ps(x);
-        let delta_x = mul(splat(gamma(5)), add(max_x, max_z));
-        let delta_y = mul(splat(gamma(5)), add(max_y, max_z));
-        let delta_z = mul(splat(gamma(3)), max_z);
-        let delta_e = mul(
-            splat(2.0),
-            add(
-                add(mul(mul(splat(gamma(2)), max_x), max_y), mul(delta_y, max_x)),
-                mul(delta_x, max_y),
-            ),
-        );
-        let error = mul(
-            mul(
-                splat(3.0),
-                add(
-                    add(mul(mul(splat(gamma(3)), max_e), max_z), mul(delta_e, max_z)),
-                    mul(delta_z, max_e),
-                ),
-            ),
-            abs(inv_det),
-        );
+        let (add, splat) = (|a, b| _mm256_add_ps(a, b), |x| _mm256_set1_ps(x));
+        let error = t_error_lanes([max_x, max_y, max_z, max_e], abs(inv_det), mul, add, splat);
         let too_near = _mm256_cmp_ps::<_CMP_LE_OQ>(t, error);
         let missed = or3(mixed_signs, flat, _mm256_or_ps(behind_or_far, too_near));
         let hit = _mm256_andnot_ps(missed, lt(t, _mm256_set1_ps(t_max)));
@@ -497,29 +478,45 @@ impl TriangleRows {
         let max_y = max3(p0y, p1y, p2y);
         let max_z = max3(z0, z1, z2);
         let max_e = max3(e0, e1, e2);
-        let delta_x = mul(splat(gamma(5)), add(max_x, max_z));
-        let delta_y = mul(splat(gamma(5)), add(max_y, max_z));
-        let delta_z = mul(splat(gamma(3)), max_z);
-        let delta_e = mul(
-            splat(2.0),
-            add(
-                add(mul(mul(splat(gamma(2)), max_x), max_y), mul(delta_y, max_x)),
-                mul(delta_x, max_y),
-            ),
-        );
-        let error = mul(
-            mul(
-                splat(3.0),
-                add(
-                    add(mul(mul(splat(gamma(3)), max_e), max_z), mul(delta_e, max_z)),
-                    mul(delta_z, max_e),
-                ),
-            ),
-            abs(inv_det),
-        );
+        let (mul, add) = (|a, b| mul(a, b), |a, b| add(a, b));
+        let error = t_error_lanes([max_x, max_y, max_z, max_e], abs(inv_det), mul, add, splat);
         let missed = mixed_signs | flat | behind_or_far | le(t, error);
         lt(t, splat(t_max)) & !missed & active
     }
+}
+
+/// `triangle_t_error` on lanes of any width (`V`: an AVX2 or AVX-512 vector, with its `mul`,
+/// `add` and `splat`), each operation the scalar one's: the error bound on a hit's distance
+/// from the largest magnitudes of the sheared vertices' x, y and z and of the edge functions,
+/// times `|1 / det|`. Inlined into the vector tests, which compile it with their features.
+#[inline(always)]
+fn t_error_lanes<V: Copy>(
+    [max_x, max_y, max_z, max_e]: [V; 4],
+    abs_inv_det: V,
+    mul: impl Fn(V, V) -> V,
+    add: impl Fn(V, V) -> V,
+    splat: impl Fn(f32) -> V,
+) -> V {
+    let delta_x = mul(splat(gamma(5)), add(max_x, max_z));
+    let delta_y = mul(splat(gamma(5)), add(max_y, max_z));
+    let delta_z = mul(splat(gamma(3)), max_z);
+    let delta_e = mul(
+        splat(2.0),
+        add(
+            add(mul(mul(splat(gamma(2)), max_x), max_y), mul(delta_y, max_x)),
+            mul(delta_x, max_y),
+        ),
+    );
+    mul(
+        mul(
+            splat(3.0),
+            add(
+                add(mul(mul(splat(gamma(3)), max_e), max_z), mul(delta_e, max_z)),
+                mul(delta_z, max_e),
+            ),
+        ),
+        abs_inv_det,
+    )
 }
 
 /// Quads (parallelograms): `corner`, `edge_u`, `edge_v` and their normal `n = edge_u × edge_v`,
