@@ -248,6 +248,42 @@ impl RayLanes {
     }
 }
 
+/// Each ray's nearest hit so far in a packet whose triangles are tested in ray lanes
+/// ([`TriangleOctet::nearest_rays`]): distance, surface coordinates and slot, ray by ray.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct NearestLanes {
+    /// Distances (the limit of each ray's search: its query's `t_max` before a hit).
+    pub t: [f32; RAY_LANES],
+    /// Surface coordinates, as `Hit::b1`.
+    pub b1: [f32; RAY_LANES],
+    /// Surface coordinates, as `Hit::b2`.
+    pub b2: [f32; RAY_LANES],
+    /// Slots in the wide BVH's primitives (`NONE` before a hit).
+    pub slot: [u32; RAY_LANES],
+}
+
+impl NearestLanes {
+    /// Every ray still looking before `t_max`, with nothing found.
+    pub fn before(t_max: f32) -> NearestLanes {
+        NearestLanes {
+            t: [t_max; RAY_LANES],
+            b1: [0.0; RAY_LANES],
+            b2: [0.0; RAY_LANES],
+            slot: [NONE; RAY_LANES],
+        }
+    }
+
+    /// Ray `ray`'s nearest hit so far.
+    pub fn hit(&self, ray: usize) -> Hit {
+        Hit {
+            t: self.t[ray],
+            b1: self.b1[ray],
+            b2: self.b2[ray],
+        }
+    }
+}
+
 impl TriangleOctet {
     /// The rays of `active` (a bit per ray of `rays`) that the triangles of this octet's
     /// leaves in `leaves` (bits of the node's lanes) block before `t_max`, a triangle at a
@@ -265,12 +301,7 @@ impl TriangleOctet {
         mut active: u32,
         t_max: f32,
     ) -> u32 {
-        let mut asked = 0u32;
-        let mut wanted = leaves & self.leaves;
-        while wanted != 0 {
-            asked |= u32::from(self.leaf_lanes[wanted.trailing_zeros() as usize]);
-            wanted &= wanted - 1;
-        }
+        let mut asked = self.asked_lanes(leaves);
         let mut blocked = 0;
         while asked != 0 && active != 0 {
             let lane = asked.trailing_zeros() as usize;
@@ -281,6 +312,73 @@ impl TriangleOctet {
             active &= !hit;
         }
         blocked
+    }
+
+    /// Each ray of `active` tests the triangles of this octet's leaves in `leaves` (bits of
+    /// the node's lanes), updating `nearest`: the octet tests' rule ray by ray, every lane
+    /// tested against the ray's nearest hit as the octet began, the lanes taken in order and
+    /// a hit kept where it is nearer than the nearest so far. So each ray finds what its
+    /// octet tests find, bit for bit. Returns the rays whose nearest hit changed.
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub unsafe fn nearest_rays(
+        &self,
+        leaves: u32,
+        rays: &RayLanes,
+        active: u32,
+        nearest: &mut NearestLanes,
+    ) -> u32 {
+        use std::arch::x86_64::*;
+        let mut asked = self.asked_lanes(leaves);
+        // SAFETY: each row holds sixteen f32s or u32s.
+        let (limit, mut b1, mut b2, mut slot) = unsafe {
+            (
+                _mm512_loadu_ps(nearest.t.as_ptr()),
+                _mm512_loadu_ps(nearest.b1.as_ptr()),
+                _mm512_loadu_ps(nearest.b2.as_ptr()),
+                _mm512_loadu_si512(nearest.slot.as_ptr().cast()),
+            )
+        };
+        let mut t = limit;
+        let mut changed = 0u32;
+        while asked != 0 {
+            let lane = asked.trailing_zeros() as usize;
+            asked &= asked - 1;
+            // SAFETY: the CPU has AVX-512F, as this function's caller must check.
+            let found = unsafe { self.rows.ray_lanes_test::<true>(lane, rays, active, limit) };
+            let nearer =
+                (found.hit & u32::from(_mm512_cmp_ps_mask::<_CMP_LT_OQ>(found.t, t))) as u16;
+            t = _mm512_mask_blend_ps(nearer, t, found.t);
+            b1 = _mm512_mask_blend_ps(nearer, b1, found.b1);
+            b2 = _mm512_mask_blend_ps(nearer, b2, found.b2);
+            let lane_slot = _mm512_set1_epi32(self.slot[lane] as i32);
+            slot = _mm512_mask_blend_epi32(nearer, slot, lane_slot);
+            changed |= u32::from(nearer);
+        }
+        // SAFETY: as above.
+        unsafe {
+            _mm512_storeu_ps(nearest.t.as_mut_ptr(), t);
+            _mm512_storeu_ps(nearest.b1.as_mut_ptr(), b1);
+            _mm512_storeu_ps(nearest.b2.as_mut_ptr(), b2);
+            _mm512_storeu_si512(nearest.slot.as_mut_ptr().cast(), slot);
+        }
+        changed
+    }
+
+    /// The lanes that hold the triangles of this octet's leaves in `leaves` (bits of the
+    /// node's lanes).
+    fn asked_lanes(&self, leaves: u32) -> u32 {
+        let mut asked = 0u32;
+        let mut wanted = leaves & self.leaves;
+        while wanted != 0 {
+            asked |= u32::from(self.leaf_lanes[wanted.trailing_zeros() as usize]);
+            wanted &= wanted - 1;
+        }
+        asked
     }
 }
 
@@ -408,14 +506,32 @@ impl Rows for TriangleRows {
     }
 }
 
+/// The watertight test of one triangle on sixteen rays (`TriangleRows::ray_lanes_test`): a
+/// bit per ray hit before its limit, and each ray's distance and surface coordinates there.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct RayLanesHits {
+    hit: u32,
+    t: std::arch::x86_64::__m512,
+    b1: std::arch::x86_64::__m512,
+    b2: std::arch::x86_64::__m512,
+}
+
 impl TriangleRows {
     /// The watertight test of the triangle in lane `lane` on sixteen rays at once, each
-    /// operation the scalar test's (the AVX2 test's, lanes being rays instead of triangles):
-    /// a bit per ray of `active` hit before `t_max`.
+    /// operation the scalar test's (the AVX2 test's, lanes being rays instead of triangles),
+    /// each ray with its own limit in `t_max`: a bit per ray of `active` hit before its limit,
+    /// and with `HITS` their distances and surface coordinates (an any-hit query needs none).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
     #[inline]
-    unsafe fn blocks_rays(&self, lane: usize, rays: &RayLanes, active: u32, t_max: f32) -> u32 {
+    unsafe fn ray_lanes_test<const HITS: bool>(
+        &self,
+        lane: usize,
+        rays: &RayLanes,
+        active: u32,
+        t_max: std::arch::x86_64::__m512,
+    ) -> RayLanesHits {
         use std::arch::x86_64::*;
         let load = |row: &[f32; RAY_LANES]| {
             // SAFETY: a row is sixteen f32s.
@@ -463,10 +579,15 @@ impl TriangleRows {
         let flat = u32::from(_mm512_cmp_ps_mask::<_CMP_EQ_OQ>(det, zero));
         // Most triangles a packet tests miss every ray here: stop before the division.
         if (mixed_signs | flat) & active == active {
-            return 0;
+            return RayLanesHits {
+                hit: 0,
+                t: zero,
+                b1: zero,
+                b2: zero,
+            };
         }
         let t_scaled = add(add(mul(e0, z0), mul(e1, z1)), mul(e2, z2));
-        let t_max_det = mul(splat(t_max), det);
+        let t_max_det = mul(t_max, det);
         let behind_or_far = (lt(det, zero) & (ge(t_scaled, zero) | lt(t_scaled, t_max_det)))
             | (gt(det, zero) & (le(t_scaled, zero) | gt(t_scaled, t_max_det)));
         let inv_det = _mm512_div_ps(splat(1.0), det);
@@ -481,7 +602,32 @@ impl TriangleRows {
         let (mul, add) = (|a, b| mul(a, b), |a, b| add(a, b));
         let error = t_error_lanes([max_x, max_y, max_z, max_e], abs(inv_det), mul, add, splat);
         let missed = mixed_signs | flat | behind_or_far | le(t, error);
-        lt(t, splat(t_max)) & !missed & active
+        let hit = lt(t, t_max) & !missed & active;
+        match HITS {
+            true => RayLanesHits {
+                hit,
+                t,
+                b1: mul(e1, inv_det),
+                b2: mul(e2, inv_det),
+            },
+            false => RayLanesHits {
+                hit,
+                t,
+                b1: zero,
+                b2: zero,
+            },
+        }
+    }
+
+    /// The rays of `active` the triangle in lane `lane` blocks before `t_max`
+    /// ([`TriangleRows::ray_lanes_test`] with one limit for all).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    unsafe fn blocks_rays(&self, lane: usize, rays: &RayLanes, active: u32, t_max: f32) -> u32 {
+        let t_max = std::arch::x86_64::_mm512_set1_ps(t_max);
+        // SAFETY: the CPU has AVX-512F, as this function's caller must check.
+        unsafe { self.ray_lanes_test::<false>(lane, rays, active, t_max).hit }
     }
 }
 
@@ -769,7 +915,8 @@ mod tests {
     /// octets drawn as in the AVX2 test: rays aimed at points of one lane's triangle from
     /// origins one to twenty-one scales away, apart or shared, some rays not asked, hit limits
     /// beyond, at and before the aimed points. Each ray's bit must be the scalar test's, for
-    /// every lane, and `blocked_rays` must report the rays some asked leaf blocks.
+    /// every lane, `blocked_rays` must report the rays some asked leaf blocks, and
+    /// `nearest_rays` each ray's nearest hit by the octet tests' rule, bit for bit.
     #[test]
     fn the_avx512_ray_lanes_equal_the_scalar_test_ray_by_ray() {
         if !std::arch::is_x86_feature_detected!("avx512f") {
@@ -780,6 +927,7 @@ mod tests {
         let mut unit = move || rng.next_f32();
         let mut point = move || Vec3::new(unit(), unit(), unit()) * 2.0 - 1.0;
         let (mut blocked_rays, mut compared, mut shared_axes) = (0, 0, 0);
+        let mut nearest_hits = 0;
         for round in 0..6000u32 {
             let scale = 10f32.powi((round % 13) as i32 - 6);
             let prims = triangles(&mut point, scale);
@@ -832,6 +980,39 @@ mod tests {
             let blocked = unsafe { octet.blocked_rays(0b10, &lanes, active, t_max) };
             assert_eq!(blocked, expected_blocked, "round {round}: leaf 1");
             blocked_rays += blocked.count_ones();
+            // The nearest hits in leaves 0 and 1, each ray with its own limit: the octet
+            // tests' rule (every lane against the limit, nearer hits kept in lane order).
+            let mut nearest = NearestLanes::before(T_FAR);
+            for k in 0..count {
+                nearest.t[k] = [T_FAR, 2.0, 1.0, 0.5][(round as usize + k) % 4];
+            }
+            let limits = nearest.t;
+            // SAFETY: as above.
+            let changed = unsafe { octet.nearest_rays(0b11, &lanes, active, &mut nearest) };
+            for (k, ray) in rays.iter().enumerate() {
+                let (mut best, mut slot) = (MISS, NONE);
+                best.t = limits[k];
+                for lane in 0..LANES {
+                    let asked = octet.leaf_lanes[0] | octet.leaf_lanes[1];
+                    let hit = octet.rows.test(lane, ray, limits[k]);
+                    if (active >> k) & 1 == 1
+                        && asked & (1 << lane) != 0
+                        && hit.t < limits[k]
+                        && hit.t < best.t
+                    {
+                        (best, slot) = (hit, octet.slot[lane]);
+                    }
+                }
+                let bits = |h: Hit| [h.t.to_bits(), h.b1.to_bits(), h.b2.to_bits()];
+                assert_eq!(bits(nearest.hit(k)), bits(best), "round {round}: ray {k}");
+                assert_eq!(nearest.slot[k], slot, "round {round}: ray {k}");
+                assert_eq!(
+                    (changed >> k) & 1 == 1,
+                    slot != NONE,
+                    "round {round}: ray {k}"
+                );
+                nearest_hits += (slot != NONE) as u32;
+            }
         }
         // Most rounds' rays share their axes (some aim across a diagonal), and the draws
         // must exercise hits and misses alike.
@@ -840,6 +1021,10 @@ mod tests {
         assert!(
             blocked_rays > 2000 && blocked_rays < 30_000,
             "{blocked_rays} rays blocked by leaf 1"
+        );
+        assert!(
+            nearest_hits > 4000 && nearest_hits < 60_000,
+            "{nearest_hits} nearest hits in leaves 0 and 1"
         );
     }
 

@@ -21,7 +21,7 @@
 //! no useful interval: its rays are traced one by one.
 
 use super::*;
-use crate::accel::octet::RayLanes;
+use crate::accel::octet::{NearestLanes, RayLanes};
 
 /// Rays in a packet at most: a 4x4 block of camera rays, as Embree's 16-wide packets take
 /// them. The interval test costs the same for any count, so more rays share each node's test;
@@ -192,11 +192,16 @@ impl WideBvh {
     ) {
         assert!(rays.len() <= PACKET && hits.len() == rays.len());
         #[cfg(target_arch = "x86_64")]
+        if self.avx512 {
+            // SAFETY: `avx512` is set only where the CPU reports AVX2 and AVX-512F.
+            return unsafe { closest_hits_avx512::<F>(self, rays, t_max, hits) };
+        }
+        #[cfg(target_arch = "x86_64")]
         if self.avx2 {
             // SAFETY: `avx2` is set only where the CPU reports AVX2.
             return unsafe { closest_hits_avx2::<F>(self, rays, t_max, hits) };
         }
-        closest_hits_inline::<F>(self, rays, t_max, hits)
+        closest_hits_inline::<F, false>(self, rays, t_max, hits)
     }
 
     /// Whether anything lies along each of `rays` (at most [`PACKET`]) before `t_max`, as
@@ -222,8 +227,12 @@ impl WideBvh {
     }
 }
 
+/// The closest-hit query of a packet. With `RAY_LANES` (compiled for AVX-512F only) a packed
+/// leaf's triangles are tested one at a time against every ray, where its rays share the
+/// watertight test's axes, by the octet tests' rule (`TriangleOctet::nearest_rays`); otherwise
+/// each ray tests the octets.
 #[inline(always)]
-fn closest_hits_inline<const F: u32>(
+fn closest_hits_inline<const F: u32, const RAY_LANES: bool>(
     bvh: &WideBvh,
     rays: &[RayQuery],
     t_max: f32,
@@ -242,6 +251,8 @@ fn closest_hits_inline<const F: u32>(
     };
     let mut best = [miss; PACKET];
     let mut best_slot = [NONE; PACKET];
+    let lanes = if RAY_LANES { RayLanes::of(rays) } else { None };
+    let all = (1u32 << rays.len()) - 1;
     // The farthest any ray still looks: a node beyond it holds nothing nearer for any of them.
     let mut reach = t_max;
     let mut stack = Stack::at_root(&bvh.nodes);
@@ -271,14 +282,37 @@ fn closest_hits_inline<const F: u32>(
         let (mask, near) = test_interval(node, &interval, reach, bvh.avx2);
         if mask & node.packed != 0 {
             let leaves = mask & node.packed;
+            #[cfg(target_arch = "x86_64")]
+            if let Some(lanes) = &lanes
+                && has(F, FEATURE_TRIANGLES)
+            {
+                let mut nearest = NearestLanes::before(t_max);
+                for r in 0..rays.len() {
+                    (nearest.t[r], nearest.b1[r], nearest.b2[r]) =
+                        (best[r].t, best[r].b1, best[r].b2);
+                    nearest.slot[r] = best_slot[r];
+                }
+                let mut changed = 0;
+                for octet in bvh.triangles_in(node, leaves) {
+                    // SAFETY: `RAY_LANES` is set only where the CPU has AVX-512F.
+                    changed |= unsafe { octet.nearest_rays(leaves, lanes, all, &mut nearest) };
+                }
+                while changed != 0 {
+                    let r = changed.trailing_zeros() as usize;
+                    changed &= changed - 1;
+                    (best[r], best_slot[r]) = (nearest.hit(r), nearest.slot[r]);
+                }
+            }
             for (r, ray) in rays.iter().enumerate() {
                 let (best, best_slot) = (&mut best[r], &mut best_slot[r]);
-                if has(F, FEATURE_TRIANGLES) {
+                if has(F, FEATURE_TRIANGLES) && lanes.is_none() {
                     let triangles = bvh.triangles_in(node, leaves);
                     nearest_in(triangles, ray, NONE, best, best_slot, bvh.avx2);
                 }
-                let quads = bvh.quads_in(node, leaves);
-                nearest_in(quads, ray, NONE, best, best_slot, bvh.avx2);
+                if node.quad_count != 0 {
+                    let quads = bvh.quads_in(node, leaves);
+                    nearest_in(quads, ray, NONE, best, best_slot, bvh.avx2);
+                }
             }
             reach = farthest(&best[..rays.len()]);
         }
@@ -388,7 +422,18 @@ fn closest_hits_avx2<const F: u32>(
     t_max: f32,
     hits: &mut [Option<(u32, Hit)>],
 ) {
-    closest_hits_inline::<F>(bvh, rays, t_max, hits)
+    closest_hits_inline::<F, false>(bvh, rays, t_max, hits)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,avx512f")]
+fn closest_hits_avx512<const F: u32>(
+    bvh: &WideBvh,
+    rays: &[RayQuery],
+    t_max: f32,
+    hits: &mut [Option<(u32, Hit)>],
+) {
+    closest_hits_inline::<F, true>(bvh, rays, t_max, hits)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -511,10 +556,27 @@ mod tests {
         let mut octets = build();
         octets.avx512 = false;
         assert_eq!(check(name, &octets, rays), found, "{name}: AVX2");
+        same_packet_hits(name, wide, &octets, rays);
         let mut portable = build();
         (portable.avx2, portable.avx512) = (false, false);
         assert_eq!(check(name, &portable, rays), found, "{name}: portable");
         found
+    }
+
+    /// The closest hits of every packet of `rays` in two builds of the traversal are the same,
+    /// bit for bit and primitive for primitive: ray lanes follow the octet tests' rule.
+    fn same_packet_hits(name: &str, a: &WideBvh, b: &WideBvh, rays: &RaySet) {
+        let order = packet_order(rays);
+        for packet in order.chunks(PACKET) {
+            let queries: Vec<RayQuery> = packet
+                .iter()
+                .map(|&i| RayQuery::new(rays.origins[i as usize], rays.directions[i as usize]))
+                .collect();
+            let (mut found_a, mut found_b) = (vec![None; packet.len()], vec![None; packet.len()]);
+            a.closest_hits::<FEATURES_ALL>(&queries, T_FAR, &mut found_a);
+            b.closest_hits::<FEATURES_ALL>(&queries, T_FAR, &mut found_b);
+            assert_eq!(found_a, found_b, "{name}: packet of rays {packet:?}");
+        }
     }
 
     #[test]
