@@ -331,6 +331,9 @@ pub struct AdaptiveReport {
     pub decisions: u32,
     /// Pixels that stopped short of the most samples a pixel takes (`render.spp`).
     pub pixels_short: usize,
+    /// The render was interrupted, failed or spent its time budget before its decisions
+    /// were done.
+    pub stopped_early: bool,
 }
 
 impl AdaptiveReport {
@@ -359,6 +362,7 @@ impl AdaptiveReport {
             mean_spp: samples.iter().map(|&n| n as f64).sum::<f64>() / samples.len().max(1) as f64,
             decisions,
             pixels_short: samples.iter().filter(|&&n| n < most).count(),
+            stopped_early: false,
         }
     }
 
@@ -372,6 +376,8 @@ impl AdaptiveReport {
             self.noise_target,
             if self.image_error <= self.noise_target {
                 "met".to_string()
+            } else if self.stopped_early {
+                "not met: the render stopped before its samples were taken".to_string()
             } else if self.pixels_short > 0 {
                 // A stopped pixel never restarts (its samples stay the first indices of its
                 // pattern), so an allocation from early, noisy estimates can fall short.
@@ -598,6 +604,15 @@ mod tests {
         );
         let spent = AdaptiveReport::new(&settings, &[0.02, 0.03, 0.0, 0.0], &[16; 4], 16, 3);
         assert!(spent.summary().contains("not met within render.spp"));
+        let stopped = AdaptiveReport {
+            stopped_early: true,
+            ..short
+        };
+        assert!(
+            stopped
+                .summary()
+                .contains("not met: the render stopped before")
+        );
         let nan = AdaptiveReport::new(&settings, &[0.01, f32::NAN], &[4, 4], 4, 1);
         assert_eq!(
             (nan.image_error, nan.max_pixel_error),

@@ -188,6 +188,22 @@ impl Protected {
     }
 }
 
+/// Whether paths `a` and `b` name one file, existing or not: their directories resolved (links,
+/// `..`), their names compared. Two outputs of one command at one path would overwrite each
+/// other, an output at an input's path its input.
+pub fn same_path(a: &Path, b: &Path) -> bool {
+    let resolve = |path: &Path| {
+        let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+        let file = std::fs::canonicalize(&absolute).ok();
+        let in_directory = || {
+            let (dir, name) = (absolute.parent()?, absolute.file_name()?);
+            Some(std::fs::canonicalize(dir).ok()?.join(name))
+        };
+        file.or_else(in_directory).unwrap_or(absolute.clone())
+    };
+    resolve(a) == resolve(b)
+}
+
 /// A checked place to write the image: a new path or an existing regular file, with a known
 /// format, in a directory where files can be created.
 #[derive(Debug)]

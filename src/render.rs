@@ -692,13 +692,9 @@ fn drive(
         (&scene.adaptive, errors, adaptive)
     {
         let counts = &output.sample_counts;
-        output.adaptive = Some(AdaptiveReport::new(
-            settings,
-            &errors,
-            counts,
-            scene.frame.spp,
-            decisions,
-        ));
+        let mut report = AdaptiveReport::new(settings, &errors, counts, scene.frame.spp, decisions);
+        report.stopped_early = output.stopped.is_some() || output.deadline_reached;
+        output.adaptive = Some(report);
     }
     let stopped = output.stopped.is_some() || output.deadline_reached;
     if stopped || scene.adaptive.is_some() {
@@ -709,6 +705,10 @@ fn drive(
         output.samples_per_pixel = counts().min().unwrap_or(0);
         output.max_samples_per_pixel = counts().max().unwrap_or(0);
         output.pixels_without_samples = counts().filter(|&n| n == 0).count();
+        // The passes in flight when the signal came finished after it: the image holds theirs.
+        if let Some(Error::Interrupted { done, .. }) = &mut output.stopped {
+            *done = output.samples_per_pixel;
+        }
     } else {
         output.max_samples_per_pixel = output.samples_per_pixel;
     }

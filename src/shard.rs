@@ -107,6 +107,29 @@ pub struct Manifest {
     pub spp_min: u32,
     /// Samples of the band's most-sampled pixel.
     pub spp_max: u32,
+    /// FNV-1a 64 of the band's pixels as written (each channel's f32 bits, little-endian):
+    /// a band file replaced by another of the same size is refused.
+    pub band_hash: String,
+}
+
+/// The hash a manifest keeps of its band's pixels ([`Manifest::band_hash`]).
+pub fn band_hash(pixels: impl Iterator<Item = [f32; 3]>) -> String {
+    let bytes: Vec<u8> = pixels
+        .flat_map(|p| p.map(f32::to_le_bytes))
+        .flatten()
+        .collect();
+    format!("{:016x}", crate::provenance::fnv1a64(&bytes))
+}
+
+/// What the merged image is, and what a user should know of it.
+pub struct Merged {
+    /// The columns and rows the shards cover together.
+    pub image: Image,
+    /// Where the bands differ in samples (a shard interrupted or on a time budget): the image
+    /// is whole, but not as even as one render of the samples asked.
+    pub notes: Vec<String>,
+    /// Every file read: the manifests and their bands.
+    pub inputs: Vec<PathBuf>,
 }
 
 fn merge_error(path: &Path, message: impl Into<String>) -> Error {
@@ -119,7 +142,7 @@ fn merge_error(path: &Path, message: impl Into<String>) -> Error {
 /// Reads the manifests of every shard of one render and assembles their bands into the image
 /// of the columns and rows they cover together. Missing, repeated, foreign or overlapping
 /// shards are errors naming the manifest.
-pub fn merge(manifest_paths: &[PathBuf]) -> Result<Image> {
+pub fn merge(manifest_paths: &[PathBuf]) -> Result<Merged> {
     let mut manifests = Vec::new();
     for path in manifest_paths {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
@@ -127,6 +150,8 @@ pub fn merge(manifest_paths: &[PathBuf]) -> Result<Image> {
             .map_err(|e| merge_error(path, format!("not a shard manifest: {e}")))?;
         manifests.push((path.clone(), manifest));
     }
+    // In the shards' order, whatever the order given (a glob, `ls -t`, `find`).
+    manifests.sort_by_key(|(_, m)| m.shard.index);
     let Some((first_path, first)) = manifests.first().cloned() else {
         return Err(merge_error(Path::new("."), "no shard manifest given"));
     };
@@ -140,10 +165,10 @@ pub fn merge(manifest_paths: &[PathBuf]) -> Result<Image> {
             ),
         ));
     }
-    manifests.sort_by_key(|(_, m)| m.shard.index);
     let (x0, x1) = (first.band[0], first.band[1]);
     let mut next_row = first.band[2];
     let mut pixels = Vec::new();
+    let mut inputs = Vec::new();
     for (i, (path, m)) in manifests.iter().enumerate() {
         let same_render = m.render_hash == first.render_hash
             && m.shard.count == first.shard.count
@@ -165,6 +190,7 @@ pub fn merge(manifest_paths: &[PathBuf]) -> Result<Image> {
             ));
         }
         let image_path = path.parent().unwrap_or(Path::new(".")).join(&m.image);
+        inputs.extend([path.clone(), image_path.clone()]);
         let band = read_band(&image_path).map_err(|e| merge_error(&image_path, e.to_string()))?;
         let expected = (x1 - x0, m.band[3] - m.band[2]);
         if band.dimensions() != expected {
@@ -176,14 +202,51 @@ pub fn merge(manifest_paths: &[PathBuf]) -> Result<Image> {
                 ),
             ));
         }
+        if band_hash(band.pixels().map(|p| p.0)) != m.band_hash {
+            return Err(merge_error(
+                &image_path,
+                "is not the band its manifest describes (its pixels' hash differs)",
+            ));
+        }
         pixels.extend(band.pixels().map(|p| glam::Vec3::from(p.0)));
         next_row = m.band[3];
     }
-    Ok(Image {
+    let image = Image {
         width: x1 - x0,
         height: next_row - first.band[2],
         pixels,
+    };
+    Ok(Merged {
+        image,
+        notes: uneven_samples(&manifests),
+        inputs,
     })
+}
+
+/// A note where the bands' samples differ (a shard interrupted, failed or on a time budget).
+fn uneven_samples(manifests: &[(PathBuf, Manifest)]) -> Vec<String> {
+    let least = manifests.iter().map(|(_, m)| m.spp_min).min();
+    let most = manifests.iter().map(|(_, m)| m.spp_max).max();
+    match (least, most) {
+        (Some(least), Some(most)) if least != most => {
+            let bands: Vec<String> = manifests
+                .iter()
+                .map(|(_, m)| match m.spp_min == m.spp_max {
+                    true => format!("shard {}: {} spp", m.shard.index, m.spp_min),
+                    false => format!(
+                        "shard {}: {} to {} spp",
+                        m.shard.index, m.spp_min, m.spp_max
+                    ),
+                })
+                .collect();
+            vec![format!(
+                "note: the bands hold {least} to {most} samples per pixel ({}): a shard was \
+                 stopped early or given a time budget, so their noise differs",
+                bands.join(", ")
+            )]
+        }
+        _ => Vec::new(),
+    }
 }
 
 /// A band's pixels, whatever its size: the image crate's default limit (512 MiB a decode) would

@@ -104,6 +104,27 @@ fn an_output_path_that_cannot_take_the_image_fails_before_the_render() {
         );
     }
     assert_eq!(entries(&dir), before, "a refused output creates nothing");
+    // Two outputs at one path, or a layer asked twice: refused before the render too.
+    let image = dir.join("same.exr");
+    let counts = dir.join("./same.exr");
+    let refusals: [(&[&str], &str); 2] = [
+        (
+            &["--sample-counts", &*counts.to_string_lossy()],
+            "the image's own path",
+        ),
+        (&["--aov", "depth,depth"], "--aov depth: given twice"),
+    ];
+    for (extra, reason) in refusals {
+        let output = small_render(&image, extra);
+        let message = stderr_of(&output);
+        assert_eq!(output.status.code(), Some(1), "{message}");
+        assert!(message.contains(reason), "{message}");
+        assert!(
+            !message.contains("spp in"),
+            "rendered before refusing: {message}"
+        );
+    }
+    assert_eq!(entries(&dir), before, "a refused output creates nothing");
 }
 
 /// An existing, write-protected file among a command's outputs is refused before any work, as
@@ -129,6 +150,7 @@ fn write_protected_outputs_are_refused_before_the_work_unless_forced() {
     let csv = protect("study.csv", 0o444);
     let plot = protect("plotted.svg", 0o444);
     let preview = protect("preview.png", 0o444);
+    let xml = protect("scene.xml", 0o444);
     let render = [
         "render",
         "scenes/spheres.toml",
@@ -188,6 +210,14 @@ fn write_protected_outputs_are_refused_before_the_work_unless_forced() {
         strings(&["preview", "scenes/spheres.toml", "-o", &at("preview.png")]),
         &preview,
     ));
+    let export = strings(&[
+        "export",
+        "scenes/spheres.toml",
+        "--approximate",
+        "--mitsuba",
+        &at("scene.xml"),
+    ]);
+    commands.push((export.clone(), &xml));
     let before = entries(&dir);
     for (args, file) in &commands {
         let output = chambre().args(args).output().unwrap();
@@ -232,6 +262,9 @@ fn write_protected_outputs_are_refused_before_the_work_unless_forced() {
             .unwrap()
             .contains("\"seed\"")
     );
+    let output = chambre().args(&export).arg("--force").output().unwrap();
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    assert!(std::fs::read_to_string(&xml).unwrap().contains("<scene"));
 }
 
 #[test]
@@ -832,6 +865,63 @@ fn one_image_side_keeps_the_film_aspect_and_threads_are_chosen() {
     let (output, _) = render(&["--threads", "0"], "t.png");
     assert_eq!(output.status.code(), Some(1));
     assert!(stderr_of(&output).contains("--threads must be at least 1"));
+    // A side whose partner rounds by half a pixel (30 / (4/3) = 22.5 -> 23): the aspect the
+    // note promises is the one the render accepts.
+    let target = dir.join("half.png");
+    let output = chambre()
+        .args(["render", "scenes/fermat_sphere.toml", "--backend", "cpu"])
+        .args(["--spp", "1", "--width", "30", "-o"])
+        .arg(&target)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    assert_eq!(image::image_dimensions(&target).unwrap(), (30, 23));
+    // `--quick` quarters the size `--set` gives, and says so truly.
+    let target = dir.join("quick.png");
+    let output = render_spheres_on_cpu(
+        &target,
+        &[
+            "--quick",
+            "--set",
+            "render.width=72",
+            "--set",
+            "render.height=48",
+        ],
+    );
+    let message = stderr_of(&output);
+    assert!(output.status.success(), "{message}");
+    assert!(message.contains("--quick renders 18x12"), "{message}");
+    assert_eq!(image::image_dimensions(&target).unwrap(), (18, 12));
+}
+
+/// `--time-budget` and `--progressive` beyond what a clock can count are refused by name, not
+/// a panic; a budget too short for one sample writes nothing and says so with an error exit,
+/// leaving no stale image looking like the render's.
+#[test]
+fn budgets_at_the_extremes_are_refused_or_fail_plainly() {
+    let dir = scratch_dir("budget_extremes");
+    let target = dir.join("b.pfm");
+    for (flag, value) in [
+        ("--time-budget", "1e300"),
+        ("--time-budget", "1.8e19"),
+        ("--progressive", "1e20"),
+    ] {
+        let output = render_spheres_on_cpu(&target, &[flag, value]);
+        assert_eq!(output.status.code(), Some(1), "{flag} {value}");
+        let message = stderr_of(&output);
+        assert!(
+            message.contains(flag) && message.contains("at most"),
+            "{message}"
+        );
+    }
+    let output = render_spheres_on_cpu(&target, &["--time-budget", "1e-9"]);
+    let message = stderr_of(&output);
+    assert_eq!(output.status.code(), Some(1), "{message}");
+    assert!(
+        message.contains("before any pixel had a sample"),
+        "{message}"
+    );
+    assert!(!target.exists());
 }
 
 /// `--sidecar` writes OUT.json beside the image with what reproduces it; `.pfm` writes the same
@@ -974,6 +1064,78 @@ fn shards_merge_into_the_single_render_bit_for_bit() {
     assert_eq!(output.status.code(), Some(1));
     assert!(stderr_of(&output).contains("2 manifests given for a render of 3 shards"));
     assert!(!dir.join("partial.exr").exists());
+    let merge = |inputs: &[PathBuf], out: &Path| {
+        chambre()
+            .arg("merge")
+            .args(inputs)
+            .arg("-o")
+            .arg(out)
+            .output()
+            .unwrap()
+    };
+    // Given in any order (`ls -t`, `find`): the same image.
+    let reversed: Vec<PathBuf> = manifests.iter().rev().cloned().collect();
+    let output = merge(&reversed, &dir.join("reversed.exr"));
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    assert_eq!(read(&dir.join("reversed.exr")).as_raw(), b.as_raw());
+    // Writing over one of its own inputs: refused before anything is written.
+    let band_1 = dir.join("out.shard-1-of-3.exr");
+    let before = std::fs::read(&band_1).unwrap();
+    let output = merge(&manifests, &band_1);
+    assert_eq!(output.status.code(), Some(1), "{}", stderr_of(&output));
+    assert!(stderr_of(&output).contains("an input of the merge"));
+    assert_eq!(std::fs::read(&band_1).unwrap(), before);
+    // A band replaced by another of the same size: refused, naming the band.
+    // (Shards 1 and 2 are 11 rows each.)
+    let band_2 = dir.join("out.shard-2-of-3.exr");
+    std::fs::copy(&band_2, &band_1).unwrap();
+    let output = merge(&manifests, &dir.join("swapped.exr"));
+    assert_eq!(output.status.code(), Some(1));
+    let message = stderr_of(&output);
+    assert!(
+        message.contains("out.shard-1-of-3.exr") && message.contains("hash"),
+        "{message}"
+    );
+    // A shard that holds fewer samples (stopped by a signal or a time budget, as its manifest
+    // says): merged, with a note saying the bands differ.
+    render_shard_with(&dir, "1/3", "2");
+    let manifest_1 = &manifests[1];
+    let mut stopped: chambre::shard::Manifest =
+        serde_json::from_str(&std::fs::read_to_string(manifest_1).unwrap()).unwrap();
+    (stopped.spp_min, stopped.spp_max) = (1, 2);
+    std::fs::write(manifest_1, serde_json::to_string(&stopped).unwrap()).unwrap();
+    let output = merge(&manifests, &dir.join("uneven.exr"));
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    let message = stderr_of(&output);
+    assert!(
+        message.contains("the bands hold 1 to 2 samples per pixel"),
+        "{message}"
+    );
+    assert!(message.contains("shard 1: 1 to 2 spp"), "{message}");
+    // More shards than rows: refused before rendering, not a panic.
+    let output = chambre()
+        .args(["render", "scenes/spheres.toml", "--backend", "cpu"])
+        .args([
+            "--width", "6", "--height", "4", "--spp", "1", "--shard", "0/5", "-o",
+        ])
+        .arg(dir.join("thin.exr"))
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    let message = stderr_of(&output);
+    assert!(message.contains("5 shards of 4 rows"), "{message}");
+}
+
+/// Shard `shard` of spheres.toml at 48x32 and `spp` into `dir/out.exr`'s shard files.
+fn render_shard_with(dir: &Path, shard: &str, spp: &str) {
+    let output = chambre()
+        .args(["render", "scenes/spheres.toml", "--backend", "cpu"])
+        .args(["--width", "48", "--height", "32", "--spp", spp])
+        .args(["--shard", shard, "-o"])
+        .arg(dir.join("out.exr"))
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", stderr_of(&output));
 }
 
 /// A band over the image crate's default decoding limit (512 MiB; a quarter of a 16384^2 render
@@ -1001,10 +1163,11 @@ fn a_band_larger_than_512_mib_merges() {
         render_hash: "0".into(),
         spp_min: 1,
         spp_max: 1,
+        band_hash: chambre::shard::band_hash(band.pixels.iter().map(|p| p.to_array())),
     };
     let manifest_path = dir.join("big.shard-0-of-1.json");
     std::fs::write(&manifest_path, serde_json::to_string(&manifest).unwrap()).unwrap();
-    let merged = chambre::shard::merge(&[manifest_path]).unwrap();
+    let merged = chambre::shard::merge(&[manifest_path]).unwrap().image;
     assert_eq!((merged.width, merged.height), (width, height));
     assert_eq!(merged.pixels[0], band.pixels[0]);
     assert_eq!(merged.pixels[1], Vec3::ZERO);

@@ -56,7 +56,7 @@ fn options(integrator: MitsubaIntegrator, approximate: bool) -> MitsubaOptions {
     MitsubaOptions {
         integrator,
         approximate,
-        overrides: Vec::new(),
+        ..MitsubaOptions::default()
     }
 }
 

@@ -19,7 +19,7 @@ use crate::camera::{CameraSpec, Focus, FocusSurface, Movements};
 use crate::error::{Error, Result};
 use crate::layout::{MODEL_BLINN_PHONG, MODEL_DIELECTRIC, MODEL_PHONG, MODEL_ROUGH_CONDUCTOR};
 use crate::named::named_enum;
-use crate::output::OutputTarget;
+use crate::output::{OutputTarget, Protected};
 use crate::sampler::SamplerName;
 use crate::scene::surface::PATCH_QUADS;
 use crate::scene::texture::Wrap;
@@ -53,6 +53,8 @@ pub struct MitsubaOptions {
     /// The `--set` overrides the scene was loaded with (refusals of the fields they set point
     /// at the command line).
     pub overrides: Vec<String>,
+    /// Whether an existing write-protected XML is refused or replaced (`--force`).
+    pub protected: Protected,
 }
 
 /// A scene as Mitsuba 3 XML.
@@ -146,7 +148,7 @@ pub fn to_mitsuba(scene: &Scene, stem: &str, options: &MitsubaOptions) -> Result
 /// [`to_mitsuba`] written to `out` (XML), with its files beside it, each atomically and the
 /// XML last, so that an XML on disk never names a file that is not there.
 pub fn write_mitsuba(scene: &Scene, out: &Path, options: &MitsubaOptions) -> Result<MitsubaExport> {
-    OutputTarget::prepare_beside(out)?;
+    OutputTarget::prepare_beside_with(out, options.protected)?;
     let stem = out
         .file_stem()
         .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());

@@ -812,7 +812,8 @@ fn view(check: &Checker, c: &CameraSection) -> Result<(DVec3, DVec3, DVec3)> {
 
 /// The film's (or window's) aspect must be the image's: whole pixels cannot always match it
 /// exactly, so the aspect a side's rounding to the nearest pixel gives (or 0.1%, whichever is
-/// larger) is allowed.
+/// larger) is allowed. A side of `n` pixels rounded from `n - δ`, `|δ| <= 1/2`, moves the
+/// aspect by `δ / (n - δ)`: at most `1/2 / (n - 1/2)`.
 fn check_aspect(
     check: &Checker,
     field: &str,
@@ -822,8 +823,9 @@ fn check_aspect(
 ) -> Result<()> {
     let aspect = size[0] / size[1];
     let image_aspect = render.width as f64 / render.height as f64;
-    let rounding = 0.5 / render.width.min(render.height) as f64;
-    if (aspect / image_aspect - 1.0).abs() > rounding.max(1e-3) {
+    let rounding = 0.5 / (render.width.min(render.height) as f64 - 0.5);
+    // The margin covers the rounding of the divisions above.
+    if (aspect / image_aspect - 1.0).abs() > rounding.max(1e-3) * (1.0 + 1e-9) {
         return Err(check.err(
             field,
             format!(

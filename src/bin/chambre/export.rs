@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use clap::Args;
 
 use chambre::export::{MitsubaIntegrator, MitsubaOptions, write_mitsuba};
+use chambre::output::Protected;
 
 use super::args::named;
 use super::{load_and_note, print};
@@ -30,6 +31,9 @@ pub struct ExportArgs {
     /// Override any scene field, e.g. --set render.spp=64 (also -D).
     #[arg(long = "set", short = 'D', value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    /// Replace the XML even where it is a write-protected file (refused otherwise).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `chambre export`: the scene written for the peer, with what was changed or left out.
@@ -39,6 +43,7 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<ExitCode> {
         integrator: args.integrator,
         approximate: args.approximate,
         overrides: args.set.clone(),
+        protected: Protected::replaced_if(args.force),
     };
     let export = write_mitsuba(&scene, &args.mitsuba, &options)?;
     for n in &export.notes {

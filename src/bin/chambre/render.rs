@@ -14,7 +14,7 @@ use clap::{Args, ValueEnum};
 use chambre::cpu::CpuRenderer;
 use chambre::gpu::render::PathKernels;
 use chambre::gpu::{GpuContext, GpuRenderer};
-use chambre::output::{Aov, Display, ImageFormat, OutputTarget, Protected, ToneMap};
+use chambre::output::{Aov, Display, ImageFormat, OutputTarget, Protected, ToneMap, same_path};
 use chambre::pack::{FlatScene, flatten};
 use chambre::render::{
     Backend, Progress, RenderOutput, describe_status_flags, render, render_until,
@@ -143,10 +143,12 @@ pub struct RenderArgs {
 }
 
 impl RenderArgs {
-    /// The scene overrides the flags stand for, `--set` last. A width or height given alone
-    /// gets its partner from the film's aspect, with a note saying so.
+    /// `--set`, then the scene overrides the flags stand for: the flags come after because
+    /// they are worked out from the scene as `--set` leaves it (`--quick`'s quarter of its
+    /// size, a side's partner from its film). A width or height given alone gets its partner
+    /// from the film's aspect, with a note saying so.
     fn overrides(&self) -> Result<Vec<String>> {
-        let mut overrides = Vec::new();
+        let mut overrides = self.set.clone();
         let (width, height) = self.image_size()?;
         let (spp, width, height) = match self.quick {
             true => self.quick_settings(self.spp, width, height)?,
@@ -184,7 +186,6 @@ impl RenderArgs {
             let values: Vec<String> = window.iter().map(|v| v.to_string()).collect();
             overrides.push(format!("render.crop=[{}]", values.join(", ")));
         }
-        overrides.extend(self.set.iter().cloned());
         Ok(overrides)
     }
 
@@ -312,6 +313,16 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<ExitCode> {
     let full_crop = scene.render.crop;
     if let Some(shard) = shard {
         scene.render.crop = shard.rows(full_crop);
+        let [.., y0, y1] = scene.render.crop;
+        if y0 == y1 {
+            let rows = full_crop[3] - full_crop[2];
+            bail!(
+                "--shard {}/{}: {} shards of {rows} rows leave this one no row; split into at most {rows}",
+                shard.index,
+                shard.count,
+                shard.count
+            );
+        }
     }
     // Before any render time is spent: a path that cannot take a file fails now.
     let outputs = Outputs::prepare(args, shard)?;
@@ -398,6 +409,10 @@ impl Outputs {
             tone_map: args.tonemap,
         });
         let counts = match &args.sample_counts {
+            Some(path) if same_path(path, image_path) => bail!(
+                "--sample-counts {}: is the image's own path; the counts would replace it",
+                path.display()
+            ),
             Some(path) => {
                 let target = OutputTarget::prepare_with(path, protected)?;
                 if !target.format().is_linear() {
@@ -413,6 +428,13 @@ impl Outputs {
         let sidecar = args.sidecar.then(|| sidecar_path(image_path));
         for beside in sidecar.iter().chain(shard_paths.as_ref().map(|(_, m)| m)) {
             OutputTarget::prepare_beside_with(beside, protected)?;
+        }
+        let mut aovs = args.aov.iter().enumerate();
+        if let Some((_, aov)) = aovs.find(|&(i, aov)| args.aov[..i].contains(aov)) {
+            bail!(
+                "--aov {}: given twice (each layer is written once)",
+                aov.name()
+            );
         }
         if !args.aov.is_empty() {
             if image.format() != ImageFormat::Exr {
@@ -447,20 +469,8 @@ fn render_scene(
         .context("installing the SIGINT/SIGTERM/SIGHUP handler")?;
     let mut progress = progress_reporter();
     // With a time budget the render stops, successfully, at the deadline.
-    let deadline = match args.time_budget {
-        Some(seconds) if !(seconds.is_finite() && seconds > 0.0) => {
-            bail!("--time-budget must be a positive number of seconds, got {seconds}")
-        }
-        Some(seconds) => Some(Instant::now() + Duration::from_secs_f64(seconds)),
-        None => None,
-    };
-    let every = match args.progressive {
-        Some(seconds) if !(seconds.is_finite() && seconds > 0.0) => {
-            bail!("--progressive must be a positive number of seconds, got {seconds}")
-        }
-        Some(seconds) => Some(Duration::from_secs_f64(seconds)),
-        None => None,
-    };
+    let deadline = seconds_flag("--time-budget", args.time_budget)?.map(|d| Instant::now() + d);
+    let every = seconds_flag("--progressive", args.progressive)?;
     let run = |backend: &mut dyn Backend, progress: &mut dyn Progress| match (every, deadline) {
         (Some(every), deadline) => {
             let mut write = |image: &chambre::render::Image| target.write(image);
@@ -656,12 +666,22 @@ fn finish(
     if let Some(adaptive) = &output.adaptive {
         note!("{}", adaptive.summary());
     }
-    if output.deadline_reached {
+    let mut failed = false;
+    if output.deadline_reached && written {
         note!(
-            "note: the time budget was spent after {:.2} s: {} per pixel",
+            "note: the time budget was spent after {:.2} s: {}",
             output.elapsed.as_secs_f64(),
             describe_samples(&output)
         );
+    } else if output.deadline_reached {
+        // A budget too short for one sample leaves no image: a success would leave whatever
+        // file was there before looking like this render's.
+        note!(
+            "error: the time budget was spent after {:.2} s, before any pixel had a sample; \
+             {path} was not written",
+            output.elapsed.as_secs_f64()
+        );
+        failed = true;
     }
     if output.truncated_paths > 0 {
         note!(
@@ -669,7 +689,6 @@ fn finish(
             output.truncated_paths
         );
     }
-    let mut failed = false;
     let non_finite = output.image.non_finite_count();
     if non_finite > 0 {
         let shown = match (written, target.format()) {
@@ -705,6 +724,21 @@ fn finish(
         (false, Some(Error::Interrupted { .. })) => ExitCode::from(130),
         (false, _) => ExitCode::SUCCESS,
     })
+}
+
+/// The longest `--time-budget` or `--progressive` interval: about 31 years, far within what
+/// a clock's instant can be moved by.
+const MAX_SECONDS_FLAG: f64 = 1e9;
+
+/// A flag's positive, finite number of seconds (at most [`MAX_SECONDS_FLAG`]) as a duration.
+fn seconds_flag(flag: &str, seconds: Option<f64>) -> anyhow::Result<Option<Duration>> {
+    match seconds {
+        Some(s) if !(s.is_finite() && s > 0.0 && s <= MAX_SECONDS_FLAG) => bail!(
+            "{flag} must be a positive number of seconds, at most {MAX_SECONDS_FLAG:e}, got {s}"
+        ),
+        Some(s) => Ok(Some(Duration::from_secs_f64(s))),
+        None => Ok(None),
+    }
 }
 
 /// "16 spp", or for a stopped render exactly what the image holds.

@@ -6,7 +6,9 @@ use std::process::ExitCode;
 
 use clap::Args;
 
-use chambre::output::{OutputTarget, Protected};
+use anyhow::bail;
+
+use chambre::output::{OutputTarget, Protected, same_path};
 use chambre::render::RenderOutput;
 use chambre::scene::Scene;
 use chambre::shard::{Manifest, Shard};
@@ -51,6 +53,7 @@ pub fn shard_manifest(
         render_hash: format!("{:016x}", chambre::provenance::fnv1a64(&identity)),
         spp_min: output.samples_per_pixel,
         spp_max: output.max_samples_per_pixel,
+        band_hash: chambre::shard::band_hash(output.image.pixels.iter().map(|p| p.to_array())),
     }
 }
 
@@ -59,8 +62,16 @@ pub fn run_merge(args: &MergeArgs) -> anyhow::Result<ExitCode> {
     let (manifests, output) = (&args.manifests, &args.output);
     let protected = Protected::replaced_if(args.force);
     let target = OutputTarget::prepare_with(output, protected)?;
-    let image = chambre::shard::merge(manifests)?;
-    target.write(&image)?;
+    let merged = chambre::shard::merge(manifests)?;
+    let image = &merged.image;
+    if let Some(input) = merged.inputs.iter().find(|input| same_path(input, output)) {
+        bail!(
+            "-o {}: is {}, an input of the merge",
+            output.display(),
+            input.display()
+        );
+    }
+    target.write(image)?;
     note!(
         "{}: {}x{} from {} shards",
         output.display(),
@@ -68,5 +79,8 @@ pub fn run_merge(args: &MergeArgs) -> anyhow::Result<ExitCode> {
         image.height,
         manifests.len()
     );
+    for line in &merged.notes {
+        note!("{line}");
+    }
     Ok(ExitCode::SUCCESS)
 }
