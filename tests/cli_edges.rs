@@ -914,6 +914,10 @@ fn budgets_at_the_extremes_are_refused_or_fail_plainly() {
             "{message}"
         );
     }
+    let output = render_spheres_on_cpu(&target, &["--noise-target", "nan"]);
+    assert_eq!(output.status.code(), Some(1));
+    let message = stderr_of(&output);
+    assert!(message.contains("render.noise_target"), "{message}");
     let output = render_spheres_on_cpu(&target, &["--time-budget", "1e-9"]);
     let message = stderr_of(&output);
     assert_eq!(output.status.code(), Some(1), "{message}");

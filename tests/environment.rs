@@ -509,6 +509,10 @@ fn bad_environments_are_refused_by_name() {
     for (builder, field) in cases {
         let error = builder.build().expect_err(field).to_string();
         assert!(error.contains(field), "{field}: {error}");
+        assert!(
+            !error.contains("  "),
+            "{field}: a run of spaces in {error:?}"
+        );
     }
     let negative_message = base()
         .environment_map(negative.to_str().unwrap(), 1.0, 0.0, 1)
@@ -519,4 +523,25 @@ fn bad_environments_are_refused_by_name() {
         negative_message.contains("negative.exr") && negative_message.contains("column 1, row 0"),
         "{negative_message}"
     );
+    // Too bright: the file's texel where it is the file's own, the scale where it raised it.
+    let bright = dir.join("bright.exr");
+    write_exr(&bright, 2, 1, &[[1.0; 3], [3e38, 0.0, 0.0]]);
+    let message = base()
+        .environment_map(bright.to_str().unwrap(), 1.0, 0.0, 1)
+        .build()
+        .unwrap_err()
+        .to_string();
+    for part in ["lights[0].file", "bright.exr", "column 1, row 0"] {
+        assert!(message.contains(part), "`{part}` not in {message}");
+    }
+    let dim = dir.join("dim.exr");
+    write_exr(&dim, 2, 1, &[[100.0; 3], [1.0; 3]]);
+    let message = base()
+        .environment_map(dim.to_str().unwrap(), 1e19, 0.0, 1)
+        .build()
+        .unwrap_err()
+        .to_string();
+    for part in ["lights[0].scale", "dim.exr", "column 0, row 0"] {
+        assert!(message.contains(part), "`{part}` not in {message}");
+    }
 }

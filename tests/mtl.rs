@@ -122,6 +122,36 @@ fn a_triangle_light_gives_its_analytic_irradiance() {
     }
 }
 
+/// A library's `Ke` that no radiance can be (beyond the scene's bound, not a number,
+/// negative) is refused naming the mesh and its material, not clamped to a silent zero.
+#[test]
+fn an_emission_no_radiance_can_be_is_refused_naming_the_material() {
+    for (name, ke) in [
+        ("huge", "1e30 1 1"),
+        ("nan", "nan 1 1"),
+        ("negative", "-1 -1 -1"),
+    ] {
+        let dir = scratch(&format!("ke_{name}"));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("lamp.mtl"), format!("newmtl lamp\nKe {ke}\n")).unwrap();
+        std::fs::write(
+            dir.join("lamp.obj"),
+            "mtllib lamp.mtl\nusemtl lamp\nv 0 1 0\nv 1 1 0\nv 0 1 1\nf 1 2 3\n",
+        )
+        .unwrap();
+        let text = "[render]\nwidth = 4\nheight = 4\nspp = 1\n\
+             [camera]\nposition = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\n\
+             film = [24.0, 24.0]\n[[shapes]]\ntype = \"mesh\"\nfile = \"lamp.obj\"\n";
+        let error = chambre::scene::Scene::from_str(&dir.join("scene.toml"), text, &[])
+            .err()
+            .unwrap_or_else(|| panic!("Ke {ke} was accepted"))
+            .to_string();
+        for part in ["shapes[0]", "lamp.obj", "\"lamp\"", "Ke"] {
+            assert!(error.contains(part), "Ke {ke}: `{part}` not in {error}");
+        }
+    }
+}
+
 /// A scene of one OBJ triangle in its own folder: `mtllib` lines for `libraries` (of which only
 /// `present` exist beside it, each defining `red`), faces that `usemtl red`, and a scene
 /// material `grey` given to the mesh when `scene_material`. Returns the scene file.

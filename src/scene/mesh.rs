@@ -96,7 +96,8 @@ pub struct MeshMaterial {
     pub shininess: f32,
     /// Mirror reflectance (`illum` 3 or 5): `Ks`, or 1 where absent; zero otherwise.
     pub mirror: Vec3,
-    /// `Ke`: emitted radiance; non-zero makes every triangle of it an area light.
+    /// `Ke`: emitted radiance, as the library gives it (validated with the scene); non-zero
+    /// makes every triangle of it an area light.
     pub emission: Vec3,
     /// `illum` 4, 6 or 7 (a refracting material): its index of refraction, `Ni` (1.5 where
     /// absent), clamped to [0.1, 10]; the path tracer renders it as a smooth dielectric.
@@ -152,7 +153,8 @@ impl MeshMaterial {
                 (true, None) => Vec3::ONE,
                 (false, _) => Vec3::ZERO,
             },
-            emission: rgb(m.emissive).max(Vec3::ZERO),
+            // Kept as written: the scene's validation refuses what no radiance can be.
+            emission: rgb(m.emissive),
             ior: matches!(m.illumination_model, Some(4 | 6 | 7))
                 .then(|| m.optical_density.unwrap_or(1.5).clamp(0.1, 10.0)),
             diffuse_texture: None,

@@ -75,6 +75,13 @@ impl Texture {
                 "a texture of {width} x {height} texels: each side must be 1 to {MAX_TEXTURE_SIDE}"
             ));
         }
+        if bytes.starts_with(&[0xFF, 0xD8]) && !jpeg_ends_its_image(bytes) {
+            return Err(
+                "a JPEG image cut short: no end-of-image marker after its last scan (the \
+                 decoder would fill the missing rows with a flat colour)"
+                    .into(),
+            );
+        }
         let image = image::load_from_memory(bytes)
             .map_err(|e| format!("not a readable PNG or JPEG image: {e}"))?
             .into_rgba8();
@@ -87,6 +94,15 @@ impl Texture {
             wrap: [Wrap::Repeat; 2],
         })
     }
+}
+
+/// Whether a JPEG's last scan (its last start-of-scan marker, `FF DA`) is followed by an
+/// end-of-image marker (`FF D9`). Neither can occur inside a scan's coded data, where an `FF`
+/// byte is always followed by `00` or a restart marker; an EXIF thumbnail's own markers come
+/// before the image's scans, and bytes a camera appends after the end are allowed.
+fn jpeg_ends_its_image(bytes: &[u8]) -> bool {
+    let last = |marker: u8| bytes.windows(2).rposition(|w| w == [0xFF, marker]);
+    matches!((last(0xDA), last(0xD9)), (Some(scan), Some(end)) if end > scan)
 }
 
 /// Textures read once each, whatever number of materials name them.
@@ -158,6 +174,31 @@ mod tests {
     fn bytes_that_are_no_image_are_refused_with_a_reason() {
         let e = Texture::decode(b"not an image", Path::new("x.png")).unwrap_err();
         assert!(e.contains("image"), "{e}");
+    }
+
+    /// A JPEG cut anywhere inside its scan is refused; the whole file, and the file with
+    /// bytes appended after its end, decode.
+    #[test]
+    fn a_jpeg_cut_short_is_refused() {
+        let image =
+            image::RgbImage::from_fn(32, 32, |x, y| image::Rgb([x as u8 * 8, y as u8 * 8, 90]));
+        let mut jpeg = Vec::new();
+        image
+            .write_to(
+                &mut std::io::Cursor::new(&mut jpeg),
+                image::ImageFormat::Jpeg,
+            )
+            .unwrap();
+        assert!(Texture::decode(&jpeg, Path::new("t.jpg")).is_ok());
+        let mut trailed = jpeg.clone();
+        trailed.extend_from_slice(b"a camera's trailer");
+        assert!(Texture::decode(&trailed, Path::new("t.jpg")).is_ok());
+        // Cuts inside the scan, which the decoder alone would accept.
+        let scan = jpeg.windows(2).rposition(|w| w == [0xFF, 0xDA]).unwrap();
+        for cut in [scan + 20, (scan + jpeg.len()) / 2, jpeg.len() - 2] {
+            let e = Texture::decode(&jpeg[..cut], Path::new("t.jpg")).unwrap_err();
+            assert!(e.contains("cut short"), "{cut}: {e}");
+        }
     }
 
     #[test]

@@ -1652,6 +1652,21 @@ fn adopt_mesh_materials(
         .map_or(String::new(), |n| n.to_string_lossy().into_owned());
     let path_traced = check.parsed.file.render.integrator == Integrator::Path;
     for m in &mesh.materials {
+        let e = m.emission;
+        if !(e.is_finite() && e.min_element() >= 0.0 && e.max_element() as f64 <= MAX_RADIOMETRIC) {
+            return Err(check.err(
+                field,
+                format!(
+                    "{}: material {:?} emits ({}, {}, {}) (its library's `Ke`): an emitted \
+                     radiance is finite, non-negative and at most {MAX_RADIOMETRIC:e}",
+                    path.display(),
+                    m.name,
+                    num(e.x as f64),
+                    num(e.y as f64),
+                    num(e.z as f64)
+                ),
+            ));
+        }
         let lobe = m.specular.max_element() > 0.0;
         let material = Material {
             name: format!("{file}:{}", m.name),
@@ -1755,7 +1770,8 @@ fn one_environment(check: &Checker, file: &SceneFile) -> Result<()> {
         return Err(check.err(
             "render.background",
             format!(
-                "is what escaping rays see where there is no environment light; lights[{first}]                  is one: set the background to 0 (the environment replaces it)"
+                "is what escaping rays see where there is no environment light; lights[{first}] \
+                 is one: set the background to 0 (the environment replaces it)"
             ),
         ));
     }
@@ -1935,18 +1951,34 @@ fn environment_light(check: &Checker, prefix: &str, l: &LightEntry) -> Result<Li
     let path = folder.join(name);
     let map = super::environment::EnvironmentMap::read(&path)
         .map_err(|e| check.err(&at("file"), format!("{}: {e}", path.display())))?;
-    let peak = map
+    let (brightest, texel) = map
         .texels
         .iter()
-        .flatten()
-        .fold(0f64, |m, &c| m.max(c as f64))
-        * scale;
+        .enumerate()
+        .map(|(i, t)| (t.iter().fold(0f64, |m, &c| m.max(c as f64)), i))
+        .fold(
+            (0f64, 0),
+            |best, texel| if texel.0 > best.0 { texel } else { best },
+        );
+    let peak = brightest * scale;
     if peak > MAX_RADIOMETRIC {
+        // The file's own texel when no scale raised it; the scale when it did.
+        let field = match l.scale {
+            Some(s) if s > 1.0 => at("scale"),
+            _ => at("file"),
+        };
+        let width = map.width as usize;
         return Err(check.err(
-            &at("scale"),
+            &field,
             format!(
-                "makes the map's brightest texel {} (over {MAX_RADIOMETRIC:e}): sums of samples \
-                 would overflow the 32-bit floats of the render",
+                "{}: the texel at column {}, row {} is {} times scale {} = {} (over \
+                 {MAX_RADIOMETRIC:e}): sums of samples would overflow the 32-bit floats of the \
+                 render",
+                path.display(),
+                texel % width,
+                texel / width,
+                num(brightest),
+                num(scale),
                 num(peak)
             ),
         ));

@@ -180,7 +180,14 @@ impl RenderArgs {
             overrides.push(format!("render.integrator={integrator}"));
         }
         if let Some(target) = self.noise_target {
-            overrides.push(format!("render.noise_target={target:?}"));
+            // TOML writes a NaN or an infinity in its own words; the field's check says why
+            // neither is a target.
+            let value = match target {
+                t if t.is_nan() => "nan".to_string(),
+                t if t.is_infinite() => format!("{}inf", if t < 0.0 { "-" } else { "" }),
+                t => format!("{t:?}"),
+            };
+            overrides.push(format!("render.noise_target={value}"));
         }
         if let Some(window) = &self.crop {
             let values: Vec<String> = window.iter().map(|v| v.to_string()).collect();
