@@ -572,3 +572,369 @@ fn bad_camera_names_and_degenerate_cameras_are_refused_with_the_file_and_field()
         2
     );
 }
+
+/// The quad scene (`gltf_json` with its camera and light) with each `(from, to)` of `edits`
+/// made, in folder `case`: the error both `Scene::load` and `load_mesh` give for it, which must
+/// name the file and each of `expected`, and must not place the fault in the scene text
+/// chambre builds from the file (`file:line:column: field `...``), which the user never sees.
+fn assert_refused(case: &str, edits: &[(&str, &str)], expected: &[&str]) {
+    let dir = scratch(case);
+    std::fs::write(dir.join("quad.bin"), quad_buffer()).unwrap();
+    let mut json = gltf_json(Some("quad.bin"), true);
+    for (from, to) in edits {
+        assert!(json.contains(from), "{case}: {from}");
+        json = json.replace(from, to);
+    }
+    let path = dir.join("quad.gltf");
+    std::fs::write(&path, json).unwrap();
+    let errors = [
+        Scene::load(&path, &[]).unwrap_err().to_string(),
+        load_mesh(&path).unwrap_err(),
+    ];
+    for error in errors {
+        assert!(error.contains("quad.gltf"), "{case}: {error}");
+        assert!(!error.contains("field `"), "{case}: {error}");
+        for part in expected {
+            assert!(error.contains(part), "{case}: {part} not in {error}");
+        }
+    }
+}
+
+/// The POSITION, NORMAL and index accessors of `gltf_json`, and the index buffer view.
+const POSITION: &str = r#""bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3""#;
+const NORMAL: &str = r#""bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3""#;
+const INDICES: &str = r#""bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR""#;
+const INDEX_VIEW: &str = r#"{"buffer": 0, "byteOffset": 96, "byteLength": 12}"#;
+const MESH_NODE: &str = r#"{"mesh": 0, "translation""#;
+const CAMERA_NODE: &str = r#"{"camera": 0, "translation": [0, 0, 5]"#;
+const LIGHT_NODE: &str = r#"{"translation": [0, 0, 3], "extensions""#;
+
+#[test]
+fn node_cycles_and_shared_nodes_are_refused_naming_the_node() {
+    // The mesh node its own child: its traversal never ended, each round adding the mesh.
+    assert_refused(
+        "self-cycle",
+        &[(MESH_NODE, r#"{"mesh": 0, "children": [0], "translation""#)],
+        &["nodes[0].children", "nodes[0] is the node itself (a cycle)"],
+    );
+    assert_refused(
+        "cycle",
+        &[
+            (
+                CAMERA_NODE,
+                r#"{"camera": 0, "children": [2], "translation": [0, 0, 5]"#,
+            ),
+            (
+                LIGHT_NODE,
+                r#"{"translation": [0, 0, 3], "children": [1], "extensions""#,
+            ),
+        ],
+        &["nodes[1].children", "nodes[2] is its ancestor (a cycle)"],
+    );
+    assert_refused(
+        "two-parents",
+        &[
+            (MESH_NODE, r#"{"mesh": 0, "children": [1], "translation""#),
+            (
+                LIGHT_NODE,
+                r#"{"translation": [0, 0, 3], "children": [1], "extensions""#,
+            ),
+        ],
+        &[
+            "nodes[2].children",
+            "nodes[1] is already a child of nodes[0]",
+        ],
+    );
+    assert_refused(
+        "root-child",
+        &[(MESH_NODE, r#"{"mesh": 0, "children": [2], "translation""#)],
+        &["scenes[0].nodes", "nodes[2] is a child of nodes[0]"],
+    );
+    assert_refused(
+        "root-twice",
+        &[(r#""nodes": [0, 1, 2]"#, r#""nodes": [0, 1, 2, 0]"#)],
+        &["scenes[0].nodes", "lists nodes[0] twice"],
+    );
+}
+
+#[test]
+fn accessors_of_types_gltf_does_not_allow_there_are_refused_naming_them() {
+    let indices = "meshes[0].primitives[0].indices -> accessors[2]";
+    for (component, name) in [("5126", "float SCALAR"), ("5120", "byte SCALAR")] {
+        let to = INDICES.replace("5123", component);
+        assert_refused(
+            &format!("indices-{component}"),
+            &[(INDICES, &to)],
+            &[indices, name],
+        );
+    }
+    let position = "meshes[0].primitives[0].attributes.POSITION -> accessors[0]";
+    for (from, to, name) in [
+        ("5126", "5123", "unsigned short VEC3"),
+        ("5126", "5120", "byte VEC3"),
+        ("VEC3", "VEC2", "float VEC2"),
+    ] {
+        let edited = POSITION.replace(from, to);
+        assert_refused(
+            &format!("position-{to}"),
+            &[(POSITION, &edited)],
+            &[position, name],
+        );
+    }
+    let edited = NORMAL.replace("5126", "5122");
+    assert_refused(
+        "normal-short",
+        &[(NORMAL, &edited)],
+        &["attributes.NORMAL -> accessors[1]", "short VEC3"],
+    );
+}
+
+/// `gltf_json` with a 1 x 1 base colour texture on its material, read through TEXCOORD_0 from
+/// a fourth accessor, of `component` and `kind`, over the normals' buffer view.
+fn textured(component: &str, kind: &str) -> Vec<(&'static str, String)> {
+    const PNG: &str = "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mP8z8BQDwAEhQGAhKmMIQAAAABJRU5ErkJggg==";
+    vec![
+        (
+            r#""NORMAL": 1}"#,
+            r#""NORMAL": 1, "TEXCOORD_0": 3}"#.to_string(),
+        ),
+        (
+            r#""metallicFactor": 0.0"#,
+            r#""baseColorTexture": {"index": 0}, "metallicFactor": 0.0"#.to_string(),
+        ),
+        (
+            r#""buffers": ["#,
+            format!(
+                r#""textures": [{{"source": 0}}],
+                   "images": [{{"uri": "data:image/png;base64,{PNG}"}}],
+                   "buffers": ["#
+            ),
+        ),
+        (
+            INDICES,
+            format!(
+                r#"{INDICES}}},
+                {{"bufferView": 1, "componentType": {component}, "count": 4, "type": "{kind}""#
+            ),
+        ),
+    ]
+}
+
+#[test]
+fn texture_coordinates_of_types_gltf_does_not_allow_are_refused_naming_them() {
+    let at = "meshes[0].primitives[0].attributes.TEXCOORD_0 -> accessors[3]";
+    for (component, kind, name) in [
+        ("5125", "VEC2", "unsigned int VEC2"),
+        ("5122", "VEC2", "short VEC2"),
+        ("5126", "VEC3", "float VEC3"),
+    ] {
+        let case = format!("uv-{component}-{kind}");
+        let edits = textured(component, kind);
+        let edits: Vec<(&str, &str)> = edits.iter().map(|(f, t)| (*f, t.as_str())).collect();
+        assert_refused(&case, &edits, &[at, name]);
+    }
+    // Floats are read.
+    let dir = scratch("uv-float");
+    std::fs::write(dir.join("quad.bin"), quad_buffer()).unwrap();
+    let mut json = gltf_json(Some("quad.bin"), true);
+    for (from, to) in textured("5126", "VEC2") {
+        json = json.replace(from, &to);
+    }
+    std::fs::write(dir.join("quad.gltf"), json).unwrap();
+    let mesh = load_mesh(&dir.join("quad.gltf")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(mesh.texcoords.map(|t| t.len()), Some(4));
+}
+
+#[test]
+fn accessors_past_their_data_are_refused_naming_the_accessor_and_view() {
+    let position = "meshes[0].primitives[0].attributes.POSITION -> accessors[0]";
+    let longer = POSITION.replace("\"count\": 4", "\"count\": 5");
+    assert_refused(
+        "position-count",
+        &[(POSITION, &longer)],
+        &[
+            position,
+            "end at byte 60, past the 48 bytes of bufferViews[0]",
+        ],
+    );
+    let longer = NORMAL.replace("\"count\": 4", "\"count\": 5");
+    assert_refused(
+        "normal-count",
+        &[(NORMAL, &longer)],
+        &["attributes.NORMAL -> accessors[1]", "bufferViews[1]"],
+    );
+    let shorter = NORMAL.replace("\"count\": 4", "\"count\": 3");
+    assert_refused(
+        "normal-fewer",
+        &[(NORMAL, &shorter)],
+        &[
+            "attributes.NORMAL -> accessors[1]",
+            "has 3 elements where POSITION has 4",
+        ],
+    );
+    let indices = "meshes[0].primitives[0].indices -> accessors[2]";
+    let longer = INDICES.replace("\"count\": 6", "\"count\": 9");
+    assert_refused(
+        "indices-count",
+        &[(INDICES, &longer)],
+        &[indices, "past the 12 bytes of bufferViews[2]"],
+    );
+    let moved = INDEX_VIEW.replace("96", "1000");
+    assert_refused(
+        "view-offset",
+        &[(INDEX_VIEW, &moved)],
+        &[
+            indices,
+            "bufferViews[2] (bytes 1000 to 1012)",
+            "108 bytes of buffers[0]",
+        ],
+    );
+    // Three vertices, which the index 3 lies past.
+    let (three, three_normals) = (
+        POSITION.replace("\"count\": 4", "\"count\": 3"),
+        NORMAL.replace("\"count\": 4", "\"count\": 3"),
+    );
+    assert_refused(
+        "index-value",
+        &[(POSITION, &three), (NORMAL, &three_normals)],
+        &[indices, "element 5 is 3, past the 3 vertices of POSITION"],
+    );
+    // Sparse indices 0, 1, 2, 0 (the index view's), which must rise.
+    let sparse = format!(
+        r#"{POSITION}, "sparse": {{"count": 4, "indices": {{"bufferView": 2,
+            "componentType": 5123}}, "values": {{"bufferView": 1}}}}"#
+    );
+    assert_refused(
+        "sparse",
+        &[(POSITION, &sparse)],
+        &[&format!("{position}.sparse.indices"), "element 3 is 0"],
+    );
+}
+
+#[test]
+fn material_and_light_factors_outside_gltfs_bounds_are_refused_naming_them() {
+    let pbr = "materials[0].pbrMetallicRoughness";
+    let light = "extensions.KHR_lights_punctual.lights[0]";
+    let point = r#"{"type": "point", "color": [1, 1, 1], "intensity": 6830}"#;
+    let spot = |inner: &str, outer: &str| {
+        format!(
+            r#"{{"type": "spot", "color": [1, 1, 1], "intensity": 6830,
+                 "spot": {{"innerConeAngle": {inner}, "outerConeAngle": {outer}}}}}"#
+        )
+    };
+    let cases: [(&str, &str, String, String); 9] = [
+        (
+            "base",
+            "[0.8, 0.2, 0.1, 1.0]",
+            "[5, -1, 0.5, 1]".into(),
+            format!("{pbr}.baseColorFactor: must lie in [0, 1]"),
+        ),
+        (
+            "metallic",
+            r#""metallicFactor": 0.0"#,
+            r#""metallicFactor": 2"#.into(),
+            format!("{pbr}.metallicFactor: must lie in [0, 1], got 2.0"),
+        ),
+        (
+            "roughness",
+            r#""roughnessFactor": 1.0"#,
+            r#""roughnessFactor": -1"#.into(),
+            format!("{pbr}.roughnessFactor: must lie in [0, 1], got -1.0"),
+        ),
+        (
+            "emissive",
+            r#""name": "paint","#,
+            r#""name": "paint", "emissiveFactor": [1e30, 1, 1],"#.into(),
+            "materials[0].emissiveFactor: must lie in [0, 1e20]".into(),
+        ),
+        (
+            "emissive-max",
+            r#""name": "paint","#,
+            r#""name": "paint", "emissiveFactor": [3e38, 0, 0],"#.into(),
+            "materials[0].emissiveFactor".into(),
+        ),
+        (
+            "intensity",
+            point,
+            point.replace("6830", "1e30"),
+            format!("{light}.intensity"),
+        ),
+        (
+            "color",
+            point,
+            point.replace("[1, 1, 1]", "[1, -1, 0.5]"),
+            format!("{light}.color"),
+        ),
+        (
+            "spot-inner",
+            point,
+            spot("1.0", "0.5"),
+            format!("{light}.spot.innerConeAngle: must lie in [0, outerConeAngle = 0.5)"),
+        ),
+        (
+            "spot-outer",
+            point,
+            spot("0.1", "3.0"),
+            format!("{light}.spot.outerConeAngle: must lie in (0, pi/2]"),
+        ),
+    ];
+    for (case, from, to, expected) in &cases {
+        assert_refused(case, &[(from, to)], &[expected]);
+    }
+}
+
+#[test]
+fn a_mesh_fault_found_after_reading_is_not_placed_in_the_scene_text() {
+    // A zero scale leaves every triangle without area, which the mesh checks find.
+    assert_refused(
+        "flat",
+        &[(r#""scale": [2, 2, 2]"#, r#""scale": [0, 0, 0]"#)],
+        &["all 2 triangles of the mesh have zero area"],
+    );
+}
+
+#[test]
+fn an_empty_file_or_json_without_asset_is_said_to_be_one() {
+    let dir = scratch("empty");
+    for (name, text, expected) in [
+        ("empty.gltf", "", "the file is empty"),
+        ("blank.gltf", " \n", "the file is empty"),
+        ("object.gltf", "{}", "missing field `asset`"),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        for error in [
+            Scene::load(&path, &[]).unwrap_err().to_string(),
+            load_mesh(&path).unwrap_err(),
+        ] {
+            assert!(
+                error.contains(name) && error.contains(expected),
+                "{name}: {error}"
+            );
+        }
+    }
+}
+
+/// A fault only the scene's validation finds (a camera beyond the coordinates chambre
+/// accepts) names the glTF file and the scene field, with no line of the scene text chambre
+/// made from the file, which its user cannot open.
+#[test]
+fn a_fault_found_by_the_scenes_validation_names_no_line_of_the_made_scene() {
+    let dir = scratch("far_camera");
+    std::fs::write(dir.join("quad.bin"), quad_buffer()).unwrap();
+    let json = gltf_json(Some("quad.bin"), true)
+        .replace(CAMERA_NODE, r#"{"camera": 0, "translation": [0, 0, 5e12]"#);
+    let path = dir.join("quad.gltf");
+    std::fs::write(&path, json).unwrap();
+    let error = Scene::load(&path, &[]).unwrap_err().to_string();
+    assert!(
+        error.contains("quad.gltf: field `camera.position"),
+        "{error}"
+    );
+    assert!(
+        error.contains("(of the scene chambre reads it as)"),
+        "{error}"
+    );
+    let placed = error.split("quad.gltf:").nth(1).unwrap();
+    assert!(placed.starts_with(' '), "a line of the made scene: {error}");
+}

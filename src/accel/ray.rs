@@ -60,8 +60,9 @@ impl RayQuery {
     #[inline]
     pub fn new(origin: Vec3, direction: Vec3) -> Self {
         let abs = direction.abs();
-        let x_largest = abs.x > abs.y && abs.x > abs.z;
-        let y_largest = !(abs.x > abs.y) && abs.y > abs.z;
+        let x_over_y = abs.x > abs.y;
+        let x_largest = x_over_y && abs.x > abs.z;
+        let y_largest = !x_over_y && abs.y > abs.z;
         // x -> 0, y -> 1, else z -> 2: ties go to the later axis, as nested comparisons do.
         let kz = 2 - 2 * x_largest as usize - y_largest as usize;
         let d = direction.to_array();

@@ -10,7 +10,9 @@ use std::sync::Arc;
 
 use glam::{DMat4, DVec3, Vec2, Vec3};
 
-use super::mesh::{MeshMaterial, NO_MATERIAL, TriangleMesh};
+use gltf::accessor::{DataType, Dimensions};
+
+use super::mesh::{MeshMaterial, NO_MATERIAL, TriangleMesh, check_mesh};
 use super::texture::{Texture, Wrap};
 
 /// Luminous efficacy (lm/W) at 555 nm: candela and lux to W/sr and W/m².
@@ -139,7 +141,7 @@ pub enum GltfLight {
 /// Reads a glTF or GLB file: the error is a sentence without the path (the caller adds it).
 /// Its cameras are listed, not checked: a file read as a mesh does not need them.
 pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
-    let gltf = gltf::Gltf::open(path).map_err(|e| format!("not a readable glTF file: {e}"))?;
+    let gltf = open_gltf(path)?;
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
         .map_err(|e| format!("reading its buffers: {e}"))?;
@@ -148,6 +150,9 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
         .default_scene()
         .or_else(|| document.scenes().next())
         .ok_or("the file has no scene")?;
+    check_node_trees(document, &scene)?;
+    check_materials(document)?;
+    check_lights(document)?;
     let textures = read_textures(document, base, &buffers)?;
     let (materials, texture_uses): (Vec<_>, Vec<_>) = document
         .materials()
@@ -171,10 +176,25 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
         let world = parent * local;
         if let Some(mesh) = node.mesh() {
             for primitive in mesh.primitives() {
-                let added =
-                    add_primitive(&mut out.mesh, &mut normals, &primitive, &buffers, world)?;
+                let at = format!("meshes[{}].primitives[{}]", mesh.index(), primitive.index());
+                let added = add_primitive(
+                    &mut out.mesh,
+                    &mut normals,
+                    &primitive,
+                    &at,
+                    &buffers,
+                    world,
+                )?;
                 any_normals |= added;
-                add_texcoords(&mut texcoords, &primitive, &buffers, &texture_uses)?;
+                let vertices = out.mesh.positions.len();
+                add_texcoords(
+                    &mut texcoords,
+                    &primitive,
+                    &at,
+                    vertices,
+                    &buffers,
+                    &texture_uses,
+                )?;
             }
         }
         if let Some(camera) = node.camera() {
@@ -222,54 +242,444 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
     Ok(out)
 }
 
+/// The file parsed and checked by the gltf crate. An empty file is said to be one: the crate
+/// would report that it could not read the four bytes of a GLB's magic.
+fn open_gltf(path: &Path) -> Result<gltf::Gltf, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read the file: {e}"))?;
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(
+            "the file is empty: a glTF file is JSON with an `asset` object, or a GLB".into(),
+        );
+    }
+    gltf::Gltf::from_slice(&bytes).map_err(|e| format!("not a readable glTF file: {e}"))
+}
+
+/// glTF's nodes form disjoint strict trees (a node has one parent at most, and no node is its
+/// own ancestor), of which a scene lists the roots, each once. A file that breaks this is
+/// refused: its traversal would never end on a cycle, and would place a subtree again (as
+/// often as the paths to it, exponentially many) under a node of several parents.
+fn check_node_trees(document: &gltf::Document, scene: &gltf::Scene) -> Result<(), String> {
+    let children: Vec<Vec<usize>> = document
+        .nodes()
+        .map(|n| n.children().map(|c| c.index()).collect())
+        .collect();
+    let mut parent: Vec<Option<usize>> = vec![None; children.len()];
+    for (n, list) in children.iter().enumerate() {
+        for &c in list {
+            match parent[c] {
+                Some(p) if p == n => {
+                    return Err(format!("nodes[{n}].children: lists nodes[{c}] twice"));
+                }
+                Some(p) => {
+                    return Err(format!(
+                        "nodes[{n}].children: nodes[{c}] is already a child of nodes[{p}]; \
+                         glTF's nodes form disjoint trees, a node having one parent at most"
+                    ));
+                }
+                None => parent[c] = Some(n),
+            }
+        }
+    }
+    if let Some(n) = node_on_cycle(&children, &parent) {
+        let p = parent[n].unwrap_or(n);
+        return Err(format!(
+            "nodes[{p}].children: nodes[{n}] is {} (a cycle); glTF's nodes form strict trees",
+            if p == n {
+                "the node itself"
+            } else {
+                "its ancestor"
+            }
+        ));
+    }
+    let mut listed = vec![false; children.len()];
+    for root in scene.nodes().map(|n| n.index()) {
+        if let Some(p) = parent[root] {
+            return Err(format!(
+                "scenes[{}].nodes: nodes[{root}] is a child of nodes[{p}], not a root node",
+                scene.index()
+            ));
+        }
+        if std::mem::replace(&mut listed[root], true) {
+            return Err(format!(
+                "scenes[{}].nodes: lists nodes[{root}] twice",
+                scene.index()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A node on a cycle of children, given each node's only parent: nodes that no walk down from a
+/// parentless node reaches lie on a cycle or below one, and going up from one of them as many
+/// times as there are nodes ends on the cycle.
+fn node_on_cycle(children: &[Vec<usize>], parent: &[Option<usize>]) -> Option<usize> {
+    let mut reached = vec![false; children.len()];
+    let mut stack: Vec<usize> = (0..children.len())
+        .filter(|&n| parent[n].is_none())
+        .collect();
+    while let Some(n) = stack.pop() {
+        reached[n] = true;
+        stack.extend(&children[n]);
+    }
+    let unreached = reached.iter().position(|r| !r)?;
+    // An unreached node's parent is unreached too, so there always is one to go up to.
+    Some((0..children.len()).fold(unreached, |n, _| parent[n].unwrap_or(n)))
+}
+
+/// The factors glTF bounds: base colour, metallic and roughness in [0, 1]; the emissive factor,
+/// which becomes an emitter's radiance, non-negative and at most `MAX_RADIOMETRIC` as a
+/// scene's radiometric values are (glTF bounds it by 1, but files brighten emitters past that).
+fn check_materials(document: &gltf::Document) -> Result<(), String> {
+    use super::validate::MAX_RADIOMETRIC;
+    for material in document.materials() {
+        let at = format!("materials[{}]", material.index().unwrap_or_default());
+        let pbr = material.pbr_metallic_roughness();
+        let base = pbr.base_color_factor();
+        for (field, values) in [
+            ("pbrMetallicRoughness.baseColorFactor", &base[..]),
+            (
+                "pbrMetallicRoughness.metallicFactor",
+                &[pbr.metallic_factor()],
+            ),
+            (
+                "pbrMetallicRoughness.roughnessFactor",
+                &[pbr.roughness_factor()],
+            ),
+        ] {
+            if !values.iter().all(|v| (0.0..=1.0).contains(v)) {
+                let got = match values {
+                    [v] => format!("{v:?}"),
+                    _ => format!("{values:?}"),
+                };
+                return Err(format!("{at}.{field}: must lie in [0, 1], got {got}"));
+            }
+        }
+        let emissive = material.emissive_factor();
+        if !emissive
+            .iter()
+            .all(|&v| (0.0..=MAX_RADIOMETRIC).contains(&(v as f64)))
+        {
+            return Err(format!(
+                "{at}.emissiveFactor: must lie in [0, {MAX_RADIOMETRIC:e}] (sums of samples \
+                 would overflow the 32-bit floats of the render), got {emissive:?}"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// KHR_lights_punctual's bounds: a colour in [0, 1], a non-negative intensity that makes a
+/// radiometric value of at most `MAX_RADIOMETRIC`, as a scene's lights have, and a spot's
+/// `0 <= innerConeAngle < outerConeAngle <= pi/2`.
+fn check_lights(document: &gltf::Document) -> Result<(), String> {
+    use super::validate::MAX_RADIOMETRIC;
+    for light in document.lights().into_iter().flatten() {
+        let at = format!("extensions.KHR_lights_punctual.lights[{}]", light.index());
+        let color = light.color();
+        if !color.iter().all(|c| (0.0..=1.0).contains(c)) {
+            return Err(format!("{at}.color: must lie in [0, 1], got {color:?}"));
+        }
+        let intensity = light.intensity();
+        let radiometric = intensity as f64 / LUMENS_PER_WATT;
+        if !(intensity >= 0.0 && radiometric <= MAX_RADIOMETRIC) {
+            return Err(format!(
+                "{at}.intensity: must lie in [0, {:e}] (chambre's bound of {MAX_RADIOMETRIC:e} \
+                 W/sr or W/m², times {LUMENS_PER_WATT} lm/W), got {intensity:?}",
+                MAX_RADIOMETRIC * LUMENS_PER_WATT
+            ));
+        }
+        if let gltf::khr_lights_punctual::Kind::Spot {
+            inner_cone_angle: inner,
+            outer_cone_angle: outer,
+        } = light.kind()
+        {
+            if !(outer > 0.0 && outer <= std::f32::consts::FRAC_PI_2) {
+                return Err(format!(
+                    "{at}.spot.outerConeAngle: must lie in (0, pi/2] radians, got {outer:?}"
+                ));
+            }
+            if !(0.0..outer).contains(&inner) {
+                return Err(format!(
+                    "{at}.spot.innerConeAngle: must lie in [0, outerConeAngle = {outer:?}) \
+                     radians, got {inner:?}"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Which component types (each with whether it is normalized) and which element type glTF
+/// allows an accessor chambre reads, and how messages name them.
+struct Layout {
+    components: &'static [(DataType, bool)],
+    dimensions: Dimensions,
+    allowed: &'static str,
+}
+
+const INDICES: Layout = Layout {
+    components: &[
+        (DataType::U8, false),
+        (DataType::U16, false),
+        (DataType::U32, false),
+    ],
+    dimensions: Dimensions::Scalar,
+    allowed: "unsigned byte, unsigned short or unsigned int SCALAR",
+};
+
+/// POSITION and NORMAL.
+const FLOAT_VEC3: Layout = Layout {
+    components: &[(DataType::F32, false)],
+    dimensions: Dimensions::Vec3,
+    allowed: "float VEC3",
+};
+
+const TEXCOORD: Layout = Layout {
+    components: &[
+        (DataType::F32, false),
+        (DataType::U8, true),
+        (DataType::U16, true),
+    ],
+    dimensions: Dimensions::Vec2,
+    allowed: "float, normalized unsigned byte or normalized unsigned short VEC2",
+};
+
+/// How glTF names a component type.
+fn component_name(data_type: DataType) -> &'static str {
+    match data_type {
+        DataType::I8 => "byte",
+        DataType::U8 => "unsigned byte",
+        DataType::I16 => "short",
+        DataType::U16 => "unsigned short",
+        DataType::U32 => "unsigned int",
+        DataType::F32 => "float",
+    }
+}
+
+/// How glTF names an element type.
+fn dimensions_name(dimensions: Dimensions) -> &'static str {
+    match dimensions {
+        Dimensions::Scalar => "SCALAR",
+        Dimensions::Vec2 => "VEC2",
+        Dimensions::Vec3 => "VEC3",
+        Dimensions::Vec4 => "VEC4",
+        Dimensions::Mat2 => "MAT2",
+        Dimensions::Mat3 => "MAT3",
+        Dimensions::Mat4 => "MAT4",
+    }
+}
+
+/// Checks that `accessor` (which `label` names, `meshes[0].primitives[0].indices ->
+/// accessors[2]`) has a type of `layout`, and that each of its elements lies inside its buffer
+/// view and each view inside its buffer. The gltf crate's readers would panic on another type,
+/// and give nothing for data past the end, which reads as an absent attribute.
+fn check_accessor(
+    accessor: &gltf::Accessor,
+    label: &str,
+    layout: &Layout,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), String> {
+    let (data_type, normalized) = (accessor.data_type(), accessor.normalized());
+    if accessor.dimensions() != layout.dimensions
+        || !layout.components.contains(&(data_type, normalized))
+    {
+        return Err(format!(
+            "{label}: {}{} {}, where glTF allows {}",
+            if normalized { "normalized " } else { "" },
+            component_name(data_type),
+            dimensions_name(accessor.dimensions()),
+            layout.allowed
+        ));
+    }
+    if let Some(view) = accessor.view() {
+        check_span(
+            label,
+            &view,
+            accessor.offset(),
+            accessor.count(),
+            accessor.size(),
+        )?;
+    }
+    if let Some(sparse) = accessor.sparse() {
+        let (indices, values) = (sparse.indices(), sparse.values());
+        let size = indices.index_type().size();
+        let at = format!("{label}.sparse.indices");
+        check_span(&at, &indices.view(), indices.offset(), sparse.count(), size)?;
+        let at = format!("{label}.sparse.values");
+        check_span(
+            &at,
+            &values.view(),
+            values.offset(),
+            sparse.count(),
+            accessor.size(),
+        )?;
+        check_sparse_indices(&sparse, label, accessor.count(), buffers)?;
+    }
+    Ok(())
+}
+
+/// Checks that a sparse accessor's indices rise and stay below its `count`, as glTF requires:
+/// the gltf crate's reader puts a value in only where the next index is the element it is at,
+/// so one out of order or past the end would leave its value out without a word. Its span
+/// has been checked (`check_span`).
+fn check_sparse_indices(
+    sparse: &gltf::accessor::sparse::Sparse,
+    label: &str,
+    count: usize,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), String> {
+    let indices = sparse.indices();
+    let view = indices.view();
+    let size = indices.index_type().size();
+    let stride = view.stride().unwrap_or(size);
+    let data = buffers
+        .get(view.buffer().index())
+        .map_or(&[][..], |d| &d.0[..]);
+    let mut previous = None;
+    for i in 0..sparse.count() {
+        let at = view.offset() + indices.offset() + i * stride;
+        let bytes = data.get(at..at + size).unwrap_or_default();
+        let index = bytes
+            .iter()
+            .rev()
+            .fold(0u64, |v, &b| (v << 8) | u64::from(b));
+        if bytes.len() < size || index >= count as u64 || previous.is_some_and(|p| index <= p) {
+            return Err(format!(
+                "{label}.sparse.indices: element {i} is {index}, where glTF requires indices \
+                 that rise, each below the accessor's count {count}"
+            ));
+        }
+        previous = Some(index);
+    }
+    Ok(())
+}
+
+/// Checks that `count` elements of `size` bytes, from byte `offset` of `view` and its stride
+/// apart, lie inside it, and it inside its buffer (whose data the gltf crate has checked to be
+/// as long as it says).
+fn check_span(
+    label: &str,
+    view: &gltf::buffer::View,
+    offset: usize,
+    count: usize,
+    size: usize,
+) -> Result<(), String> {
+    let v = view.index();
+    let stride = view.stride().unwrap_or(size);
+    if count == 0 {
+        return Err(format!(
+            "{label}: has no elements (glTF requires a count of 1 or more)"
+        ));
+    }
+    if stride < size {
+        return Err(format!(
+            "{label}: bufferViews[{v}].byteStride {stride} is less than its {size}-byte elements"
+        ));
+    }
+    let end = (count as u128 - 1) * stride as u128 + size as u128 + offset as u128;
+    if end > view.length() as u128 {
+        return Err(format!(
+            "{label}: its {count} elements of {size} bytes from byte {offset}, {stride} apart, \
+             end at byte {end}, past the {} bytes of bufferViews[{v}]",
+            view.length()
+        ));
+    }
+    let buffer = view.buffer();
+    let view_end = view.offset() as u128 + view.length() as u128;
+    if view_end > buffer.length() as u128 {
+        return Err(format!(
+            "{label}: bufferViews[{v}] (bytes {} to {view_end}) lies past the end of the {} \
+             bytes of buffers[{}]",
+            view.offset(),
+            buffer.length(),
+            buffer.index()
+        ));
+    }
+    Ok(())
+}
+
+/// How messages name the accessor `primitive`'s attribute `semantic` names, once it is checked
+/// for `layout` and for as many elements as the primitive has `vertices` (when known); `None`
+/// when the primitive has no such attribute.
+fn attribute(
+    primitive: &gltf::Primitive,
+    at: &str,
+    semantic: gltf::Semantic,
+    layout: &Layout,
+    vertices: Option<usize>,
+    buffers: &[gltf::buffer::Data],
+) -> Result<Option<String>, String> {
+    let Some(accessor) = primitive.get(&semantic) else {
+        return Ok(None);
+    };
+    let label = format!(
+        "{at}.attributes.{} -> accessors[{}]",
+        semantic.to_string(),
+        accessor.index()
+    );
+    check_accessor(&accessor, &label, layout, buffers)?;
+    if let Some(n) = vertices.filter(|&n| n != accessor.count()) {
+        return Err(format!(
+            "{label}: has {} elements where POSITION has {n}",
+            accessor.count()
+        ));
+    }
+    Ok(Some(label))
+}
+
+/// What a reader of a checked accessor gave, or an error naming it: the gltf crate gives
+/// `None` for data it cannot reach, which the checks before rule out.
+fn read<T>(data: Option<T>, label: &str) -> Result<T, String> {
+    data.ok_or_else(|| format!("{label}: its data cannot be read"))
+}
+
+/// The index of the first element of `values` with a component that is not finite.
+fn first_non_finite<const N: usize>(values: &[[f32; N]]) -> Option<usize> {
+    values.iter().position(|v| !v.iter().all(|c| c.is_finite()))
+}
+
 /// Appends a triangle primitive's vertices (placed by `world`) and triangles; returns whether
 /// it had normals (a primitive without them gets zero normals, which the mesh code replaces
-/// by the face's).
+/// by the face's). `at` is how messages name it, `meshes[0].primitives[1]`.
 fn add_primitive(
     mesh: &mut TriangleMesh,
     normals: &mut Vec<Vec3>,
     primitive: &gltf::Primitive,
+    at: &str,
     buffers: &[gltf::buffer::Data],
     world: DMat4,
 ) -> Result<bool, String> {
     if primitive.mode() != gltf::mesh::Mode::Triangles {
         return Err(format!(
-            "a primitive of mode {:?}: only triangle lists are read",
+            "{at}.mode: {:?}: only triangle lists are read",
             primitive.mode()
         ));
     }
     let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let positions: Vec<[f32; 3]> = reader
-        .read_positions()
-        .ok_or("a primitive without POSITION")?
-        .collect();
+    let label = attribute(
+        primitive,
+        at,
+        gltf::Semantic::Positions,
+        &FLOAT_VEC3,
+        None,
+        buffers,
+    )?
+    .ok_or_else(|| format!("{at}.attributes: has no POSITION"))?;
+    let positions: Vec<[f32; 3]> = read(reader.read_positions(), &label)?.collect();
+    if let Some(i) = first_non_finite(&positions) {
+        return Err(format!(
+            "{label}: element {i} is not finite: {:?}",
+            positions[i]
+        ));
+    }
     let first = mesh.positions.len() as u32;
     mesh.positions.extend(positions.iter().map(|&p| {
         world
             .transform_point3(DVec3::from(p.map(f64::from)))
             .as_vec3()
     }));
-    let normal_matrix = world.inverse().transpose();
-    let read_normals = reader.read_normals();
-    let had_normals = read_normals.is_some();
-    normals.resize(first as usize, Vec3::ZERO);
-    match read_normals {
-        Some(n) => normals.extend(n.map(|n| {
-            let placed = normal_matrix.transform_vector3(DVec3::from(n.map(f64::from)));
-            placed.normalize_or_zero().as_vec3()
-        })),
-        None => normals.extend(std::iter::repeat_n(Vec3::ZERO, positions.len())),
-    }
-    let indices: Vec<u32> = match reader.read_indices() {
-        Some(indices) => indices.into_u32().collect(),
-        None => (0..positions.len() as u32).collect(),
-    };
-    if !indices.len().is_multiple_of(3) {
-        return Err(format!(
-            "a primitive of {} indices, not triangles",
-            indices.len()
-        ));
-    }
+    let had_normals = add_normals(normals, primitive, at, buffers, positions.len(), world)?;
+    let indices = read_indices(primitive, at, buffers, positions.len())?;
     let material = primitive
         .material()
         .index()
@@ -280,6 +690,78 @@ fn add_primitive(
         mesh.face_materials.push(material);
     }
     Ok(had_normals)
+}
+
+/// Appends the `vertices` normals of a primitive (turned by `world`), zero when it has none;
+/// returns whether it had them.
+fn add_normals(
+    normals: &mut Vec<Vec3>,
+    primitive: &gltf::Primitive,
+    at: &str,
+    buffers: &[gltf::buffer::Data],
+    vertices: usize,
+    world: DMat4,
+) -> Result<bool, String> {
+    let first = normals.len();
+    let semantic = gltf::Semantic::Normals;
+    let Some(label) = attribute(
+        primitive,
+        at,
+        semantic,
+        &FLOAT_VEC3,
+        Some(vertices),
+        buffers,
+    )?
+    else {
+        normals.resize(first + vertices, Vec3::ZERO);
+        return Ok(false);
+    };
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let read: Vec<[f32; 3]> = read(reader.read_normals(), &label)?.collect();
+    if let Some(i) = first_non_finite(&read) {
+        return Err(format!("{label}: element {i} is not finite: {:?}", read[i]));
+    }
+    let normal_matrix = world.inverse().transpose();
+    normals.extend(read.iter().map(|&n| {
+        let placed = normal_matrix.transform_vector3(DVec3::from(n.map(f64::from)));
+        placed.normalize_or_zero().as_vec3()
+    }));
+    Ok(true)
+}
+
+/// A primitive's vertex indices, each below `vertices`, in threes; `0..vertices` when it has
+/// none.
+fn read_indices(
+    primitive: &gltf::Primitive,
+    at: &str,
+    buffers: &[gltf::buffer::Data],
+    vertices: usize,
+) -> Result<Vec<u32>, String> {
+    let Some(accessor) = primitive.indices() else {
+        if !vertices.is_multiple_of(3) {
+            return Err(format!(
+                "{at}: {vertices} vertices without indices, not a list of triangles"
+            ));
+        }
+        return Ok((0..vertices as u32).collect());
+    };
+    let label = format!("{at}.indices -> accessors[{}]", accessor.index());
+    check_accessor(&accessor, &label, &INDICES, buffers)?;
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let indices: Vec<u32> = read(reader.read_indices(), &label)?.into_u32().collect();
+    if !indices.len().is_multiple_of(3) {
+        return Err(format!(
+            "{label}: {} indices, not a list of triangles",
+            indices.len()
+        ));
+    }
+    if let Some(i) = indices.iter().position(|&v| v as usize >= vertices) {
+        return Err(format!(
+            "{label}: element {i} is {}, past the {vertices} vertices of POSITION",
+            indices[i]
+        ));
+    }
+    Ok(indices)
 }
 
 /// How a material reads its base colour texture: from which TEXCOORD set, through which
@@ -411,36 +893,45 @@ fn textured_material(
     (mapped, texture_use)
 }
 
-/// Appends a primitive's texture coordinates (after those of the vertices before it), from
-/// the set its material's base colour texture reads, through its KHR_texture_transform; zero
-/// for a primitive whose material has no texture.
+/// Appends a primitive's texture coordinates, up to `vertices` (those of the vertices before
+/// it and its own), from the set its material's base colour texture reads, through its
+/// KHR_texture_transform; zero for a primitive whose material has no texture.
 fn add_texcoords(
     texcoords: &mut Vec<Vec2>,
     primitive: &gltf::Primitive,
+    at: &str,
+    vertices: usize,
     buffers: &[gltf::buffer::Data],
     texture_uses: &[Option<TextureUse>],
 ) -> Result<(), String> {
-    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let count = reader.read_positions().map_or(0, |p| p.len());
-    let first = texcoords.len();
-    let used = primitive
-        .material()
-        .index()
-        .and_then(|m| texture_uses.get(m).copied().flatten());
+    let own = vertices - texcoords.len();
+    let material = primitive.material().index();
+    let used = material.and_then(|m| texture_uses.get(m).copied().flatten());
     if let Some(texture_use) = used {
-        let read = reader.read_tex_coords(texture_use.set).ok_or_else(|| {
+        let set = texture_use.set;
+        let semantic = gltf::Semantic::TexCoords(set);
+        let missing = || {
             format!(
-                "a primitive whose material's baseColorTexture reads TEXCOORD_{}, which it \
-                 lacks",
-                texture_use.set
+                "{at}.attributes: has no TEXCOORD_{set}, which the baseColorTexture of \
+                 materials[{}] reads",
+                material.unwrap_or_default()
             )
-        })?;
+        };
+        let label = attribute(primitive, at, semantic, &TEXCOORD, Some(own), buffers)?
+            .ok_or_else(missing)?;
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let read: Vec<[f32; 2]> = read(reader.read_tex_coords(set), &label)?
+            .into_f32()
+            .collect();
+        if let Some(i) = first_non_finite(&read) {
+            return Err(format!("{label}: element {i} is not finite: {:?}", read[i]));
+        }
         texcoords.extend(
-            read.into_f32()
-                .map(|uv| transformed(Vec2::from(uv), texture_use)),
+            read.iter()
+                .map(|&uv| transformed(Vec2::from(uv), texture_use)),
         );
     }
-    texcoords.resize(first + count, Vec2::ZERO);
+    texcoords.resize(vertices, Vec2::ZERO);
     Ok(())
 }
 
@@ -473,7 +964,8 @@ pub fn map_material(material: gltf::Material) -> MeshMaterial {
     )
 }
 
-/// The mapping of [`map_material`], from the factors.
+/// The mapping of [`map_material`], from factors within glTF's bounds (base colour, metallic
+/// and roughness in [0, 1], emission non-negative), which `read_gltf` checks.
 pub fn map_factors(
     name: &str,
     base: Vec3,
@@ -481,10 +973,7 @@ pub fn map_factors(
     roughness: f32,
     emission: Vec3,
 ) -> MeshMaterial {
-    let base = base.clamp(Vec3::ZERO, Vec3::ONE);
-    let (metallic, roughness) = (metallic.clamp(0.0, 1.0), roughness.clamp(0.0, 1.0));
     let name = name.to_string();
-    let emission = emission.max(Vec3::ZERO);
     if metallic >= 1.0 && roughness <= 0.0 {
         return MeshMaterial {
             name,
@@ -717,10 +1206,13 @@ impl ImageSize {
 /// keeping the camera's vertical extent, as glTF viewers do with a viewport of another shape:
 /// `yfov` stays the vertical field of view, `2 ymag` the window's height.
 pub fn scene_text(path: &Path, camera: Option<&str>, size: ImageSize) -> Result<String, String> {
-    let scene = read_gltf(path)?;
+    let mut scene = read_gltf(path)?;
     if scene.mesh.triangles.is_empty() {
         return Err("the file's default scene has no triangles".into());
     }
+    // The scene text names the file as a mesh shape, whose loading checks the mesh again; a
+    // fault found there would be placed at the `file` line of text the user never sees.
+    scene.mesh = check_mesh(std::mem::take(&mut scene.mesh))?;
     let (lo, hi) = scene.mesh.positions.iter().fold(
         (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
         |(lo, hi), p| (lo.min(p.as_dvec3()), hi.max(p.as_dvec3())),
@@ -782,8 +1274,9 @@ pub fn scene_text(path: &Path, camera: Option<&str>, size: ImageSize) -> Result<
                 v(*position),
                 v(*direction),
                 rgb(*intensity),
-                outer_deg.clamp(1e-3, 90.0),
-                inner_deg.clamp(0.0, outer_deg.clamp(1e-3, 90.0) * 0.999),
+                // f32's pi/2, which `check_lights` lets through, is 90.0000025 degrees.
+                outer_deg.min(90.0),
+                inner_deg,
             ),
             GltfLight::Directional {
                 direction,

@@ -300,7 +300,18 @@ impl Scene {
                     message,
                 })?;
             let overrides: Vec<String> = overrides.into_iter().cloned().collect();
-            return Scene::from_str(path, &text, &overrides);
+            return Scene::from_str(path, &text, &overrides).map_err(|e| match e {
+                // The lines of the scene text made from the file mean nothing to its user (a
+                // line of 0 is a `--set`'s, which says so itself).
+                Error::Scene { location, message } if location.line != 0 => Error::File {
+                    path: path.to_path_buf(),
+                    message: format!(
+                        "field `{}` (of the scene chambre reads it as): {message}",
+                        location.field
+                    ),
+                },
+                other => other,
+            });
         }
         let parsed = load::parse_scene_file(path, overrides)?;
         validate::validate(parsed)
