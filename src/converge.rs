@@ -111,28 +111,31 @@ fn render_once(
 /// The reference: read from `path` (a linear EXR of the scene's size), or rendered.
 fn reference(args: &ConvergeSettings, width: u32, height: u32, seed: u32) -> Result<Image> {
     if let Some(path) = &args.reference {
-        let read = image::open(path)
-            .map_err(|e| Error::File {
-                path: path.clone(),
-                message: e.to_string(),
-            })?
-            .into_rgb32f();
-        if (read.width(), read.height()) != (width, height) {
-            return Err(Error::File {
-                path: path.clone(),
-                message: format!(
-                    "the reference is {}x{}, the scene {width}x{height}",
-                    read.width(),
-                    read.height()
-                ),
-            });
+        let fail = |message: String| Error::File {
+            path: path.clone(),
+            message,
+        };
+        let read = read_linear(path).map_err(fail)?;
+        if (read.width, read.height) != (width, height) {
+            return Err(fail(format!(
+                "the reference is {}x{}, the scene {width}x{height}",
+                read.width, read.height
+            )));
         }
-        let pixels = read.pixels().map(|p| glam::Vec3::from(p.0)).collect();
-        return Ok(Image {
-            width,
-            height,
-            pixels,
-        });
+        // A NaN would make every error NaN; a negative radiance is no reference either.
+        if let Some(i) = read
+            .pixels
+            .iter()
+            .position(|p| !(p.is_finite() && p.min_element() >= 0.0))
+        {
+            return Err(fail(format!(
+                "pixel ({}, {}) is {} (a reference's radiance is finite and non-negative)",
+                i as u32 % width,
+                i as u32 / width,
+                read.pixels[i]
+            )));
+        }
+        return Ok(read);
     }
     let mut overrides = args.set.clone();
     overrides.extend([
@@ -143,6 +146,33 @@ fn reference(args: &ConvergeSettings, width: u32, height: u32, seed: u32) -> Res
         format!("render.seed={}", seed.wrapping_add(1_000_003)),
     ]);
     Ok(render_once(&args.scene, &overrides, None)?.image)
+}
+
+/// A linear image: an EXR or a PFM (chambre's own outputs); an 8-bit image is refused, its
+/// values being display codes, not radiance.
+fn read_linear(path: &std::path::Path) -> std::result::Result<Image, String> {
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match extension.as_deref() {
+        Some("pfm") => {
+            let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+            crate::output::read_pfm(&bytes)
+        }
+        Some("exr") => {
+            let read = image::open(path).map_err(|e| e.to_string())?.into_rgb32f();
+            Ok(Image {
+                width: read.width(),
+                height: read.height(),
+                pixels: read.pixels().map(|p| glam::Vec3::from(p.0)).collect(),
+            })
+        }
+        _ => Err(
+            "a reference is a linear image: an EXR or a PFM (a PNG's values are display \
+                  codes, not radiance)"
+                .into(),
+        ),
+    }
 }
 
 /// The whole study: every run, in the order rendered.

@@ -631,6 +631,66 @@ fn pfm_bytes(image: &Image) -> Vec<u8> {
     bytes
 }
 
+/// The image of a colour Portable Float Map (`pfm_bytes`'s format, either byte order): an
+/// error saying what is wrong otherwise.
+pub fn read_pfm(bytes: &[u8]) -> std::result::Result<Image, String> {
+    // The header is three whitespace-separated fields after "PF", then one whitespace byte.
+    let mut fields = Vec::new();
+    let mut at = 0;
+    while fields.len() < 4 {
+        while at < bytes.len() && bytes[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        let start = at;
+        while at < bytes.len() && !bytes[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        if start == at {
+            return Err("a PFM header is `PF`, the width, the height and the scale".into());
+        }
+        fields.push(String::from_utf8_lossy(&bytes[start..at]).into_owned());
+    }
+    if fields[0] != "PF" {
+        return Err(format!("`{}`: not a colour PFM (`PF`)", fields[0]));
+    }
+    let size = |field: &str| field.parse::<u32>().ok().filter(|&v| v > 0);
+    let (Some(width), Some(height)) = (size(&fields[1]), size(&fields[2])) else {
+        return Err(format!("a PFM of {} x {} pixels", fields[1], fields[2]));
+    };
+    let scale: f32 = fields[3]
+        .parse()
+        .map_err(|_| format!("`{}`: not a PFM scale", fields[3]))?;
+    let data = &bytes[(at + 1).min(bytes.len())..];
+    let expected = width as usize * height as usize * 12;
+    if data.len() != expected {
+        return Err(format!(
+            "{width} x {height} pixels need {expected} bytes of floats, the file has {}",
+            data.len()
+        ));
+    }
+    let float = |b: &[u8]| {
+        let b: [u8; 4] = b.try_into().expect("chunks of four");
+        match scale < 0.0 {
+            true => f32::from_le_bytes(b),
+            false => f32::from_be_bytes(b),
+        }
+    };
+    let rows: Vec<Vec<glam::Vec3>> = data
+        .chunks_exact(12 * width as usize)
+        .map(|row| {
+            row.chunks_exact(12)
+                .map(|p| glam::Vec3::new(float(&p[0..4]), float(&p[4..8]), float(&p[8..12])))
+                .collect()
+        })
+        .collect();
+    Ok(Image {
+        width,
+        height,
+        // The file's rows run bottom to top.
+        pixels: rows.into_iter().rev().flatten().collect(),
+    })
+}
+
 /// sRGB bytes of every pixel after exposure and tone mapping, a row per task: on a 16384^2
 /// image the conversion, not the compression, is what keeps an interrupted render waiting.
 fn png_pixels(image: &Image, display: Display) -> Vec<u8> {
@@ -773,6 +833,30 @@ mod tests {
                 out.min_element() >= 0.0 && out.max_element() <= 1.0,
                 "{out}"
             );
+        }
+    }
+
+    #[test]
+    fn a_pfm_reads_back_as_written_and_a_bad_one_says_why() {
+        let image = Image {
+            width: 3,
+            height: 2,
+            pixels: (0..6)
+                .map(|i| glam::Vec3::splat(i as f32 * 0.5 - 1.0))
+                .collect(),
+        };
+        let read = read_pfm(&pfm_bytes(&image)).unwrap();
+        assert_eq!((read.width, read.height), (3, 2));
+        assert_eq!(read.pixels, image.pixels);
+        let bytes = pfm_bytes(&image);
+        for (bad, why) in [
+            (&bytes[..bytes.len() - 1], "bytes of floats"),
+            (&b"Pf\n1 1\n-1.0\n"[..], "not a colour PFM"),
+            (&b"PF\n0 1\n-1.0\n"[..], "0 x 1 pixels"),
+            (&b"PF\n1"[..], "a PFM header"),
+        ] {
+            let e = read_pfm(bad).unwrap_err();
+            assert!(e.contains(why), "{e}");
         }
     }
 

@@ -203,7 +203,7 @@ pub fn poisson_disk_set(n: u32, key: u32) -> PoissonSet {
         }
         radius *= 0.95;
     };
-    eliminate_closest(&mut points, n);
+    eliminate_closest(&mut points, n, radius);
     // Shuffle (Fisher-Yates) so any prefix of the samples is spread over the domain.
     for i in (1..points.len()).rev() {
         let j = (rng.next_u32() as usize) % (i + 1);
@@ -262,26 +262,102 @@ fn bridson_torus(radius: f64, rng: &mut Rng) -> Vec<[f64; 2]> {
     points
 }
 
-/// Removes points until `n` remain, always one of the closest remaining pair.
-fn eliminate_closest(points: &mut Vec<[f64; 2]>, n: usize) {
-    let nearest = |points: &[[f64; 2]], i: usize| {
-        (0..points.len())
-            .filter(|&j| j != i)
-            .map(|j| toroidal_distance(points[i], points[j]))
-            .fold(f64::INFINITY, f64::min)
-    };
-    let mut distance: Vec<f64> = (0..points.len()).map(|i| nearest(points, i)).collect();
+/// Removes points until `n` remain, always one of the closest remaining pair. Each point's
+/// nearest distance is found through a grid of cells about `spacing` wide (the set's radius),
+/// searched ring by ring until no unsearched cell can hold a nearer point: the same distances
+/// as comparing every pair, in time about linear in the points instead of quadratic (4096
+/// samples took minutes).
+fn eliminate_closest(points: &mut Vec<[f64; 2]>, n: usize, spacing: f64) {
+    let mut grid = PointGrid::new(points, spacing);
+    let mut distance: Vec<f64> = (0..points.len()).map(|i| grid.nearest(points, i)).collect();
     while points.len() > n {
         let worst = (0..points.len())
             .min_by(|&a, &b| distance[a].total_cmp(&distance[b]))
             .unwrap();
+        grid.remove(points, worst);
         let removed = points.swap_remove(worst);
         distance.swap_remove(worst);
         for i in 0..points.len() {
             if distance[i] <= toroidal_distance(points[i], removed) {
-                distance[i] = nearest(points, i);
+                distance[i] = grid.nearest(points, i);
             }
         }
+    }
+}
+
+/// The points of a set on the unit torus, by the cell of a `cells x cells` grid they lie in.
+struct PointGrid {
+    cells: usize,
+    members: Vec<Vec<usize>>,
+}
+
+impl PointGrid {
+    fn new(points: &[[f64; 2]], spacing: f64) -> PointGrid {
+        let cells = ((1.0 / spacing).floor() as usize).clamp(1, 4096);
+        let mut grid = PointGrid {
+            cells,
+            members: vec![Vec::new(); cells * cells],
+        };
+        for (i, &p) in points.iter().enumerate() {
+            let cell = grid.cell(p);
+            grid.members[cell].push(i);
+        }
+        grid
+    }
+
+    fn coordinates(&self, p: [f64; 2]) -> (usize, usize) {
+        let c = |x: f64| ((x * self.cells as f64) as usize).min(self.cells - 1);
+        (c(p[0]), c(p[1]))
+    }
+
+    fn cell(&self, p: [f64; 2]) -> usize {
+        let (x, y) = self.coordinates(p);
+        y * self.cells + x
+    }
+
+    /// Point `i` leaves the set by `swap_remove`: the last point takes its index.
+    fn remove(&mut self, points: &[[f64; 2]], i: usize) {
+        let cell = self.cell(points[i]);
+        self.members[cell].retain(|&m| m != i);
+        let last = points.len() - 1;
+        if last != i {
+            let cell = self.cell(points[last]);
+            for m in &mut self.members[cell] {
+                if *m == last {
+                    *m = i;
+                }
+            }
+        }
+    }
+
+    /// The toroidal distance from point `i` to its nearest other point (infinite alone).
+    fn nearest(&self, points: &[[f64; 2]], i: usize) -> f64 {
+        let (cx, cy) = self.coordinates(points[i]);
+        let cells = self.cells as isize;
+        let width = 1.0 / self.cells as f64;
+        let mut best = f64::INFINITY;
+        // Ring k holds the cells k steps away (Chebyshev) from the point's: any point beyond
+        // it is more than k cells' widths away.
+        for k in 0..=(self.cells / 2) as isize {
+            for dy in -k..=k {
+                for dx in -k..=k {
+                    if dx.abs().max(dy.abs()) != k {
+                        continue;
+                    }
+                    let x = (cx as isize + dx).rem_euclid(cells) as usize;
+                    let y = (cy as isize + dy).rem_euclid(cells) as usize;
+                    for &j in &self.members[y * self.cells + x] {
+                        if j != i {
+                            best = best.min(toroidal_distance(points[i], points[j]));
+                        }
+                    }
+                }
+            }
+            if best <= k as f64 * width {
+                break;
+            }
+        }
+        best
     }
 }
 
@@ -783,5 +859,63 @@ mod sobol_matrix_tests {
             cells[(u * 4.0) as usize + 4 * (v * 4.0) as usize] += 1;
         }
         assert!(cells.iter().all(|&c| c == 1), "{cells:?}");
+    }
+}
+
+#[cfg(test)]
+mod elimination_tests {
+    use super::*;
+
+    /// The elimination as it was written first: every pair compared.
+    fn eliminate_by_every_pair(points: &mut Vec<[f64; 2]>, n: usize) {
+        let nearest = |points: &[[f64; 2]], i: usize| {
+            (0..points.len())
+                .filter(|&j| j != i)
+                .map(|j| toroidal_distance(points[i], points[j]))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut distance: Vec<f64> = (0..points.len()).map(|i| nearest(points, i)).collect();
+        while points.len() > n {
+            let worst = (0..points.len())
+                .min_by(|&a, &b| distance[a].total_cmp(&distance[b]))
+                .unwrap();
+            let removed = points.swap_remove(worst);
+            distance.swap_remove(worst);
+            for i in 0..points.len() {
+                if distance[i] <= toroidal_distance(points[i], removed) {
+                    distance[i] = nearest(points, i);
+                }
+            }
+        }
+    }
+
+    /// The grid's elimination removes the very points comparing every pair removes, in the
+    /// same order, on Bridson sets and on clumped random points (cells of many points, and
+    /// points on cell edges and across the torus's seam), from one point to a few hundred.
+    #[test]
+    fn the_grid_eliminates_as_every_pair_does() {
+        let mut rng = Rng::new(5, 0, 0);
+        for round in 0..40u32 {
+            let radius = 0.02 + 0.2 * rng.next_f32() as f64;
+            let mut points = match round % 2 {
+                0 => bridson_torus(radius, &mut rng),
+                _ => (0..1 + round * 7)
+                    .map(|k| {
+                        let [u, v] = rng.next_2d().map(f64::from);
+                        // Clumps of points, some at exact cell edges and at the seam.
+                        match k % 3 {
+                            0 => [(0.999 + 0.002 * u).rem_euclid(1.0), 0.5 * v],
+                            1 => [(u * 4.0).floor() / 4.0, v],
+                            _ => [u, v],
+                        }
+                    })
+                    .collect(),
+            };
+            let n = points.len() * (1 + round as usize % 3) / 4;
+            let mut expected = points.clone();
+            eliminate_by_every_pair(&mut expected, n);
+            eliminate_closest(&mut points, n, radius);
+            assert_eq!(points, expected, "round {round}");
+        }
     }
 }

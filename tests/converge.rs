@@ -218,3 +218,76 @@ fn the_plot_is_written_beside_the_csv_unless_no_plot_is_given() {
     assert!(files.is_empty(), "{files:?}");
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// A reference given by `--reference` is read as radiance: chambre's own PFM as its EXR; a
+/// PNG (display codes) is refused, and so is a reference with a NaN or negative pixel, named.
+#[test]
+fn a_given_reference_is_linear_finite_and_non_negative() {
+    let dir = std::env::temp_dir().join(format!("chambre-reference-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let chambre = || {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_chambre"));
+        command.current_dir(env!("CARGO_MANIFEST_DIR"));
+        command
+    };
+    let size = ["-D", "render.width=8", "-D", "render.height=8"];
+    let converge = |reference: &std::path::Path| {
+        chambre()
+            .args(["converge", "scenes/area_light.toml"])
+            .args(size)
+            .args([
+                "--max-spp",
+                "1",
+                "--samplers",
+                "random",
+                "--backends",
+                "cpu",
+            ])
+            .arg("--no-plot")
+            .arg("--csv")
+            .arg(dir.join("c.csv"))
+            .arg("--reference")
+            .arg(reference)
+            .output()
+            .unwrap()
+    };
+    for name in ["ref.pfm", "ref.png"] {
+        let output = chambre()
+            .args([
+                "render",
+                "scenes/area_light.toml",
+                "--backend",
+                "cpu",
+                "--spp",
+                "4",
+            ])
+            .args(size)
+            .arg("-o")
+            .arg(dir.join(name))
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+    }
+    let output = converge(&dir.join("ref.pfm"));
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let output = converge(&dir.join("ref.png"));
+    assert_eq!(output.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("a reference is a linear image"));
+    // One pixel made NaN (the PFM's floats, bottom row first, follow a 12-byte header here).
+    let mut bytes = std::fs::read(dir.join("ref.pfm")).unwrap();
+    let header = b"PF\n8 8\n-1.0\n".len();
+    bytes[header..header + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    std::fs::write(dir.join("nan.pfm"), bytes).unwrap();
+    let output = converge(&dir.join("nan.pfm"));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("pixel (0, 7) is"), "{stderr}");
+}
