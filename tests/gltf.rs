@@ -938,3 +938,18 @@ fn a_fault_found_by_the_scenes_validation_names_no_line_of_the_made_scene() {
     let placed = error.split("quad.gltf:").nth(1).unwrap();
     assert!(placed.starts_with(' '), "a line of the made scene: {error}");
 }
+
+/// A GLB cut short says so, with the length its header declares.
+#[test]
+fn a_glb_cut_short_says_so() {
+    let dir = scratch("short_glb");
+    let whole = std::fs::read(write_glb(&dir)).unwrap();
+    let path = dir.join("short.glb");
+    std::fs::write(&path, &whole[..whole.len() - 9]).unwrap();
+    let error = Scene::load(&path, &[]).unwrap_err().to_string();
+    let expected = format!("its header declares {} bytes", whole.len());
+    assert!(
+        error.contains("short.glb") && error.contains(&expected),
+        "{error}"
+    );
+}

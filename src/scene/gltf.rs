@@ -12,7 +12,7 @@ use glam::{DMat4, DVec3, Vec2, Vec3};
 
 use gltf::accessor::{DataType, Dimensions};
 
-use super::mesh::{MeshMaterial, NO_MATERIAL, TriangleMesh, check_mesh};
+use super::mesh::{MAX_MESH_BYTES, MeshMaterial, NO_MATERIAL, TriangleMesh, check_mesh};
 use super::texture::{Texture, Wrap};
 
 /// Luminous efficacy (lm/W) at 555 nm: candela and lux to W/sr and W/m².
@@ -245,11 +245,30 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
 /// The file parsed and checked by the gltf crate. An empty file is said to be one: the crate
 /// would report that it could not read the four bytes of a GLB's magic.
 fn open_gltf(path: &Path) -> Result<gltf::Gltf, String> {
+    // The file is read whole, as a mesh or as a scene: bound it first.
+    let size = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    if size > MAX_MESH_BYTES {
+        return Err(format!(
+            "{size} bytes, more than the {MAX_MESH_BYTES} a mesh may have"
+        ));
+    }
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read the file: {e}"))?;
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Err(
             "the file is empty: a glTF file is JSON with an `asset` object, or a GLB".into(),
         );
+    }
+    // A GLB's header (magic, version, length) says how long the file is.
+    if let Some(declared) = bytes
+        .strip_prefix(b"glTF")
+        .and_then(|rest| rest.get(4..8))
+        .map(|length| u32::from_le_bytes(length.try_into().expect("four bytes")) as usize)
+        .filter(|&declared| declared > bytes.len())
+    {
+        return Err(format!(
+            "a GLB cut short: its header declares {declared} bytes, the file has {}",
+            bytes.len()
+        ));
     }
     gltf::Gltf::from_slice(&bytes).map_err(|e| format!("not a readable glTF file: {e}"))
 }

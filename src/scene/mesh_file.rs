@@ -18,13 +18,7 @@ fn read_mesh(path: &Path) -> Result<TriangleMesh, String> {
     let file = std::fs::File::open(path).map_err(|e| format!("cannot open mesh file: {e}"))?;
     let name = path.to_string_lossy().to_ascii_lowercase();
     if name.ends_with(".gltf") || name.ends_with(".glb") {
-        // The gltf crate reads the file (and its buffers) whole: bound it first.
-        let size = file.metadata().map(|m| m.len()).unwrap_or(0);
-        if size > MAX_MESH_BYTES {
-            return Err(format!(
-                "{size} bytes, more than the {MAX_MESH_BYTES} a mesh may have"
-            ));
-        }
+        // `read_gltf` bounds the file's size, as a mesh or as a scene.
         let scene = read_gltf(path)?;
         let mut mesh = scene.mesh;
         mesh.notes = scene.notes;
