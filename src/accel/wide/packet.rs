@@ -4,10 +4,11 @@
 //! of their origins, the range of their reciprocal directions per axis), instead of once per
 //! ray. Where the interval hits a node's packed leaves, each ray tests their octets (a few more
 //! leaves than its own box test would have let through: the octet test rejects a missed
-//! triangle about as fast as the box test would have), with its own nearest hit so far. An
-//! any-hit packet on a CPU with AVX-512 tests the triangles of the leaves reached instead, one
-//! at a time against every ray still looking (`RayLanes`): the rays' bits are the same, and a
-//! triangle takes one test where sixteen rays took sixteen.
+//! triangle about as fast as the box test would have), with its own nearest hit so far. On a
+//! CPU with AVX-512 both queries test the triangles of the leaves reached instead, one at a
+//! time against every ray of the packet (`RayLanes`; a closest-hit ray with its own nearest
+//! hit as its limit, by the octet test's rule): each ray's result is the same, and a triangle
+//! takes one test where sixteen rays took sixteen.
 //!
 //! Each ray's result is the one-ray traversal's: the interval test is conservative in f32 (the
 //! slab test's subtractions and products round monotonically, so the products at the
