@@ -32,7 +32,12 @@ fn civil_date(unix_seconds: u64) -> String {
 
 /// FNV-1a, 64 bits: a stable fingerprint of a scene file (not a cryptographic hash).
 pub fn fnv1a64(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |hash, &b| {
+    fnv1a64_of(bytes.iter().copied())
+}
+
+/// [`fnv1a64`] of bytes as they come, for data too large to gather into one slice first.
+pub fn fnv1a64_of(bytes: impl Iterator<Item = u8>) -> u64 {
+    bytes.fold(0xcbf2_9ce4_8422_2325, |hash, b| {
         (hash ^ b as u64).wrapping_mul(0x0100_0000_01b3)
     })
 }
