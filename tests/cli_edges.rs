@@ -876,6 +876,21 @@ fn one_image_side_keeps_the_film_aspect_and_threads_are_chosen() {
         .unwrap();
     assert!(output.status.success(), "{}", stderr_of(&output));
     assert_eq!(image::image_dimensions(&target).unwrap(), (30, 23));
+    // A film `--set` to another aspect than the scene's own image size: the one side given
+    // takes the film's aspect (the scene's size, which would not match it, gives way).
+    let (output, target) = render(&["--width", "60", "--set", "camera.film=[20, 40]"], "f.png");
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    assert_eq!(image::image_dimensions(&target).unwrap(), (60, 120));
+    // An orthographic camera's window, likewise.
+    let target = dir.join("window.png");
+    let output = chambre()
+        .args(["render", "scenes/elevation.toml", "--backend", "cpu", "--spp", "1"])
+        .args(["--height", "20", "--set", "camera.window=[40.0, 10.0]", "-o"])
+        .arg(&target)
+        .output()
+        .unwrap();
+    assert!(output.status.success(), "{}", stderr_of(&output));
+    assert_eq!(image::image_dimensions(&target).unwrap(), (80, 20));
     // `--quick` quarters the size `--set` gives, and says so truly.
     let target = dir.join("quick.png");
     let output = render_spheres_on_cpu(

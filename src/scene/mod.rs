@@ -317,6 +317,30 @@ impl Scene {
         validate::validate(parsed)
     }
 
+    /// The width and height of the frame the image's aspect must match, as the scene file with
+    /// `overrides` gives them before the rest is validated: a perspective camera's film (mm) or
+    /// an orthographic camera's window. One side of the image given on the command line takes
+    /// this aspect, whatever image size the scene itself names (the full load would refuse
+    /// a film set to another aspect than that size's). A glTF file's frame is its camera's,
+    /// which takes the image size given among `overrides`; a frame the file lacks or gives
+    /// unusable sides is left to the full load's error.
+    pub fn frame_given(path: &Path, overrides: &[String]) -> Result<[f64; 2]> {
+        let extension = path.extension().map(|e| e.to_ascii_lowercase());
+        let full = || Scene::load(path, overrides).map(|s| s.camera.film_mm);
+        if extension.is_some_and(|e| e == "gltf" || e == "glb") {
+            return full();
+        }
+        let camera = load::parse_scene_file(path, overrides)?.file.camera;
+        let frame = match camera.projection {
+            crate::camera::Projection::Orthographic => camera.window.map(|w| w.0),
+            _ => Some(camera.film.map_or(format::DEFAULT_FILM, |f| f.0)),
+        };
+        match frame {
+            Some([w, h]) if w > 0.0 && h > 0.0 && (w / h).is_normal() => Ok([w, h]),
+            _ => full(),
+        }
+    }
+
     /// What loading left out that the user should know (`TriangleMesh::notes`).
     pub fn notes(&self) -> Vec<String> {
         let meshes = self.shapes.iter().filter_map(|s| match s {

@@ -224,7 +224,7 @@ impl RenderArgs {
         if width.is_some() == height.is_some() {
             return Ok((width, height));
         }
-        let film = load(&self.scene, &self.set)?.camera.film_mm;
+        let film = Scene::frame_given(&self.scene, &self.set)?;
         let aspect = film[0] / film[1];
         let fit = |v: f64| (v.round() as u32).max(1);
         let size = match (width, height) {
