@@ -478,13 +478,13 @@ fn a_bad_vertex_names_the_mesh_file_and_the_vertex() {
     mesh_error(
         "nan.obj",
         Some(&obj("v nan 0 0")),
-        "nan.obj: vertex 1 has a non-finite",
+        "nan.obj: line 2: `v nan 0 0`: a number that is not finite",
     );
     // Finite in the file's decimal text, infinite as the f32 every coordinate becomes.
     mesh_error(
         "big.obj",
         Some(&obj("v 1e39 0 0")),
-        "big.obj: vertex 1 has a non-finite",
+        "big.obj: line 2: `v 1e39 0 0`: a number that is not finite",
     );
     // ASCII PLY has no spelling for NaN; binary PLY carries its bits.
     let mut ply = b"ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n\
@@ -510,7 +510,21 @@ fn a_bad_vertex_names_the_mesh_file_and_the_vertex() {
         "inf.obj.gz",
         Some(&gz.finish().unwrap()),
         "",
-        "inf.obj.gz: vertex 1 has a non-finite",
+        "inf.obj.gz: line 2: `v 0 inf 0`: a number that is not finite",
+    );
+    // Texture coordinates and normals: the file's line, not v as flipped for the image.
+    let attributes = |line: &str, face: &str| {
+        format!("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\n{line}\nvt 0 1\nvn 0 0 1\nf {face}\n")
+    };
+    mesh_error(
+        "vt.obj",
+        Some(&attributes("vt nan 0.25", "1/1 2/2 3/3")),
+        "vt.obj: line 5: `vt nan 0.25`: a number that is not finite",
+    );
+    mesh_error(
+        "vn.obj",
+        Some(&attributes("vn 0 -inf 1", "1//1 2//1 3//2")),
+        "vn.obj: line 5: `vn 0 -inf 1`: a number that is not finite",
     );
     mesh_error_with(
         "far.obj",

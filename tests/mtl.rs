@@ -263,3 +263,20 @@ fn a_missing_library_is_an_error_when_the_files_materials_are_needed() {
     let loaded = chambre::scene::Scene::load(&scene, &[]).unwrap();
     assert!(loaded.materials.iter().any(|m| m.name == "tri.obj:red"));
 }
+
+/// A library tobj refuses (a `map_Kd` with no file) is named with the line it refuses, found
+/// again since tobj names none.
+#[test]
+fn a_malformed_library_names_its_line() {
+    let scene = scene_with_libraries("malformed", &["bad.mtl"], &[], false);
+    std::fs::write(
+        scene.with_file_name("bad.mtl"),
+        "newmtl red\nKd 0.8 0.1 0.1\n\nnewmtl blue\nKd 0.1 0.1 0.8\nmap_Kd\nKs 0 0 0\n",
+    )
+    .unwrap();
+    let output = check(&scene);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    let expected = "malformed material library: line 6: `map_Kd`: material parse error";
+    assert!(stderr.contains(expected), "{expected} not in {stderr}");
+}

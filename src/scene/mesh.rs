@@ -389,8 +389,35 @@ pub(super) fn read_obj(reader: &mut GuardedReader, obj: &Path) -> Result<Triangl
 fn library_failure(path: &Path, e: tobj::LoadError) -> String {
     match (e, std::fs::File::open(path)) {
         (tobj::LoadError::OpenFileFailed, Err(io)) => io.to_string(),
-        (e, _) => format!("malformed material library: {e}"),
+        (e, _) => match std::fs::read_to_string(path).ok().and_then(|t| first_failing_line(&t)) {
+            Some((line, text)) => format!("malformed material library: line {line}: `{text}`: {e}"),
+            None => format!("malformed material library: {e}"),
+        },
     }
+}
+
+/// The line of MTL `text` tobj refuses, with its number: tobj names no line, so the shortest
+/// run of first lines it refuses is searched for (a run it refuses is refused longer too).
+/// None where the whole text reads (the library failed for another reason).
+fn first_failing_line(text: &str) -> Option<(usize, String)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let fails = |count: usize| {
+        let prefix = lines[..count].join("\n");
+        tobj::load_mtl_buf(&mut prefix.as_bytes()).is_err()
+    };
+    if !fails(lines.len()) {
+        return None;
+    }
+    // The fewest lines that fail: in (low, high], `high` failing.
+    let (mut low, mut high) = (0, lines.len());
+    while high - low > 1 {
+        let middle = (low + high) / 2;
+        match fails(middle) {
+            true => high = middle,
+            false => low = middle,
+        }
+    }
+    Some((high, lines[high - 1].trim().to_string()))
 }
 
 /// tobj parses line by line, except that it resolves face indices when an object ends (at the
@@ -581,6 +608,18 @@ pub(super) fn check_mesh(mut mesh: TriangleMesh) -> Result<TriangleMesh, String>
             t.x, t.y
         ));
     }
+    if let Some((i, n)) = mesh
+        .normals
+        .iter()
+        .flatten()
+        .enumerate()
+        .find(|(_, n)| !n.is_finite())
+    {
+        return Err(format!(
+            "vertex {i} has a non-finite normal ({}, {}, {})",
+            n.x, n.y, n.z
+        ));
+    }
     let count = mesh.positions.len() as u32;
     if let Some(t) = mesh
         .triangles
@@ -766,5 +805,20 @@ mod tests {
             err.to_string().contains("line 3 is longer than 10 bytes"),
             "{err}"
         );
+    }
+
+    /// A normal that is not finite (a glTF's, a binary PLY's) is refused with its vertex, as a
+    /// position is: it would shade its triangles NaN.
+    #[test]
+    fn a_non_finite_normal_is_refused() {
+        let mesh = |n: Vec3| TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: Some(vec![Vec3::Z, n, Vec3::Z]),
+            triangles: vec![[0, 1, 2]],
+            ..TriangleMesh::default()
+        };
+        assert!(check_mesh(mesh(Vec3::Z)).is_ok());
+        let err = check_mesh(mesh(Vec3::new(0.0, f32::NAN, 1.0))).unwrap_err();
+        assert_eq!(err, "vertex 1 has a non-finite normal (0, NaN, 1)");
     }
 }

@@ -1,7 +1,7 @@
 //! A mesh file of any format chambre reads, chosen by its extension: OBJ and PLY (`.gz` read
 //! transparently, `mesh`) and glTF (`gltf`, its meshes merged into one).
 
-use std::io::Read;
+use std::io::{BufRead, Read};
 use std::path::Path;
 
 use super::gltf::read_gltf;
@@ -38,7 +38,16 @@ fn read_mesh(path: &Path) -> Result<TriangleMesh, String> {
     };
     let mut reader = GuardedReader::new(source, MAX_MESH_BYTES, MAX_LINE_BYTES);
     let mesh = if inner_name.ends_with(".obj") {
-        read_obj(&mut reader, path)?
+        let mesh = read_obj(&mut reader, path)?;
+        if !numbers_finite(&mesh)
+            && let Some((line, text)) = non_finite_obj_line(path, compressed)
+        {
+            return Err(format!(
+                "line {line}: `{text}`: a number that is not finite (NaN, infinity, or beyond \
+                 the 32-bit float range)"
+            ));
+        }
+        mesh
     } else if inner_name.ends_with(".ply") {
         read_ply(&mut reader, available)?
     } else {
@@ -47,4 +56,33 @@ fn read_mesh(path: &Path) -> Result<TriangleMesh, String> {
         );
     };
     check_mesh(mesh)
+}
+
+/// Whether every position, texture coordinate and normal of `mesh` is finite.
+fn numbers_finite(mesh: &TriangleMesh) -> bool {
+    mesh.positions.iter().all(|p| p.is_finite())
+        && mesh.texcoords.iter().flatten().all(|t| t.is_finite())
+        && mesh.normals.iter().flatten().all(|n| n.is_finite())
+}
+
+/// The first `v`, `vt` or `vn` line of OBJ `path` with a number that is not finite (NaN,
+/// infinity, or beyond the 32-bit float range), with its number: tobj keeps no lines, so the
+/// file is read again once `check_mesh` has refused what tobj made of it.
+fn non_finite_obj_line(path: &Path, compressed: bool) -> Option<(usize, String)> {
+    let file = std::fs::File::open(path).ok()?;
+    let source: Box<dyn Read> = match compressed {
+        true => Box::new(flate2::read::MultiGzDecoder::new(file)),
+        false => Box::new(file),
+    };
+    let reader = GuardedReader::new(source, MAX_MESH_BYTES, MAX_LINE_BYTES);
+    let not_finite = |word: &str| word.parse::<f32>().is_ok_and(|v| !v.is_finite());
+    reader
+        .lines()
+        .map_while(|line| line.ok())
+        .enumerate()
+        .find(|(_, line)| {
+            let mut words = line.split_whitespace();
+            matches!(words.next(), Some("v" | "vt" | "vn")) && words.any(not_finite)
+        })
+        .map(|(i, line)| (i + 1, line.trim().to_string()))
 }
