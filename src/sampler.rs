@@ -33,6 +33,8 @@
 
 use std::f64::consts::TAU;
 
+use rayon::prelude::*;
+
 use crate::layout::*;
 use crate::math::rng::{Rng, pcg_hash};
 use crate::math::sampling::{concentric_disk, div_rem, strata_columns, stratified_2d};
@@ -136,12 +138,17 @@ impl SampleTable {
         let salt = pcg_hash(seed ^ pcg_hash(dim));
         match sampler {
             SamplerName::Poisson => {
-                for set in 0..POISSON_SETS {
-                    let key = pcg_hash(salt ^ set);
-                    let points = poisson_disk_set(spp, key).points;
-                    self.points
-                        .extend(ordered(points, key, progressive, dim == LENS_DIMENSION));
-                }
+                // The sets are independent, each made from its own key: built on every core
+                // (a 4096-point set takes about 0.1 s), stored in order.
+                let sets: Vec<Vec<[f32; 2]>> = (0..POISSON_SETS)
+                    .into_par_iter()
+                    .map(|set| {
+                        let key = pcg_hash(salt ^ set);
+                        let points = poisson_disk_set(spp, key).points;
+                        ordered(points, key, progressive, dim == LENS_DIMENSION)
+                    })
+                    .collect();
+                self.points.extend(sets.into_iter().flatten());
             }
             SamplerName::Interleaved => {
                 for pattern in 0..INTERLEAVED_TILE * INTERLEAVED_TILE {
@@ -176,13 +183,16 @@ pub struct PoissonSet {
     pub radius: f64,
 }
 
-/// Distance between two points of the unit torus.
+/// Distance between two points of the unit torus. Each side is at most 0.5, so the plain
+/// root of the squares neither overflows nor underflows to harm (libm's `hypot`, which guards
+/// against both, took half the time of building a 4096-point Poisson table).
 pub fn toroidal_distance(a: [f64; 2], b: [f64; 2]) -> f64 {
     let d = |x: f64, y: f64| {
         let d = (x - y).abs();
         d.min(1.0 - d)
     };
-    d(a[0], b[0]).hypot(d(a[1], b[1]))
+    let (dx, dy) = (d(a[0], b[0]), d(a[1], b[1]));
+    (dx * dx + dy * dy).sqrt()
 }
 
 /// Exactly `n` points with a large minimum toroidal distance, in random order.
@@ -277,8 +287,10 @@ fn eliminate_closest(points: &mut Vec<[f64; 2]>, n: usize, spacing: f64) {
         grid.remove(points, worst);
         let removed = points.swap_remove(worst);
         distance.swap_remove(worst);
+        // Only a point whose nearest was the one removed has a new nearest: its distance to it
+        // is the very number its nearest distance was taken as (the others' is larger).
         for i in 0..points.len() {
-            if distance[i] <= toroidal_distance(points[i], removed) {
+            if toroidal_distance(points[i], removed) <= distance[i] {
                 distance[i] = grid.nearest(points, i);
             }
         }
@@ -882,7 +894,7 @@ mod elimination_tests {
             let removed = points.swap_remove(worst);
             distance.swap_remove(worst);
             for i in 0..points.len() {
-                if distance[i] <= toroidal_distance(points[i], removed) {
+                if toroidal_distance(points[i], removed) <= distance[i] {
                     distance[i] = nearest(points, i);
                 }
             }
