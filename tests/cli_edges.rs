@@ -884,8 +884,21 @@ fn one_image_side_keeps_the_film_aspect_and_threads_are_chosen() {
     // An orthographic camera's window, likewise.
     let target = dir.join("window.png");
     let output = chambre()
-        .args(["render", "scenes/elevation.toml", "--backend", "cpu", "--spp", "1"])
-        .args(["--height", "20", "--set", "camera.window=[40.0, 10.0]", "-o"])
+        .args([
+            "render",
+            "scenes/elevation.toml",
+            "--backend",
+            "cpu",
+            "--spp",
+            "1",
+        ])
+        .args([
+            "--height",
+            "20",
+            "--set",
+            "camera.window=[40.0, 10.0]",
+            "-o",
+        ])
         .arg(&target)
         .output()
         .unwrap();

@@ -12,6 +12,7 @@ pub mod curved;
 pub mod cwbvh;
 pub mod intersect;
 pub mod octet;
+pub mod pages;
 pub mod planes;
 pub mod ray;
 pub mod traverse;

@@ -21,6 +21,7 @@ use glam::Vec3;
 use super::cwbvh::CwGeometry;
 use super::intersect::{Hit, RayQuery, SLAB_FAR_SCALE, intersect_primitive};
 use super::octet::{Octet, QuadOctet, Rows, TriangleOctet};
+use super::pages::on_huge_pages;
 use super::planes::{closest_plane, plane_occludes};
 use crate::layout::{
     CWBVH_STACK_SIZE, FEATURE_TRIANGLES, GpuCwNode, GpuPrimitive, NONE, PRIM_QUAD, PRIM_TRIANGLE,
@@ -129,10 +130,10 @@ impl WideBvh {
         let prims = cw.prims[..count].to_vec();
         let (octets, quads) = pack_octets(&mut nodes, &prims, !velocities.is_empty());
         Ok(WideBvh {
-            nodes,
-            octets,
-            quads,
-            prims,
+            nodes: on_huge_pages(nodes),
+            octets: on_huge_pages(octets),
+            quads: on_huge_pages(quads),
+            prims: on_huge_pages(prims),
             ids,
             slot_of,
             velocities,

@@ -389,7 +389,10 @@ pub(super) fn read_obj(reader: &mut GuardedReader, obj: &Path) -> Result<Triangl
 fn library_failure(path: &Path, e: tobj::LoadError) -> String {
     match (e, std::fs::File::open(path)) {
         (tobj::LoadError::OpenFileFailed, Err(io)) => io.to_string(),
-        (e, _) => match std::fs::read_to_string(path).ok().and_then(|t| first_failing_line(&t)) {
+        (e, _) => match std::fs::read_to_string(path)
+            .ok()
+            .and_then(|t| first_failing_line(&t))
+        {
             Some((line, text)) => format!("malformed material library: line {line}: `{text}`: {e}"),
             None => format!("malformed material library: {e}"),
         },
