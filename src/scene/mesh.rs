@@ -389,14 +389,20 @@ pub(super) fn read_obj(reader: &mut GuardedReader, obj: &Path) -> Result<Triangl
 fn library_failure(path: &Path, e: tobj::LoadError) -> String {
     match (e, std::fs::File::open(path)) {
         (tobj::LoadError::OpenFileFailed, Err(io)) => io.to_string(),
-        (e, _) => match std::fs::read_to_string(path)
-            .ok()
-            .and_then(|t| first_failing_line(&t))
-        {
+        (e, _) => match small_text(path).and_then(|t| first_failing_line(&t)) {
             Some((line, text)) => format!("malformed material library: line {line}: `{text}`: {e}"),
             None => format!("malformed material library: {e}"),
         },
     }
+}
+
+/// The text of `path` where it is a regular file of at most 16 MiB: the search for a
+/// library's failing line reads it whole, many times over.
+fn small_text(path: &Path) -> Option<String> {
+    let meta = std::fs::metadata(path).ok()?;
+    (meta.is_file() && meta.len() <= 16 << 20)
+        .then(|| std::fs::read_to_string(path).ok())
+        .flatten()
 }
 
 /// The line of MTL `text` tobj refuses, with its number: tobj names no line, so the shortest
