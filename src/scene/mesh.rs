@@ -591,43 +591,41 @@ fn smallest_encoding(encoding: &Encoding, property: &PropertyType) -> u64 {
     }
 }
 
-/// Rejects meshes that cannot be rendered and drops triangles that can never be hit.
-pub(super) fn check_mesh(mut mesh: TriangleMesh) -> Result<TriangleMesh, String> {
-    if let Some((i, p)) = mesh
-        .positions
-        .iter()
-        .enumerate()
-        .find(|(_, p)| !p.is_finite())
-    {
-        return Err(format!(
+/// What is wrong with the first position, texture coordinate or normal of `mesh` that is not
+/// finite (NaN, infinity, or beyond the 32-bit float range), if any.
+pub(super) fn non_finite_vertex(mesh: &TriangleMesh) -> Option<String> {
+    fn first<T: Copy>(values: &[T], finite: impl Fn(&T) -> bool) -> Option<(usize, T)> {
+        values
+            .iter()
+            .position(|v| !finite(v))
+            .map(|i| (i, values[i]))
+    }
+    if let Some((i, p)) = first(&mesh.positions, |p| p.is_finite()) {
+        return Some(format!(
             "vertex {i} has a non-finite coordinate ({}, {}, {}): NaN, infinity, or beyond \
              the 32-bit float range",
             p.x, p.y, p.z
         ));
     }
-    if let Some((i, t)) = mesh
-        .texcoords
-        .iter()
-        .flatten()
-        .enumerate()
-        .find(|(_, t)| !t.is_finite())
-    {
-        return Err(format!(
+    let texcoords = mesh.texcoords.as_deref().unwrap_or_default();
+    if let Some((i, t)) = first(texcoords, |t| t.is_finite()) {
+        return Some(format!(
             "vertex {i} has a non-finite texture coordinate ({}, {})",
             t.x, t.y
         ));
     }
-    if let Some((i, n)) = mesh
-        .normals
-        .iter()
-        .flatten()
-        .enumerate()
-        .find(|(_, n)| !n.is_finite())
-    {
-        return Err(format!(
-            "vertex {i} has a non-finite normal ({}, {}, {})",
-            n.x, n.y, n.z
-        ));
+    let normals = mesh.normals.as_deref().unwrap_or_default();
+    let (i, n) = first(normals, |n| n.is_finite())?;
+    Some(format!(
+        "vertex {i} has a non-finite normal ({}, {}, {})",
+        n.x, n.y, n.z
+    ))
+}
+
+/// Rejects meshes that cannot be rendered and drops triangles that can never be hit.
+pub(super) fn check_mesh(mut mesh: TriangleMesh) -> Result<TriangleMesh, String> {
+    if let Some(message) = non_finite_vertex(&mesh) {
+        return Err(message);
     }
     let count = mesh.positions.len() as u32;
     if let Some(t) = mesh

@@ -6,7 +6,8 @@ use std::path::Path;
 
 use super::gltf::read_gltf;
 use super::mesh::{
-    GuardedReader, MAX_LINE_BYTES, MAX_MESH_BYTES, TriangleMesh, check_mesh, read_obj, read_ply,
+    GuardedReader, MAX_LINE_BYTES, MAX_MESH_BYTES, TriangleMesh, check_mesh, non_finite_vertex,
+    read_obj, read_ply,
 };
 
 /// Reads a mesh; the error is a sentence that starts with the file's path.
@@ -39,7 +40,7 @@ fn read_mesh(path: &Path) -> Result<TriangleMesh, String> {
     let mut reader = GuardedReader::new(source, MAX_MESH_BYTES, MAX_LINE_BYTES);
     let mesh = if inner_name.ends_with(".obj") {
         let mesh = read_obj(&mut reader, path)?;
-        if !numbers_finite(&mesh)
+        if non_finite_vertex(&mesh).is_some()
             && let Some((line, text)) = non_finite_obj_line(path, compressed)
         {
             return Err(format!(
@@ -56,13 +57,6 @@ fn read_mesh(path: &Path) -> Result<TriangleMesh, String> {
         );
     };
     check_mesh(mesh)
-}
-
-/// Whether every position, texture coordinate and normal of `mesh` is finite.
-fn numbers_finite(mesh: &TriangleMesh) -> bool {
-    mesh.positions.iter().all(|p| p.is_finite())
-        && mesh.texcoords.iter().flatten().all(|t| t.is_finite())
-        && mesh.normals.iter().flatten().all(|n| n.is_finite())
 }
 
 /// The first `v`, `vt` or `vn` line of OBJ `path` with a number that is not finite (NaN,
