@@ -954,7 +954,15 @@ impl<'r> ClosestSearch<'r> {
     /// The search's result once it is over: the planes tested, the slot named as the scene's
     /// primitive.
     #[inline(always)]
-    fn finish<const F: u32>(mut self, bvh: &WideBvh) -> Option<(u32, Hit)> {
+    fn finish<const F: u32>(self, bvh: &WideBvh) -> Option<(u32, Hit)> {
+        self.finish_in_slots::<F>(bvh)
+            .map(|(slot, hit)| (bvh.ids[slot as usize], hit))
+    }
+
+    /// [`ClosestSearch::finish`] with the hit's slot in the wide BVH's primitives left as it is,
+    /// for a caller that names many results' primitives at once.
+    #[inline(always)]
+    fn finish_in_slots<const F: u32>(mut self, bvh: &WideBvh) -> Option<(u32, Hit)> {
         let (best, best_slot) = (&mut self.best, &mut self.best_slot);
         closest_plane::<F>(
             &bvh.prims,
@@ -964,7 +972,7 @@ impl<'r> ClosestSearch<'r> {
             best,
             best_slot,
         );
-        (self.best_slot != NONE).then(|| (bvh.ids[self.best_slot as usize], self.best))
+        (self.best_slot != NONE).then_some((self.best_slot, self.best))
     }
 }
 
