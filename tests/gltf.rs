@@ -953,3 +953,92 @@ fn a_glb_cut_short_says_so() {
         "{error}"
     );
 }
+
+/// The quad of `quad_buffer` quantized as gltfpack writes it, in one buffer: POSITION in
+/// unsigned shorts, not normalized (0 and 2, the node's transform taking them to -2 and 2),
+/// NORMAL in normalized bytes (0, 0, 127), each vertex attribute 4-byte aligned as
+/// KHR_mesh_quantization requires; `declared` lists the extension in `extensionsUsed` and
+/// `required` (with `more_required`).
+fn quantized_quad(dir: &Path, declared: bool, more_required: &str) -> PathBuf {
+    let mut bytes = Vec::new();
+    for p in [[0u16, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]] {
+        for c in p {
+            bytes.extend_from_slice(&c.to_le_bytes());
+        }
+        bytes.extend_from_slice(&[0, 0]);
+    }
+    for _ in 0..4 {
+        bytes.extend_from_slice(&[0, 0, 127, 0]);
+    }
+    for i in [0u16, 1, 2, 0, 2, 3] {
+        bytes.extend_from_slice(&i.to_le_bytes());
+    }
+    std::fs::write(dir.join("quantized.bin"), &bytes).unwrap();
+    let extensions = match declared {
+        true => format!(
+            r#""extensionsUsed": ["KHR_mesh_quantization"],
+               "extensionsRequired": ["KHR_mesh_quantization"{more_required}],"#
+        ),
+        false => String::new(),
+    };
+    let json = format!(
+        r#"{{
+  "asset": {{"version": "2.0"}},
+  {extensions}
+  "scene": 0,
+  "scenes": [{{"nodes": [0]}}],
+  "nodes": [{{"mesh": 0, "translation": [-2, -2, -1], "scale": [2, 2, 2]}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1}}, "indices": 2}}]}}],
+  "buffers": [{{"uri": "quantized.bin", "byteLength": {}}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteOffset": 0, "byteLength": 32, "byteStride": 8}},
+    {{"buffer": 0, "byteOffset": 32, "byteLength": 16, "byteStride": 4}},
+    {{"buffer": 0, "byteOffset": 48, "byteLength": 12}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5123, "count": 4, "type": "VEC3",
+      "min": [0, 0, 0], "max": [2, 2, 0]}},
+    {{"bufferView": 1, "componentType": 5120, "normalized": true, "count": 4, "type": "VEC3"}},
+    {{"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}}]
+}}"#,
+        bytes.len()
+    );
+    let path = dir.join("quantized.gltf");
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// A KHR_mesh_quantization file reads as the float original it was made from, exactly here
+/// (its integers and their scales are exact in f32); a file that does not declare the
+/// extension has its integer attributes refused, told of it; a required extension chambre
+/// does not read is still refused.
+#[test]
+fn quantized_attributes_read_as_their_float_originals() {
+    let dir = scratch("quantized");
+    let float = load_mesh(&write_gltf(&dir, false)).unwrap();
+    let quantized = load_mesh(&quantized_quad(&dir, true, "")).unwrap();
+    assert_eq!(quantized.positions, float.positions);
+    assert_eq!(quantized.normals, float.normals);
+    assert_eq!(quantized.triangles, float.triangles);
+    let scene = Scene::load(&quantized_quad(&dir, true, ""), &[]).unwrap();
+    assert_eq!(flatten(&scene).prims.len(), 2);
+
+    let undeclared = quantized_quad(&dir, false, "");
+    for error in [
+        Scene::load(&undeclared, &[]).unwrap_err().to_string(),
+        load_mesh(&undeclared).unwrap_err(),
+    ] {
+        for part in [
+            "quantized.gltf",
+            "attributes.POSITION -> accessors[0]: unsigned short VEC3, where glTF allows float VEC3",
+            "in a file whose extensionsUsed lists KHR_mesh_quantization",
+        ] {
+            assert!(error.contains(part), "{part} not in {error}");
+        }
+    }
+    let draco = quantized_quad(&dir, true, r#", "KHR_draco_mesh_compression""#);
+    let error = load_mesh(&draco).unwrap_err();
+    assert!(
+        error.contains("extensionsRequired[1]") && error.contains("Unsupported extension"),
+        "{error}"
+    );
+}

@@ -1,7 +1,7 @@
 //! glTF 2.0 files (`.gltf` with its buffers, or `.glb`), through the `gltf` crate: the triangles
 //! of every mesh of the default scene placed by their node transforms, their materials mapped
 //! to chambre's models, its cameras (perspective or orthographic), and KHR_lights_punctual
-//! lights. A mesh shape can name a glTF file (`load_mesh`), and `chambre render model.glb`
+//! lights; vertex attributes in floats or, with KHR_mesh_quantization, in small integers. A mesh shape can name a glTF file (`load_mesh`), and `chambre render model.glb`
 //! renders one as a scene (`scene_text`), with the first camera reached from the scene's nodes
 //! or the one `gltf.camera` names. The mappings are in docs/scene-format.md ("glTF").
 
@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use glam::{DMat4, DVec3, Vec2, Vec3};
 
-use gltf::accessor::{DataType, Dimensions};
+use gltf::accessor::{DataType, Dimensions, Item, Iter};
 
 use super::mesh::{MAX_MESH_BYTES, MeshMaterial, NO_MATERIAL, TriangleMesh, check_mesh};
 use super::texture::{Texture, Wrap};
@@ -146,6 +146,7 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
     let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone())
         .map_err(|e| format!("reading its buffers: {e}"))?;
     let document = &gltf.document;
+    let quantized = document.extensions_used().any(|name| name == QUANTIZATION);
     let scene = document
         .default_scene()
         .or_else(|| document.scenes().next())
@@ -177,24 +178,16 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
         if let Some(mesh) = node.mesh() {
             for primitive in mesh.primitives() {
                 let at = format!("meshes[{}].primitives[{}]", mesh.index(), primitive.index());
-                let added = add_primitive(
-                    &mut out.mesh,
-                    &mut normals,
-                    &primitive,
-                    &at,
-                    &buffers,
-                    world,
-                )?;
+                let attributes = Attributes {
+                    primitive: &primitive,
+                    at: &at,
+                    buffers: &buffers,
+                    quantized,
+                };
+                let added = add_primitive(&mut out.mesh, &mut normals, &attributes, world)?;
                 any_normals |= added;
                 let vertices = out.mesh.positions.len();
-                add_texcoords(
-                    &mut texcoords,
-                    &primitive,
-                    &at,
-                    vertices,
-                    &buffers,
-                    &texture_uses,
-                )?;
+                add_texcoords(&mut texcoords, &attributes, vertices, &texture_uses)?;
             }
         }
         if let Some(camera) = node.camera() {
@@ -270,8 +263,41 @@ fn open_gltf(path: &Path) -> Result<gltf::Gltf, String> {
             bytes.len()
         ));
     }
-    gltf::Gltf::from_slice(&bytes).map_err(|e| format!("not a readable glTF file: {e}"))
+    let not_readable = |e: gltf::Error| format!("not a readable glTF file: {e}");
+    let gltf = gltf::Gltf::from_slice_without_validation(&bytes).map_err(not_readable)?;
+    let errors = validation_errors(gltf.document.as_json());
+    if !errors.is_empty() {
+        return Err(not_readable(gltf::Error::Validation(errors)));
+    }
+    Ok(gltf)
 }
+
+/// The gltf crate's checks of a file, but for its refusal of the required extensions chambre
+/// reads itself (the crate refuses every one it does not know).
+fn validation_errors(
+    json: &gltf::json::Root,
+) -> Vec<(gltf::json::Path, gltf::json::validation::Error)> {
+    use gltf::json::validation::{Error, Validate};
+    let mut errors = Vec::new();
+    json.validate(json, gltf::json::Path::new, &mut |path, error| {
+        errors.push((path(), error))
+    });
+    // Such a refusal's path ends in the extension's name: `extensionsRequired[1] = "NAME"`.
+    let read_here = |path: &gltf::json::Path| {
+        READ_HERE
+            .iter()
+            .any(|name| path.as_str().ends_with(&format!("= \"{name}\"")))
+    };
+    errors.retain(|(path, error)| !(*error == Error::Unsupported && read_here(path)));
+    errors
+}
+
+/// Extensions a file may require that chambre reads itself, the gltf crate not knowing them.
+const READ_HERE: &[&str] = &[QUANTIZATION];
+
+/// KHR_mesh_quantization: vertex attributes in 8- and 16-bit integers (normalized or not),
+/// placed by their nodes' transforms; gltfpack and glTF-Transform write it.
+const QUANTIZATION: &str = "KHR_mesh_quantization";
 
 /// glTF's nodes form disjoint strict trees (a node has one parent at most, and no node is its
 /// own ancestor), of which a scene lists the roots, each once. A file that breaks this is
@@ -429,11 +455,14 @@ fn check_lights(document: &gltf::Document) -> Result<(), String> {
 }
 
 /// Which component types (each with whether it is normalized) and which element type glTF
-/// allows an accessor chambre reads, and how messages name them.
+/// allows an accessor chambre reads, and how messages name them; with KHR_mesh_quantization,
+/// which more.
 struct Layout {
     components: &'static [(DataType, bool)],
     dimensions: Dimensions,
     allowed: &'static str,
+    quantized: &'static [(DataType, bool)],
+    quantized_allowed: &'static str,
 }
 
 const INDICES: Layout = Layout {
@@ -444,13 +473,36 @@ const INDICES: Layout = Layout {
     ],
     dimensions: Dimensions::Scalar,
     allowed: "unsigned byte, unsigned short or unsigned int SCALAR",
+    quantized: &[],
+    quantized_allowed: "",
 };
 
-/// POSITION and NORMAL.
-const FLOAT_VEC3: Layout = Layout {
+/// The 8- and 16-bit integers, normalized or not.
+const SMALL_INTEGERS: &[(DataType, bool)] = &[
+    (DataType::I8, false),
+    (DataType::I8, true),
+    (DataType::U8, false),
+    (DataType::U8, true),
+    (DataType::I16, false),
+    (DataType::I16, true),
+    (DataType::U16, false),
+    (DataType::U16, true),
+];
+
+const POSITION: Layout = Layout {
     components: &[(DataType::F32, false)],
     dimensions: Dimensions::Vec3,
     allowed: "float VEC3",
+    quantized: SMALL_INTEGERS,
+    quantized_allowed: "byte, unsigned byte, short or unsigned short VEC3, normalized or not",
+};
+
+const NORMAL: Layout = Layout {
+    components: &[(DataType::F32, false)],
+    dimensions: Dimensions::Vec3,
+    allowed: "float VEC3",
+    quantized: &[(DataType::I8, true), (DataType::I16, true)],
+    quantized_allowed: "normalized byte or normalized short VEC3",
 };
 
 const TEXCOORD: Layout = Layout {
@@ -461,6 +513,8 @@ const TEXCOORD: Layout = Layout {
     ],
     dimensions: Dimensions::Vec2,
     allowed: "float, normalized unsigned byte or normalized unsigned short VEC2",
+    quantized: SMALL_INTEGERS,
+    quantized_allowed: "byte, unsigned byte, short or unsigned short VEC2, normalized or not",
 };
 
 /// How glTF names a component type.
@@ -489,25 +543,39 @@ fn dimensions_name(dimensions: Dimensions) -> &'static str {
 }
 
 /// Checks that `accessor` (which `label` names, `meshes[0].primitives[0].indices ->
-/// accessors[2]`) has a type of `layout`, and that each of its elements lies inside its buffer
-/// view and each view inside its buffer. The gltf crate's readers would panic on another type,
-/// and give nothing for data past the end, which reads as an absent attribute.
+/// accessors[2]`) has a type of `layout` (with its `quantized` types where the file uses
+/// KHR_mesh_quantization), and that each of its elements lies inside its buffer view and each
+/// view inside its buffer. The gltf crate's readers would panic on another type, and give
+/// nothing for data past the end, which reads as an absent attribute.
 fn check_accessor(
     accessor: &gltf::Accessor,
     label: &str,
     layout: &Layout,
+    quantized: bool,
     buffers: &[gltf::buffer::Data],
 ) -> Result<(), String> {
-    let (data_type, normalized) = (accessor.data_type(), accessor.normalized());
+    let component = (accessor.data_type(), accessor.normalized());
+    let with_quantization = layout.quantized.contains(&component);
     if accessor.dimensions() != layout.dimensions
-        || !layout.components.contains(&(data_type, normalized))
+        || !(layout.components.contains(&component) || quantized && with_quantization)
     {
+        let hint =
+            match with_quantization && !quantized && accessor.dimensions() == layout.dimensions {
+                true => format!(
+                    " (and {}, in a file whose extensionsUsed lists {QUANTIZATION})",
+                    layout.quantized_allowed
+                ),
+                false => String::new(),
+            };
         return Err(format!(
-            "{label}: {}{} {}, where glTF allows {}",
-            if normalized { "normalized " } else { "" },
-            component_name(data_type),
+            "{label}: {}{} {}, where glTF allows {}{hint}",
+            if component.1 { "normalized " } else { "" },
+            component_name(component.0),
             dimensions_name(accessor.dimensions()),
-            layout.allowed
+            match quantized && !layout.quantized.is_empty() {
+                true => format!("{} or {}", layout.allowed, layout.quantized_allowed),
+                false => layout.allowed.to_string(),
+            }
         ));
     }
     if let Some(view) = accessor.view() {
@@ -617,33 +685,106 @@ fn check_span(
     Ok(())
 }
 
-/// How messages name the accessor `primitive`'s attribute `semantic` names, once it is checked
-/// for `layout` and for as many elements as the primitive has `vertices` (when known); `None`
-/// when the primitive has no such attribute.
-fn attribute(
-    primitive: &gltf::Primitive,
-    at: &str,
-    semantic: gltf::Semantic,
-    layout: &Layout,
-    vertices: Option<usize>,
-    buffers: &[gltf::buffer::Data],
-) -> Result<Option<String>, String> {
-    let Some(accessor) = primitive.get(&semantic) else {
-        return Ok(None);
-    };
-    let label = format!(
-        "{at}.attributes.{} -> accessors[{}]",
-        semantic.to_string(),
-        accessor.index()
-    );
-    check_accessor(&accessor, &label, layout, buffers)?;
-    if let Some(n) = vertices.filter(|&n| n != accessor.count()) {
-        return Err(format!(
-            "{label}: has {} elements where POSITION has {n}",
-            accessor.count()
-        ));
+/// A primitive whose attributes are read: how messages name it (`meshes[0].primitives[1]`),
+/// the file's buffers, and whether the file uses KHR_mesh_quantization.
+struct Attributes<'a> {
+    primitive: &'a gltf::Primitive<'a>,
+    at: &'a str,
+    buffers: &'a [gltf::buffer::Data],
+    quantized: bool,
+}
+
+impl Attributes<'_> {
+    /// The elements of the attribute `semantic` as floats, once checked for `layout`, for as
+    /// many elements as the primitive has `vertices` (when known) and for finite values; `None`
+    /// when the primitive has no such attribute.
+    fn read<const N: usize>(
+        &self,
+        semantic: gltf::Semantic,
+        layout: &Layout,
+        vertices: Option<usize>,
+    ) -> Result<Option<Vec<[f32; N]>>, String>
+    where
+        [f32; N]: Item,
+        [i8; N]: Item,
+        [u8; N]: Item,
+        [i16; N]: Item,
+        [u16; N]: Item,
+    {
+        let Some(accessor) = self.primitive.get(&semantic) else {
+            return Ok(None);
+        };
+        let label = format!(
+            "{}.attributes.{} -> accessors[{}]",
+            self.at,
+            semantic.to_string(),
+            accessor.index()
+        );
+        check_accessor(&accessor, &label, layout, self.quantized, self.buffers)?;
+        if let Some(n) = vertices.filter(|&n| n != accessor.count()) {
+            return Err(format!(
+                "{label}: has {} elements where POSITION has {n}",
+                accessor.count()
+            ));
+        }
+        let values = read_floats(accessor, self.buffers)
+            .ok_or_else(|| format!("{label}: its data cannot be read"))?;
+        if let Some(i) = first_non_finite(&values) {
+            return Err(format!(
+                "{label}: element {i} is not finite: {:?}",
+                values[i]
+            ));
+        }
+        Ok(Some(values))
     }
-    Ok(Some(label))
+}
+
+/// The elements of a checked accessor of `N` components as floats: a normalized integer `c`
+/// as glTF maps it, `c / 255` or `c / 65535` unsigned and `max(c / 127, -1)` or
+/// `max(c / 32767, -1)` signed; an integer not normalized as its value. `None` for data the
+/// gltf crate cannot reach (the checks before rule it out).
+fn read_floats<const N: usize>(
+    accessor: gltf::Accessor,
+    buffers: &[gltf::buffer::Data],
+) -> Option<Vec<[f32; N]>>
+where
+    [f32; N]: Item,
+    [i8; N]: Item,
+    [u8; N]: Item,
+    [i16; N]: Item,
+    [u16; N]: Item,
+{
+    fn floats<T: Copy, const N: usize>(
+        items: Option<Iter<[T; N]>>,
+        to_float: impl Fn(T) -> f32,
+    ) -> Option<Vec<[f32; N]>>
+    where
+        [T; N]: Item,
+    {
+        Some(items?.map(|item| item.map(&to_float)).collect())
+    }
+    let data = |buffer: gltf::Buffer| buffers.get(buffer.index()).map(|d| &d.0[..]);
+    let normalized = accessor.normalized();
+    let scaled = move |c: f32, max: f32| match normalized {
+        true => (c / max).max(-1.0),
+        false => c,
+    };
+    match accessor.data_type() {
+        DataType::F32 => floats(Iter::<[f32; N]>::new(accessor, data), |c| c),
+        DataType::I8 => floats(Iter::<[i8; N]>::new(accessor, data), |c| {
+            scaled(f32::from(c), 127.0)
+        }),
+        DataType::U8 => floats(Iter::<[u8; N]>::new(accessor, data), |c| {
+            scaled(f32::from(c), 255.0)
+        }),
+        DataType::I16 => floats(Iter::<[i16; N]>::new(accessor, data), |c| {
+            scaled(f32::from(c), 32767.0)
+        }),
+        DataType::U16 => floats(Iter::<[u16; N]>::new(accessor, data), |c| {
+            scaled(f32::from(c), 65535.0)
+        }),
+        DataType::U32 => None,
+    }
 }
 
 /// What a reader of a checked accessor gave, or an error naming it: the gltf crate gives
@@ -659,45 +800,30 @@ fn first_non_finite<const N: usize>(values: &[[f32; N]]) -> Option<usize> {
 
 /// Appends a triangle primitive's vertices (placed by `world`) and triangles; returns whether
 /// it had normals (a primitive without them gets zero normals, which the mesh code replaces
-/// by the face's). `at` is how messages name it, `meshes[0].primitives[1]`.
+/// by the face's).
 fn add_primitive(
     mesh: &mut TriangleMesh,
     normals: &mut Vec<Vec3>,
-    primitive: &gltf::Primitive,
-    at: &str,
-    buffers: &[gltf::buffer::Data],
+    attributes: &Attributes,
     world: DMat4,
 ) -> Result<bool, String> {
+    let (primitive, at, buffers) = (attributes.primitive, attributes.at, attributes.buffers);
     if primitive.mode() != gltf::mesh::Mode::Triangles {
         return Err(format!(
             "{at}.mode: {:?}: only triangle lists are read",
             primitive.mode()
         ));
     }
-    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let label = attribute(
-        primitive,
-        at,
-        gltf::Semantic::Positions,
-        &FLOAT_VEC3,
-        None,
-        buffers,
-    )?
-    .ok_or_else(|| format!("{at}.attributes: has no POSITION"))?;
-    let positions: Vec<[f32; 3]> = read(reader.read_positions(), &label)?.collect();
-    if let Some(i) = first_non_finite(&positions) {
-        return Err(format!(
-            "{label}: element {i} is not finite: {:?}",
-            positions[i]
-        ));
-    }
+    let positions = attributes
+        .read::<3>(gltf::Semantic::Positions, &POSITION, None)?
+        .ok_or_else(|| format!("{at}.attributes: has no POSITION"))?;
     let first = mesh.positions.len() as u32;
     mesh.positions.extend(positions.iter().map(|&p| {
         world
             .transform_point3(DVec3::from(p.map(f64::from)))
             .as_vec3()
     }));
-    let had_normals = add_normals(normals, primitive, at, buffers, positions.len(), world)?;
+    let had_normals = add_normals(normals, attributes, positions.len(), world)?;
     let indices = read_indices(primitive, at, buffers, positions.len())?;
     let material = primitive
         .material()
@@ -715,31 +841,16 @@ fn add_primitive(
 /// returns whether it had them.
 fn add_normals(
     normals: &mut Vec<Vec3>,
-    primitive: &gltf::Primitive,
-    at: &str,
-    buffers: &[gltf::buffer::Data],
+    attributes: &Attributes,
     vertices: usize,
     world: DMat4,
 ) -> Result<bool, String> {
     let first = normals.len();
     let semantic = gltf::Semantic::Normals;
-    let Some(label) = attribute(
-        primitive,
-        at,
-        semantic,
-        &FLOAT_VEC3,
-        Some(vertices),
-        buffers,
-    )?
-    else {
+    let Some(read) = attributes.read::<3>(semantic, &NORMAL, Some(vertices))? else {
         normals.resize(first + vertices, Vec3::ZERO);
         return Ok(false);
     };
-    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let read: Vec<[f32; 3]> = read(reader.read_normals(), &label)?.collect();
-    if let Some(i) = first_non_finite(&read) {
-        return Err(format!("{label}: element {i} is not finite: {:?}", read[i]));
-    }
     let normal_matrix = world.inverse().transpose();
     normals.extend(read.iter().map(|&n| {
         let placed = normal_matrix.transform_vector3(DVec3::from(n.map(f64::from)));
@@ -765,7 +876,7 @@ fn read_indices(
         return Ok((0..vertices as u32).collect());
     };
     let label = format!("{at}.indices -> accessors[{}]", accessor.index());
-    check_accessor(&accessor, &label, &INDICES, buffers)?;
+    check_accessor(&accessor, &label, &INDICES, false, buffers)?;
     let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
     let indices: Vec<u32> = read(reader.read_indices(), &label)?.into_u32().collect();
     if !indices.len().is_multiple_of(3) {
@@ -917,13 +1028,12 @@ fn textured_material(
 /// KHR_texture_transform; zero for a primitive whose material has no texture.
 fn add_texcoords(
     texcoords: &mut Vec<Vec2>,
-    primitive: &gltf::Primitive,
-    at: &str,
+    attributes: &Attributes,
     vertices: usize,
-    buffers: &[gltf::buffer::Data],
     texture_uses: &[Option<TextureUse>],
 ) -> Result<(), String> {
     let own = vertices - texcoords.len();
+    let (primitive, at) = (attributes.primitive, attributes.at);
     let material = primitive.material().index();
     let used = material.and_then(|m| texture_uses.get(m).copied().flatten());
     if let Some(texture_use) = used {
@@ -936,15 +1046,9 @@ fn add_texcoords(
                 material.unwrap_or_default()
             )
         };
-        let label = attribute(primitive, at, semantic, &TEXCOORD, Some(own), buffers)?
+        let read = attributes
+            .read::<2>(semantic, &TEXCOORD, Some(own))?
             .ok_or_else(missing)?;
-        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-        let read: Vec<[f32; 2]> = read(reader.read_tex_coords(set), &label)?
-            .into_f32()
-            .collect();
-        if let Some(i) = first_non_finite(&read) {
-            return Err(format!("{label}: element {i} is not finite: {:?}", read[i]));
-        }
         texcoords.extend(
             read.iter()
                 .map(|&uv| transformed(Vec2::from(uv), texture_use)),
