@@ -697,7 +697,9 @@ struct Attributes<'a> {
 impl Attributes<'_> {
     /// The elements of the attribute `semantic` as floats, once checked for `layout`, for as
     /// many elements as the primitive has `vertices` (when known) and for finite values; `None`
-    /// when the primitive has no such attribute.
+    /// when the primitive has no such attribute. A normalized integer `c` reads as glTF maps
+    /// it, `c / 255` or `c / 65535` unsigned and `max(c / 127, -1)` or `max(c / 32767, -1)`
+    /// signed; an integer not normalized as its value.
     fn read<const N: usize>(
         &self,
         semantic: gltf::Semantic,
@@ -711,6 +713,60 @@ impl Attributes<'_> {
         [i16; N]: Item,
         [u16; N]: Item,
     {
+        fn floats<T: Copy, const N: usize>(
+            items: Option<Iter<[T; N]>>,
+            to_float: impl Fn(T) -> f32,
+        ) -> Option<Vec<[f32; N]>>
+        where
+            [T; N]: Item,
+        {
+            Some(items?.map(|item| item.map(&to_float)).collect())
+        }
+        let Some((accessor, label)) = self.checked(semantic, layout, vertices)? else {
+            return Ok(None);
+        };
+        let data = |buffer: gltf::Buffer| self.buffers.get(buffer.index()).map(|d| &d.0[..]);
+        let normalized = accessor.normalized();
+        let scaled = move |c: f32, max: f32| match normalized {
+            true => (c / max).max(-1.0),
+            false => c,
+        };
+        let values = match accessor.data_type() {
+            DataType::F32 => floats(Iter::<[f32; N]>::new(accessor, data), |c| c),
+            DataType::I8 => floats(Iter::<[i8; N]>::new(accessor, data), |c| {
+                scaled(f32::from(c), 127.0)
+            }),
+            DataType::U8 => floats(Iter::<[u8; N]>::new(accessor, data), |c| {
+                scaled(f32::from(c), 255.0)
+            }),
+            DataType::I16 => floats(Iter::<[i16; N]>::new(accessor, data), |c| {
+                scaled(f32::from(c), 32767.0)
+            }),
+            DataType::U16 => floats(Iter::<[u16; N]>::new(accessor, data), |c| {
+                scaled(f32::from(c), 65535.0)
+            }),
+            DataType::U32 => None,
+        };
+        // The gltf crate gives `None` for data it cannot reach, which the checks rule out.
+        let values = values.ok_or_else(|| format!("{label}: its data cannot be read"))?;
+        if let Some(i) = first_non_finite(&values) {
+            return Err(format!(
+                "{label}: element {i} is not finite: {:?}",
+                values[i]
+            ));
+        }
+        Ok(Some(values))
+    }
+
+    /// The accessor of the attribute `semantic`, checked for `layout` and for as many elements
+    /// as the primitive has `vertices` (when known), with how messages name it; `None` when the
+    /// primitive has no such attribute.
+    fn checked(
+        &self,
+        semantic: gltf::Semantic,
+        layout: &Layout,
+        vertices: Option<usize>,
+    ) -> Result<Option<(gltf::Accessor<'_>, String)>, String> {
         let Some(accessor) = self.primitive.get(&semantic) else {
             return Ok(None);
         };
@@ -727,63 +783,7 @@ impl Attributes<'_> {
                 accessor.count()
             ));
         }
-        let values = read_floats(accessor, self.buffers)
-            .ok_or_else(|| format!("{label}: its data cannot be read"))?;
-        if let Some(i) = first_non_finite(&values) {
-            return Err(format!(
-                "{label}: element {i} is not finite: {:?}",
-                values[i]
-            ));
-        }
-        Ok(Some(values))
-    }
-}
-
-/// The elements of a checked accessor of `N` components as floats: a normalized integer `c`
-/// as glTF maps it, `c / 255` or `c / 65535` unsigned and `max(c / 127, -1)` or
-/// `max(c / 32767, -1)` signed; an integer not normalized as its value. `None` for data the
-/// gltf crate cannot reach (the checks before rule it out).
-fn read_floats<const N: usize>(
-    accessor: gltf::Accessor,
-    buffers: &[gltf::buffer::Data],
-) -> Option<Vec<[f32; N]>>
-where
-    [f32; N]: Item,
-    [i8; N]: Item,
-    [u8; N]: Item,
-    [i16; N]: Item,
-    [u16; N]: Item,
-{
-    fn floats<T: Copy, const N: usize>(
-        items: Option<Iter<[T; N]>>,
-        to_float: impl Fn(T) -> f32,
-    ) -> Option<Vec<[f32; N]>>
-    where
-        [T; N]: Item,
-    {
-        Some(items?.map(|item| item.map(&to_float)).collect())
-    }
-    let data = |buffer: gltf::Buffer| buffers.get(buffer.index()).map(|d| &d.0[..]);
-    let normalized = accessor.normalized();
-    let scaled = move |c: f32, max: f32| match normalized {
-        true => (c / max).max(-1.0),
-        false => c,
-    };
-    match accessor.data_type() {
-        DataType::F32 => floats(Iter::<[f32; N]>::new(accessor, data), |c| c),
-        DataType::I8 => floats(Iter::<[i8; N]>::new(accessor, data), |c| {
-            scaled(f32::from(c), 127.0)
-        }),
-        DataType::U8 => floats(Iter::<[u8; N]>::new(accessor, data), |c| {
-            scaled(f32::from(c), 255.0)
-        }),
-        DataType::I16 => floats(Iter::<[i16; N]>::new(accessor, data), |c| {
-            scaled(f32::from(c), 32767.0)
-        }),
-        DataType::U16 => floats(Iter::<[u16; N]>::new(accessor, data), |c| {
-            scaled(f32::from(c), 65535.0)
-        }),
-        DataType::U32 => None,
+        Ok(Some((accessor, label)))
     }
 }
 
