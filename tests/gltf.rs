@@ -1035,6 +1035,30 @@ fn quantized_attributes_read_as_their_float_originals() {
             assert!(error.contains(part), "{part} not in {error}");
         }
     }
+    // Texture coordinates in shorts, over the normals' floats: element 2 holds the bytes of
+    // 1.0f32, 0x3f800000, as the shorts 0 and 0x3f80.
+    let mut json = gltf_json(Some("quad.bin"), true).replace(
+        r#""extensionsUsed": ["KHR_lights_punctual"]"#,
+        r#""extensionsUsed": ["KHR_lights_punctual", "KHR_mesh_quantization"]"#,
+    );
+    for (from, to) in textured("5122", "VEC2") {
+        json = json.replace(from, &to);
+    }
+    std::fs::write(dir.join("quad.bin"), quad_buffer()).unwrap();
+    for (normalized, v) in [(false, 16256.0), (true, 16256.0 / 32767.0)] {
+        let json = json.replace(
+            r#""componentType": 5122,"#,
+            &format!(r#""componentType": 5122, "normalized": {normalized},"#),
+        );
+        std::fs::write(dir.join("uv.gltf"), json).unwrap();
+        let mesh = load_mesh(&dir.join("uv.gltf")).unwrap_or_else(|e| panic!("{e}"));
+        let uv = mesh.texcoords.unwrap();
+        assert_eq!(uv[2], glam::Vec2::new(0.0, v), "normalized {normalized}");
+        assert_eq!(
+            (uv[0], uv[1], uv[3]),
+            (glam::Vec2::ZERO, glam::Vec2::ZERO, glam::Vec2::ZERO)
+        );
+    }
     let draco = quantized_quad(&dir, true, r#", "KHR_draco_mesh_compression""#);
     let error = load_mesh(&draco).unwrap_err();
     assert!(
