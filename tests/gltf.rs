@@ -1066,3 +1066,92 @@ fn quantized_attributes_read_as_their_float_originals() {
         "{error}"
     );
 }
+
+/// `gltf_json`'s material given `extra` fields (and, with `metal`, metallic 1).
+fn material_with(dir: &Path, extra: &str, metal: bool) -> PathBuf {
+    std::fs::write(dir.join("quad.bin"), quad_buffer()).unwrap();
+    let mut json = gltf_json(Some("quad.bin"), false).replace(
+        r#"{"name": "paint","#,
+        &format!(r#"{{"name": "paint", {extra},"#),
+    );
+    if metal {
+        json = json.replace(r#""metallicFactor": 0.0"#, r#""metallicFactor": 1.0"#);
+    }
+    let path = dir.join("material.gltf");
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// KHR_materials_emissive_strength scales the emission (Blender writes it for strengths above
+/// 1); KHR_materials_transmission makes a dielectric glass of KHR_materials_ior's index (1.5
+/// without one), a metal not, and what the glass approximates is noted; values outside glTF's
+/// bounds, or beyond chambre's glass, are refused naming the field.
+#[test]
+fn emissive_strength_scales_emission_and_transmission_makes_glass() {
+    let dir = scratch("material-extensions");
+    let strength = r#""emissiveFactor": [1, 0.5, 0.25],
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 8}}"#;
+    let mesh = load_mesh(&material_with(&dir, strength, false)).unwrap();
+    assert_eq!(mesh.materials[0].emission, Vec3::new(8.0, 4.0, 2.0));
+    assert_eq!(mesh.materials[0].ior, None);
+
+    let glass = r#""extensions": {"KHR_materials_transmission": {"transmissionFactor": 1},
+                                   "KHR_materials_ior": {"ior": 1.33}}"#;
+    for (extra, metal, ior) in [
+        (glass, false, Some(1.33)),
+        (
+            r#""extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5}}"#,
+            false,
+            Some(1.5),
+        ),
+        (glass, true, None),
+    ] {
+        let path = material_with(&dir, extra, metal);
+        let read = chambre::scene::gltf::read_gltf(&path).unwrap();
+        assert_eq!(read.mesh.materials[0].ior, ior, "{extra}, metal {metal}");
+        let notes = read.notes.join("\n");
+        // The quad's roughness is 1: rendered smooth, and said so.
+        assert_eq!(
+            notes.contains("a roughness of 1 as smooth"),
+            ior.is_some(),
+            "{notes}"
+        );
+        assert_eq!(
+            notes.contains("a transmission of 0.5"),
+            extra.contains("0.5"),
+            "{notes}"
+        );
+    }
+
+    for (extra, field) in [
+        (
+            r#""extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": -1}}"#,
+            "materials[0].extensions.KHR_materials_emissive_strength.emissiveStrength",
+        ),
+        (
+            r#""emissiveFactor": [1, 1, 1],
+               "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 1e30}}"#,
+            "materials[0].emissiveFactor: must lie in [0, 1e20] once multiplied by its \
+             emissiveStrength 1e30",
+        ),
+        (
+            r#""extensions": {"KHR_materials_transmission": {"transmissionFactor": 2}}"#,
+            "materials[0].extensions.KHR_materials_transmission.transmissionFactor",
+        ),
+        (
+            r#""extensions": {"KHR_materials_ior": {"ior": 0.5}}"#,
+            "materials[0].extensions.KHR_materials_ior.ior",
+        ),
+    ] {
+        let path = material_with(&dir, extra, false);
+        for error in [
+            Scene::load(&path, &[]).unwrap_err().to_string(),
+            load_mesh(&path).unwrap_err(),
+        ] {
+            assert!(
+                error.contains("material.gltf") && error.contains(field),
+                "{field} not in {error}"
+            );
+        }
+    }
+}

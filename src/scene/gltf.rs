@@ -224,13 +224,7 @@ pub fn read_gltf(path: &Path) -> Result<GltfScene, String> {
         }
     }
     for material in document.materials() {
-        let pbr = material.pbr_metallic_roughness();
-        if pbr.metallic_roughness_texture().is_some() {
-            out.notes.push(format!(
-                "material {:?}: its metallic-roughness texture is not read; its factors are",
-                material.name().unwrap_or("(unnamed)")
-            ));
-        }
+        out.notes.extend(material_notes(&material));
     }
     Ok(out)
 }
@@ -399,18 +393,94 @@ fn check_materials(document: &gltf::Document) -> Result<(), String> {
                 return Err(format!("{at}.{field}: must lie in [0, 1], got {got}"));
             }
         }
+        let strength = material.emissive_strength().unwrap_or(1.0);
+        if !(strength >= 0.0 && strength.is_finite()) {
+            return Err(format!(
+                "{at}.extensions.KHR_materials_emissive_strength.emissiveStrength: must be a \
+                 non-negative number, got {strength:?}"
+            ));
+        }
         let emissive = material.emissive_factor();
         if !emissive
             .iter()
-            .all(|&v| (0.0..=MAX_RADIOMETRIC).contains(&(v as f64)))
+            .all(|&v| (0.0..=MAX_RADIOMETRIC).contains(&(v as f64 * strength as f64)))
         {
+            let times = match material.emissive_strength() {
+                Some(strength) => format!(" once multiplied by its emissiveStrength {strength:?}"),
+                None => String::new(),
+            };
             return Err(format!(
-                "{at}.emissiveFactor: must lie in [0, {MAX_RADIOMETRIC:e}] (sums of samples \
-                 would overflow the 32-bit floats of the render), got {emissive:?}"
+                "{at}.emissiveFactor: must lie in [0, {MAX_RADIOMETRIC:e}]{times} (sums of \
+                 samples would overflow the 32-bit floats of the render), got {emissive:?}"
+            ));
+        }
+        check_transmission(&material, &at)?;
+    }
+    Ok(())
+}
+
+/// KHR_materials_transmission's factor in [0, 1], and KHR_materials_ior's index in
+/// [1, `MAX_IOR`] (glTF allows any from 1; chambre's glass, as an MTL's `Ni`, goes to 10).
+fn check_transmission(material: &gltf::Material, at: &str) -> Result<(), String> {
+    if let Some(transmission) = material.transmission() {
+        let factor = transmission.transmission_factor();
+        if !(0.0..=1.0).contains(&factor) {
+            return Err(format!(
+                "{at}.extensions.KHR_materials_transmission.transmissionFactor: must lie in \
+                 [0, 1], got {factor:?}"
             ));
         }
     }
+    let ior = material.ior().unwrap_or(DEFAULT_IOR);
+    if !(1.0..=MAX_IOR).contains(&ior) {
+        return Err(format!(
+            "{at}.extensions.KHR_materials_ior.ior: must lie in [1, {MAX_IOR}], got {ior:?}"
+        ));
+    }
     Ok(())
+}
+
+/// KHR_materials_ior's default, glass's index.
+const DEFAULT_IOR: f32 = 1.5;
+/// The largest index of refraction chambre's glass takes (an MTL's `Ni` is clamped to it).
+const MAX_IOR: f32 = 10.0;
+
+/// What the mapping of `material` leaves out or approximates, for the user to read.
+fn material_notes(material: &gltf::Material) -> Vec<String> {
+    let name = material.name().unwrap_or("(unnamed)");
+    let pbr = material.pbr_metallic_roughness();
+    let mut notes = Vec::new();
+    if pbr.metallic_roughness_texture().is_some() {
+        notes.push(format!(
+            "material {name:?}: its metallic-roughness texture is not read; its factors are"
+        ));
+    }
+    let transmission = material.transmission();
+    let factor = transmission
+        .as_ref()
+        .map_or(0.0, |t| t.transmission_factor());
+    if factor > 0.0 && pbr.metallic_factor() < 1.0 {
+        let approximated = [
+            (
+                factor < 1.0,
+                format!("a transmission of {factor} as a whole one"),
+            ),
+            (
+                pbr.roughness_factor() > 0.0,
+                format!("a roughness of {} as smooth", pbr.roughness_factor()),
+            ),
+            (
+                transmission.is_some_and(|t| t.transmission_texture().is_some()),
+                "its transmission texture as its factor".to_string(),
+            ),
+        ];
+        for (_, what) in approximated.into_iter().filter(|(applies, _)| *applies) {
+            notes.push(format!(
+                "material {name:?}: glass under the path tracer, which renders {what}"
+            ));
+        }
+    }
+    notes
 }
 
 /// KHR_lights_punctual's bounds: a colour in [0, 1], a non-negative intensity that makes a
@@ -1073,18 +1143,28 @@ fn transformed(uv: Vec2, texture_use: TextureUse) -> Vec2 {
 /// mirror of the base colour, metallic 1 and roughness r > 0 a rough conductor of reflectance
 /// the base colour and GGX alpha r²; otherwise diffuse `base (1 - metallic)` and a Blinn-Phong lobe of
 /// reflectance `0.04 (1 - metallic) + base metallic` and exponent `2 / α² - 2` with
-/// `α = roughness²` (Walter et al.'s correspondence; at most 1e4); the emissive factor
-/// becomes an emitter.
+/// `α = roughness²` (Walter et al.'s correspondence; at most 1e4); the emissive factor, times
+/// KHR_materials_emissive_strength's strength, becomes an emitter; a dielectric with a
+/// KHR_materials_transmission factor above 0 becomes glass of KHR_materials_ior's index.
 pub fn map_material(material: gltf::Material) -> MeshMaterial {
     let pbr = material.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
-    map_factors(
+    let strength = material.emissive_strength().unwrap_or(1.0);
+    let mapped = map_factors(
         material.name().unwrap_or("(unnamed)"),
         Vec3::new(r, g, b),
         pbr.metallic_factor(),
         pbr.roughness_factor(),
-        Vec3::from(material.emissive_factor()),
-    )
+        Vec3::from(material.emissive_factor()) * strength,
+    );
+    // A dielectric that lets light through is glass under the path tracer (a metal's
+    // transmission is none, as glTF defines it); Whitted's integrator keeps the factors' lobes.
+    let transmits = material
+        .transmission()
+        .is_some_and(|t| t.transmission_factor() > 0.0);
+    let ior =
+        (transmits && pbr.metallic_factor() < 1.0).then(|| material.ior().unwrap_or(DEFAULT_IOR));
+    MeshMaterial { ior, ..mapped }
 }
 
 /// The mapping of [`map_material`], from factors within glTF's bounds (base colour, metallic
