@@ -253,6 +253,16 @@ fn a_gltf_without_camera_or_lights_is_framed_and_lit() {
         "{}",
         image.get(w / 2, h / 2)
     );
+    // The path tracer, which refuses ambient light, renders it with the key light alone, as
+    // `--integrator path` (a bare word) or a quoted `--set` asks.
+    assert_eq!(scene.render.ambient, Vec3::splat(0.1));
+    for integrator in ["render.integrator=path", "render.integrator=\"path\""] {
+        let overrides = [small[0].clone(), small[1].clone(), integrator.to_string()];
+        let scene = Scene::load(&path, &overrides).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(scene.render.ambient, Vec3::ZERO);
+        let image = common::render_cpu(&flatten(&scene));
+        assert!(image.get(w / 2, h / 2).x > 0.05, "{integrator}");
+    }
 }
 
 #[test]

@@ -1402,13 +1402,19 @@ impl ImageSize {
 /// camera `camera` names or the first reached from the scene's nodes (or one framing its bounds:
 /// 40° vertical field of view, from above the front right, the bounds filling the view), its
 /// lights (or, when it has none, a default key light: a directional light of irradiance 3 from
-/// above the camera, and ambient 0.1).
+/// above the camera, and ambient 0.1 unless `path_traced`: the path tracer computes the
+/// indirect light ambient light stands in for, and refuses it).
 ///
 /// The image is `size` where the user gives it, a missing side from the camera's aspect (4:3
 /// when it has none). The film (or an orthographic window) then takes the image's aspect,
 /// keeping the camera's vertical extent, as glTF viewers do with a viewport of another shape:
 /// `yfov` stays the vertical field of view, `2 ymag` the window's height.
-pub fn scene_text(path: &Path, camera: Option<&str>, size: ImageSize) -> Result<String, String> {
+pub fn scene_text(
+    path: &Path,
+    camera: Option<&str>,
+    size: ImageSize,
+    path_traced: bool,
+) -> Result<String, String> {
     let mut scene = read_gltf(path)?;
     if scene.mesh.triangles.is_empty() {
         return Err("the file's default scene has no triangles".into());
@@ -1444,7 +1450,7 @@ pub fn scene_text(path: &Path, camera: Option<&str>, size: ImageSize) -> Result<
         "[render]\nwidth = {width}\nheight = {height}\n{}\n\
          [camera]\nposition = {}\nlook_at = {}\nup = {}\n{projection}\n\
          [[shapes]]\ntype = \"mesh\"\nfile = {}\n",
-        if scene.lights.is_empty() {
+        if scene.lights.is_empty() && !path_traced {
             "ambient = [0.1, 0.1, 0.1]\n"
         } else {
             ""

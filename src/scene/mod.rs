@@ -294,10 +294,13 @@ impl Scene {
                 value.trim_matches('"').to_string()
             });
             let size = image_size_given(&overrides);
+            let path_traced = path_traced_given(&overrides);
             let text =
-                gltf::scene_text(path, name.as_deref(), size).map_err(|message| Error::File {
-                    path: path.to_path_buf(),
-                    message,
+                gltf::scene_text(path, name.as_deref(), size, path_traced).map_err(|message| {
+                    Error::File {
+                        path: path.to_path_buf(),
+                        message,
+                    }
                 })?;
             let overrides: Vec<String> = overrides.into_iter().cloned().collect();
             return Scene::from_str(path, &text, &overrides).map_err(|e| match e {
@@ -407,6 +410,17 @@ fn image_size_given(overrides: &[&String]) -> gltf::ImageSize {
         }
     }
     size
+}
+
+/// Whether `overrides` choose the path tracer (`render.integrator = "path"`, as `--integrator
+/// path` sets it), the last of them winning.
+fn path_traced_given(overrides: &[&String]) -> bool {
+    overrides
+        .iter()
+        .rev()
+        .filter_map(|o| parse_override(o).ok())
+        .find(|(key, _)| key == "render.integrator")
+        .is_some_and(|(_, value)| value.as_str() == Some("path"))
 }
 
 /// Where `field` (a path such as `shapes[2].material`) stands in the scene file at `path` loaded
