@@ -651,17 +651,6 @@ impl CodeStack {
         }
     }
 
-    /// A stack holding the root of `nodes`, unless it is empty (a scene of planes only).
-    #[inline(always)]
-    fn at_root(nodes: &[WideNode]) -> CodeStack {
-        let mut stack = CodeStack::empty();
-        if nodes[0].valid != 0 {
-            stack.codes[0] = MaybeUninit::new(0);
-            stack.len = 1;
-        }
-        stack
-    }
-
     #[inline(always)]
     fn pop(&mut self) -> Option<u32> {
         self.len = self.len.checked_sub(1)?;

@@ -334,7 +334,10 @@ fn farthest(best: &[Hit]) -> f32 {
 
 /// The any-hit query of a packet. With `RAY_LANES` (compiled for AVX-512F only) a packed
 /// leaf's triangles are tested one at a time against every ray still looking, where its rays
-/// share the watertight test's axes; otherwise each ray tests the octets.
+/// share the watertight test's axes; otherwise each ray tests the octets. Children are visited
+/// nearest first, as the closest-hit query visits them: a packet of camera rays meets the
+/// surface facing it sooner (5% more of the dragon's coherent any hits a second on Zen 2, five
+/// alternating rounds, than in the children's order).
 #[inline(always)]
 fn occluded_packet_inline<const F: u32, const RAY_LANES: bool>(
     bvh: &WideBvh,
@@ -352,8 +355,8 @@ fn occluded_packet_inline<const F: u32, const RAY_LANES: bool>(
     let all = (1u32 << rays.len()) - 1;
     // Bit per ray: something lies along it.
     let mut done = 0u32;
-    let mut stack = CodeStack::at_root(&bvh.nodes);
-    let mut visit = stack.pop();
+    let mut stack = Stack::at_root(&bvh.nodes);
+    let mut visit = stack.pop().map(|(code, _)| code);
     while done != all {
         let Some(code) = visit else {
             break;
@@ -369,11 +372,11 @@ fn occluded_packet_inline<const F: u32, const RAY_LANES: bool>(
                 });
                 done |= (hits as u32) << r;
             }
-            visit = stack.pop();
+            visit = stack.pop().map(|(code, _)| code);
             continue;
         }
         let node = &bvh.nodes[code as usize];
-        let (mask, _) = test_interval(node, &interval, t_max, bvh.avx2);
+        let (mask, near) = test_interval(node, &interval, t_max, bvh.avx2);
         if mask & node.packed != 0 {
             let leaves = mask & node.packed;
             #[cfg(target_arch = "x86_64")]
@@ -405,9 +408,8 @@ fn occluded_packet_inline<const F: u32, const RAY_LANES: bool>(
                 done |= (hits as u32) << r;
             }
         }
-        visit = stack
-            .push_children(node, mask & !node.packed, bvh.avx2)
-            .or_else(|| stack.pop());
+        stack.push_nearest_last(&bvh.nodes, node, mask & !node.packed, &near);
+        visit = stack.pop().map(|(code, _)| code);
     }
     for (r, ray) in rays.iter().enumerate() {
         blocked[r] = done & (1 << r) != 0
