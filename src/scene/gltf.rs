@@ -1,9 +1,10 @@
 //! glTF 2.0 files (`.gltf` with its buffers, or `.glb`), through the `gltf` crate: the triangles
 //! of every mesh of the default scene placed by their node transforms, their materials mapped
 //! to chambre's models, its cameras (perspective or orthographic), and KHR_lights_punctual
-//! lights; vertex attributes in floats or, with KHR_mesh_quantization, in small integers. A mesh shape can name a glTF file (`load_mesh`), and `chambre render model.glb`
-//! renders one as a scene (`scene_text`), with the first camera reached from the scene's nodes
-//! or the one `gltf.camera` names. The mappings are in docs/scene-format.md ("glTF").
+//! lights; vertex attributes in floats or, with KHR_mesh_quantization, in small integers. A
+//! mesh shape can name a glTF file (`load_mesh`), and `chambre render model.glb` renders one as
+//! a scene (`scene_text`), with the first camera reached from the scene's nodes or the one
+//! `gltf.camera` names. The mappings are in docs/scene-format.md ("glTF").
 
 use std::path::Path;
 use std::sync::Arc;
@@ -12,7 +13,9 @@ use glam::{DMat4, DVec3, Vec2, Vec3};
 
 use gltf::accessor::{DataType, Dimensions, Item, Iter};
 
-use super::mesh::{MAX_MESH_BYTES, MeshMaterial, NO_MATERIAL, TriangleMesh, check_mesh};
+use super::mesh::{
+    DEFAULT_IOR, IOR_RANGE, MAX_MESH_BYTES, MeshMaterial, NO_MATERIAL, TriangleMesh, check_mesh,
+};
 use super::texture::{Texture, Wrap};
 
 /// Luminous efficacy (lm/W) at 555 nm: candela and lux to W/sr and W/m².
@@ -419,8 +422,8 @@ fn check_materials(document: &gltf::Document) -> Result<(), String> {
     Ok(())
 }
 
-/// KHR_materials_transmission's factor in [0, 1], and KHR_materials_ior's index in
-/// [1, `MAX_IOR`] (glTF allows any from 1; chambre's glass, as an MTL's `Ni`, goes to 10).
+/// KHR_materials_transmission's factor in [0, 1], and KHR_materials_ior's index from 1 (as
+/// glTF requires) to the largest chambre's glass takes (`IOR_RANGE`).
 fn check_transmission(material: &gltf::Material, at: &str) -> Result<(), String> {
     if let Some(transmission) = material.transmission() {
         let factor = transmission.transmission_factor();
@@ -432,18 +435,14 @@ fn check_transmission(material: &gltf::Material, at: &str) -> Result<(), String>
         }
     }
     let ior = material.ior().unwrap_or(DEFAULT_IOR);
-    if !(1.0..=MAX_IOR).contains(&ior) {
+    let high = *IOR_RANGE.end();
+    if !(1.0..=high).contains(&f64::from(ior)) {
         return Err(format!(
-            "{at}.extensions.KHR_materials_ior.ior: must lie in [1, {MAX_IOR}], got {ior:?}"
+            "{at}.extensions.KHR_materials_ior.ior: must lie in [1, {high}], got {ior:?}"
         ));
     }
     Ok(())
 }
-
-/// KHR_materials_ior's default, glass's index.
-const DEFAULT_IOR: f32 = 1.5;
-/// The largest index of refraction chambre's glass takes (an MTL's `Ni` is clamped to it).
-const MAX_IOR: f32 = 10.0;
 
 /// What the mapping of `material` leaves out or approximates, for the user to read.
 fn material_notes(material: &gltf::Material) -> Vec<String> {

@@ -155,13 +155,21 @@ impl MeshMaterial {
             },
             // Kept as written: the scene's validation refuses what no radiance can be.
             emission: rgb(m.emissive),
-            ior: matches!(m.illumination_model, Some(4 | 6 | 7))
-                .then(|| m.optical_density.unwrap_or(1.5).clamp(0.1, 10.0)),
+            ior: matches!(m.illumination_model, Some(4 | 6 | 7)).then(|| {
+                let ior = m.optical_density.unwrap_or(DEFAULT_IOR);
+                ior.clamp(*IOR_RANGE.start() as f32, *IOR_RANGE.end() as f32)
+            }),
             diffuse_texture: None,
             conductor_roughness: None,
         }
     }
 }
+
+/// The index of refraction of a glass that names none (an MTL without `Ni`, a scene material
+/// or glTF material without `ior`).
+pub const DEFAULT_IOR: f32 = 1.5;
+/// The indices of refraction chambre's glass takes, from every source.
+pub const IOR_RANGE: std::ops::RangeInclusive<f64> = 0.1..=10.0;
 
 /// A buffered reader with limits: at most `max_bytes` in all, and (while `line_limit` is set)
 /// at most that many bytes without a line break. It counts the lines its reader has consumed,

@@ -14,7 +14,8 @@ use super::format::{
 };
 use super::load::ParsedScene;
 use super::mesh::{
-    TriangleMesh, compute_vertex_normals, orientation_of, rotation_of, transform_mesh,
+    DEFAULT_IOR, IOR_RANGE, TriangleMesh, compute_vertex_normals, orientation_of, rotation_of,
+    transform_mesh,
 };
 use super::mesh_file::load_mesh;
 use super::parametric::{BezierPatch, Cylinder, Ellipsoid, Torus};
@@ -1033,11 +1034,12 @@ fn dielectric_ior(check: &Checker, file: &SceneFile, i: usize) -> Result<f32> {
             "a dielectric reflects and refracts by Fresnel's equations alone",
         ));
     }
-    let ior = check.finite(&at("ior"), m.ior.unwrap_or(1.5))?;
-    if !(0.1..=10.0).contains(&ior) {
+    let ior = check.finite(&at("ior"), m.ior.unwrap_or(f64::from(DEFAULT_IOR)))?;
+    if !IOR_RANGE.contains(&ior) {
+        let (low, high) = (IOR_RANGE.start(), IOR_RANGE.end());
         return Err(check.err(
             &at("ior"),
-            format!("must lie in [0.1, 10], got {}", num(ior)),
+            format!("must lie in [{low}, {high}], got {}", num(ior)),
         ));
     }
     Ok(ior as f32)
