@@ -249,6 +249,18 @@ fn wf_shade(@builtin(global_invocation_id) id: vec3<u32>,
         check_loop_limit();
         return;
     }
+    // The path tracer's vertex after max_depth bounces only sees emission: where its
+    // material emits nothing and has no texture, the path ends without the surface
+    // (`dark_last_vertex` in path.rs).
+    if (path_traced() && depth > frame.max_depth) {
+        let plain = materials[prims[stored.prim].material];
+        if (plain.texture == 0u && max(max(plain.emission.x, plain.emission.y), plain.emission.z) <= 0.0) {
+            path.truncated = select(0u, 1u, first && plain.model != MODEL_EMITTER && reflects(plain));
+            wf_paths[p] = path;
+            check_loop_limit();
+            return;
+        }
+    }
     let ray = ray_at_time(ray_query_new(traced.origin, traced.direction), traced.time);
     let prim = prims[stored.prim];
     let hit = Hit(stored.t, stored.b1, stored.b2);

@@ -168,6 +168,17 @@ pub(super) fn bounce(
     Some(sample)
 }
 
+/// The vertex past `max_depth` is there only to see emission: where its primitive's material
+/// emits nothing and has no texture (which could change whether it reflects), the path ends
+/// there without the surface's geometry (most of the last bounces of a lit interior meet a
+/// wall). Whether the material still reflects (the path was cut off), or none where the
+/// vertex needs its surface.
+fn dark_last_vertex(scene: &FlatScene, prim_id: u32) -> Option<bool> {
+    let material = &scene.materials[scene.prims[prim_id as usize].material as usize];
+    let dark = material.texture == 0 && Vec3::from(material.emission).max_element() <= 0.0;
+    dark.then(|| material.model != MODEL_EMITTER && lobes(material).reflect(material.model))
+}
+
 /// Radiance along one path that starts with `camera_ray` (whose closest hit `camera_hit` may
 /// already know), as `super::trace_path` but with bounces of every kind.
 #[allow(clippy::too_many_arguments)]
@@ -199,6 +210,12 @@ pub(super) fn trace_path<const F: u32>(
             }
             break;
         };
+        if depth > frame.max_depth
+            && let Some(reflects) = dark_last_vertex(scene, prim_id)
+        {
+            stats.truncated += u64::from(first && reflects);
+            break;
+        }
         let mut textured = MaybeUninit::uninit();
         let (prim, material, surface) =
             vertex_at(scene, prim_id, &ray, hit, depth, first_hit, &mut textured);
