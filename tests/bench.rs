@@ -127,6 +127,53 @@ fn bench_rays_reports_the_same_checksum_on_every_backend() {
     }
 }
 
+/// `--rays` and `--queries` trace only the sets and queries asked for, in the order asked.
+#[test]
+fn bench_rays_traces_only_the_sets_and_queries_asked_for() {
+    let json = std::env::temp_dir().join(format!("chambre-bench-some-{}.json", std::process::id()));
+    let report = run_bench(
+        &[
+            "rays",
+            "--mesh",
+            "scenes/meshes/bunny-npm-lowres.obj",
+            "--width",
+            "16",
+            "--height",
+            "8",
+            "--frames",
+            "1",
+            "--runs",
+            "1",
+            "--backends",
+            "cpu",
+            "--bvh",
+            "wide,stream",
+            "--rays",
+            "incoherent",
+            "--queries",
+            "any,closest",
+        ],
+        &json,
+        "| rays | query | backend |",
+    );
+    let body = &report["report"];
+    let rows: Vec<(&str, &str)> = body["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| (r["set"].as_str().unwrap(), r["query"].as_str().unwrap()))
+        .collect();
+    let asked = [("incoherent", "any_hit"), ("incoherent", "closest_hit")];
+    assert_eq!(
+        rows,
+        [asked, asked].concat(),
+        "one row per BVH, set and query"
+    );
+    let set_up = body["set_up"].as_array().unwrap();
+    assert_eq!(set_up.len(), 1);
+    assert_eq!(set_up[0]["set"], "incoherent");
+}
+
 #[test]
 fn bench_scale_measures_each_size_and_plots_them() {
     drop(common::gpu_context());

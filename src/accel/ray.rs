@@ -10,6 +10,7 @@ use glam::{Vec3, Vec3A};
 use serde::Serialize;
 
 use crate::layout::T_FAR;
+use crate::named::named_enum;
 
 /// Smallest direction magnitude used for the slab reciprocals: with coordinates below 1e9
 /// (validated), products stay far below f32::MAX.
@@ -174,14 +175,16 @@ impl RaySet {
     }
 }
 
-/// Closest hit or any hit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Query {
-    /// The nearest hit along each ray, with its distance.
-    ClosestHit,
-    /// Whether anything lies along each ray (shadow rays).
-    AnyHit,
+named_enum! {
+    /// Closest hit or any hit.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+    #[serde(rename_all = "snake_case")]
+    pub enum Query {
+        /// The nearest hit along each ray, with its distance.
+        ClosestHit = "closest",
+        /// Whether anything lies along each ray (shadow rays).
+        AnyHit = "any",
+    }
 }
 
 #[cfg(test)]

@@ -72,6 +72,10 @@ pub struct RaysConfig {
     pub runs: u32,
     /// Seed of the pixel jitter and of the incoherent rays.
     pub seed: u32,
+    /// The ray sets traced, in this order.
+    pub sets: Vec<RaySetName>,
+    /// The queries asked of each set, in this order.
+    pub queries: Vec<Query>,
     /// The acceleration structures traversed, side by side.
     pub bvhs: Vec<Bvh>,
     /// wgpu's run-time checks the GPU kernels are built with, side by side.
@@ -85,6 +89,18 @@ impl RaysConfig {
             true => vec![Some(ShaderChecks::default())],
             false => self.shader_checks.iter().copied().map(Some).collect(),
         }
+    }
+}
+
+named_enum! {
+    /// One of the two ray sets (module docs).
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+    #[serde(rename_all = "lowercase")]
+    pub enum RaySetName {
+        /// A pinhole camera's rays, one jittered ray per pixel and frame.
+        Coherent = "coherent",
+        /// Origins in the mesh's bounding box, directions uniform on the sphere.
+        Incoherent = "incoherent",
     }
 }
 
@@ -658,7 +674,11 @@ pub fn run(
     let mut results = Vec::new();
     let mut cwbvh_reads = Vec::new();
     let mut set_up = Vec::new();
-    for (set, rays) in [("coherent", &coherent), ("incoherent", &incoherent)] {
+    for &name in &config.sets {
+        let (set, rays) = match name {
+            RaySetName::Coherent => (name.name(), &coherent),
+            RaySetName::Incoherent => (name.name(), &incoherent),
+        };
         if config.bvhs.contains(&Bvh::Cwbvh) {
             cwbvh_reads.push(Reads::of(set, cw, rays));
         }
@@ -707,7 +727,7 @@ pub fn run(
                             None,
                         ),
                     };
-                    for query in [Query::ClosestHit, Query::AnyHit] {
+                    for &query in &config.queries {
                         let (mrays_per_s, checksum) = match &tracer {
                             None => measure_cpu(&scene, bvh, rays, query, config.runs)?,
                             Some(tracer) => measure_gpu(tracer, rays, query, config.runs)?,
@@ -776,10 +796,7 @@ impl RaysReport {
         out += "\n| rays | query | backend | BVH | Mrays/s median | min | max | GB/s read | hits | sum of t |\n";
         out += "|---|---|---|---|---|---|---|---|---|---|\n";
         for r in &self.results {
-            let query = match r.query {
-                Query::ClosestHit => "closest",
-                Query::AnyHit => "any",
-            };
+            let query = r.query.name();
             let bvh = r.bvh.label();
             let reads = self
                 .cwbvh_reads
@@ -911,6 +928,8 @@ mod tests {
             frames: 2,
             runs: 1,
             seed: 4,
+            sets: vec![RaySetName::Coherent, RaySetName::Incoherent],
+            queries: vec![Query::ClosestHit, Query::AnyHit],
             bvhs: vec![Bvh::Packets],
             shader_checks: Vec::new(),
         };

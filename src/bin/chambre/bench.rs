@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use chambre::Error;
-use chambre::bench::rays::{Backend, Bvh, Pinhole, RaysConfig};
+use chambre::bench::rays::{Backend, Bvh, Pinhole, Query, RaySetName, RaysConfig};
 use chambre::bench::{
     Machine, adaptive, build, fermat, finish, frame, motion, precision, preview, rays, samplers,
     scale, usable,
@@ -381,6 +381,12 @@ pub struct RaysArgs {
     /// Seed of the pixel jitter and of the incoherent rays.
     #[arg(long, default_value_t = 1)]
     pub seed: u32,
+    /// Ray sets to trace, in this order.
+    #[arg(long, value_parser = named::<RaySetName>(), value_delimiter = ',', default_values_t = [RaySetName::Coherent, RaySetName::Incoherent])]
+    pub rays: Vec<RaySetName>,
+    /// Queries to ask of each set, in this order.
+    #[arg(long, value_parser = named::<Query>(), value_delimiter = ',', default_values_t = [Query::ClosestHit, Query::AnyHit])]
+    pub queries: Vec<Query>,
     /// Acceleration structures to traverse, side by side (`wide` on the CPU only).
     #[arg(long, value_parser = named::<Bvh>(), value_delimiter = ',', default_values_t = [Bvh::Bvh2, Bvh::Cwbvh, Bvh::Wide, Bvh::Packets, Bvh::Stream])]
     pub bvh: Vec<Bvh>,
@@ -466,6 +472,8 @@ fn bench_rays(args: &RaysArgs, run: &Run) -> chambre::Result<String> {
         frames: args.frames,
         runs: args.runs,
         seed: args.seed,
+        sets: args.rays.clone(),
+        queries: args.queries.clone(),
         bvhs: args.bvh.clone(),
         shader_checks: args.shader_checks.clone(),
     };
