@@ -50,7 +50,7 @@ pub mod texture;
 pub struct SampleStats {
     /// Rays traced: camera, shadow and mirror rays.
     pub rays: u64,
-    /// Paths cut off at `max_depth` while they still reflected.
+    /// Paths cut off at `max_depth` while they still reflected (drew their bounce there).
     pub truncated: u64,
     /// `STATUS_*` bits raised while sampling.
     pub flags: u32,

@@ -77,6 +77,9 @@ pub struct FlatScene {
     cwbvh: std::sync::OnceLock<Result<CwGeometry, String>>,
     /// The CPU's wide BVH (`accel::wide`), made from the CWBVH on first use.
     wide: std::sync::OnceLock<Result<WideBvh, String>>,
+    /// The primitives whose materials emit, in `prims`' order (the path tracer's last bounce
+    /// tests them one by one where they are few, `integrator::path`).
+    pub emitters: Vec<u32>,
 }
 
 /// An area light's shape as its samples see it, and its share of the samples when the path
@@ -258,6 +261,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
     let lens_table = camera.lens_table();
     let choice_offset = (table.points.len() + lens_table.len()) as u32;
     let frame = frame_constants(scene, &lights, &geometry, &table, &choice, choice_offset);
+    let emitters = emitting_prims(&geometry.prims, &materials);
     FlatScene {
         light_shapes: lights
             .iter()
@@ -292,7 +296,19 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         aovs: false,
         cwbvh: std::sync::OnceLock::new(),
         wide: std::sync::OnceLock::new(),
+        emitters,
     }
+}
+
+/// The indices of the primitives whose material emits.
+fn emitting_prims(prims: &[GpuPrimitive], materials: &[GpuMaterial]) -> Vec<u32> {
+    let emits = |prim: &GpuPrimitive| {
+        let emission = Vec3::from(materials[prim.material as usize].emission);
+        emission.max_element() > 0.0
+    };
+    (0..prims.len() as u32)
+        .filter(|&i| emits(&prims[i as usize]))
+        .collect()
 }
 
 /// The scene's materials as the kernels read them (area lights add theirs after,

@@ -27,11 +27,6 @@ fn material_lobes(material: GpuMaterial) -> Lobes {
     return Lobes(diffuse / total, glossy / total, mirror / total);
 }
 
-fn reflects(material: GpuMaterial) -> bool {
-    let lobes = material_lobes(material);
-    return material.model == MODEL_DIELECTRIC || lobes.diffuse + lobes.glossy + lobes.mirror > 0.0;
-}
-
 fn has_smooth_lobes(material: GpuMaterial) -> bool {
     let lobes = material_lobes(material);
     return lobes.diffuse + lobes.glossy > 0.0;

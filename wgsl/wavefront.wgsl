@@ -214,6 +214,11 @@ fn queue_path_bounce(p: u32, path: ptr<function, GpuPath>, ray: RayQuery, surfac
         queue_ray(p, ray.time, leaves.origin, s.wi, leaves.skip);
         (*path).bounce_weight = s.weight;
         (*path).bsdf_pdf = s.pdf;
+        // Cut off while it still reflects: the path would go on (as Whitted's mirror bounce
+        // at max_depth counts).
+        if (wave.depth == frame.max_depth && window_is_first(pass_window())) {
+            (*path).truncated = 1u;
+        }
     }
 }
 
@@ -255,7 +260,6 @@ fn wf_shade(@builtin(global_invocation_id) id: vec3<u32>,
     if (path_traced() && depth > frame.max_depth) {
         let plain = materials[prims[stored.prim].material];
         if (plain.texture == 0u && max(max(plain.emission.x, plain.emission.y), plain.emission.z) <= 0.0) {
-            path.truncated = select(0u, 1u, first && plain.model != MODEL_EMITTER && reflects(plain));
             wf_paths[p] = path;
             check_loop_limit();
             return;
@@ -284,7 +288,6 @@ fn wf_shade(@builtin(global_invocation_id) id: vec3<u32>,
     }
     // The path tracer's vertex after max_depth bounces only sees emission.
     if (path_mode && depth > frame.max_depth) {
-        path.truncated = select(0u, 1u, first && reflects(material));
         wf_paths[p] = path;
         check_loop_limit();
         return;

@@ -58,11 +58,6 @@ pub fn lobes(material: &GpuMaterial) -> Lobes {
 }
 
 impl Lobes {
-    /// Whether the material whose lobes these are (of `model`) reflects or refracts any light.
-    pub fn reflect(&self, model: u32) -> bool {
-        model == MODEL_DIELECTRIC || self.diffuse + self.glossy + self.mirror > 0.0
-    }
-
     /// Whether a lobe is one light samples can meet (not only deltas): where none is, the
     /// path tracer casts no shadow ray.
     pub fn smooth(&self) -> bool {

@@ -7,7 +7,9 @@
 //! direction drawn from the BSDF (`bsdf`), which Russian roulette may end from vertex
 //! `rr_depth` on. After `max_depth` bounces the path takes one more, as Mitsuba's does, only to
 //! see the emission its BSDF sample hits (the other half of the last vertex's multiple
-//! importance sampling): `max_depth = 0` is direct light. Escaping rays see the background (a
+//! importance sampling): `max_depth = 0` is direct light. Where few primitives emit, that
+//! ray is tested against them and then, if it meets one, for what lies before it: most last
+//! rays meet a wall, which a closest hit found at the cost of a traversal. Escaping rays see the background (a
 //! constant no light samples) and the lights at infinity (an environment, suns), weighted
 //! against their light samples as emitters are. Equations and choices: `docs/path.md`,
 //! `docs/lights.md`.
@@ -22,10 +24,10 @@ use glam::Vec3;
 
 use super::bsdf::{BsdfSample, Lobes, emitter_hit_weight, lobes, sample_bsdf};
 use super::{
-    CameraHit, FirstHit, LightWindow, SampleStats, Surface, Vertex, direct_light, sky_seen,
-    vertex_at, vertex_hit,
+    CameraHit, FirstHit, LightWindow, SampleStats, Surface, Vertex, direct_light, moved_surface_at,
+    sky_seen, vertex_at, vertex_hit,
 };
-use crate::accel::intersect::{RayQuery, offset_ray_origin};
+use crate::accel::intersect::{RayQuery, intersect_primitive, offset_ray_origin};
 use crate::camera::Ray;
 use crate::layout::*;
 use crate::math::rng::Rng;
@@ -168,15 +170,73 @@ pub(super) fn bounce(
     Some(sample)
 }
 
-/// The vertex past `max_depth` is there only to see emission: where its primitive's material
-/// emits nothing and has no texture (which could change whether it reflects), the path ends
-/// there without the surface's geometry (most of the last bounces of a lit interior meet a
-/// wall). Whether the material still reflects (the path was cut off), or none where the
-/// vertex needs its surface.
-fn dark_last_vertex(scene: &FlatScene, prim_id: u32) -> Option<bool> {
+/// Up to this many emitting primitives, the path's last ray is tested against each of them
+/// instead of traced through the BVH ([`last_ray_seen`]).
+const FEW_EMITTERS: usize = 8;
+
+/// What the path's ray past `max_depth` (there only to see emission, module docs) adds to
+/// `radiance` with `throughput`, found without its closest hit where the scene has few
+/// emitters and nothing moves: the nearest emitter along the ray, then whether anything lies
+/// before it (an any-hit query); where no emitter lies along it, whether it escapes to the
+/// background and the lights at infinity, asked only where they shine. Most last rays of a
+/// lit interior meet a wall, which the closest hit found at the cost of a traversal. The same
+/// radiance as the traced ray finds, in the same operations, but at an exact tie (another
+/// primitive at the emitter's very distance, which the closest hit may pick). False where the
+/// ray must be traced.
+fn last_ray_seen<const F: u32>(
+    scene: &FlatScene,
+    ray: &RayQuery,
+    skip: u32,
+    bsdf_pdf: f32,
+    throughput: Vec3,
+    radiance: &mut Vec3,
+) -> bool {
+    let frame = &scene.frame;
+    if scene.emitters.len() > FEW_EMITTERS || frame.motion_base != 0 {
+        return false;
+    }
+    let tracer = scene.tracer();
+    let mut nearest = None;
+    let mut t_max = T_FAR;
+    for &id in scene.emitters.iter().filter(|&&id| id != skip) {
+        let hit = intersect_primitive::<F>(ray, &scene.prims[id as usize], t_max);
+        if hit.t < t_max {
+            t_max = hit.t;
+            nearest = Some((id, hit));
+        }
+    }
+    match nearest {
+        Some((id, hit)) if !tracer.occluded::<F>(ray, skip, id, hit.t) => {
+            let prim = &scene.prims[id as usize];
+            let material = &scene.materials[prim.material as usize];
+            let surface = moved_surface_at(scene, id, ray, hit);
+            if surface.front_facing {
+                let emission = Vec3::from(material.emission);
+                let (origin, direction) = (ray.origin, ray.direction);
+                let weight =
+                    emission_weight(frame, prim, material, &surface, origin, direction, bsdf_pdf);
+                *radiance += throughput * emission * weight;
+            }
+        }
+        Some(_) => {}
+        None => {
+            let background = Vec3::from(frame.background);
+            let sky = sky_seen::<F>(scene, ray.direction, bsdf_pdf);
+            let shines = background.max_element() > 0.0 || sky.max_element() > 0.0;
+            if shines && !tracer.occluded::<F>(ray, skip, NONE, T_FAR) {
+                *radiance += throughput * background;
+                *radiance += throughput * sky;
+            }
+        }
+    }
+    true
+}
+
+/// Whether the path's vertex past `max_depth` on primitive `prim_id` ends without its surface:
+/// its material emits nothing and has no texture, so it adds nothing (module docs).
+fn dark_last_vertex(scene: &FlatScene, prim_id: u32) -> bool {
     let material = &scene.materials[scene.prims[prim_id as usize].material as usize];
-    let dark = material.texture == 0 && Vec3::from(material.emission).max_element() <= 0.0;
-    dark.then(|| material.model != MODEL_EMITTER && lobes(material).reflect(material.model))
+    material.texture == 0 && Vec3::from(material.emission).max_element() <= 0.0
 }
 
 /// Radiance along one path that starts with `camera_ray` (whose closest hit `camera_hit` may
@@ -202,6 +262,17 @@ pub(super) fn trace_path<const F: u32>(
     let mut skip = NONE;
     for depth in 0..=frame.max_depth + 1 {
         throughput *= bounce_weight;
+        if depth > frame.max_depth && !first {
+            // The last ray only sees emission, which the first window alone adds.
+            stats.rays += 1;
+            break;
+        }
+        if depth > frame.max_depth
+            && last_ray_seen::<F>(scene, &ray, skip, bsdf_pdf, throughput, &mut radiance)
+        {
+            stats.rays += 1;
+            break;
+        }
         let Some((prim_id, hit)) = vertex_hit::<F>(scene, &ray, skip, depth, camera_hit, stats)
         else {
             if first {
@@ -210,10 +281,7 @@ pub(super) fn trace_path<const F: u32>(
             }
             break;
         };
-        if depth > frame.max_depth
-            && let Some(reflects) = dark_last_vertex(scene, prim_id)
-        {
-            stats.truncated += u64::from(first && reflects);
+        if depth > frame.max_depth && dark_last_vertex(scene, prim_id) {
             break;
         }
         let mut textured = MaybeUninit::uninit();
@@ -235,13 +303,10 @@ pub(super) fn trace_path<const F: u32>(
         if material.model == MODEL_EMITTER {
             break;
         }
-        let lobes = lobes(material);
         if depth > frame.max_depth {
-            if first && lobes.reflect(material.model) {
-                stats.truncated += 1;
-            }
             break;
         }
+        let lobes = lobes(material);
         let wo = -ray.direction;
         let own = match leaving_rays_skip(prim.kind, surface.front_facing) {
             true => prim_id,
@@ -259,6 +324,11 @@ pub(super) fn trace_path<const F: u32>(
         let Some(sample) = sample else {
             break;
         };
+        // Cut off while it still reflects: the path would go on (as Whitted's mirror bounce
+        // at max_depth counts).
+        if depth == frame.max_depth && first {
+            stats.truncated += 1;
+        }
         bounce_weight = sample.weight;
         bsdf_pdf = sample.pdf;
         let (origin, skipped) = leaving(prim, prim_id, &vertex, sample.transmitted);
@@ -266,4 +336,114 @@ pub(super) fn trace_path<const F: u32>(
         skip = skipped;
     }
     radiance
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pack::flatten;
+    use crate::scene::sample_scene;
+
+    /// What the last ray adds when traced, as `trace_path`'s loop found it before
+    /// [`last_ray_seen`]: its closest hit's emission, or the background and the lights at
+    /// infinity where it escapes.
+    fn traced(scene: &FlatScene, ray: &RayQuery, skip: u32, bsdf_pdf: f32) -> Vec3 {
+        let throughput = Vec3::new(0.7, 0.5, 0.3);
+        let mut radiance = Vec3::new(0.01, 0.02, 0.03);
+        let Some((id, hit)) = scene.tracer().closest_hit::<FEATURES_ALL>(ray, skip, T_FAR) else {
+            radiance += throughput * Vec3::from(scene.frame.background);
+            radiance += throughput * sky_seen::<FEATURES_ALL>(scene, ray.direction, bsdf_pdf);
+            return radiance;
+        };
+        let prim = &scene.prims[id as usize];
+        let material = &scene.materials[prim.material as usize];
+        let surface = moved_surface_at(scene, id, ray, hit);
+        let emission = Vec3::from(material.emission);
+        if surface.front_facing && emission.max_element() > 0.0 {
+            let weight = emission_weight(
+                &scene.frame,
+                prim,
+                material,
+                &surface,
+                ray.origin,
+                ray.direction,
+                bsdf_pdf,
+            );
+            radiance += throughput * emission * weight;
+        }
+        radiance
+    }
+
+    /// The last ray tested against the few emitters adds what the traced ray adds, bit for
+    /// bit, whether it meets an emitter, meets one behind something, leaves an emitter (which
+    /// it skips), or escapes to a background or a sky map; rays from points inside the
+    /// scenes, every way.
+    #[test]
+    fn the_last_ray_tested_against_the_emitters_adds_what_the_traced_ray_adds() {
+        let cases: [(&str, &[&str], [Vec3; 2]); 2] = [
+            (
+                "cornell_box.toml",
+                &[
+                    "render.integrator=\"path\"",
+                    "render.background=[0.2,0.3,0.4]",
+                ],
+                [Vec3::new(-0.9, 0.1, -0.9), Vec3::new(0.9, 1.97, 1.5)],
+            ),
+            (
+                "sky.toml",
+                &[],
+                [Vec3::new(-3.0, 0.1, -2.0), Vec3::new(3.0, 2.0, 2.0)],
+            ),
+        ];
+        for (name, overrides, [low, high]) in cases {
+            let scene = flatten(&sample_scene(name, overrides));
+            assert!(scene.emitters.len() <= FEW_EMITTERS, "{name}");
+            let mut rng = Rng::new(11, 0, 0);
+            let (mut lit, mut escaped) = (0, 0);
+            for i in 0..20_000 {
+                let [a, b] = rng.next_2d();
+                let c = rng.next_f32();
+                let origin = low + (high - low) * Vec3::new(a, b, c);
+                let [u, v] = rng.next_2d();
+                let z = 1.0 - 2.0 * u;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let phi = 2.0 * std::f32::consts::PI * v;
+                let direction = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+                let ray = RayQuery::new(origin, direction);
+                // Every fourth ray leaves an emitter, as a bounce off an emitting surface does.
+                let skip = match (i % 4, scene.emitters.first()) {
+                    (0, Some(&id)) => id,
+                    _ => NONE,
+                };
+                let bsdf_pdf = [0.0, 0.4][i % 2];
+                let expected = traced(&scene, &ray, skip, bsdf_pdf);
+                let throughput = Vec3::new(0.7, 0.5, 0.3);
+                let mut radiance = Vec3::new(0.01, 0.02, 0.03);
+                assert!(last_ray_seen::<FEATURES_ALL>(
+                    &scene,
+                    &ray,
+                    skip,
+                    bsdf_pdf,
+                    throughput,
+                    &mut radiance
+                ));
+                assert_eq!(
+                    radiance.to_array().map(f32::to_bits),
+                    expected.to_array().map(f32::to_bits),
+                    "{name}: ray {i} from {origin} along {direction}: {radiance} against {expected}"
+                );
+                let missed = scene
+                    .tracer()
+                    .closest_hit::<FEATURES_ALL>(&ray, skip, T_FAR)
+                    .is_none();
+                escaped += missed as u32;
+                lit += (!missed && expected != Vec3::new(0.01, 0.02, 0.03)) as u32;
+            }
+            // Both branches are exercised: rays that meet a light, rays that escape.
+            assert!(escaped > 100, "{name}: {escaped} escaped");
+            if !scene.emitters.is_empty() {
+                assert!(lit > 100, "{name}: {lit} met a light");
+            }
+        }
+    }
 }
