@@ -80,6 +80,9 @@ pub struct FlatScene {
     /// The primitives whose materials emit, in `prims`' order (the path tracer's last bounce
     /// tests them one by one where they are few, `integrator::path`).
     pub emitters: Vec<u32>,
+    /// A box around every one of `emitters` (lower and upper corners), widened so that a ray
+    /// that misses it misses them all; none where one is unbounded or curved.
+    pub emitter_bounds: Option<[Vec3; 2]>,
 }
 
 /// An area light's shape as its samples see it, and its share of the samples when the path
@@ -262,6 +265,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
     let choice_offset = (table.points.len() + lens_table.len()) as u32;
     let frame = frame_constants(scene, &lights, &geometry, &table, &choice, choice_offset);
     let emitters = emitting_prims(&geometry.prims, &materials);
+    let emitter_bounds = bounds_of(&geometry.prims, &emitters);
     FlatScene {
         light_shapes: lights
             .iter()
@@ -297,7 +301,34 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         cwbvh: std::sync::OnceLock::new(),
         wide: std::sync::OnceLock::new(),
         emitters,
+        emitter_bounds,
     }
+}
+
+/// A box around primitives `ids` of `prims` (none where one is not a triangle, quad or
+/// sphere), widened by a thousandth of a percent of its coordinates and its extent, far more
+/// than the rounding of a hit point, so that a ray's hit on one of them is never outside it.
+fn bounds_of(prims: &[GpuPrimitive], ids: &[u32]) -> Option<[Vec3; 2]> {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for &id in ids {
+        let prim = &prims[id as usize];
+        let (p0, p1, p2) = (
+            Vec3::from(prim.p0),
+            Vec3::from(prim.p1),
+            Vec3::from(prim.p2),
+        );
+        let corners = match prim.kind {
+            PRIM_TRIANGLE => [p0, p1, p2, p2],
+            PRIM_QUAD => [p0, p0 + p1, p0 + p2, p0 + p1 + p2],
+            PRIM_SPHERE => [p0 - p1.x, p0 + p1.x, p0, p0],
+            _ => return None,
+        };
+        for corner in corners {
+            (lo, hi) = (lo.min(corner), hi.max(corner));
+        }
+    }
+    let margin = 1e-5 * (lo.abs().max(hi.abs()) + (hi - lo)).max_element();
+    (lo.x <= hi.x).then(|| [lo - margin, hi + margin])
 }
 
 /// The indices of the primitives whose material emits.

@@ -27,7 +27,7 @@ use super::{
     CameraHit, FirstHit, LightWindow, SampleStats, Surface, Vertex, direct_light, moved_surface_at,
     sky_seen, vertex_at, vertex_hit,
 };
-use crate::accel::intersect::{RayQuery, intersect_primitive, offset_ray_origin};
+use crate::accel::intersect::{RayQuery, intersect_box, intersect_primitive, offset_ray_origin};
 use crate::camera::Ray;
 use crate::layout::*;
 use crate::math::rng::Rng;
@@ -198,7 +198,11 @@ fn last_ray_seen<const F: u32>(
     let tracer = scene.tracer();
     let mut nearest = None;
     let mut t_max = T_FAR;
-    for &id in scene.emitters.iter().filter(|&&id| id != skip) {
+    let emitters = match scene.emitter_bounds {
+        Some([lo, hi]) if intersect_box(ray, lo, hi, T_FAR) >= T_FAR => &[][..],
+        _ => &scene.emitters[..],
+    };
+    for &id in emitters.iter().filter(|&&id| id != skip) {
         let hit = intersect_primitive::<F>(ray, &scene.prims[id as usize], t_max);
         if hit.t < t_max {
             t_max = hit.t;
@@ -375,9 +379,9 @@ mod tests {
     }
 
     /// The last ray tested against the few emitters adds what the traced ray adds, bit for
-    /// bit, whether it meets an emitter, meets one behind something, leaves an emitter (which
-    /// it skips), or escapes to a background or a sky map; rays from points inside the
-    /// scenes, every way.
+    /// bit, whether it meets an emitter, meets one behind something, grazes one's edge (the
+    /// rim of the box that passes over them), leaves an emitter (which it skips), or escapes
+    /// to a background or a sky map; rays from points inside the scenes, every way.
     #[test]
     fn the_last_ray_tested_against_the_emitters_adds_what_the_traced_ray_adds() {
         let cases: [(&str, &[&str], [Vec3; 2]); 2] = [
@@ -408,7 +412,18 @@ mod tests {
                 let z = 1.0 - 2.0 * u;
                 let r = (1.0 - z * z).max(0.0).sqrt();
                 let phi = 2.0 * std::f32::consts::PI * v;
-                let direction = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+                let mut direction = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+                // Every third ray aims at a point on an emitter's edge, where a hit is on the
+                // rim of the emitters' box.
+                if let (1, Some(&id)) = (i % 3, scene.emitters.get(i % 7)) {
+                    let prim = &scene.prims[id as usize];
+                    let (p0, p1) = (Vec3::from(prim.p0), Vec3::from(prim.p1));
+                    let rim = match prim.kind {
+                        PRIM_QUAD => p0 + u * p1,
+                        _ => p0 + u * (p1 - p0),
+                    };
+                    direction = (rim - origin).normalize();
+                }
                 let ray = RayQuery::new(origin, direction);
                 // Every fourth ray leaves an emitter, as a bounce off an emitting surface does.
                 let skip = match (i % 4, scene.emitters.first()) {
