@@ -85,7 +85,7 @@ lscpu 2>/dev/null | sed -n 's/^Model name: *//p' > bench/cpu.txt || true
     # (CHAMBRE_MITSUBA_SITE from tools/install_mitsuba.sh).
     echo
     echo "path tracer by max_depth: scenes/cornell_box.toml"
-    python3 tools/bench_path.py --chambre "$chambre" --runs "$runs" --out bench
+    python3 tools/bench_path.py --chambre "$chambre" --runs "$runs" --rounds 5 --out bench
 } | tee bench/results.md
 # The plots BENCHMARKS.md shows.
 cp bench/scale.svg docs/images/scale.svg
