@@ -92,6 +92,28 @@ pub(super) fn emission_weight(
     )
 }
 
+/// What the emitting `surface` of primitive `prim` and `material` (if it emits, and from its
+/// front) adds to `radiance` with `throughput`, seen along `ray` drawn with density
+/// `bsdf_pdf` ([`emission_weight`]).
+// Inlined: at every vertex of the path loop, a call passing the surface through memory would
+// cost more than the test it makes.
+#[inline(always)]
+fn add_emission(
+    frame: &GpuFrame,
+    (prim, material, surface): (&GpuPrimitive, &GpuMaterial, &Surface),
+    ray: &RayQuery,
+    bsdf_pdf: f32,
+    throughput: Vec3,
+    radiance: &mut Vec3,
+) {
+    let emission = Vec3::from(material.emission);
+    if surface.front_facing && emission.max_element() > 0.0 {
+        let (origin, direction) = (ray.origin, ray.direction);
+        let weight = emission_weight(frame, prim, material, surface, origin, direction, bsdf_pdf);
+        *radiance += throughput * emission * weight;
+    }
+}
+
 /// Where a bounce's ray starts (offset to the side it leaves on: a reflected ray from the
 /// vertex's own `origin`) and the primitive it skips: a ray refracted into a sphere or an
 /// ellipsoid must meet it again from inside.
@@ -214,13 +236,14 @@ fn last_ray_seen<const F: u32>(
             let prim = &scene.prims[id as usize];
             let material = &scene.materials[prim.material as usize];
             let surface = moved_surface_at(scene, id, ray, hit);
-            if surface.front_facing {
-                let emission = Vec3::from(material.emission);
-                let (origin, direction) = (ray.origin, ray.direction);
-                let weight =
-                    emission_weight(frame, prim, material, &surface, origin, direction, bsdf_pdf);
-                *radiance += throughput * emission * weight;
-            }
+            add_emission(
+                frame,
+                (prim, material, &surface),
+                ray,
+                bsdf_pdf,
+                throughput,
+                radiance,
+            );
         }
         Some(_) => {}
         None => {
@@ -291,18 +314,9 @@ pub(super) fn trace_path<const F: u32>(
         let mut textured = MaybeUninit::uninit();
         let (prim, material, surface) =
             vertex_at(scene, prim_id, &ray, hit, depth, first_hit, &mut textured);
-        let emission = Vec3::from(material.emission);
-        if first && surface.front_facing && emission.max_element() > 0.0 {
-            let weight = emission_weight(
-                frame,
-                prim,
-                material,
-                &surface,
-                ray.origin,
-                ray.direction,
-                bsdf_pdf,
-            );
-            radiance += throughput * emission * weight;
+        if first {
+            let seen = (prim, material, &surface);
+            add_emission(frame, seen, &ray, bsdf_pdf, throughput, &mut radiance);
         }
         if material.model == MODEL_EMITTER {
             break;
@@ -362,19 +376,8 @@ mod tests {
         let prim = &scene.prims[id as usize];
         let material = &scene.materials[prim.material as usize];
         let surface = moved_surface_at(scene, id, ray, hit);
-        let emission = Vec3::from(material.emission);
-        if surface.front_facing && emission.max_element() > 0.0 {
-            let weight = emission_weight(
-                &scene.frame,
-                prim,
-                material,
-                &surface,
-                ray.origin,
-                ray.direction,
-                bsdf_pdf,
-            );
-            radiance += throughput * emission * weight;
-        }
+        let seen = (prim, material, &surface);
+        add_emission(&scene.frame, seen, ray, bsdf_pdf, throughput, &mut radiance);
         radiance
     }
 
