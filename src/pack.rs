@@ -12,7 +12,9 @@ use crate::accel::traverse::Tracer;
 use crate::accel::wide::WideBvh;
 use std::sync::Arc;
 
-use crate::accel::{Geometry, Motion, Primitives, VertexAttributes, build_geometry, intersect};
+use crate::accel::{
+    Geometry, Motion, Primitives, VertexAttributes, build_geometry, intersect, widened_bounds,
+};
 use crate::layout::*;
 use crate::math::sampling::strata_columns;
 use crate::sampler::SampleTable;
@@ -81,7 +83,7 @@ pub struct FlatScene {
     /// tests them one by one where they are few, `integrator::path`).
     pub emitters: Vec<u32>,
     /// A box around every one of `emitters` (lower and upper corners), widened so that a ray
-    /// that misses it misses them all; none where one is unbounded or curved.
+    /// that misses it misses them all; none where one is unbounded.
     pub emitter_bounds: Option<[Vec3; 2]>,
 }
 
@@ -265,7 +267,7 @@ pub fn flatten(scene: &Scene) -> FlatScene {
     let choice_offset = (table.points.len() + lens_table.len()) as u32;
     let frame = frame_constants(scene, &lights, &geometry, &table, &choice, choice_offset);
     let emitters = emitting_prims(&geometry.prims, &materials);
-    let emitter_bounds = bounds_of(&geometry.prims, &emitters);
+    let emitter_bounds = widened_bounds(emitters.iter().map(|&i| &geometry.prims[i as usize]));
     FlatScene {
         light_shapes: lights
             .iter()
@@ -303,32 +305,6 @@ pub fn flatten(scene: &Scene) -> FlatScene {
         emitters,
         emitter_bounds,
     }
-}
-
-/// A box around primitives `ids` of `prims` (none where one is not a triangle, quad or
-/// sphere), widened by a thousandth of a percent of its coordinates and its extent, far more
-/// than the rounding of a hit point, so that a ray's hit on one of them is never outside it.
-fn bounds_of(prims: &[GpuPrimitive], ids: &[u32]) -> Option<[Vec3; 2]> {
-    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for &id in ids {
-        let prim = &prims[id as usize];
-        let (p0, p1, p2) = (
-            Vec3::from(prim.p0),
-            Vec3::from(prim.p1),
-            Vec3::from(prim.p2),
-        );
-        let corners = match prim.kind {
-            PRIM_TRIANGLE => [p0, p1, p2, p2],
-            PRIM_QUAD => [p0, p0 + p1, p0 + p2, p0 + p1 + p2],
-            PRIM_SPHERE => [p0 - p1.x, p0 + p1.x, p0, p0],
-            _ => return None,
-        };
-        for corner in corners {
-            (lo, hi) = (lo.min(corner), hi.max(corner));
-        }
-    }
-    let margin = 1e-5 * (lo.abs().max(hi.abs()) + (hi - lo)).max_element();
-    (lo.x <= hi.x).then(|| [lo - margin, hi + margin])
 }
 
 /// The indices of the primitives whose material emits.

@@ -259,7 +259,7 @@ fn wf_shade(@builtin(global_invocation_id) id: vec3<u32>,
     // (`dark_last_vertex` in path.rs).
     if (path_traced() && depth > frame.max_depth) {
         let plain = materials[prims[stored.prim].material];
-        if (plain.texture == 0u && max(max(plain.emission.x, plain.emission.y), plain.emission.z) <= 0.0) {
+        if (plain.texture == 0u && max3(plain.emission) <= 0.0) {
             wf_paths[p] = path;
             check_loop_limit();
             return;

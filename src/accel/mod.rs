@@ -238,6 +238,25 @@ pub(crate) fn primitive_bounds(p: &GpuPrimitive) -> Aabb {
     }
 }
 
+/// The box around every one of `prims`, widened as the BVH's node boxes are, so that a ray's
+/// hit on one of them is never outside it; none where there is none or one is a plane
+/// (unbounded).
+pub(crate) fn widened_bounds<'a>(
+    prims: impl IntoIterator<Item = &'a GpuPrimitive>,
+) -> Option<[Vec3; 2]> {
+    let mut union: Option<Aabb> = None;
+    for p in prims {
+        if p.kind == PRIM_PLANE {
+            return None;
+        }
+        let b = primitive_bounds(p);
+        union = Some(union.map_or(b, |u| u.union(&b)));
+    }
+    let mut aabb = union?;
+    widen(&mut aabb);
+    Some([aabb.min.into(), aabb.max.into()])
+}
+
 /// The box around an ellipsoid, cylinder or torus (`kind`, with `p0` and `p1` as
 /// `GpuPrimitive` gives them) turned by `turn`: the tight box of the turned shape, each
 /// half-extent widened by a few ULPs for the rotation's rounding. With the world's x, y, z
